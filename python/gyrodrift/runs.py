@@ -1,0 +1,269 @@
+"""Tables of alignment runs: the identification inputs and, when known, the true axial drift.
+
+A run is one initial alignment on a static base. Columns, with their units in the names:
+
+=================  ======  ==========================================================================
+``run``            text    run identifier (number or name), unique within a table
+``lat_deg``        deg     latitude computed by the free navigation at the 12th hour
+``lat0_deg``       deg     true (initial) latitude of the site; optional, else given by the caller
+``temp_min_c``     deg C   lowest system temperature over the 12 h
+``temp_max_c``     deg C   highest system temperature over the 12 h
+``temp_range_c``   text    alternative to the two above: a "min~max" cell such as ``37.1~39.5``
+``drift_deg_h``    deg/h   true axial gyro drift (the training target); optional for prediction
+``split``          text    optional ``train``/``test`` marker
+=================  ======  ==========================================================================
+
+The latitude error used by the models is ``lat_deg - lat0_deg`` (computed minus true).
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+PAPER_LAT0_DEG = 28.222
+"""Site latitude of the paper's experiments [deg] (Yu et al. 2013, section 3)."""
+
+KNOWN_COLUMNS = (
+    "run",
+    "split",
+    "lat_deg",
+    "lat0_deg",
+    "temp_min_c",
+    "temp_max_c",
+    "temp_range_c",
+    "drift_deg_h",
+    "temp_start_c",
+    "temp_end_c",
+)
+
+
+class RunTableError(ValueError):
+    """A run table that cannot be read; the message names the file, row and column."""
+
+
+@dataclass(frozen=True)
+class RunTable:
+    """Alignment runs as parallel arrays (one element per run).
+
+    Attributes
+    ----------
+    run : ndarray of str
+        Run identifiers.
+    lat_deg : ndarray of float
+        Latitude at the 12th hour of free navigation [deg].
+    lat0_deg : ndarray of float
+        True site latitude [deg].
+    temp_min_c, temp_max_c : ndarray of float
+        Temperature extremes over the 12 h [deg C].
+    drift_deg_h : ndarray of float
+        True axial drift [deg/h]; NaN where unknown.
+    split : ndarray of str
+        ``"train"``, ``"test"`` or ``""``.
+    source : str
+        Where the table came from (file name), for messages.
+    """
+
+    run: np.ndarray
+    lat_deg: np.ndarray
+    lat0_deg: np.ndarray
+    temp_min_c: np.ndarray
+    temp_max_c: np.ndarray
+    drift_deg_h: np.ndarray
+    split: np.ndarray = field(default=None)  # type: ignore[assignment]
+    source: str = "<memory>"
+
+    def __post_init__(self):
+        n = len(self.run)
+        if self.split is None:
+            object.__setattr__(self, "split", np.array([""] * n, dtype=object))
+        for name in ("lat_deg", "lat0_deg", "temp_min_c", "temp_max_c", "drift_deg_h", "split"):
+            if len(getattr(self, name)) != n:
+                raise RunTableError(f"{self.source}: column {name} has {len(getattr(self, name))} values, run has {n}")
+
+    def __len__(self) -> int:
+        return len(self.run)
+
+    @property
+    def lat_err_arcsec(self) -> np.ndarray:
+        """Latitude error at 12 h, computed minus true [arcsec]."""
+        return (self.lat_deg - self.lat0_deg) * 3600.0
+
+    @property
+    def has_truth(self) -> bool:
+        """True when every run has a known drift."""
+        return bool(np.all(np.isfinite(self.drift_deg_h)))
+
+    def select(self, mask) -> RunTable:
+        """The runs where ``mask`` is true (boolean array or indices)."""
+        return RunTable(
+            run=self.run[mask],
+            lat_deg=self.lat_deg[mask],
+            lat0_deg=self.lat0_deg[mask],
+            temp_min_c=self.temp_min_c[mask],
+            temp_max_c=self.temp_max_c[mask],
+            drift_deg_h=self.drift_deg_h[mask],
+            split=self.split[mask],
+            source=self.source,
+        )
+
+    def records(self) -> list[dict]:
+        """One dict per run with unit-carrying keys (for JSON and CSV output)."""
+        out = []
+        for i in range(len(self)):
+            rec = {
+                "run": str(self.run[i]),
+                "lat_deg": float(self.lat_deg[i]),
+                "lat0_deg": float(self.lat0_deg[i]),
+                "temp_min_c": float(self.temp_min_c[i]),
+                "temp_max_c": float(self.temp_max_c[i]),
+            }
+            if math.isfinite(self.drift_deg_h[i]):
+                rec["drift_deg_h"] = float(self.drift_deg_h[i])
+            if self.split[i]:
+                rec["split"] = str(self.split[i])
+            out.append(rec)
+        return out
+
+
+def _parse_float(text: str, where: str, column: str, what: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise RunTableError(f"{where}, column {column}: expected {what}, got {text!r}") from None
+    if not math.isfinite(value):
+        raise RunTableError(f"{where}, column {column}: expected a finite number, got {text!r}")
+    return value
+
+
+def parse_temp_range(text: str, where: str = "temp_range_c") -> tuple[float, float]:
+    """Parse a temperature range cell ``"37.1~39.5"`` (also ``-``-free forms with ``～`` or ``..``) [deg C]."""
+    for sep in ("~", "\uff5e", ".."):
+        if sep in text:
+            lo_text, hi_text = text.split(sep, 1)
+            lo = _parse_float(lo_text.strip(), where, "temp_range_c", "a range like 37.1~39.5")
+            hi = _parse_float(hi_text.strip(), where, "temp_range_c", "a range like 37.1~39.5")
+            return lo, hi
+    raise RunTableError(f"{where}, column temp_range_c: expected a range like 37.1~39.5, got {text!r}")
+
+
+def read_runs_csv(path, *, lat0_deg: float | None = None, require_truth: bool = False) -> RunTable:
+    """Read a CSV table of runs (see the module docstring for the columns).
+
+    Parameters
+    ----------
+    path : str or Path
+        The CSV file (UTF-8, header row, comma separated).
+    lat0_deg : float, optional
+        Site latitude [deg] for tables without a ``lat0_deg`` column. Required in that case.
+    require_truth : bool
+        When true every row must have ``drift_deg_h`` (training data).
+
+    Raises
+    ------
+    RunTableError
+        Naming the file, the row (1-based, header is row 1) and the column, and what was expected.
+    """
+    path = Path(path)
+    name = str(path)
+    try:
+        handle = open(path, newline="", encoding="utf-8-sig")
+    except OSError as exc:
+        raise RunTableError(f"{name}: cannot open: {exc.strerror}") from None
+    with handle:
+        reader = csv.reader(handle)
+        try:
+            header = next(reader)
+        except StopIteration:
+            raise RunTableError(f"{name}: empty file, expected a header row") from None
+        header = [h.strip() for h in header]
+        unknown = [h for h in header if h not in KNOWN_COLUMNS]
+        if unknown:
+            raise RunTableError(
+                f"{name}, row 1: unknown column {unknown[0]!r}; expected columns among {', '.join(KNOWN_COLUMNS)}"
+            )
+        if len(set(header)) != len(header):
+            dup = next(h for h in header if header.count(h) > 1)
+            raise RunTableError(f"{name}, row 1: column {dup!r} appears twice")
+        col = {h: i for i, h in enumerate(header)}
+        if "lat_deg" not in col:
+            raise RunTableError(f"{name}, row 1: missing column 'lat_deg' (latitude at 12 h, deg)")
+        has_minmax = "temp_min_c" in col and "temp_max_c" in col
+        if not has_minmax and "temp_range_c" not in col:
+            raise RunTableError(
+                f"{name}, row 1: missing temperature columns: expected temp_min_c and temp_max_c, or temp_range_c"
+            )
+        if "lat0_deg" not in col and lat0_deg is None:
+            raise RunTableError(f"{name}, row 1: no lat0_deg column and no site latitude given (lat0_deg)")
+        if require_truth and "drift_deg_h" not in col:
+            raise RunTableError(f"{name}, row 1: missing column 'drift_deg_h' (true axial drift, deg/h) for training")
+
+        runs, lat, lat0, tmin, tmax, drift, split = [], [], [], [], [], [], []
+        for rownum, row in enumerate(reader, start=2):
+            if not row or all(not cell.strip() for cell in row):
+                continue
+            where = f"{name}, row {rownum}"
+            if len(row) != len(header):
+                raise RunTableError(f"{where}: expected {len(header)} cells, got {len(row)}")
+            cell = {h: row[i].strip() for h, i in col.items()}
+            runs.append(cell.get("run") or str(len(runs) + 1))
+            la = _parse_float(cell["lat_deg"], where, "lat_deg", "a latitude in degrees")
+            if not -90.0 <= la <= 90.0:
+                raise RunTableError(f"{where}, column lat_deg: expected a latitude within [-90, 90] deg, got {la}")
+            lat.append(la)
+            if "lat0_deg" in col:
+                l0 = _parse_float(cell["lat0_deg"], where, "lat0_deg", "a latitude in degrees")
+                if not -90.0 <= l0 <= 90.0:
+                    raise RunTableError(f"{where}, column lat0_deg: expected a latitude within [-90, 90] deg, got {l0}")
+            else:
+                l0 = float(lat0_deg)
+            lat0.append(l0)
+            if has_minmax:
+                lo = _parse_float(cell["temp_min_c"], where, "temp_min_c", "a temperature in deg C")
+                hi = _parse_float(cell["temp_max_c"], where, "temp_max_c", "a temperature in deg C")
+                bad_col = "temp_max_c"
+            else:
+                lo, hi = parse_temp_range(cell["temp_range_c"], where)
+                bad_col = "temp_range_c"
+            if hi < lo:
+                raise RunTableError(f"{where}, column {bad_col}: maximum temperature {hi} is below the minimum {lo}")
+            if not (-100.0 <= lo <= 200.0 and -100.0 <= hi <= 200.0):
+                raise RunTableError(f"{where}, column {bad_col}: temperature outside [-100, 200] deg C")
+            tmin.append(lo)
+            tmax.append(hi)
+            if "drift_deg_h" in col and cell["drift_deg_h"] != "":
+                d = _parse_float(cell["drift_deg_h"], where, "drift_deg_h", "a drift in deg/h")
+                if abs(d) > 10.0:
+                    raise RunTableError(
+                        f"{where}, column drift_deg_h: |{d}| deg/h is not an RLG drift (expected |drift| <= 10 deg/h)"
+                    )
+            elif require_truth:
+                raise RunTableError(f"{where}, column drift_deg_h: expected a drift in deg/h for training, got an empty cell")
+            else:
+                d = math.nan
+            drift.append(d)
+            sp = cell.get("split", "")
+            if sp not in ("", "train", "test"):
+                raise RunTableError(f"{where}, column split: expected 'train' or 'test', got {sp!r}")
+            split.append(sp)
+    if not runs:
+        raise RunTableError(f"{name}: no data rows after the header")
+    seen = set()
+    for i, r in enumerate(runs):
+        if r in seen:
+            raise RunTableError(f"{name}, column run: run {r!r} appears more than once")
+        seen.add(r)
+    return RunTable(
+        run=np.array(runs, dtype=object),
+        lat_deg=np.array(lat),
+        lat0_deg=np.array(lat0),
+        temp_min_c=np.array(tmin),
+        temp_max_c=np.array(tmax),
+        drift_deg_h=np.array(drift),
+        split=np.array(split, dtype=object),
+        source=name,
+    )
