@@ -1,11 +1,138 @@
 """Command-line interface: a thin layer over the same functions a notebook calls."""
 
+from __future__ import annotations
+
+import csv
+import io
+import json
+import sys
+
 import click
 
 from gyrodrift import __version__
+from gyrodrift.features import ENCODINGS
+from gyrodrift.model import SCALINGS
+from gyrodrift.tuning import METHODS, OBJECTIVES
 
 
 @click.group()
 @click.version_option(__version__, prog_name="gyrodrift")
 def main() -> None:
     """Identify the axial gyro drift of single-axis rotation RLG inertial navigation systems."""
+
+
+def _read_runs(path, lat0_deg, require_truth, split=None):
+    from gyrodrift.runs import RunTableError, read_runs_csv
+
+    try:
+        runs = read_runs_csv(path, lat0_deg=lat0_deg, require_truth=require_truth)
+    except RunTableError as exc:
+        raise click.ClickException(str(exc)) from None
+    if split:
+        runs = runs.select(runs.split == split)
+        if len(runs) == 0:
+            raise click.ClickException(f"{path}: no rows with split = {split!r}")
+    return runs
+
+
+_lat0_option = click.option(
+    "--lat0-deg", type=float, default=None, help="Site latitude [deg] for tables without a lat0_deg column."
+)
+_split_option = click.option(
+    "--split", type=click.Choice(["train", "test"]), default=None, help="Use only rows with this split value."
+)
+
+
+@main.command()
+@click.argument("data", type=click.Path(dir_okay=False))
+@click.option("--out", "out", required=True, type=click.Path(dir_okay=False), help="Model file to write (JSON).")
+@click.option("--encoding", type=click.Choice(list(ENCODINGS)), default="temp_range", show_default=True)
+@click.option("--scaling", type=click.Choice(list(SCALINGS)), default="standard", show_default=True)
+@click.option("--objective", type=click.Choice(list(OBJECTIVES)), default="loo_mae", show_default=True)
+@click.option("--method", type=click.Choice(list(METHODS)), default="cpso", show_default=True)
+@click.option("--gamma", type=float, default=None, help="Fix gamma (with --sigma) instead of tuning.")
+@click.option("--sigma", type=float, default=None, help="Fix sigma (scaled input units) instead of tuning.")
+@click.option("--seed", type=int, default=0, show_default=True)
+@_lat0_option
+@_split_option
+@click.option("--quiet", is_flag=True, help="No progress bar.")
+def fit(data, out, encoding, scaling, objective, method, gamma, sigma, seed, lat0_deg, split, quiet):
+    """Fit a drift model on DATA.csv (runs with drift_deg_h) and write it to --out."""
+    from gyrodrift.model import fit_drift_model
+    from gyrodrift.model_io import save_model
+
+    runs = _read_runs(data, lat0_deg, True, split)
+    try:
+        model = fit_drift_model(
+            runs, encoding=encoding, scaling=scaling, objective=objective, method=method,
+            gamma=gamma, sigma=sigma, rng=seed, quiet=quiet,
+        )
+    except ValueError as exc:
+        raise click.ClickException(str(exc)) from None
+    save_model(model, out)
+    est = model.lssvr
+    loo = model.loo_residuals()
+    click.echo(
+        f"fitted on {len(runs)} runs: gamma = {est.gamma:.6g}, sigma = {est.sigma:.6g}, "
+        f"LOO MAE = {float(abs(loo).mean()):.3e} deg/h -> {out}"
+    )
+
+
+@main.command()
+@click.argument("model_file", type=click.Path(dir_okay=False))
+@click.argument("data", type=click.Path(dir_okay=False))
+@click.option("--format", "fmt", type=click.Choice(["csv", "jsonl"]), default="csv", show_default=True)
+@click.option("--out", type=click.Path(dir_okay=False), default=None, help="Write here (atomically) instead of stdout.")
+@_lat0_option
+@_split_option
+def predict(model_file, data, fmt, out, lat0_deg, split):
+    """Identify the axial drift [deg/h] of each run in DATA.csv with MODEL_FILE."""
+    from gyrodrift.atomic import atomic_write
+    from gyrodrift.model_io import ModelFileError, load_model
+
+    try:
+        model = load_model(model_file)
+    except ModelFileError as exc:
+        raise click.ClickException(str(exc)) from None
+    runs = _read_runs(data, lat0_deg, False, split)
+    pred = model.predict(runs)
+    rows = []
+    for i, rec in enumerate(runs.records()):
+        row = {"run": rec["run"], "drift_identified_deg_h": float(pred[i])}
+        if "drift_deg_h" in rec:
+            row["drift_deg_h"] = rec["drift_deg_h"]
+            row["error_deg_h"] = rec["drift_deg_h"] - float(pred[i])
+        rows.append(row)
+    buf = io.StringIO()
+    if fmt == "jsonl":
+        for row in rows:
+            buf.write(json.dumps(row) + "\n")
+    else:
+        fields = list(rows[0]) if all(len(r) == len(rows[0]) for r in rows) else [
+            "run", "drift_identified_deg_h", "drift_deg_h", "error_deg_h"]
+        writer = csv.DictWriter(buf, fieldnames=fields, lineterminator="\n", restval="")
+        writer.writeheader()
+        for row in rows:
+            writer.writerow({k: (repr(v) if isinstance(v, float) else v) for k, v in row.items()})
+    if out is None:
+        sys.stdout.write(buf.getvalue())
+    else:
+        with atomic_write(out) as handle:
+            handle.write(buf.getvalue())
+
+
+@main.command()
+@click.option("--out", "out_dir", type=click.Path(file_okay=False), default="gyrodrift-reproduce", show_default=True,
+              help="Folder for results.json, report.md, report.html and the figures (replaced as a whole).")
+@click.option("--seed", type=int, default=0, show_default=True, help="Seeds every swarm; same seed, same results.")
+@click.option("--quiet", is_flag=True, help="No progress bar and no summary.")
+def reproduce(out_dir, seed, quiet):
+    """Reproduce the paper's experiment on its embedded data, with baselines and a report."""
+    from gyrodrift.report import summary_lines
+    from gyrodrift.reproduce import reproduce as run
+
+    results = run(out_dir, seed=seed, quiet=quiet)
+    if not quiet:
+        for line in summary_lines(results):
+            click.echo(line)
+        click.echo(f"report: {out_dir}/report.html ({results['elapsed_s']:.1f} s)")

@@ -1,0 +1,159 @@
+"""The drift model: encoding of a run, input scaling and an LSSVR, fitted and used as one object.
+
+``fit_drift_model`` is what ``gyrodrift fit`` and ``gyrodrift reproduce`` call: it encodes the training
+runs, fits the scaler on them, tunes (gamma, sigma) unless given, and fits the LSSVR. Predictions are axial
+drifts in deg/h, the total constant to subtract from the z-gyro output (measured - estimate).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass, field
+
+import numpy as np
+from sklearn.pipeline import Pipeline
+from sklearn.preprocessing import MinMaxScaler, StandardScaler
+
+from gyrodrift.features import encode, feature_names
+from gyrodrift.lssvr import LSSVR
+from gyrodrift.progress import progress
+from gyrodrift.runs import RunTable
+from gyrodrift.tuning import DEFAULT_BOUNDS, TuningResult, tune_lssvr
+
+SCALINGS = ("standard", "minmax", "none")
+"""Input scalings: zero mean / unit variance, [0, 1] per feature, or raw inputs."""
+
+
+def make_scaler(scaling: str):
+    """The scikit-learn transformer for a scaling name (``"passthrough"`` for none)."""
+    if scaling == "standard":
+        return StandardScaler()
+    if scaling == "minmax":
+        return MinMaxScaler()
+    if scaling == "none":
+        return "passthrough"
+    raise ValueError(f"unknown scaling {scaling!r}; expected one of {', '.join(SCALINGS)}")
+
+
+def training_digest(runs: RunTable) -> str:
+    """SHA-256 of the training runs' values (run, latitudes, temperatures, drift), order included."""
+    canon = json.dumps(
+        [
+            [str(r), repr(float(a)), repr(float(b)), repr(float(c)), repr(float(d)), repr(float(e))]
+            for r, a, b, c, d, e in zip(
+                runs.run, runs.lat_deg, runs.lat0_deg, runs.temp_min_c, runs.temp_max_c, runs.drift_deg_h
+            )
+        ]
+    )
+    return hashlib.sha256(canon.encode()).hexdigest()
+
+
+def _tick(bar, callback, intermediate_result):
+    bar.update(1)
+    return callback(intermediate_result) if callback is not None else None
+
+
+@dataclass
+class DriftModel:
+    """A fitted axial-drift model.
+
+    Attributes
+    ----------
+    encoding : str
+        How a run becomes an input vector (see ``gyrodrift.features.ENCODINGS``).
+    scaling : str
+        Input scaling fitted on the training runs (``SCALINGS``).
+    pipeline : sklearn Pipeline
+        ``scale`` then ``lssvr``; its input is ``encode(runs, encoding)``.
+    tuning : TuningResult or None
+        How gamma and sigma were chosen (None when given by the user).
+    training : dict
+        ``n_runs``, ``sha256`` (``training_digest``) and ``source`` of the training data.
+    """
+
+    encoding: str
+    scaling: str
+    pipeline: Pipeline
+    tuning: TuningResult | None = None
+    training: dict = field(default_factory=dict)
+
+    @property
+    def lssvr(self) -> LSSVR:
+        return self.pipeline.named_steps["lssvr"]
+
+    @property
+    def feature_names(self) -> tuple[str, ...]:
+        return feature_names(self.encoding)
+
+    def predict(self, runs: RunTable) -> np.ndarray:
+        """Identified axial drift [deg/h] for each run."""
+        return self.pipeline.predict(encode(runs, self.encoding))
+
+    def loo_residuals(self) -> np.ndarray:
+        """Closed-form leave-one-out residuals on the training runs [deg/h] (true minus left-out prediction).
+
+        The scaler is not refitted per left-out run; with 20+ runs its effect on the residuals is small.
+        """
+        return self.lssvr.loo_residuals()
+
+
+def fit_drift_model(
+    train: RunTable,
+    *,
+    encoding: str = "temp_range",
+    scaling: str = "standard",
+    objective: str = "loo_mae",
+    method: str = "cpso",
+    gamma: float | None = None,
+    sigma: float | None = None,
+    bounds=DEFAULT_BOUNDS,
+    n_particles: int = 30,
+    max_iter: int = 100,
+    chaos_steps: int = 10,
+    rng=None,
+    quiet: bool = True,
+    callback=None,
+) -> DriftModel:
+    """Fit a drift model on runs with known drift.
+
+    With ``gamma`` and ``sigma`` both given no tuning is done; otherwise they are tuned by ``method``
+    (``cpso``, ``pso`` or ``grid``) on ``objective`` (``loo_mae``, ``train_mae``, ``kfold_mae``), with a
+    progress bar unless ``quiet``. ``sigma`` is in scaled input units. ``callback(intermediate_result)``,
+    if given, is called once per tuning iteration as well (e.g. to drive an outer progress bar).
+    """
+    if not train.has_truth:
+        raise ValueError(f"{train.source}: every training run needs drift_deg_h")
+    if len(train) < 3:
+        raise ValueError(f"{train.source}: need at least 3 training runs, got {len(train)}")
+    X = encode(train, encoding)
+    y = np.asarray(train.drift_deg_h, float)
+    scaler = make_scaler(scaling)
+    Xs = X if scaler == "passthrough" else scaler.fit(X).transform(X)
+    tuning = None
+    if (gamma is None) != (sigma is None):
+        raise ValueError("give both gamma and sigma, or neither (then both are tuned)")
+    if gamma is None:
+        with progress(max_iter if method != "grid" else 1, f"tuning ({method}, {objective})", quiet, unit="it") as bar:
+            tuning = tune_lssvr(
+                Xs,
+                y,
+                objective=objective,
+                method=method,
+                bounds=bounds,
+                n_particles=n_particles,
+                max_iter=max_iter,
+                chaos_steps=chaos_steps,
+                rng=rng,
+                callback=lambda res: _tick(bar, callback, res),
+            )
+        gamma, sigma = tuning.gamma, tuning.sigma
+    lssvr = LSSVR(gamma=gamma, sigma=sigma).fit(Xs, y)
+    pipeline = Pipeline([("scale", scaler), ("lssvr", lssvr)])
+    return DriftModel(
+        encoding=encoding,
+        scaling=scaling,
+        pipeline=pipeline,
+        tuning=tuning,
+        training={"n_runs": len(train), "sha256": training_digest(train), "source": train.source},
+    )
