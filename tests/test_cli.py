@@ -1,0 +1,66 @@
+"""The CLI as a user runs it: fit, predict, and clear errors for bad files."""
+
+import csv
+import io
+import json
+
+import pytest
+from click.testing import CliRunner
+
+from gyrodrift.cli import main
+from gyrodrift.datasets import paper_csv_path
+
+
+@pytest.fixture
+def paper_csv(tmp_path):
+    p = tmp_path / "paper.csv"
+    p.write_bytes(paper_csv_path().read_bytes())
+    return p
+
+
+def test_fit_then_predict_csv_and_jsonl(tmp_path, paper_csv):
+    runner = CliRunner()
+    model = tmp_path / "model.json"
+    r = runner.invoke(main, ["fit", str(paper_csv), "--out", str(model), "--split", "train", "--lat0-deg", "28.222",
+                             "--method", "grid", "--quiet"])
+    assert r.exit_code == 0, r.output
+    assert "fitted on 22 runs" in r.output and model.exists()
+    r = runner.invoke(main, ["predict", str(model), str(paper_csv), "--split", "test", "--lat0-deg", "28.222"])
+    assert r.exit_code == 0, r.output
+    rows = list(csv.DictReader(io.StringIO(r.output)))
+    assert [row["run"] for row in rows] == [str(i) for i in range(23, 33)]
+    for row in rows:
+        assert float(row["error_deg_h"]) == pytest.approx(float(row["drift_deg_h"]) - float(row["drift_identified_deg_h"]))
+    out = tmp_path / "pred.jsonl"
+    r = runner.invoke(main, ["predict", str(model), str(paper_csv), "--lat0-deg", "28.222", "--format", "jsonl",
+                             "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    lines = [json.loads(line) for line in out.read_text().splitlines()]
+    assert len(lines) == 32 and {"run", "drift_identified_deg_h"} <= set(lines[0])
+
+
+def test_fit_with_fixed_parameters_needs_both(tmp_path, paper_csv):
+    r = CliRunner().invoke(main, ["fit", str(paper_csv), "--out", str(tmp_path / "m.json"), "--lat0-deg", "28.222",
+                                  "--gamma", "10"])
+    assert r.exit_code != 0 and "give both gamma and sigma" in r.output
+
+
+def test_bad_data_file_is_named(tmp_path):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("run,lat_deg,temp_min_c,temp_max_c,drift_deg_h\n1,28.2,1,x,0.001\n")
+    r = CliRunner().invoke(main, ["fit", str(bad), "--out", str(tmp_path / "m.json"), "--lat0-deg", "28.222"])
+    assert r.exit_code == 1
+    assert "bad.csv, row 2, column temp_max_c: expected a temperature in deg C, got 'x'" in r.output
+    assert not (tmp_path / "m.json").exists()
+
+
+def test_bad_model_file_is_named(tmp_path, paper_csv):
+    bad = tmp_path / "model.json"
+    bad.write_text("{not json")
+    r = CliRunner().invoke(main, ["predict", str(bad), str(paper_csv), "--lat0-deg", "28.222"])
+    assert r.exit_code == 1 and "model.json: corrupted JSON" in r.output
+
+
+def test_version():
+    r = CliRunner().invoke(main, ["--version"])
+    assert r.exit_code == 0 and "gyrodrift" in r.output

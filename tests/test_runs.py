@@ -1,0 +1,82 @@
+"""Run tables: the paper's data as embedded, and every malformed CSV with an error naming file, row, column."""
+
+import numpy as np
+import pytest
+
+from gyrodrift.datasets import load_paper
+from gyrodrift.features import ENCODINGS, encode, feature_names
+from gyrodrift.runs import RunTableError, parse_temp_range, read_runs_csv
+
+
+def test_paper_data_has_the_papers_split_and_values():
+    d = load_paper()
+    assert len(d.train) == 22 and len(d.test) == 10
+    assert list(d.test.run) == [str(i) for i in range(23, 33)]
+    # Spot values from Table 1 row 8 and Table 2 row 7.
+    r8 = d.train.select(d.train.run == "8")
+    assert (r8.lat_deg[0], r8.temp_min_c[0], r8.temp_max_c[0], r8.drift_deg_h[0]) == (28.2028, 53.1, 62.3, 0.0033)
+    t7 = d.test.select(d.test.run == "29")
+    assert (t7.temp_min_c[0], t7.temp_max_c[0], t7.drift_deg_h[0]) == (40.0, 57.5, -0.00345)
+    assert np.all(d.runs.lat0_deg == 28.222)
+    np.testing.assert_allclose(d.train.lat_err_arcsec[0], (28.2274 - 28.222) * 3600)
+
+
+def test_encodings_columns():
+    d = load_paper()
+    for enc in ENCODINGS:
+        X = encode(d.train, enc)
+        assert X.shape == (22, len(feature_names(enc)))
+        np.testing.assert_allclose(X[:, 0], d.train.lat_err_arcsec)
+    np.testing.assert_allclose(encode(d.train, "temp_span")[:, 1], d.train.temp_max_c - d.train.temp_min_c)
+    np.testing.assert_allclose(encode(d.train, "temp_mean")[:, 1], (d.train.temp_max_c + d.train.temp_min_c) / 2)
+    with pytest.raises(ValueError, match="unknown encoding 'bogus'"):
+        encode(d.train, "bogus")
+
+
+def _write(tmp_path, text, name="runs.csv"):
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+def test_range_cells_and_lat0_column(tmp_path):
+    p = _write(tmp_path, "run,lat_deg,lat0_deg,temp_range_c,drift_deg_h\na,28.2274,28.222,37.1~39.5,0.0007\nb,45.0,45.001,10 ~ 12,\n")
+    runs = read_runs_csv(p)
+    assert list(runs.temp_min_c) == [37.1, 10.0] and list(runs.temp_max_c) == [39.5, 12.0]
+    assert np.isnan(runs.drift_deg_h[1]) and not runs.has_truth
+    np.testing.assert_allclose(runs.lat_err_arcsec, [(28.2274 - 28.222) * 3600, -0.001 * 3600])
+    assert parse_temp_range("37.1\uff5e39.5") == (37.1, 39.5)
+
+
+@pytest.mark.parametrize(
+    "text, kwargs, message",
+    [
+        ("", {}, r"runs.csv: empty file"),
+        ("run,lat_deg,temp_min_c,temp_max_c\n", {"lat0_deg": 28.0}, r"runs.csv: no data rows"),
+        ("run,lat_deg,temp_min_c,temp_max_c,colour\n1,28,1,2,red\n", {"lat0_deg": 28.0}, r"row 1: unknown column 'colour'"),
+        ("run,temp_min_c,temp_max_c\n1,1,2\n", {"lat0_deg": 28.0}, r"row 1: missing column 'lat_deg'"),
+        ("run,lat_deg\n1,28\n", {"lat0_deg": 28.0}, r"row 1: missing temperature columns"),
+        ("run,lat_deg,temp_min_c,temp_max_c\n1,28,1,2\n", {}, r"no lat0_deg column and no site latitude"),
+        ("run,lat_deg,temp_min_c,temp_max_c\n1,28,1,2\n", {"lat0_deg": 28.0, "require_truth": True}, r"missing column 'drift_deg_h'"),
+        ("run,lat_deg,temp_min_c,temp_max_c\n1,28,1,2\n2,abc,1,2\n", {"lat0_deg": 28.0}, r"runs.csv, row 3, column lat_deg: expected a latitude in degrees, got 'abc'"),
+        ("run,lat_deg,temp_min_c,temp_max_c\n1,128,1,2\n", {"lat0_deg": 28.0}, r"row 2, column lat_deg: expected a latitude within \[-90, 90\]"),
+        ("run,lat_deg,temp_min_c,temp_max_c\n1,28,nan,2\n", {"lat0_deg": 28.0}, r"row 2, column temp_min_c: expected a finite number"),
+        ("run,lat_deg,temp_min_c,temp_max_c\n1,28,5,2\n", {"lat0_deg": 28.0}, r"row 2, column temp_max_c: maximum temperature 2.0 is below the minimum 5.0"),
+        ("run,lat_deg,temp_range_c\n1,28,37.1-39.5\n", {"lat0_deg": 28.0}, r"row 2, column temp_range_c: expected a range like 37.1~39.5, got '37.1-39.5'"),
+        ("run,lat_deg,temp_min_c,temp_max_c\n1,28,1\n", {"lat0_deg": 28.0}, r"row 2: expected 4 cells, got 3"),
+        ("run,lat_deg,temp_min_c,temp_max_c,drift_deg_h\n1,28,1,2,\n", {"lat0_deg": 28.0, "require_truth": True}, r"row 2, column drift_deg_h: expected a drift in deg/h for training"),
+        ("run,lat_deg,temp_min_c,temp_max_c,drift_deg_h\n1,28,1,2,36\n", {"lat0_deg": 28.0}, r"row 2, column drift_deg_h: \|36.0\| deg/h is not an RLG drift"),
+        ("run,lat_deg,temp_min_c,temp_max_c\n1,28,1,2\n1,28,1,2\n", {"lat0_deg": 28.0}, r"column run: run '1' appears more than once"),
+        ("run,lat_deg,lat_deg,temp_min_c,temp_max_c\n1,28,28,1,2\n", {"lat0_deg": 28.0}, r"column 'lat_deg' appears twice"),
+        ("run,split,lat_deg,temp_min_c,temp_max_c\n1,validate,28,1,2\n", {"lat0_deg": 28.0}, r"column split: expected 'train' or 'test'"),
+    ],
+)
+def test_bad_tables_name_file_row_and_column(tmp_path, text, kwargs, message):
+    p = _write(tmp_path, text)
+    with pytest.raises(RunTableError, match=message):
+        read_runs_csv(p, **kwargs)
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(RunTableError, match=r"nope.csv: cannot open"):
+        read_runs_csv(tmp_path / "nope.csv", lat0_deg=0.0)
