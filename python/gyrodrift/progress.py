@@ -1,0 +1,48 @@
+"""Progress bars for long runs: a tiny wrapper so every command shows (or hides) progress the same way."""
+
+from __future__ import annotations
+
+import sys
+
+from tqdm import tqdm
+
+__all__ = ["progress"]
+
+
+def progress(total: int | float | None, desc: str, quiet: bool = False, *, unit: str = "sample") -> tqdm:
+    """Return a tqdm bar writing to stderr; use as a context manager and call ``bar.update(n)``.
+
+    Parameters
+    ----------
+    total : int, float or None
+        Expected total of the `update` increments (None: unknown, the bar only counts).
+    desc : str
+        Label shown before the bar.
+    quiet : bool
+        True silences the bar completely.
+    unit : str
+        Name of one increment.
+
+    Notes
+    -----
+    The bar is also disabled when stderr is not a terminal (logs, CI, pipes), so redirected output
+    never fills with carriage-return lines. A disabled bar still accepts `update` and `close`.
+    """
+    disable = bool(quiet) or not _stderr_is_tty()
+    return tqdm(
+        total=total,
+        desc=desc,
+        unit=unit,
+        unit_scale=True,
+        disable=disable,
+        file=sys.stderr,
+        dynamic_ncols=True,
+        leave=False,
+    )
+
+
+def _stderr_is_tty() -> bool:
+    try:
+        return sys.stderr.isatty()
+    except (AttributeError, ValueError):  # closed or replaced stream
+        return False
