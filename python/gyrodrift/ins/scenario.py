@@ -1,0 +1,558 @@
+"""Scenario files: a TOML description of one simulated static-base run, validated into frozen dataclasses.
+
+Every key carries its user unit in its name (``lat_deg``, ``bias_deg_h``, ``vrw_ug_rthz``).
+`Scenario.to_core_config` converts to the SI dict of the binding contract (docs/ins-binding-contract.md);
+`Scenario.to_toml_dict` / `write_scenario_toml` give back the fully resolved scenario (every default
+written out, a temperature series inlined) that reloads to an equal object.
+
+Sections and defaults are documented key by key in docs/scenarios.md. Any unknown section or key, wrong
+type, wrong vector length, non-finite number or out-of-range value raises `ScenarioError` whose message
+starts with the file and the key, e.g. ``scenario.toml: [gyro] bias_deg_h: expected 3 numbers, got 2``.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import math
+import os
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping
+
+from gyrodrift.units import ARCSEC, DEG, DEG_PER_H, DEG_PER_SQRT_H, HOUR, MICRO_G
+
+__all__ = [
+    "ScenarioError",
+    "Site",
+    "Run",
+    "Rotation",
+    "Gyro",
+    "Accel",
+    "Temperature",
+    "Attitude",
+    "Scenario",
+    "load_scenario",
+    "ROTATION_SCHEMES",
+]
+
+ROTATION_SCHEMES = ("none", "continuous", "reciprocating", "indexing")
+"""Turntable schemes understood by the core."""
+
+DEG_PER_H_PER_SQRT_H = DEG_PER_H / math.sqrt(HOUR)
+"""One deg/h/sqrt(h) (rate random walk) [rad/s/sqrt(s)]."""
+
+
+class ScenarioError(ValueError):
+    """A scenario file (or dict) is invalid; the message names the file and the key."""
+
+
+# --------------------------------------------------------------------------------------------------
+# The typed scenario
+# --------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Site:
+    """Static site, WGS-84 geodetic: latitude and longitude [deg], height above the ellipsoid [m]."""
+
+    lat_deg: float = 28.222
+    lon_deg: float = 112.99
+    height_m: float = 0.0
+
+
+@dataclass(frozen=True)
+class Run:
+    """Length of the run [h], IMU sample rate [Hz] and the seed of all its noise."""
+
+    duration_h: float = 16.0
+    rate_hz: float = 100.0
+    seed: int = 0
+
+
+@dataclass(frozen=True)
+class Rotation:
+    """Single-axis turntable about body Up (positive counter-clockwise seen from above).
+
+    scheme : "none", "continuous" (one direction), "reciprocating" (turn `span_deg` one way, dwell
+    `dwell_s`, turn back), "indexing" (slew through `positions_deg`, dwelling `dwell_s` at each, cycled).
+    rate_deg_s : cruise rate [deg/s]; accel_deg_s2 : acceleration at starts, stops, reversals [deg/s^2].
+    """
+
+    scheme: str = "reciprocating"
+    rate_deg_s: float = 6.0
+    accel_deg_s2: float = 10.0
+    span_deg: float = 360.0
+    positions_deg: tuple[float, ...] = (0.0, 180.0, 90.0, 270.0)
+    dwell_s: float = 0.0
+
+
+@dataclass(frozen=True)
+class Gyro:
+    """Gyro errors in user units, body axes x, y, z (x right, y forward, z up = rotation axis).
+
+    bias_deg_h [deg/h]; arw_deg_rth angle random walk [deg/sqrt(h)]; bias_instability_deg_h stationary
+    sigma of a first-order Gauss-Markov bias [deg/h] with correlation time correlation_s [s];
+    rrw_deg_h_rth rate random walk [deg/h/sqrt(h)]; scale_ppm [ppm]; misalignment_arcsec off-diagonal
+    terms xy, xz, yx, yz, zx, zy [arcsec].
+    """
+
+    bias_deg_h: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    arw_deg_rth: float = 0.0
+    bias_instability_deg_h: float = 0.0
+    correlation_s: float = 3600.0
+    rrw_deg_h_rth: float = 0.0
+    scale_ppm: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    misalignment_arcsec: tuple[float, float, float, float, float, float] = (0.0,) * 6
+
+
+@dataclass(frozen=True)
+class Accel:
+    """Accelerometer errors: bias_ug [ug, 1 ug = 9.80665e-6 m/s^2], vrw_ug_rthz velocity random walk
+    [ug/sqrt(Hz)], scale_ppm [ppm], body axes x, y, z."""
+
+    bias_ug: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    vrw_ug_rthz: float = 0.0
+    scale_ppm: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class Temperature:
+    """System temperature and the axial (z) gyro drift it causes.
+
+    Temperature: a warm-up T(t) = end_c + (start_c - end_c) exp(-t / tau_h) [deg C, h], or a measured
+    series (series_t_h [h], series_temp_c [deg C], linearly interpolated) which overrides the warm-up.
+    Axial drift [deg/h], added to the z gyro:
+    k1 (T - t0_c) + k2 (T - t0_c)^2 + k3 dT/dt, with k1 [deg/h/degC], k2 [deg/h/degC^2],
+    k3 [deg/h per degC/h] and dT/dt in degC/h.
+    """
+
+    start_c: float = 20.0
+    end_c: float = 20.0
+    tau_h: float = 1.0
+    series_t_h: tuple[float, ...] | None = None
+    series_temp_c: tuple[float, ...] | None = None
+    t0_c: float = 20.0
+    k1_deg_h_per_c: float = 0.0
+    k2_deg_h_per_c2: float = 0.0
+    k3_deg_h_per_c_per_h: float = 0.0
+
+
+@dataclass(frozen=True)
+class Attitude:
+    """Initial body attitude at table angle 0 [deg]: pitch about x, roll about y, yaw about Up (CCW +)."""
+
+    pitch_deg: float = 0.0
+    roll_deg: float = 0.0
+    yaw_deg: float = 0.0
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """One static-base run. Build it with `load_scenario` (file) or `Scenario.from_dict` (mapping)."""
+
+    site: Site = field(default_factory=Site)
+    run: Run = field(default_factory=Run)
+    rotation: Rotation = field(default_factory=Rotation)
+    gyro: Gyro = field(default_factory=Gyro)
+    accel: Accel = field(default_factory=Accel)
+    temperature: Temperature = field(default_factory=Temperature)
+    attitude: Attitude = field(default_factory=Attitude)
+
+    @property
+    def n_samples(self) -> int:
+        """Number of IMU samples of the run (duration x rate, rounded)."""
+        return int(round(self.run.duration_h * HOUR * self.run.rate_hz))
+
+    @classmethod
+    def from_dict(
+        cls, data: Mapping[str, Any], source: str = "<scenario>", base_dir: str | os.PathLike[str] | None = None
+    ) -> "Scenario":
+        """Validate a mapping shaped like the TOML file.
+
+        Parameters
+        ----------
+        data : mapping
+            Sections to key/value mappings, user units.
+        source : str
+            Name used at the start of every error message (normally the file path).
+        base_dir : path-like, optional
+            Folder against which a relative ``[temperature] series_csv`` is resolved (default: the current
+            folder).
+
+        Raises
+        ------
+        ScenarioError
+        """
+        return _Validator(source, Path(base_dir) if base_dir is not None else Path(".")).scenario(data)
+
+    def to_toml_dict(self) -> dict[str, dict[str, Any]]:
+        """The fully resolved scenario as a TOML-shaped dict (user units, every key written out).
+
+        A temperature series is written inline (``series_t_h``, ``series_temp_c``), so the result is
+        self-contained: ``Scenario.from_dict(s.to_toml_dict()) == s``.
+        """
+        out: dict[str, dict[str, Any]] = {}
+        for f in dataclasses.fields(self):
+            section = getattr(self, f.name)
+            values: dict[str, Any] = {}
+            for g in dataclasses.fields(section):
+                v = getattr(section, g.name)
+                if v is None:
+                    continue
+                values[g.name] = list(v) if isinstance(v, tuple) else v
+            out[f.name] = values
+        return out
+
+    def to_core_config(self) -> dict[str, Any]:
+        """The SI config dict of `gyrodrift._core.ImuSimulator` (see docs/ins-binding-contract.md).
+
+        Conversions: deg -> rad, deg/h -> rad/s, deg/sqrt(h) -> rad/sqrt(s), deg/h/sqrt(h) -> rad/s/sqrt(s),
+        ug -> m/s^2 (1 ug = 9.80665e-6 m/s^2), ug/sqrt(Hz) -> m/s/sqrt(s), ppm -> 1e-6, arcsec -> rad,
+        h -> s; k3 [deg/h per degC/h] -> [rad/s per degC/s] (multiply by deg/h and by 3600 s/h).
+        """
+        s, r, rot, g, a, t, att = (
+            self.site,
+            self.run,
+            self.rotation,
+            self.gyro,
+            self.accel,
+            self.temperature,
+            self.attitude,
+        )
+        cfg: dict[str, Any] = {
+            "lat_rad": s.lat_deg * DEG,
+            "lon_rad": s.lon_deg * DEG,
+            "height_m": float(s.height_m),
+            "rate_hz": float(r.rate_hz),
+            "duration_s": r.duration_h * HOUR,
+            "seed": int(r.seed),
+            "pitch_rad": att.pitch_deg * DEG,
+            "roll_rad": att.roll_deg * DEG,
+            "yaw_rad": att.yaw_deg * DEG,
+            "rotation_scheme": rot.scheme,
+            "rotation_rate_rad_s": rot.rate_deg_s * DEG,
+            "rotation_accel_rad_s2": rot.accel_deg_s2 * DEG,
+            "reciprocating_span_rad": rot.span_deg * DEG,
+            "positions_rad": [p * DEG for p in rot.positions_deg],
+            "dwell_s": float(rot.dwell_s),
+            "gyro_bias_rad_s": [b * DEG_PER_H for b in g.bias_deg_h],
+            "gyro_arw_rad_rts": g.arw_deg_rth * DEG_PER_SQRT_H,
+            "gyro_bias_instability_rad_s": g.bias_instability_deg_h * DEG_PER_H,
+            "gyro_correlation_s": float(g.correlation_s),
+            "gyro_rrw_rad_s_rts": g.rrw_deg_h_rth * DEG_PER_H_PER_SQRT_H,
+            "gyro_scale": [p * 1e-6 for p in g.scale_ppm],
+            "gyro_misalignment_rad": [m * ARCSEC for m in g.misalignment_arcsec],
+            "accel_bias_m_s2": [b * MICRO_G for b in a.bias_ug],
+            "accel_vrw_m_s_rts": a.vrw_ug_rthz * MICRO_G,
+            "accel_scale": [p * 1e-6 for p in a.scale_ppm],
+            "temp_start_c": float(t.start_c),
+            "temp_end_c": float(t.end_c),
+            "temp_tau_s": t.tau_h * HOUR,
+            "drift_t0_c": float(t.t0_c),
+            "drift_k1_rad_s_per_c": t.k1_deg_h_per_c * DEG_PER_H,
+            "drift_k2_rad_s_per_c2": t.k2_deg_h_per_c2 * DEG_PER_H,
+            "drift_k3_rad_s_per_c_per_s": t.k3_deg_h_per_c_per_h * DEG_PER_H * HOUR,
+        }
+        if t.series_t_h is not None:
+            cfg["temp_series_t_s"] = [x * HOUR for x in t.series_t_h]
+            cfg["temp_series_c"] = [float(x) for x in t.series_temp_c]
+        return cfg
+
+
+def load_scenario(path: str | os.PathLike[str]) -> Scenario:
+    """Read and validate a scenario TOML file.
+
+    A relative ``[temperature] series_csv`` is read relative to the TOML file's folder.
+
+    Raises
+    ------
+    ScenarioError
+        Missing or unreadable file, invalid TOML, or any invalid key (the message names the file and key).
+    """
+    p = Path(path)
+    source = str(path)
+    try:
+        raw = p.read_bytes()
+    except FileNotFoundError:
+        raise ScenarioError(f"{source}: no such file") from None
+    except OSError as exc:
+        raise ScenarioError(f"{source}: cannot read: {exc.strerror or exc}") from None
+    try:
+        data = tomllib.loads(raw.decode("utf-8"))
+    except UnicodeDecodeError:
+        raise ScenarioError(f"{source}: not UTF-8 text") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError(f"{source}: invalid TOML: {exc}") from None
+    return Scenario.from_dict(data, source=source, base_dir=p.parent)
+
+
+# --------------------------------------------------------------------------------------------------
+# Validation
+# --------------------------------------------------------------------------------------------------
+
+
+def _type_name(v: Any) -> str:
+    if isinstance(v, bool):
+        return "boolean"
+    if isinstance(v, str):
+        return "string"
+    if isinstance(v, (list, tuple)):
+        return "array"
+    if isinstance(v, dict):
+        return "table"
+    if isinstance(v, (int, float)):
+        return "number"
+    return type(v).__name__
+
+
+class _Validator:
+    """Turns a TOML-shaped mapping into a `Scenario`, naming the file and key in every error."""
+
+    SECTIONS = ("site", "run", "rotation", "gyro", "accel", "temperature", "attitude")
+
+    def __init__(self, source: str, base_dir: Path):
+        self.source = source
+        self.base_dir = base_dir
+
+    # -- error helpers -------------------------------------------------------------------------
+    def fail(self, section: str | None, key: str | None, msg: str) -> ScenarioError:
+        where = self.source
+        if section is not None:
+            where += f": [{section}]"
+        if key is not None:
+            where += f" {key}"
+        return ScenarioError(f"{where}: {msg}")
+
+    # -- scalar readers --------------------------------------------------------------------------
+    def number(self, sec: str, table: Mapping[str, Any], key: str, default: float) -> float:
+        if key not in table:
+            return float(default)
+        v = table[key]
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise self.fail(sec, key, f"expected a number, got {_type_name(v)} {v!r}")
+        v = float(v)
+        if not math.isfinite(v):
+            raise self.fail(sec, key, f"expected a finite number, got {v!r}")
+        return v
+
+    def positive(self, sec, table, key, default) -> float:
+        v = self.number(sec, table, key, default)
+        if not v > 0:
+            raise self.fail(sec, key, f"must be > 0, got {_fmt(v)}")
+        return v
+
+    def non_negative(self, sec, table, key, default) -> float:
+        v = self.number(sec, table, key, default)
+        if v < 0:
+            raise self.fail(sec, key, f"must be >= 0, got {_fmt(v)}")
+        return v
+
+    def in_range(self, sec, table, key, default, lo, hi, *, open_interval=False) -> float:
+        v = self.number(sec, table, key, default)
+        bad = not (lo < v < hi) if open_interval else not (lo <= v <= hi)
+        if bad:
+            kind = "strictly between" if open_interval else "between"
+            raise self.fail(sec, key, f"must be {kind} {_fmt(lo)} and {_fmt(hi)}, got {_fmt(v)}")
+        return v
+
+    def integer(self, sec, table, key, default: int) -> int:
+        if key not in table:
+            return default
+        v = table[key]
+        if isinstance(v, bool) or not isinstance(v, int):
+            raise self.fail(sec, key, f"expected an integer, got {_type_name(v)} {v!r}")
+        if v < 0:
+            raise self.fail(sec, key, f"must be >= 0, got {v}")
+        return v
+
+    def vector(self, sec, table, key, default: tuple[float, ...], n: int | None) -> tuple[float, ...]:
+        """A list of numbers; exactly `n` long, or non-empty when `n` is None."""
+        if key not in table:
+            return tuple(float(x) for x in default)
+        v = table[key]
+        if not isinstance(v, (list, tuple)):
+            want = f"{n} numbers" if n is not None else "an array of numbers"
+            raise self.fail(sec, key, f"expected {want}, got {_type_name(v)} {v!r}")
+        if n is not None and len(v) != n:
+            raise self.fail(sec, key, f"expected {n} numbers, got {len(v)}")
+        if n is None and len(v) == 0:
+            raise self.fail(sec, key, "expected at least 1 number, got 0")
+        out = []
+        for i, x in enumerate(v):
+            if isinstance(x, bool) or not isinstance(x, (int, float)):
+                raise self.fail(sec, key, f"element {i}: expected a number, got {_type_name(x)} {x!r}")
+            if not math.isfinite(float(x)):
+                raise self.fail(sec, key, f"element {i}: expected a finite number, got {x!r}")
+            out.append(float(x))
+        return tuple(out)
+
+    def section(self, data: Mapping[str, Any], name: str, cls: type) -> Mapping[str, Any]:
+        table = data.get(name, {})
+        if not isinstance(table, Mapping):
+            raise self.fail(None, None, f"[{name}] must be a table, got {_type_name(table)}")
+        allowed = [f.name for f in dataclasses.fields(cls)]
+        if name == "temperature":
+            allowed = allowed + ["series_csv"]
+        for key in table:
+            if key not in allowed:
+                raise self.fail(name, key, f"unknown key (expected one of: {', '.join(allowed)})")
+        return table
+
+    # -- sections --------------------------------------------------------------------------------
+    def scenario(self, data: Mapping[str, Any]) -> Scenario:
+        if not isinstance(data, Mapping):
+            raise self.fail(None, None, f"expected a table of sections, got {_type_name(data)}")
+        for name in data:
+            if name not in self.SECTIONS:
+                raise self.fail(
+                    None, None, f"unknown section [{name}] (expected one of: {', '.join(self.SECTIONS)})"
+                )
+        return Scenario(
+            site=self.site(data),
+            run=self.run(data),
+            rotation=self.rotation(data),
+            gyro=self.gyro(data),
+            accel=self.accel(data),
+            temperature=self.temperature(data),
+            attitude=self.attitude(data),
+        )
+
+    def site(self, data) -> Site:
+        t, d = self.section(data, "site", Site), Site()
+        return Site(
+            lat_deg=self.in_range("site", t, "lat_deg", d.lat_deg, -90.0, 90.0, open_interval=True),
+            lon_deg=self.in_range("site", t, "lon_deg", d.lon_deg, -180.0, 360.0),
+            height_m=self.in_range("site", t, "height_m", d.height_m, -1.0e4, 1.0e5),
+        )
+
+    def run(self, data) -> Run:
+        t, d = self.section(data, "run", Run), Run()
+        run = Run(
+            duration_h=self.positive("run", t, "duration_h", d.duration_h),
+            rate_hz=self.positive("run", t, "rate_hz", d.rate_hz),
+            seed=self.integer("run", t, "seed", d.seed),
+        )
+        if run.seed >= 2**64:
+            raise self.fail("run", "seed", f"must be < 2**64, got {run.seed}")
+        if round(run.duration_h * HOUR * run.rate_hz) < 1:
+            raise self.fail("run", "duration_h", "shorter than one sample")
+        return run
+
+    def rotation(self, data) -> Rotation:
+        t, d = self.section(data, "rotation", Rotation), Rotation()
+        scheme = t.get("scheme", d.scheme)
+        if scheme not in ROTATION_SCHEMES:
+            opts = ", ".join(repr(s) for s in ROTATION_SCHEMES)
+            raise self.fail("rotation", "scheme", f"expected one of {opts}, got {scheme!r}")
+        dwell_default = 300.0 if scheme == "indexing" else d.dwell_s
+        return Rotation(
+            scheme=scheme,
+            rate_deg_s=self.positive("rotation", t, "rate_deg_s", d.rate_deg_s),
+            accel_deg_s2=self.positive("rotation", t, "accel_deg_s2", d.accel_deg_s2),
+            span_deg=self.positive("rotation", t, "span_deg", d.span_deg),
+            positions_deg=self.vector("rotation", t, "positions_deg", d.positions_deg, None),
+            dwell_s=self.non_negative("rotation", t, "dwell_s", dwell_default),
+        )
+
+    def gyro(self, data) -> Gyro:
+        t, d = self.section(data, "gyro", Gyro), Gyro()
+        return Gyro(
+            bias_deg_h=self.vector("gyro", t, "bias_deg_h", d.bias_deg_h, 3),
+            arw_deg_rth=self.non_negative("gyro", t, "arw_deg_rth", d.arw_deg_rth),
+            bias_instability_deg_h=self.non_negative(
+                "gyro", t, "bias_instability_deg_h", d.bias_instability_deg_h
+            ),
+            correlation_s=self.positive("gyro", t, "correlation_s", d.correlation_s),
+            rrw_deg_h_rth=self.non_negative("gyro", t, "rrw_deg_h_rth", d.rrw_deg_h_rth),
+            scale_ppm=self.vector("gyro", t, "scale_ppm", d.scale_ppm, 3),
+            misalignment_arcsec=self.vector("gyro", t, "misalignment_arcsec", d.misalignment_arcsec, 6),
+        )
+
+    def accel(self, data) -> Accel:
+        t, d = self.section(data, "accel", Accel), Accel()
+        return Accel(
+            bias_ug=self.vector("accel", t, "bias_ug", d.bias_ug, 3),
+            vrw_ug_rthz=self.non_negative("accel", t, "vrw_ug_rthz", d.vrw_ug_rthz),
+            scale_ppm=self.vector("accel", t, "scale_ppm", d.scale_ppm, 3),
+        )
+
+    def temperature(self, data) -> Temperature:
+        sec = "temperature"
+        t, d = self.section(data, sec, Temperature), Temperature()
+        series_t = series_c = None
+        if "series_csv" in t:
+            for other in ("series_t_h", "series_temp_c"):
+                if other in t:
+                    raise self.fail(sec, "series_csv", f"give either series_csv or {other}, not both")
+            series_t, series_c = self.read_series_csv(t["series_csv"])
+        elif "series_t_h" in t or "series_temp_c" in t:
+            for key in ("series_t_h", "series_temp_c"):
+                if key not in t:
+                    other = "series_temp_c" if key == "series_t_h" else "series_t_h"
+                    raise self.fail(sec, key, f"missing (required together with {other})")
+            series_t = self.vector(sec, t, "series_t_h", (), None)
+            series_c = self.vector(sec, t, "series_temp_c", (), None)
+            if len(series_t) != len(series_c):
+                raise self.fail(
+                    sec, "series_temp_c", f"expected {len(series_t)} numbers (as series_t_h), got {len(series_c)}"
+                )
+        if series_t is not None:
+            key = "series_csv" if "series_csv" in t else "series_t_h"
+            if len(series_t) < 2:
+                raise self.fail(sec, key, f"expected at least 2 samples, got {len(series_t)}")
+            if any(b <= a for a, b in zip(series_t, series_t[1:])):
+                raise self.fail(sec, key, "times must be strictly increasing")
+        return Temperature(
+            start_c=self.in_range(sec, t, "start_c", d.start_c, -100.0, 200.0),
+            end_c=self.in_range(sec, t, "end_c", d.end_c, -100.0, 200.0),
+            tau_h=self.positive(sec, t, "tau_h", d.tau_h),
+            series_t_h=series_t,
+            series_temp_c=series_c,
+            t0_c=self.in_range(sec, t, "t0_c", d.t0_c, -100.0, 200.0),
+            k1_deg_h_per_c=self.number(sec, t, "k1_deg_h_per_c", d.k1_deg_h_per_c),
+            k2_deg_h_per_c2=self.number(sec, t, "k2_deg_h_per_c2", d.k2_deg_h_per_c2),
+            k3_deg_h_per_c_per_h=self.number(sec, t, "k3_deg_h_per_c_per_h", d.k3_deg_h_per_c_per_h),
+        )
+
+    def attitude(self, data) -> Attitude:
+        t, d = self.section(data, "attitude", Attitude), Attitude()
+        return Attitude(
+            pitch_deg=self.in_range("attitude", t, "pitch_deg", d.pitch_deg, -90.0, 90.0, open_interval=True),
+            roll_deg=self.in_range("attitude", t, "roll_deg", d.roll_deg, -180.0, 180.0),
+            yaw_deg=self.in_range("attitude", t, "yaw_deg", d.yaw_deg, -360.0, 360.0),
+        )
+
+    def read_series_csv(self, value: Any) -> tuple[tuple[float, ...], tuple[float, ...]]:
+        sec, key = "temperature", "series_csv"
+        if not isinstance(value, str):
+            raise self.fail(sec, key, f"expected a file name, got {_type_name(value)} {value!r}")
+        path = Path(value)
+        if not path.is_absolute():
+            path = self.base_dir / path
+        try:
+            with open(path, newline="", encoding="utf-8") as fh:
+                rows = list(csv.DictReader(fh))
+        except FileNotFoundError:
+            raise self.fail(sec, key, f"{path}: no such file") from None
+        except OSError as exc:
+            raise self.fail(sec, key, f"{path}: cannot read: {exc.strerror or exc}") from None
+        if not rows or "t_h" not in rows[0] or "temp_c" not in rows[0]:
+            raise self.fail(sec, key, f"{path}: expected columns t_h, temp_c and at least one row")
+        ts, cs = [], []
+        for line, row in enumerate(rows, start=2):
+            try:
+                tv, cv = float(row["t_h"]), float(row["temp_c"])
+            except (TypeError, ValueError):
+                raise self.fail(sec, key, f"{path}:{line}: expected numbers in t_h, temp_c") from None
+            if not (math.isfinite(tv) and math.isfinite(cv)):
+                raise self.fail(sec, key, f"{path}:{line}: expected finite numbers in t_h, temp_c")
+            ts.append(tv)
+            cs.append(cv)
+        return tuple(ts), tuple(cs)
+
+
+def _fmt(v: float) -> str:
+    """Print 90.0 as 90 and 0.5 as 0.5 in messages."""
+    return str(int(v)) if float(v).is_integer() and abs(v) < 1e15 else repr(float(v))
