@@ -124,7 +124,7 @@ def test_same_seed_is_bitwise_identical_and_different_seeds_differ(name, f, d, b
 
 @pytest.mark.parametrize(
     "name, tol_f, tol_x",
-    [("sphere", 1e-8, 1e-4), ("rosenbrock", 1e-3, 5e-2), ("rastrigin", 1e-6, 1e-4)],
+    [("sphere", 1e-8, 1e-4), ("rosenbrock", 1e-3, 5e-2), ("rastrigin", 1e-6, 1e-4), ("ackley", 1e-3, 1e-3)],
 )
 def test_easy_problems_reach_the_known_optimum(name, tol_f, tol_x):
     _, f, d, bounds, argmin = PROBLEMS[IDS.index(name)]
@@ -134,14 +134,14 @@ def test_easy_problems_reach_the_known_optimum(name, tol_f, tol_x):
         np.testing.assert_allclose(res.x, argmin, atol=tol_x)
 
 
-def test_hard_problems_end_well_below_a_random_search_level():
-    # Ackley and Griewank (5-D) are not solved to the optimum by the paper's settings in 100
-    # iterations; the best of the initial random swarm is the level to beat by a wide margin.
-    for name, factor in (("ackley", 1e-2), ("griewank", 0.1)):
-        _, f, d, bounds, _ = PROBLEMS[IDS.index(name)]
-        res = minimize_cpso(f, bounds, rng=0)
-        assert res.fun < factor * res.history[0] or res.fun < 1e-2, (name, res.fun, res.history[0])
-        assert res.fun < res.history[0]
+def test_griewank_ends_in_a_good_basin_far_below_its_first_iteration():
+    # 5-D Griewank is not solved to the optimum by the paper's settings in 100 iterations (the
+    # swarm settles in one of the many shallow minima near the origin); it must still end below
+    # 1 (where the cosine product outweighs the quadratic bowl) and far below its first iteration.
+    _, f, d, bounds, _ = PROBLEMS[IDS.index("griewank")]
+    for seed in range(2):
+        res = minimize_cpso(f, bounds, rng=seed)
+        assert res.fun < 1.0 and res.fun < 0.1 * res.history[0], (seed, res.fun, res.history[0])
 
 
 # --- evaluation modes give the same answer ---------------------------------------------------------
@@ -178,6 +178,20 @@ def test_map_like_workers_callable_is_used():
     b = minimize_cpso(sphere, [(-1, 1)] * 2, rng=0, max_iter=5, workers=my_map)
     assert_identical(a, b)
     assert used[0] == 30 and sum(used) == b.nfev
+
+
+def test_process_pool_map_gives_the_identical_result():
+    from concurrent.futures import ProcessPoolExecutor
+
+    serial = minimize_cpso(sphere, [(-1, 1)] * 2, rng=0, max_iter=3)
+    with ProcessPoolExecutor(max_workers=2) as pool:
+        parallel = minimize_cpso(sphere, [(-1, 1)] * 2, rng=0, max_iter=3, workers=pool.map)
+    assert_identical(serial, parallel)
+
+
+def test_callback_with_truthy_numpy_bool_stops():
+    res = minimize_cpso(sphere, [(-1, 1)], rng=0, callback=lambda r: np.bool_(r.nit >= 3))
+    assert res.nit == 3
 
 
 def test_bounds_object_equals_sequence_of_pairs():

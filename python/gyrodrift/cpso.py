@@ -125,7 +125,12 @@ def minimize_cpso(
         Logistic-map parameter, in (2, 4] as in eq. 15 (4 is fully chaotic on [0, 1]).
     chaos_radius, chaos_radius_end : float, default 0.1 and 1e-6
         Half-width of the chaos search region as a fraction of each dimension's search width, at the
-        first and at the last iteration (geometric schedule). ``0 < chaos_radius_end <= chaos_radius <= 1``.
+        first and at the last iteration, geometric in between:
+        ``rho_k = chaos_radius * (chaos_radius_end / chaos_radius) ** ((k - 1) / (max_iter - 1))``.
+        ``0 < chaos_radius_end <= chaos_radius <= 1``. The paper gives no region; 0.1 lets the early
+        chaos steps jump between neighbouring basins, and the end value 1e-6 lets the last ones refine
+        ``gbest`` well below the spread the swarm itself reaches in 100 iterations with these weights.
+        ``chaos_radius = chaos_radius_end`` gives a fixed region.
     vmax_frac : float or None, default 0.2
         Velocity clamp as a fraction of each dimension's search width; ``None`` disables it (with
         ``w = 0.75``, ``c1 + c2 = 4`` the unclamped swarm is outside the convergent region and explodes
@@ -298,7 +303,7 @@ def minimize_cpso(
                     stop = callback(interim)
                 except StopIteration:
                     stop = True
-                if stop is True:
+                if stop:
                     message = "Stopped by the callback."
                     break
             if patience is not None and nit > patience and history[-1 - patience] - gbest_fit <= tol:
@@ -331,6 +336,7 @@ class _Evaluator:
 
     def __init__(self, fun, args, vectorized, mapper):
         self.fun, self.args, self.vectorized, self.mapper = fun, tuple(args), vectorized, mapper
+        self.scalar = _ScalarCall(fun, self.args)
         self.nfev = 0
 
     def __call__(self, points: np.ndarray) -> np.ndarray:
@@ -344,11 +350,18 @@ class _Evaluator:
                     f"{points.shape}, got shape {out.shape}"
                 )
         else:
-            out = np.array(list(self.mapper(self._scalar, [p.copy() for p in points])), dtype=float)
+            out = np.array(list(self.mapper(self.scalar, [p.copy() for p in points])), dtype=float)
             self.nfev += n
         return np.where(np.isnan(out), np.inf, out)
 
-    def _scalar(self, x: np.ndarray) -> float:
+
+class _ScalarCall:
+    """``fun(x, *args)`` as a float; a small picklable object so process-pool maps can ship it."""
+
+    def __init__(self, fun, args):
+        self.fun, self.args = fun, args
+
+    def __call__(self, x: np.ndarray) -> float:
         value = np.asarray(self.fun(x, *self.args), dtype=float)
         if value.size != 1:
             raise ValueError(f"fun must return a scalar, got an array of shape {value.shape}")
