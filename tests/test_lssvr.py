@@ -1,0 +1,438 @@
+"""LSSVR: the Suykens system, scikit-learn as the oracle, closed-form LOO vs refits, errors, invariances."""
+
+import re
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from sklearn.base import clone
+from sklearn.exceptions import NotFittedError
+from sklearn.kernel_ridge import KernelRidge
+from sklearn.model_selection import GridSearchCV
+from sklearn.pipeline import make_pipeline
+from sklearn.preprocessing import StandardScaler
+from sklearn.utils.estimator_checks import parametrize_with_checks
+
+from gyrodrift.kernels import kernel_matrix, squared_distances
+from gyrodrift.lssvr import (
+    LSSVR,
+    NotPositiveDefiniteError,
+    lssvr_loo_residuals,
+    lssvr_solve,
+    rbf_batch_errors,
+)
+
+
+def make_data(n=25, d=2, seed=0, k=None):
+    rng = np.random.default_rng(seed)
+    X = rng.uniform(-1.0, 1.0, size=(n, d))
+    f = np.sin(2.0 * X[:, 0]) + 0.5 * X[:, -1] ** 2 + 3.0  # offset so the bias matters
+    if k is None:
+        return X, f + 0.05 * rng.normal(size=n)
+    return X, f[:, None] * np.arange(1, k + 1) + 0.05 * rng.normal(size=(n, k))
+
+
+def bordered_solution(K, y, gamma):
+    """Independent oracle: the (n+1) x (n+1) Suykens system solved directly (test-only)."""
+    n = len(y)
+    A = np.zeros((n + 1, n + 1))
+    A[0, 1:] = A[1:, 0] = 1.0
+    A[1:, 1:] = K + np.eye(n) / gamma
+    sol = np.linalg.solve(A, np.concatenate([[0.0], y]))
+    return sol[1:], sol[0]
+
+
+def brute_force_loo(model, X, y):
+    out = np.empty_like(y, dtype=float)
+    for i in range(len(X)):
+        keep = np.arange(len(X)) != i
+        out[i] = y[i] - clone(model).fit(X[keep], y[keep]).predict(X[i : i + 1])[0]
+    return out
+
+
+def rel_err(a, b):
+    return np.max(np.abs(np.asarray(a) - np.asarray(b))) / np.max(np.abs(b))
+
+
+# ------------------------------------------------------------------ scikit-learn's own estimator checks
+
+
+@parametrize_with_checks([LSSVR(), LSSVR(kernel="linear"), LSSVR(kernel="poly", degree=2), LSSVR(gamma=50.0)])
+def test_sklearn_estimator_checks(estimator, check):
+    check(estimator)
+
+
+# ------------------------------------------------------------------ the system and scikit-learn as oracle
+
+
+@pytest.mark.parametrize("gamma, sigma", [(0.1, 0.3), (1.0, 1.0), (102.124, 0.5), (1e3, 2.0), (10.0, 5.0)])
+def test_rbf_matches_kernel_ridge_on_y_minus_b(gamma, sigma):
+    X, y = make_data(seed=int(gamma * 7 + sigma * 3))
+    model = LSSVR(gamma=gamma, sigma=sigma).fit(X, y)
+    kr = KernelRidge(alpha=1.0 / gamma, kernel="rbf", gamma=1.0 / sigma**2).fit(X, y - model.intercept_)
+    Xt = make_data(n=40, seed=99)[0] * 1.5
+    assert rel_err(model.alpha_, kr.dual_coef_) < 1e-9
+    assert rel_err(model.predict(Xt), kr.predict(Xt) + model.intercept_) < 1e-9
+    # KernelRidge on y - b reproduces alpha only for the right b: a shifted b breaks it.
+    kr_wrong = KernelRidge(alpha=1.0 / gamma, kernel="rbf", gamma=1.0 / sigma**2).fit(X, y - model.intercept_ - 0.1)
+    assert rel_err(kr_wrong.dual_coef_, model.alpha_) > 1e-6
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    n=st.integers(2, 30),
+    d=st.integers(1, 3),
+    log_gamma=st.floats(-2.0, 3.0),
+    log_sigma=st.floats(-1.0, 1.0),
+)
+def test_rbf_matches_kernel_ridge_hypothesis(seed, n, d, log_gamma, log_sigma):
+    gamma, sigma = 10.0**log_gamma, 10.0**log_sigma
+    rng = np.random.default_rng(seed)
+    X = rng.uniform(-1.0, 1.0, size=(n, d))
+    y = rng.normal(size=n) + 2.0
+    model = LSSVR(gamma=gamma, sigma=sigma).fit(X, y)
+    kr = KernelRidge(alpha=1.0 / gamma, kernel="rbf", gamma=1.0 / sigma**2).fit(X, y - model.intercept_)
+    assert rel_err(model.alpha_, kr.dual_coef_) < 1e-9
+    assert rel_err(model.predict(X), kr.predict(X) + model.intercept_) < 1e-9
+    assert abs(model.alpha_.sum()) <= 1e-10 * np.abs(model.alpha_).sum()
+
+
+@pytest.mark.parametrize(
+    "params, kr_params",
+    [
+        (dict(kernel="linear"), dict(kernel="linear")),
+        (dict(kernel="poly", sigma=1.7, degree=3, coef0=1.0), dict(kernel="poly", gamma=1 / 1.7**2, degree=3, coef0=1.0)),
+        (dict(kernel="polynomial", sigma=0.6, degree=2, coef0=0.5), dict(kernel="poly", gamma=1 / 0.36, degree=2, coef0=0.5)),
+    ],
+)
+@pytest.mark.parametrize("gamma", [0.5, 20.0])
+def test_linear_and_poly_match_kernel_ridge(params, kr_params, gamma):
+    X, y = make_data(n=30, d=3, seed=5)
+    model = LSSVR(gamma=gamma, **params).fit(X, y)
+    kr = KernelRidge(alpha=1.0 / gamma, **kr_params).fit(X, y - model.intercept_)
+    Xt = make_data(n=10, d=3, seed=6)[0]
+    assert rel_err(model.alpha_, kr.dual_coef_) < 1e-9
+    assert rel_err(model.predict(Xt), kr.predict(Xt) + model.intercept_) < 1e-9
+
+
+@pytest.mark.parametrize("kernel", ["rbf", "linear", "poly"])
+def test_solves_the_bordered_suykens_system(kernel):
+    X, y = make_data(n=20, seed=11)
+    model = LSSVR(gamma=30.0, sigma=0.8, kernel=kernel, degree=2).fit(X, y)
+    K = kernel_matrix(X, kernel=kernel, sigma=0.8, degree=2)
+    alpha, b = bordered_solution(K, y, 30.0)
+    assert rel_err(model.alpha_, alpha) < 1e-9
+    assert model.intercept_ == pytest.approx(b, rel=1e-10)
+    assert isinstance(model.intercept_, float)
+
+
+def test_bias_constraint_and_training_residuals():
+    X, y = make_data(n=40, seed=2)
+    model = LSSVR(gamma=25.0, sigma=0.6).fit(X, y)
+    assert abs(model.alpha_.sum()) < 1e-12 * np.abs(model.alpha_).sum()
+    # KKT: the LSSVM error variables are e_i = alpha_i / gamma = y_i - f(x_i).
+    np.testing.assert_allclose(y - model.predict(X), model.alpha_ / 25.0, rtol=1e-9, atol=1e-14)
+
+
+def test_functional_core_matches_estimator():
+    X, y = make_data(n=18, seed=8)
+    model = LSSVR(gamma=7.0, sigma=0.9).fit(X, y)
+    K = kernel_matrix(X, sigma=0.9)
+    alpha, b = lssvr_solve(K, y, 7.0)
+    np.testing.assert_array_equal(alpha, model.alpha_)
+    assert b == model.intercept_
+    np.testing.assert_array_equal(lssvr_loo_residuals(K, y, 7.0), model.loo_residuals())
+
+
+# ------------------------------------------------------------------ leave-one-out residuals
+
+
+@pytest.mark.parametrize(
+    "params",
+    [
+        dict(gamma=10.0, sigma=0.5),
+        dict(gamma=1e3, sigma=1.5),
+        dict(gamma=0.2, sigma=0.3),
+        dict(gamma=5.0, kernel="linear"),
+        dict(gamma=5.0, kernel="poly", degree=2, sigma=1.2),
+    ],
+)
+def test_loo_residuals_equal_brute_force_refits(params):
+    X, y = make_data(n=22, seed=4)
+    model = LSSVR(**params).fit(X, y)
+    r = model.loo_residuals()
+    brute = brute_force_loo(model, X, y)
+    assert rel_err(r, brute) < 1e-8
+    # Sign: observed minus predicted - the LOO residual exceeds the training residual in size and has
+    # the same sign (dropping a point pulls the fit away from it).
+    train = y - model.predict(X)
+    assert np.all(np.sign(r) == np.sign(train))
+    assert np.all(np.abs(r) >= np.abs(train))
+
+
+def test_loo_residuals_multi_output():
+    X, Y = make_data(n=15, seed=7, k=2)
+    model = LSSVR(gamma=40.0, sigma=0.7).fit(X, Y)
+    r = model.loo_residuals()
+    assert r.shape == (15, 2)
+    for j in range(2):
+        brute = brute_force_loo(LSSVR(gamma=40.0, sigma=0.7), X, Y[:, j])
+        assert rel_err(r[:, j], brute) < 1e-8
+
+
+def test_loo_residuals_requires_fit():
+    with pytest.raises(NotFittedError, match="This LSSVR instance is not fitted yet"):
+        LSSVR().loo_residuals()
+
+
+# ------------------------------------------------------------------ the batch core for the tuner
+
+
+@pytest.mark.parametrize("kind", ["train", "loo"])
+def test_rbf_batch_errors_equal_per_candidate_fits(kind):
+    X, y = make_data(n=20, seed=12)
+    rng = np.random.default_rng(0)
+    gammas = 10.0 ** rng.uniform(-1, 3, 30)
+    sigmas = 10.0 ** rng.uniform(-0.7, 0.5, 30)
+    E = rbf_batch_errors(squared_distances(X), y, gammas, sigmas, kind)
+    assert E.shape == (30, 20)
+    for j, (g, s) in enumerate(zip(gammas, sigmas)):
+        model = LSSVR(gamma=g, sigma=s).fit(X, y)
+        expected = y - model.predict(X) if kind == "train" else brute_force_loo(model, X, y) if j < 3 else model.loo_residuals()
+        assert rel_err(E[j], expected) < 1e-8, (j, g, s)
+
+
+def test_rbf_batch_fitness_is_the_papers_mean_absolute_error():
+    X, y = make_data(n=22, seed=13)
+    E = rbf_batch_errors(squared_distances(X), y, [102.124], [0.5], kind="train")
+    model = LSSVR(gamma=102.124, sigma=0.5).fit(X, y)
+    assert np.mean(np.abs(E), axis=1)[0] == pytest.approx(np.mean(np.abs(y - model.predict(X))), rel=1e-9)
+
+
+def test_rbf_batch_broadcasts_scalars_and_defaults_to_train():
+    X, y = make_data(n=10, seed=14)
+    D = squared_distances(X)
+    E = rbf_batch_errors(D, y, 5.0, [0.5, 1.0])
+    np.testing.assert_array_equal(E[1], rbf_batch_errors(D, y, [5.0], [1.0], "train")[0])
+
+
+def test_non_positive_definite_candidates_give_inf_rows_not_errors():
+    # Three identical points: K is the all-ones matrix exactly, and 1 + 1/gamma rounds to 1 for
+    # gamma = 1e300, so H is exactly singular and the Cholesky factorisation must fail.
+    X = np.ones((3, 2))
+    y = np.array([1.0, 2.0, 3.0])
+    D = squared_distances(X)
+    for kind in ("train", "loo"):
+        E = rbf_batch_errors(D, y, [1.0, 1e300, 10.0], [1.0, 1.0, 2.0], kind)
+        assert np.all(np.isposinf(E[1]))
+        assert np.all(np.isfinite(E[[0, 2]]))
+
+
+def test_rbf_batch_errors_bad_arguments():
+    D = squared_distances(make_data(n=5)[0])
+    y = np.zeros(5)
+    with pytest.raises(ValueError, match="kind must be 'train' or 'loo', got 'cv'"):
+        rbf_batch_errors(D, y, [1.0], [1.0], "cv")
+    with pytest.raises(ValueError, match=r"gammas\[1\] must be a finite number > 0, got -2.0"):
+        rbf_batch_errors(D, y, [1.0, -2.0], [1.0, 1.0])
+    with pytest.raises(ValueError, match=r"sigmas\[0\] must be a finite number > 0, got nan"):
+        rbf_batch_errors(D, y, [1.0], [np.nan])
+    with pytest.raises(ValueError, match=r"y must have shape \(5,\) to match sqdist"):
+        rbf_batch_errors(D, np.zeros(4), [1.0], [1.0])
+    with pytest.raises(ValueError, match="sqdist must be a square 2-D matrix"):
+        rbf_batch_errors(D[:3], y, [1.0], [1.0])
+    with pytest.raises(ValueError, match="sqdist must be finite and non-negative"):
+        rbf_batch_errors(-D, y, [1.0], [1.0])
+    with pytest.raises(ValueError, match="y contains NaN or infinity"):
+        rbf_batch_errors(D, np.full(5, np.inf), [1.0], [1.0])
+    with pytest.raises(ValueError, match="at least 2 samples, got n_samples=1"):
+        rbf_batch_errors(np.zeros((1, 1)), np.zeros(1), [1.0], [1.0])
+
+
+# ------------------------------------------------------------------ failure of the factorisation
+
+
+def test_singular_kernel_with_huge_gamma_raises_naming_gamma_and_sigma():
+    X = np.ones((3, 2))
+    y = np.array([1.0, 2.0, 3.0])
+    with pytest.raises(NotPositiveDefiniteError, match=r"not positive definite for gamma=1e\+300, sigma=0\.5, kernel='rbf'"):
+        LSSVR(gamma=1e300, sigma=0.5).fit(X, y)
+    # The same data are fine with regularisation: b = mean(y), alpha = gamma (y - mean(y)) / (1 + 3 gamma)... at
+    # least the fit exists and the constraint holds.
+    model = LSSVR(gamma=1.0, sigma=0.5).fit(X, y)
+    assert abs(model.alpha_.sum()) < 1e-12
+
+
+def test_indefinite_polynomial_kernel_raises():
+    X, y = make_data(n=10, seed=1)
+    with pytest.raises(NotPositiveDefiniteError, match="kernel='poly'"):
+        LSSVR(gamma=1e6, kernel="poly", degree=1, coef0=-10.0).fit(X, y)
+    with pytest.raises(np.linalg.LinAlgError, match=r"not positive definite for gamma=1000000.0"):
+        lssvr_solve(kernel_matrix(X, kernel="poly", degree=1, coef0=-10.0), y, 1e6)
+    with pytest.raises(ValueError):  # NotPositiveDefiniteError is also a ValueError
+        lssvr_loo_residuals(kernel_matrix(X, kernel="poly", degree=1, coef0=-10.0), y, 1e6)
+
+
+# ------------------------------------------------------------------ bad inputs
+
+
+def test_predict_before_fit():
+    with pytest.raises(NotFittedError, match="This LSSVR instance is not fitted yet"):
+        LSSVR().predict(np.zeros((2, 2)))
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_nan_and_inf_in_X_or_y(bad):
+    X, y = make_data(n=6)
+    Xb = X.copy()
+    Xb[2, 1] = bad
+    yb = y.copy()
+    yb[3] = bad
+    with pytest.raises(ValueError, match="Input X contains (NaN|infinity)"):
+        LSSVR().fit(Xb, y)
+    with pytest.raises(ValueError, match="Input y contains (NaN|infinity)"):
+        LSSVR().fit(X, yb)
+    model = LSSVR().fit(X, y)
+    with pytest.raises(ValueError, match="Input X contains (NaN|infinity)"):
+        model.predict(Xb)
+
+
+def test_wrong_feature_count_in_predict():
+    X, y = make_data(n=6, d=2)
+    model = LSSVR().fit(X, y)
+    with pytest.raises(ValueError, match="X has 3 features, but LSSVR is expecting 2 features as input"):
+        model.predict(np.zeros((4, 3)))
+
+
+def test_fewer_than_two_samples():
+    with pytest.raises(ValueError, match=r"Found array with 1 sample\(s\) .* while a minimum of 2 is required"):
+        LSSVR().fit(np.zeros((1, 2)), np.zeros(1))
+    with pytest.raises(ValueError, match="at least 2 samples, got n_samples=1"):
+        lssvr_solve(np.ones((1, 1)), np.ones(1), 1.0)
+
+
+@pytest.mark.parametrize("name", ["gamma", "sigma"])
+@pytest.mark.parametrize("value", [0.0, -1.0, -1e-300, np.nan, np.inf, "1"])
+def test_gamma_and_sigma_must_be_positive(name, value):
+    X, y = make_data(n=6)
+    with pytest.raises(ValueError, match=re.escape(f"{name} must be a finite number > 0, got {value!r}")):
+        LSSVR(**{name: value}).fit(X, y)
+
+
+def test_gamma_validated_in_functional_core():
+    with pytest.raises(ValueError, match=re.escape("gamma must be a finite number > 0, got 0")):
+        lssvr_solve(np.eye(3), np.ones(3), 0)
+
+
+def test_unknown_kernel():
+    X, y = make_data(n=6)
+    with pytest.raises(ValueError, match="unknown kernel 'sigmoid'"):
+        LSSVR(kernel="sigmoid").fit(X, y)
+
+
+def test_functional_core_shape_errors():
+    with pytest.raises(ValueError, match=r"K must be a square 2-D kernel matrix, got shape \(3, 2\)"):
+        lssvr_solve(np.ones((3, 2)), np.ones(3), 1.0)
+    with pytest.raises(ValueError, match=r"y must have shape \(3,\) or \(3, k\)"):
+        lssvr_solve(np.eye(3), np.ones(4), 1.0)
+    with pytest.raises(ValueError, match="K must be symmetric"):
+        lssvr_solve(np.eye(3) + np.triu(np.ones((3, 3)), 1), np.ones(3), 1.0)
+    with pytest.raises(ValueError, match="K contains NaN or infinity"):
+        lssvr_solve(np.full((3, 3), np.nan), np.ones(3), 1.0)
+    with pytest.raises(ValueError, match="y contains NaN or infinity"):
+        lssvr_loo_residuals(np.eye(3), np.array([1.0, np.nan, 0.0]), 1.0)
+
+
+# ------------------------------------------------------------------ multi-output
+
+
+def test_multi_output_equals_column_by_column_fits():
+    X, Y = make_data(n=20, seed=9, k=3)
+    model = LSSVR(gamma=12.0, sigma=0.7).fit(X, Y)
+    assert model.alpha_.shape == (20, 3) and model.intercept_.shape == (3,)
+    Xt = make_data(n=7, seed=10)[0]
+    P = model.predict(Xt)
+    assert P.shape == (7, 3)
+    for j in range(3):
+        single = LSSVR(gamma=12.0, sigma=0.7).fit(X, Y[:, j])
+        np.testing.assert_allclose(model.alpha_[:, j], single.alpha_, rtol=1e-12, atol=1e-14)
+        assert model.intercept_[j] == pytest.approx(single.intercept_, rel=1e-12)
+        np.testing.assert_allclose(P[:, j], single.predict(Xt), rtol=1e-12)
+    np.testing.assert_allclose(model.alpha_.sum(axis=0), 0.0, atol=1e-12)
+
+
+# ------------------------------------------------------------------ properties
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(3, 25))
+def test_permuting_samples_permutes_alpha_and_keeps_predictions(seed, n):
+    rng = np.random.default_rng(seed)
+    X = rng.uniform(-1, 1, size=(n, 2))
+    y = rng.normal(size=n)
+    perm = rng.permutation(n)
+    a = LSSVR(gamma=20.0, sigma=0.6).fit(X, y)
+    b = LSSVR(gamma=20.0, sigma=0.6).fit(X[perm], y[perm])
+    Xt = rng.uniform(-1, 1, size=(5, 2))
+    scale = np.abs(a.alpha_).max()
+    np.testing.assert_allclose(b.alpha_, a.alpha_[perm], rtol=1e-9, atol=1e-11 * scale)
+    assert b.intercept_ == pytest.approx(a.intercept_, rel=1e-9, abs=1e-12)
+    np.testing.assert_allclose(b.predict(Xt), a.predict(Xt), rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(b.loo_residuals(), a.loo_residuals()[perm], rtol=1e-8, atol=1e-12)
+
+
+def test_unregularised_bias_absorbs_a_constant_shift_of_y():
+    X, y = make_data(n=20, seed=15)
+    a = LSSVR(gamma=3.0, sigma=0.5).fit(X, y)
+    b = LSSVR(gamma=3.0, sigma=0.5).fit(X, y + 1000.0)
+    np.testing.assert_allclose(b.alpha_, a.alpha_, rtol=1e-6, atol=1e-10)
+    assert b.intercept_ - a.intercept_ == pytest.approx(1000.0, rel=1e-12)
+
+
+def test_rbf_predictions_are_translation_invariant_in_X():
+    X, y = make_data(n=20, seed=16)
+    Xt = make_data(n=5, seed=17)[0]
+    a = LSSVR(gamma=8.0, sigma=0.4).fit(X, y)
+    b = LSSVR(gamma=8.0, sigma=0.4).fit(X + 5.0, y)
+    np.testing.assert_allclose(b.predict(Xt + 5.0), a.predict(Xt), rtol=1e-9)
+
+
+def test_huge_gamma_interpolates_and_tiny_gamma_predicts_the_mean():
+    X, y = make_data(n=15, seed=18)
+    interp = LSSVR(gamma=1e10, sigma=0.5).fit(X, y)
+    np.testing.assert_allclose(interp.predict(X), y, rtol=0, atol=1e-6)
+    flat = LSSVR(gamma=1e-9, sigma=0.5).fit(X, y)
+    assert flat.intercept_ == pytest.approx(y.mean(), rel=1e-7)
+    np.testing.assert_allclose(flat.predict(make_data(n=4, seed=19)[0]), y.mean(), rtol=1e-7)
+
+
+def test_fit_is_deterministic_to_the_bit_and_refit_replaces_state():
+    X, y = make_data(n=30, seed=20)
+    a = LSSVR(gamma=9.0, sigma=0.8).fit(X, y)
+    b = LSSVR(gamma=9.0, sigma=0.8).fit(X, y)
+    assert np.array_equal(a.alpha_, b.alpha_) and a.intercept_ == b.intercept_
+    X2, y2 = make_data(n=12, seed=21)
+    a.fit(X2, y2)
+    assert a.alpha_.shape == (12,) and a.loo_residuals().shape == (12,)
+
+
+def test_fit_does_not_modify_inputs_and_init_stores_parameters():
+    X, y = make_data(n=10)
+    X0, y0 = X.copy(), y.copy()
+    model = LSSVR(gamma="not validated in __init__", sigma=-1)
+    assert model.get_params() == dict(gamma="not validated in __init__", sigma=-1, kernel="rbf", degree=3,
+                                      coef0=1.0)
+    LSSVR(gamma=4.0).fit(X, y)
+    np.testing.assert_array_equal(X, X0)
+    np.testing.assert_array_equal(y, y0)
+
+
+def test_works_in_pipeline_and_grid_search():
+    X, y = make_data(n=40, seed=22)
+    search = GridSearchCV(make_pipeline(StandardScaler(), LSSVR()),
+                          {"lssvr__gamma": [0.1, 100.0], "lssvr__sigma": [0.5, 2.0]}, cv=4)
+    search.fit(X, y)
+    assert search.best_params_["lssvr__gamma"] == 100.0
+    assert search.best_score_ > 0.9
