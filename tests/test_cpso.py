@@ -279,6 +279,18 @@ def test_without_velocity_clamp_positions_still_stay_inside_the_bounds():
     assert res.fun == sphere(res.x)
 
 
+@pytest.mark.parametrize("vmax_frac", [0.01, 0.05])
+def test_velocity_clamp_limits_each_step_to_a_fraction_of_the_width(vmax_frac):
+    counted = Counted(rastrigin)
+    bounds = [(-5.12, 5.12), (0.0, 1.0)]
+    minimize_cpso(counted, bounds, rng=0, max_iter=20, chaos_steps=0, vmax_frac=vmax_frac)
+    swarm = np.array(counted.points).reshape(21, 30, 2)  # (iteration, particle, dim)
+    steps = np.abs(np.diff(swarm, axis=0))
+    vmax = vmax_frac * np.array([10.24, 1.0])
+    assert np.all(steps <= vmax * (1 + 1e-12))
+    assert np.any(steps >= vmax * (1 - 1e-12))  # the clamp is actually reached
+
+
 def test_tol_and_patience_stop_a_stagnating_run():
     res = minimize_cpso(lambda x: 1.0, [(-1, 1)], rng=0, tol=0.0, patience=5)
     assert res.success and res.nit == 6 and res.message.startswith("Converged")
@@ -435,7 +447,8 @@ def test_bad_inputs_raise_naming_argument_and_value(kwargs, message):
     "returned, shape", [(lambda X: np.sum(X, axis=1, keepdims=True), "(30, 1)"), (lambda X: 0.0, "()")]
 )
 def test_vectorized_output_shape_is_validated(returned, shape):
-    with pytest.raises(ValueError, match=re.escape(f"must return an array of shape (30,) for input of shape (30, 2), got shape {shape}")):
+    message = f"must return an array of shape (30,) for input of shape (30, 2), got shape {shape}"
+    with pytest.raises(ValueError, match=re.escape(message)):
         minimize_cpso(returned, GOOD, vectorized=True, max_iter=2)
 
 

@@ -84,6 +84,12 @@ def minimize_cpso(
        is kept. Otherwise the swarm is untouched.
     4. ``history`` records the best fitness, ``callback`` is called, and the stopping rules are checked.
 
+    The paper says only that the logistic map "perturbs the current particles" to escape premature
+    convergence, with at most 10 chaos iterations. Step 3 follows the usual CPSO reading (a chaotic local
+    search around the global best, as in Liu et al. 2005) and spends exactly ``chaos_steps`` evaluations
+    per iteration rather than stopping at the first improvement, so the budget (``nfev``) is fixed in
+    advance and the chaos batch can be evaluated in parallel.
+
     Guards on the logistic map: an iterate within 1e-10 of a fixed or absorbing point (0, 0.25, 0.5,
     0.75, 1, and for general ``mu`` also ``1 - 1/mu`` and ``1/mu``), or outside (0, 1), is replaced by a
     fresh draw from ``rng``; this also catches floating-point orbits that collapse onto 0 after passing
@@ -183,6 +189,8 @@ def minimize_cpso(
     ----------
     Yu F., Zhang L., Xie Y., Long X., "Identification of axial RLG drifts in single-axis rotation
     inertial navigation system based on CPSO-LSSVM", Systems Engineering and Electronics 35(5), 2013.
+    Liu B., Wang L., Jin Y.-H., Tang F., Huang D.-X., "Improved particle swarm optimization combined
+    with chaos", Chaos, Solitons & Fractals 25(5), 1261-1271, 2005.
     """
     lo_nat, hi_nat = _validate_bounds(bounds)
     n_dim = lo_nat.size
@@ -443,7 +451,8 @@ def _validate_log_scale(log_scale, lo: np.ndarray, hi: np.ndarray) -> np.ndarray
     for i in np.flatnonzero(mask):
         if lo[i] <= 0:
             raise ValueError(
-                f"log_scale requires positive bounds, got ({float(lo[i])!r}, {float(hi[i])!r}) in dimension {i}"
+                "log_scale requires positive bounds, "
+                f"got ({float(lo[i])!r}, {float(hi[i])!r}) in dimension {i}"
             )
     return mask
 
