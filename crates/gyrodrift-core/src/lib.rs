@@ -2,8 +2,21 @@
 //!
 //! One module per concept of navigation:
 //! - [`earth`]: WGS-84 constants, radii of curvature, normal gravity, Earth rate in ENU.
+//! - [`attitude`]: quaternions, DCM, rotation vectors, Euler angles (PSINS conventions).
+//! - [`turntable`]: single-axis rotation schemes about body Up (closed-form angle/rate/acceleration).
+//! - [`temperature`]: temperature profiles (warm-up, interpolated series).
+//! - [`imu_error`]: the body-frame IMU error model (biases, random walks, Gauss-Markov, scale, misalignment,
+//!   temperature-dependent axial drift).
+//! - [`simulator`]: exact IMU increments of a static base with a turntable, plus the error model.
+//! - [`strapdown`]: the strapdown navigator (coning/sculling, velocity, position, attitude).
 //!
 //! Frames: navigation frame local-level East-North-Up (ENU); body frame Right-Forward-Up.
 //! Units: SI everywhere inside the crate (rad, rad/s, m, m/s, s).
 
+pub mod attitude;
 pub mod earth;
+pub mod imu_error;
+pub mod simulator;
+pub mod strapdown;
+pub mod temperature;
+pub mod turntable;

@@ -1,0 +1,381 @@
+//! IMU simulator of a static base with a single-axis turntable: exact true increments plus the error model.
+//!
+//! Truth (ENU navigation frame n fixed to the Earth at the site, body b Right-Forward-Up):
+//! - attitude C_b^n(t) = C_b0^n Rz(alpha(t)), C_b0^n = Rz(yaw0) Rx(pitch0) Ry(roll0), alpha = table angle
+//!   (see `turntable`);
+//! - angular rate w_ib^b = C_n^b w_ie^n + alpha'(t) e_z  (the base does not move: w_en^n = 0);
+//! - specific force f^b = C_n^b (0, 0, g)   (static: f^n = -g^n, g = normal gravity of `earth`).
+//!
+//! Increments over sample k, [t_{k-1}, t_k], t_k = k / rate_hz:
+//!     dtheta = int w_ib^b dt = [ Ic u_x + Is u_y,  -Is u_x + Ic u_y,  u_z dt + alpha(t_k) - alpha(t_{k-1}) ],
+//!     dv     = int f^b dt    = [ Ic a_x + Is a_y,  -Is a_x + Ic a_y,  a_z dt ],
+//! with u = C_n^b0 w_ie^n, a = C_n^b0 (0, 0, g) and Ic = int cos(alpha) dt, Is = int sin(alpha) dt (because
+//! C_n^b = Rz(alpha)' C_n^b0). The table term is exact; Ic, Is use two-point Gauss-Legendre quadrature, whose
+//! error (alpha' dt)^4 / 4320 relative is below 1e-16 at any realistic table rate and sample rate.
+//! These are the integrals a real gyro and accelerometer deliver, so the navigator's coning, sculling and
+//! rotation compensations reproduce zero velocity: nothing is sampled at a single instant.
+//!
+//! The error model (`imu_error`) is then applied; the temperature drift uses the temperature and its rate
+//! at the middle of the sample. Output times are the end times t_k. Streaming: `next_chunk` produces the next
+//! samples into reusable buffers and keeps all state, so a run of any length uses constant memory.
+
+use crate::attitude::{dcm_to_euler, euler_to_dcm, mat_mul, mat_t_vec, rot_z, wrap_pi, Euler, Mat3, Vec3};
+use crate::earth;
+use crate::imu_error::{ImuErrorModel, ImuErrorParams};
+use crate::temperature::TemperatureProfile;
+use crate::turntable::{check, ParamError, RotationScheme, Turntable};
+
+/// Everything that defines a simulated static run (SI units).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImuSimulatorConfig {
+    /// Geodetic latitude [rad], longitude [rad], height above the ellipsoid [m].
+    pub lat: f64,
+    pub lon: f64,
+    pub height: f64,
+    /// Sample rate [Hz].
+    pub rate_hz: f64,
+    /// Length of the run [s]; the run has round(duration_s * rate_hz) samples.
+    pub duration_s: f64,
+    /// Seed of the single random generator.
+    pub seed: u64,
+    /// Body attitude at table angle zero.
+    pub attitude: Euler,
+    pub scheme: RotationScheme,
+    pub errors: ImuErrorParams,
+    pub temperature: TemperatureProfile,
+}
+
+impl Default for ImuSimulatorConfig {
+    fn default() -> Self {
+        ImuSimulatorConfig {
+            lat: 28.222f64.to_radians(),
+            lon: 0.0,
+            height: 0.0,
+            rate_hz: 100.0,
+            duration_s: 3600.0,
+            seed: 0,
+            attitude: Euler::default(),
+            scheme: RotationScheme::None,
+            errors: ImuErrorParams::default(),
+            temperature: TemperatureProfile::WarmUp { start_c: 20.0, end_c: 20.0, tau_s: 3600.0 },
+        }
+    }
+}
+
+/// Checks of the site, rate, duration and attitude shared by the simulator and the navigator.
+pub(crate) fn check_site(lat: f64, lon: f64, height: f64, rate_hz: f64) -> Result<(), ParamError> {
+    check(lat.is_finite() && lat.abs() <= 89.0f64.to_radians(), "lat_rad", format!("must be within +-89 deg (+-1.5533 rad), got {lat}"))?;
+    check(lon.is_finite() && lon.abs() <= 2.0 * std::f64::consts::PI, "lon_rad", format!("must be within +-2 pi, got {lon}"))?;
+    check(height.is_finite() && (-1000.0..=20000.0).contains(&height), "height_m", format!("must be in [-1000, 20000] m, got {height}"))?;
+    check(rate_hz.is_finite() && (1.0..=100_000.0).contains(&rate_hz), "rate_hz", format!("must be in [1, 100000] Hz, got {rate_hz}"))
+}
+
+pub(crate) fn check_attitude(e: Euler) -> Result<(), ParamError> {
+    use std::f64::consts::{FRAC_PI_2, PI};
+    check(e.pitch.is_finite() && e.pitch.abs() < FRAC_PI_2, "pitch_rad", format!("must be within (-pi/2, pi/2), got {}", e.pitch))?;
+    check(e.roll.is_finite() && e.roll.abs() <= PI, "roll_rad", format!("must be within [-pi, pi], got {}", e.roll))?;
+    check(e.yaw.is_finite() && e.yaw.abs() <= 2.0 * PI, "yaw_rad", format!("must be within [-2 pi, 2 pi], got {}", e.yaw))
+}
+
+impl ImuSimulatorConfig {
+    /// Range checks; errors name the contract key.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        check_site(self.lat, self.lon, self.height, self.rate_hz)?;
+        check(self.duration_s.is_finite() && self.duration_s > 0.0 && self.duration_s <= 1e7, "duration_s", format!("must be in (0, 1e7] s, got {}", self.duration_s))?;
+        check((self.duration_s * self.rate_hz).round() >= 1.0, "duration_s", "gives no sample at this rate")?;
+        check_attitude(self.attitude)?;
+        self.errors.validate()?;
+        self.temperature.validate()
+    }
+}
+
+/// A chunk of simulated samples (flat buffers, reused between calls).
+#[derive(Clone, Debug, Default)]
+pub struct ImuChunk {
+    /// End time of each sample [s].
+    pub t_s: Vec<f64>,
+    /// Angle increments [rad], body x y z, flattened row-major (n x 3).
+    pub dtheta: Vec<f64>,
+    /// Velocity increments [m/s], body x y z, flattened row-major (n x 3).
+    pub dv: Vec<f64>,
+    /// Temperature at the end of each sample [deg C].
+    pub temp_c: Vec<f64>,
+    /// Table angle at the end of each sample [rad] (unwrapped, CCW about body Up).
+    pub table_angle: Vec<f64>,
+    /// True attitude at the end of each sample [rad].
+    pub pitch: Vec<f64>,
+    pub roll: Vec<f64>,
+    pub yaw: Vec<f64>,
+}
+
+impl ImuChunk {
+    pub fn len(&self) -> usize {
+        self.t_s.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.t_s.is_empty()
+    }
+
+    fn clear_reserve(&mut self, n: usize) {
+        for v in [&mut self.t_s, &mut self.temp_c, &mut self.table_angle, &mut self.pitch, &mut self.roll, &mut self.yaw] {
+            v.clear();
+            v.reserve(n);
+        }
+        self.dtheta.clear();
+        self.dtheta.reserve(3 * n);
+        self.dv.clear();
+        self.dv.reserve(3 * n);
+    }
+}
+
+/// Two-point Gauss-Legendre nodes on [0, 1]: 1/2 -+ 1/(2 sqrt 3).
+const GL2_LO: f64 = 0.5 - 0.288_675_134_594_812_9;
+const GL2_HI: f64 = 0.5 + 0.288_675_134_594_812_9;
+
+/// The simulator (see the module docs).
+#[derive(Clone, Debug)]
+pub struct ImuSimulator {
+    cfg: ImuSimulatorConfig,
+    dt: f64,
+    n_samples: u64,
+    /// Samples produced so far.
+    k: u64,
+    c_b0n: Mat3,
+    /// C_n^b0 w_ie^n [rad/s].
+    u_w: Vec3,
+    /// C_n^b0 (0, 0, g) [m/s^2].
+    u_f: Vec3,
+    level: bool,
+    table: Turntable,
+    errors: ImuErrorModel,
+    /// Table angle at the end of the previous sample [rad].
+    alpha_prev: f64,
+}
+
+impl ImuSimulator {
+    pub fn new(cfg: ImuSimulatorConfig) -> Result<Self, ParamError> {
+        cfg.validate()?;
+        let table = Turntable::new(cfg.scheme.clone())?;
+        let dt = 1.0 / cfg.rate_hz;
+        let errors = ImuErrorModel::new(cfg.errors.clone(), dt, cfg.seed)?;
+        let c_b0n = euler_to_dcm(cfg.attitude);
+        let g = earth::normal_gravity(cfg.lat, cfg.height);
+        let u_w = mat_t_vec(&c_b0n, earth::earth_rate_enu(cfg.lat));
+        let u_f = mat_t_vec(&c_b0n, [0.0, 0.0, g]);
+        Ok(ImuSimulator {
+            n_samples: (cfg.duration_s * cfg.rate_hz).round() as u64,
+            level: cfg.attitude.pitch == 0.0 && cfg.attitude.roll == 0.0,
+            dt,
+            k: 0,
+            c_b0n,
+            u_w,
+            u_f,
+            table,
+            errors,
+            alpha_prev: 0.0,
+            cfg,
+        })
+    }
+
+    /// Total number of samples of the run.
+    pub fn n_samples(&self) -> u64 {
+        self.n_samples
+    }
+
+    /// Samples produced so far.
+    pub fn samples_done(&self) -> u64 {
+        self.k
+    }
+
+    pub fn config(&self) -> &ImuSimulatorConfig {
+        &self.cfg
+    }
+
+    /// The turntable profile.
+    pub fn turntable(&self) -> &Turntable {
+        &self.table
+    }
+
+    /// Sample interval [s].
+    pub fn dt(&self) -> f64 {
+        self.dt
+    }
+
+    /// True increments (dtheta [rad], dv [m/s]) of sample k (1-based, ending at t_k = k dt) and the table angle
+    /// at its end. `alpha0` is the table angle at its start.
+    #[inline]
+    fn true_increments(&self, k: u64, alpha0: f64) -> (Vec3, Vec3, f64) {
+        let dt = self.dt;
+        let rate = self.cfg.rate_hz;
+        let t1 = k as f64 / rate;
+        let (u, a) = (self.u_w, self.u_f);
+        if self.table.is_static() {
+            return ([u[0] * dt, u[1] * dt, u[2] * dt], [a[0] * dt, a[1] * dt, a[2] * dt], 0.0);
+        }
+        let t0 = (k - 1) as f64 / rate;
+        let alpha1 = self.table.angle(t1);
+        let (s1, c1) = self.table.angle(t0 + GL2_LO * dt).sin_cos();
+        let (s2, c2) = self.table.angle(t0 + GL2_HI * dt).sin_cos();
+        let ic = 0.5 * dt * (c1 + c2);
+        let is = 0.5 * dt * (s1 + s2);
+        (
+            [ic * u[0] + is * u[1], -is * u[0] + ic * u[1], u[2] * dt + (alpha1 - alpha0)],
+            [ic * a[0] + is * a[1], -is * a[0] + ic * a[1], a[2] * dt],
+            alpha1,
+        )
+    }
+
+    /// Produce the next at most `n` samples into `out` (cleared first). Returns the number produced;
+    /// 0 means the run is over.
+    pub fn next_chunk(&mut self, n: usize, out: &mut ImuChunk) -> usize {
+        let m = (n as u64).min(self.n_samples - self.k) as usize;
+        out.clear_reserve(m);
+        let rate = self.cfg.rate_hz;
+        let dt = self.dt;
+        let temp_drift = self.errors.params().has_temperature_drift();
+        let yaw0 = self.cfg.attitude.yaw;
+        for _ in 0..m {
+            let k = self.k + 1;
+            let t1 = k as f64 / rate;
+            let (mut dth, mut dv, alpha1) = self.true_increments(k, self.alpha_prev);
+            self.alpha_prev = alpha1;
+            let drift = if temp_drift {
+                let (tm, rm) = self.cfg.temperature.at(t1 - 0.5 * dt);
+                self.errors.params().axial_drift(tm, rm)
+            } else {
+                0.0
+            };
+            self.errors.apply(drift, &mut dth, &mut dv);
+            let temp = self.cfg.temperature.at(t1).0;
+            out.t_s.push(t1);
+            out.dtheta.extend_from_slice(&dth);
+            out.dv.extend_from_slice(&dv);
+            out.temp_c.push(temp);
+            out.table_angle.push(alpha1);
+            if self.level {
+                out.pitch.push(0.0);
+                out.roll.push(0.0);
+                out.yaw.push(wrap_pi(yaw0 + alpha1));
+            } else {
+                let e = dcm_to_euler(&mat_mul(&self.c_b0n, &rot_z(alpha1)));
+                out.pitch.push(e.pitch);
+                out.roll.push(e.roll);
+                out.yaw.push(e.yaw);
+            }
+            self.k = k;
+        }
+        m
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::attitude::{add, norm, quat_mul, quat_to_rotvec, rotvec_to_quat, euler_to_quat, quat_conj, sub};
+
+    fn rotating(level: bool) -> ImuSimulatorConfig {
+        ImuSimulatorConfig {
+            rate_hz: 50.0,
+            duration_s: 200.0,
+            attitude: if level { Euler { pitch: 0.0, roll: 0.0, yaw: 0.3 } } else { Euler { pitch: 0.02, roll: -0.03, yaw: 0.3 } },
+            scheme: RotationScheme::Reciprocating { rate: 0.3, accel: 0.2, span: 3.0, dwell: 2.0 },
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn increments_match_a_fine_numerical_integration() {
+        for level in [true, false] {
+            let cfg = rotating(level);
+            let mut sim = ImuSimulator::new(cfg.clone()).unwrap();
+            let mut ch = ImuChunk::default();
+            let n = sim.next_chunk(2000, &mut ch);
+            assert_eq!(n, 2000);
+            let c_b0n = euler_to_dcm(cfg.attitude);
+            let wie = earth::earth_rate_enu(cfg.lat);
+            let g = earth::normal_gravity(cfg.lat, cfg.height);
+            let table = Turntable::new(cfg.scheme.clone()).unwrap();
+            for k in (0..2000).step_by(37) {
+                // Simpson with 200 sub-intervals per sample.
+                let (t0, dt) = (k as f64 * 0.02, 0.02);
+                let m = 200;
+                let mut sw = [0.0; 3];
+                let mut sf = [0.0; 3];
+                for j in 0..=m {
+                    let t = t0 + dt * j as f64 / m as f64;
+                    let st = table.state(t);
+                    let cbn = mat_mul(&c_b0n, &rot_z(st.angle));
+                    let w = add(mat_t_vec(&cbn, wie), [0.0, 0.0, st.rate]);
+                    let f = mat_t_vec(&cbn, [0.0, 0.0, g]);
+                    let wt = if j == 0 || j == m { 1.0 } else if j % 2 == 1 { 4.0 } else { 2.0 } * dt / (3.0 * m as f64);
+                    for i in 0..3 {
+                        sw[i] += wt * w[i];
+                        sf[i] += wt * f[i];
+                    }
+                }
+                let dth = [ch.dtheta[3 * k], ch.dtheta[3 * k + 1], ch.dtheta[3 * k + 2]];
+                let dv = [ch.dv[3 * k], ch.dv[3 * k + 1], ch.dv[3 * k + 2]];
+                assert!(norm(sub(dth, sw)) < 1e-14, "{k}: {dth:?} vs {sw:?}");
+                // Two-point Gauss-Legendre is exact for cubics; at a ramp start alpha ~ t^4 and the quadrature
+                // error reaches ~1e-13 m/s on 6e-3 m/s (3e-12 m/s^2 while the ramp starts: negligible).
+                assert!(norm(sub(dv, sf)) < 1e-12, "{k}: {dv:?} vs {sf:?}");
+                // True attitude = C_b0^n Rz(alpha).
+                let e = dcm_to_euler(&mat_mul(&c_b0n, &rot_z(table.angle(t0 + dt))));
+                assert!((ch.yaw[k] - e.yaw).abs() < 1e-12 && (ch.pitch[k] - e.pitch).abs() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn summed_increments_give_the_true_attitude_change() {
+        // Integrating dtheta with exact rotation-vector composition (tiny steps) must track the body relative
+        // to inertial space; compare against C_b^i(t) = C_n^i(t) C_b^n(t) with C_n^i = Rz_polar(w_ie t).
+        let cfg = rotating(false);
+        let mut sim = ImuSimulator::new(cfg.clone()).unwrap();
+        let mut ch = ImuChunk::default();
+        sim.next_chunk(5000, &mut ch);
+        let mut q = QUAT0;
+        let mut prev = [0.0; 3];
+        for k in 0..5000 {
+            let d = [ch.dtheta[3 * k], ch.dtheta[3 * k + 1], ch.dtheta[3 * k + 2]];
+            // One-plus-previous-sample coning correction.
+            let phi = add(d, crate::attitude::scale(crate::attitude::cross(prev, d), 1.0 / 12.0));
+            q = quat_mul(q, rotvec_to_quat(phi));
+            prev = d;
+        }
+        // Truth: q_{b(t)}^{b(0)} = q_n^b(0) o q_{n(t)}^{n(0)} o q_b^n(t); n rotates about the polar axis,
+        // which in ENU is w_ie^n / w_ie, by w_ie t.
+        let t = 100.0;
+        let pol = earth::earth_rate_enu(cfg.lat);
+        let qn = rotvec_to_quat([pol[0] * t, pol[1] * t, pol[2] * t]);
+        let qb0 = euler_to_quat(cfg.attitude);
+        let table = Turntable::new(cfg.scheme.clone()).unwrap();
+        let qbt = quat_mul(qb0, rotvec_to_quat([0.0, 0.0, table.angle(t)]));
+        let truth = quat_mul(quat_conj(qb0), quat_mul(qn, qbt));
+        let err = quat_to_rotvec(quat_mul(quat_conj(truth), q));
+        // With the coning correction the composition reproduces the true rotation to rounding level.
+        assert!(norm(err) < 1e-11, "{err:?}");
+    }
+
+    const QUAT0: [f64; 4] = [1.0, 0.0, 0.0, 0.0];
+
+    #[test]
+    fn chunking_does_not_change_the_output() {
+        let mut cfg = rotating(false);
+        cfg.errors.gyro_arw = 1e-6;
+        cfg.errors.accel_vrw = 1e-5;
+        cfg.errors.gyro_bias_instability = 1e-7;
+        let mut a = ImuSimulator::new(cfg.clone()).unwrap();
+        let mut b = ImuSimulator::new(cfg).unwrap();
+        let mut ca = ImuChunk::default();
+        a.next_chunk(10_000, &mut ca);
+        let mut all = Vec::new();
+        let mut cb = ImuChunk::default();
+        while b.next_chunk(333, &mut cb) > 0 {
+            all.extend_from_slice(&cb.dtheta);
+        }
+        assert_eq!(ca.dtheta, all);
+        assert_eq!(a.next_chunk(5, &mut ca), 0);
+    }
+}

@@ -1,0 +1,428 @@
+//! Turntable: the single-axis rotation schemes of the IMU about body Up.
+//!
+//! The table angle alpha(t) [rad] is positive counter-clockwise about body Up, and alpha(0) = 0 for every
+//! scheme, so with the body attitude C_b0^n at table angle zero the true attitude is
+//! C_b^n(t) = C_b0^n Rz(alpha(t)); with zero pitch and roll, yaw(t) = yaw0 + alpha(t).
+//!
+//! Every start, stop and reversal follows a cycloidal rate ramp (continuous acceleration, bounded jerk):
+//! over a ramp of duration T_r from rate 0 to rate w,
+//!     u = tau / T_r,  rate(tau) = w (u - sin(2 pi u) / (2 pi)),
+//!     accel(tau) = (w / T_r)(1 - cos(2 pi u)),   peak accel 2 w / T_r = `accel`  =>  T_r = 2 w / accel,
+//!     angle(tau) = w T_r (u^2 / 2 + (cos(2 pi u) - 1) / (4 pi^2)),  ramp angle w T_r / 2.
+//! Acceleration is zero at both ends of every ramp, so rate and acceleration are continuous everywhere.
+//! A move of signed angle D at cruise rate w: ramp up, cruise, ramp down; if |D| < w T_r the peak rate is
+//! lowered to sqrt(accel |D| / 2) (no cruise). Angle, rate and acceleration are closed-form functions of t.
+//!
+//! Schemes:
+//! - `None`: alpha = 0.
+//! - `Continuous`: ramp up to the cruise rate (its sign is the direction), then rotate for ever.
+//! - `Reciprocating`: move +span, dwell, move -span, dwell, repeat (span signed by the rate's sign). The angle
+//!   is periodic and stays in [0, span]; `dwell` may be zero (direct reversal).
+//! - `Indexing`: from 0 move to positions[0], dwell, move to positions[1], dwell, ..., move from the last
+//!   position back to positions[0] and repeat. Moves go by the numeric difference of the (unwrapped)
+//!   positions, so the table never accumulates net turns: e.g. [0, 90, 180, 270] deg slews +90, +90, +90 and
+//!   then -270 back. The cruise rate's magnitude is used for every slew.
+
+use std::f64::consts::TAU;
+
+/// A rotation scheme about body Up (SI: rad, rad/s, rad/s^2, s).
+#[derive(Clone, Debug, PartialEq)]
+pub enum RotationScheme {
+    None,
+    Continuous { rate: f64, accel: f64 },
+    Reciprocating { rate: f64, accel: f64, span: f64, dwell: f64 },
+    Indexing { rate: f64, accel: f64, positions: Vec<f64>, dwell: f64 },
+}
+
+/// Table state at one time: angle [rad], rate [rad/s], acceleration [rad/s^2], all about body Up (CCW +).
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct TableState {
+    pub angle: f64,
+    pub rate: f64,
+    pub accel: f64,
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Kind {
+    /// Cycloidal ramp from 0 to `peak` (signed) in `duration`.
+    RampUp { peak: f64 },
+    /// Cycloidal ramp from `peak` (signed) to 0 in `duration`.
+    RampDown { peak: f64 },
+    /// Constant rate.
+    Cruise { rate: f64 },
+    /// At rest.
+    Dwell,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Segment {
+    t0: f64,
+    duration: f64,
+    angle0: f64,
+    kind: Kind,
+}
+
+/// Cycloidal ramp from rate 0 to rate `w` over `tr`, evaluated at `tau` in [0, tr].
+#[inline]
+fn ramp_up(w: f64, tr: f64, tau: f64) -> TableState {
+    let u = tau / tr;
+    let (s, c) = (TAU * u).sin_cos();
+    TableState {
+        angle: w * tr * (0.5 * u * u + (c - 1.0) / (TAU * TAU)),
+        rate: w * (u - s / TAU),
+        accel: w / tr * (1.0 - c),
+    }
+}
+
+impl Segment {
+    #[inline]
+    fn eval(&self, t: f64) -> TableState {
+        let tau = t - self.t0;
+        match self.kind {
+            Kind::Dwell => TableState { angle: self.angle0, rate: 0.0, accel: 0.0 },
+            Kind::Cruise { rate } => TableState { angle: self.angle0 + rate * tau, rate, accel: 0.0 },
+            Kind::RampUp { peak } => {
+                let s = ramp_up(peak, self.duration, tau);
+                TableState { angle: self.angle0 + s.angle, ..s }
+            }
+            Kind::RampDown { peak } => {
+                let s = ramp_up(peak, self.duration, tau);
+                TableState { angle: self.angle0 + peak * tau - s.angle, rate: peak - s.rate, accel: -s.accel }
+            }
+        }
+    }
+
+    #[cfg(test)]
+    fn end(&self) -> TableState {
+        let t = self.t0 + self.duration;
+        match self.kind {
+            // Closed-form end values avoid rounding of sin/cos at u = 1.
+            Kind::RampUp { peak } => {
+                TableState { angle: self.angle0 + 0.5 * peak * self.duration, rate: peak, accel: 0.0 }
+            }
+            Kind::RampDown { peak } => {
+                TableState { angle: self.angle0 + 0.5 * peak * self.duration, rate: 0.0, accel: 0.0 }
+            }
+            _ => self.eval(t),
+        }
+    }
+}
+
+/// A turntable profile: exact closed-form angle, rate and acceleration as functions of time.
+#[derive(Clone, Debug)]
+pub struct Turntable {
+    scheme: RotationScheme,
+    /// One period of the profile (or the whole of it for `Continuous`).
+    segments: Vec<Segment>,
+    /// Period [s] for periodic schemes (angle returns to its value at `period_start`); 0 if not periodic.
+    period: f64,
+    /// Time at which periodic repetition starts (after an initial move for indexing) [s].
+    period_start: f64,
+    /// Segments before `period_start` that are not repeated.
+    n_prefix: usize,
+}
+
+/// Validation error naming the offending parameter.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ParamError {
+    pub key: &'static str,
+    pub message: String,
+}
+
+impl std::fmt::Display for ParamError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}: {}", self.key, self.message)
+    }
+}
+
+impl std::error::Error for ParamError {}
+
+pub(crate) fn check(ok: bool, key: &'static str, message: impl Into<String>) -> Result<(), ParamError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(ParamError { key, message: message.into() })
+    }
+}
+
+/// Build a move of signed angle `d` into `segs`, starting at (`t`, `angle`); returns the end time.
+fn push_move(segs: &mut Vec<Segment>, t: f64, angle: f64, d: f64, rate: f64, accel: f64) -> f64 {
+    if d == 0.0 {
+        return t;
+    }
+    let sign = d.signum();
+    let dist = d.abs();
+    let mut w = rate.abs();
+    let mut tr = 2.0 * w / accel;
+    if dist < w * tr {
+        w = (accel * dist / 2.0).sqrt();
+        tr = 2.0 * w / accel;
+    }
+    let peak = sign * w;
+    let cruise_t = (dist - w * tr) / w;
+    let mut t = t;
+    let mut a = angle;
+    segs.push(Segment { t0: t, duration: tr, angle0: a, kind: Kind::RampUp { peak } });
+    t += tr;
+    a += 0.5 * peak * tr;
+    if cruise_t > 0.0 {
+        segs.push(Segment { t0: t, duration: cruise_t, angle0: a, kind: Kind::Cruise { rate: peak } });
+        t += cruise_t;
+        a += peak * cruise_t;
+    }
+    segs.push(Segment { t0: t, duration: tr, angle0: a, kind: Kind::RampDown { peak } });
+    t + tr
+}
+
+fn push_dwell(segs: &mut Vec<Segment>, t: f64, angle: f64, dwell: f64) -> f64 {
+    if dwell > 0.0 {
+        segs.push(Segment { t0: t, duration: dwell, angle0: angle, kind: Kind::Dwell });
+    }
+    t + dwell
+}
+
+fn check_rate_accel(rate: f64, accel: f64) -> Result<(), ParamError> {
+    check(rate.is_finite() && rate != 0.0 && rate.abs() <= 10.0, "rotation_rate_rad_s", format!("must be non-zero, finite and at most 10 rad/s in magnitude, got {rate}"))?;
+    check(accel.is_finite() && accel > 0.0 && accel <= 100.0, "rotation_accel_rad_s2", format!("must be positive, finite and at most 100 rad/s^2, got {accel}"))
+}
+
+impl Turntable {
+    /// Build and validate a profile.
+    pub fn new(scheme: RotationScheme) -> Result<Self, ParamError> {
+        let mut segs = Vec::new();
+        let (period, period_start, n_prefix);
+        match &scheme {
+            RotationScheme::None => {
+                period = 0.0;
+                period_start = 0.0;
+                n_prefix = 0;
+            }
+            RotationScheme::Continuous { rate, accel } => {
+                check_rate_accel(*rate, *accel)?;
+                let tr = 2.0 * rate.abs() / accel;
+                segs.push(Segment { t0: 0.0, duration: tr, angle0: 0.0, kind: Kind::RampUp { peak: *rate } });
+                segs.push(Segment { t0: tr, duration: f64::INFINITY, angle0: 0.5 * rate * tr, kind: Kind::Cruise { rate: *rate } });
+                period = 0.0;
+                period_start = 0.0;
+                n_prefix = 0;
+            }
+            RotationScheme::Reciprocating { rate, accel, span, dwell } => {
+                check_rate_accel(*rate, *accel)?;
+                check(span.is_finite() && *span > 0.0 && *span <= 1000.0, "reciprocating_span_rad", format!("must be positive and finite, got {span}"))?;
+                check(dwell.is_finite() && *dwell >= 0.0, "dwell_s", format!("must be >= 0 and finite, got {dwell}"))?;
+                let d = span * rate.signum();
+                let mut t = push_move(&mut segs, 0.0, 0.0, d, *rate, *accel);
+                t = push_dwell(&mut segs, t, d, *dwell);
+                t = push_move(&mut segs, t, d, -d, *rate, *accel);
+                t = push_dwell(&mut segs, t, 0.0, *dwell);
+                period = t;
+                period_start = 0.0;
+                n_prefix = 0;
+            }
+            RotationScheme::Indexing { rate, accel, positions, dwell } => {
+                check_rate_accel(*rate, *accel)?;
+                check(!positions.is_empty(), "positions_rad", "must hold at least one position")?;
+                check(positions.iter().all(|p| p.is_finite() && p.abs() <= 1000.0), "positions_rad", "positions must be finite (|p| <= 1000 rad)")?;
+                check(dwell.is_finite() && *dwell > 0.0, "dwell_s", format!("indexing needs a positive dwell, got {dwell}"))?;
+                // Prefix: move from 0 to positions[0].
+                let mut t = push_move(&mut segs, 0.0, 0.0, positions[0], *rate, *accel);
+                n_prefix = segs.len();
+                period_start = t;
+                let n = positions.len();
+                for i in 0..n {
+                    t = push_dwell(&mut segs, t, positions[i], *dwell);
+                    let next = positions[(i + 1) % n];
+                    t = push_move(&mut segs, t, positions[i], next - positions[i], *rate, *accel);
+                }
+                period = t - period_start;
+            }
+        }
+        Ok(Turntable { scheme, segments: segs, period, period_start, n_prefix })
+    }
+
+    /// The scheme this profile was built from.
+    pub fn scheme(&self) -> &RotationScheme {
+        &self.scheme
+    }
+
+    /// Period of the profile [s] (0 for `None` and `Continuous`).
+    pub fn period(&self) -> f64 {
+        self.period
+    }
+
+    /// True if the table never moves.
+    pub fn is_static(&self) -> bool {
+        self.segments.is_empty()
+    }
+
+    /// Angle [rad], rate [rad/s] and acceleration [rad/s^2] at time t >= 0 [s].
+    #[inline]
+    pub fn state(&self, t: f64) -> TableState {
+        if self.segments.is_empty() {
+            return TableState::default();
+        }
+        let (segs, tt) = if self.period > 0.0 && t >= self.period_start {
+            let tau = (t - self.period_start) % self.period;
+            (&self.segments[self.n_prefix..], self.period_start + tau)
+        } else {
+            (&self.segments[..], t)
+        };
+        // Last segment starting at or before tt.
+        let i = segs.partition_point(|s| s.t0 <= tt).saturating_sub(1);
+        segs[i].eval(tt)
+    }
+
+    /// Angle [rad] at time t [s].
+    #[inline]
+    pub fn angle(&self, t: f64) -> f64 {
+        self.state(t).angle
+    }
+
+    /// Largest rate magnitude any segment reaches [rad/s].
+    pub fn max_rate(&self) -> f64 {
+        self.segments
+            .iter()
+            .map(|s| match s.kind {
+                Kind::RampUp { peak } | Kind::RampDown { peak } => peak.abs(),
+                Kind::Cruise { rate } => rate.abs(),
+                Kind::Dwell => 0.0,
+            })
+            .fold(0.0, f64::max)
+    }
+
+    #[cfg(test)]
+    fn segment_ends(&self) -> Vec<(f64, TableState)> {
+        self.segments.iter().map(|s| (s.t0 + s.duration, s.end())).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::{FRAC_PI_2, PI};
+
+    const RATE: f64 = 6.0 * PI / 180.0;
+    const ACC: f64 = 2.0 * PI / 180.0;
+
+    fn schemes() -> Vec<RotationScheme> {
+        vec![
+            RotationScheme::Continuous { rate: RATE, accel: ACC },
+            RotationScheme::Continuous { rate: -RATE, accel: ACC },
+            RotationScheme::Reciprocating { rate: RATE, accel: ACC, span: 2.0 * PI, dwell: 0.0 },
+            RotationScheme::Reciprocating { rate: RATE, accel: ACC, span: PI, dwell: 30.0 },
+            RotationScheme::Reciprocating { rate: RATE, accel: ACC, span: 0.01, dwell: 1.0 },
+            RotationScheme::Indexing { rate: RATE, accel: ACC, positions: vec![0.0, FRAC_PI_2, PI, 1.5 * PI], dwell: 300.0 },
+            RotationScheme::Indexing { rate: RATE, accel: ACC, positions: vec![0.5, -2.0], dwell: 10.0 },
+        ]
+    }
+
+    #[test]
+    fn angle_rate_accel_are_continuous_consistent_and_bounded() {
+        for sch in schemes() {
+            let tt = Turntable::new(sch.clone()).unwrap();
+            let horizon = if tt.period() > 0.0 { 3.0 * tt.period() + 100.0 } else { 600.0 };
+            let dt = 1e-3;
+            let w_min = tt
+                .segments
+                .iter()
+                .filter_map(|g| match g.kind {
+                    Kind::RampUp { peak } => Some(peak.abs()),
+                    _ => None,
+                })
+                .fold(f64::INFINITY, f64::min);
+            let mut prev = tt.state(0.0);
+            assert_eq!(prev.angle, 0.0);
+            assert_eq!(prev.rate, 0.0);
+            let mut t = dt;
+            let mut max_rate: f64 = 0.0;
+            while t < horizon {
+                let s = tt.state(t);
+                // Continuity: no jumps larger than what the bounds allow over dt.
+                assert!((s.angle - prev.angle).abs() <= RATE * dt * (1.0 + 1e-9) + 1e-12, "{sch:?} angle jump at {t}");
+                assert!((s.rate - prev.rate).abs() <= ACC * dt * (1.0 + 1e-9) + 1e-12, "{sch:?} rate jump at {t}");
+                // Jerk of a cycloidal ramp peaks at pi accel^2 / (2 w_peak).
+                assert!((s.accel - prev.accel).abs() <= PI * ACC * ACC / (2.0 * w_min) * dt * 1.01 + 1e-12, "{sch:?} accel jump at {t}");
+                // Consistency: finite differences of angle and rate match rate and accel (central, O(dt^2)).
+                let (a, b) = (tt.state(t - 1e-4), tt.state(t + 1e-4));
+                assert!(((b.angle - a.angle) / 2e-4 - s.rate).abs() < 1e-7, "{sch:?} rate at {t}");
+                assert!(((b.rate - a.rate) / 2e-4 - s.accel).abs() < 1e-6, "{sch:?} accel at {t}");
+                assert!(s.accel.abs() <= ACC * (1.0 + 1e-12));
+                max_rate = max_rate.max(s.rate.abs());
+                prev = s;
+                t += dt;
+            }
+            assert!(max_rate <= RATE * (1.0 + 1e-12));
+            // Segment ends in closed form agree with evaluation.
+            for (te, s) in tt.segment_ends() {
+                if te.is_finite() {
+                    let e = tt.segments.iter().find(|g| g.t0 + g.duration == te).unwrap().eval(te);
+                    assert!((e.angle - s.angle).abs() < 1e-12 && (e.rate - s.rate).abs() < 1e-12);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn continuous_reaches_cruise_rate_and_the_angle_is_linear() {
+        let tt = Turntable::new(RotationScheme::Continuous { rate: RATE, accel: ACC }).unwrap();
+        let tr = 2.0 * RATE / ACC; // 6 s
+        let s = tt.state(1000.0);
+        assert!((s.rate - RATE).abs() < 1e-15);
+        assert!((s.angle - (0.5 * RATE * tr + RATE * (1000.0 - tr))).abs() < 1e-10);
+        // Half-way through the ramp the rate is half the cruise rate and the acceleration peaks.
+        let h = tt.state(0.5 * tr);
+        assert!((h.rate - 0.5 * RATE).abs() < 1e-15 && (h.accel - ACC).abs() < 1e-15);
+    }
+
+    #[test]
+    fn reciprocating_turns_span_and_back() {
+        let span = 2.0 * PI;
+        let tt = Turntable::new(RotationScheme::Reciprocating { rate: RATE, accel: ACC, span, dwell: 20.0 }).unwrap();
+        let tr = 2.0 * RATE / ACC;
+        let move_t = (span - RATE * tr) / RATE + 2.0 * tr;
+        assert!((tt.period() - 2.0 * (move_t + 20.0)).abs() < 1e-9);
+        let top = tt.state(move_t + 10.0);
+        assert!((top.angle - span).abs() < 1e-12 && top.rate == 0.0);
+        for k in 0..5 {
+            let s = tt.state(k as f64 * tt.period() + 5.0);
+            assert!((s.angle - tt.state(5.0).angle).abs() < 1e-9, "periodic");
+            let b = tt.state((k + 1) as f64 * tt.period() - 10.0);
+            assert!(b.angle.abs() < 1e-12 && b.rate == 0.0, "dwell at zero");
+        }
+    }
+
+    #[test]
+    fn indexing_dwells_at_each_position() {
+        let pos = vec![0.0, FRAC_PI_2, PI, 1.5 * PI];
+        let dwell = 300.0;
+        let tt = Turntable::new(RotationScheme::Indexing { rate: RATE, accel: ACC, positions: pos.clone(), dwell }).unwrap();
+        // Walk through two periods and check the middle of each dwell.
+        let mut t = 0.0;
+        let slew = |d: f64| {
+            let tr = 2.0 * RATE / ACC;
+            let d = d.abs();
+            if d >= RATE * tr { (d - RATE * tr) / RATE + 2.0 * tr } else { 2.0 * (2.0 * (ACC * d / 2.0).sqrt() / ACC) }
+        };
+        for _ in 0..2 {
+            for i in 0..4 {
+                let s = tt.state(t + 0.5 * dwell);
+                assert!((s.angle - pos[i]).abs() < 1e-9, "position {i}: {s:?}");
+                assert_eq!(s.rate, 0.0);
+                t += dwell + slew(pos[(i + 1) % 4] - pos[i]);
+            }
+        }
+        assert!((tt.period() - t / 2.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn bad_parameters_name_the_key() {
+        let e = Turntable::new(RotationScheme::Continuous { rate: 0.0, accel: ACC }).unwrap_err();
+        assert_eq!(e.key, "rotation_rate_rad_s");
+        let e = Turntable::new(RotationScheme::Continuous { rate: RATE, accel: -1.0 }).unwrap_err();
+        assert_eq!(e.key, "rotation_accel_rad_s2");
+        let e = Turntable::new(RotationScheme::Indexing { rate: RATE, accel: ACC, positions: vec![], dwell: 1.0 }).unwrap_err();
+        assert_eq!(e.key, "positions_rad");
+        let e = Turntable::new(RotationScheme::Reciprocating { rate: RATE, accel: ACC, span: f64::NAN, dwell: 0.0 }).unwrap_err();
+        assert_eq!(e.key, "reciprocating_span_rad");
+    }
+}
