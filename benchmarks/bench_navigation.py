@@ -1,0 +1,116 @@
+"""Throughput of the Rust IMU simulator and navigator against a per-sample numpy strapdown, same run.
+
+    python benchmarks/bench_navigation.py [--hours 72] [--rate-hz 100] [--reference-s 60] [--chunk 100000]
+
+1. Rust `ImuSimulator` alone: the whole run (default 72 h at 100 Hz = 25.9 M samples), streamed in chunks.
+2. Rust `Navigator` alone: the same run, chunks simulated beforehand are not kept (the simulator is timed
+   separately and its time subtracted; the navigation time is measured around `process` only).
+3. The numpy `ReferenceNavigator` (python/gyrodrift/ins/reference_nav.py, the same equations, one sample
+   per Python iteration) on the first `--reference-s` seconds of the same data.
+
+Prints samples/s of each, the ratio Rust / numpy, and the peak memory (resident set size from
+`resource.getrusage`, and the Python-heap peak from `tracemalloc` during the streamed run), which
+shows the run is never held whole in memory. Never fails on a slow machine: it only reports.
+"""
+
+from __future__ import annotations
+
+import argparse
+import resource
+import sys
+import time
+import tracemalloc
+
+import numpy as np
+
+from gyrodrift import _core
+from gyrodrift.ins import Scenario
+from gyrodrift.ins.reference_nav import ReferenceNavigator
+from gyrodrift.units import DEG
+
+
+def _scenario(hours: float, rate_hz: float) -> Scenario:
+    # The paper-like case: reciprocating rotation, small sensor errors with noise on every channel.
+    return Scenario.from_dict(
+        {
+            "run": {"duration_h": hours, "rate_hz": rate_hz, "seed": 1},
+            "rotation": {"scheme": "reciprocating", "rate_deg_s": 6.0},
+            "gyro": {"bias_deg_h": [0.002, -0.002, 0.003], "arw_deg_rth": 0.0005,
+                     "bias_instability_deg_h": 0.001, "correlation_s": 3600.0},
+            "accel": {"bias_ug": [20.0, -20.0, 15.0], "vrw_ug_rthz": 5.0},
+            "temperature": {"start_c": 20.0, "end_c": 35.0, "tau_h": 2.0, "k1_deg_h_per_c": 1e-4},
+            "attitude": {"pitch_deg": 0.5, "roll_deg": -0.3, "yaw_deg": 30.0},
+        },
+        source="<bench>",
+    )
+
+
+def _nav_config(s: Scenario) -> dict:
+    return {"lat_rad": s.site.lat_deg * DEG, "lon_rad": s.site.lon_deg * DEG, "height_m": s.site.height_m,
+            "pitch_rad": s.attitude.pitch_deg * DEG, "roll_rad": s.attitude.roll_deg * DEG,
+            "yaw_rad": s.attitude.yaw_deg * DEG, "rate_hz": s.run.rate_hz, "vertical": "fixed"}
+
+
+def _rss_mb() -> float:
+    """Peak resident set size of this process [MB] (Linux reports kB, macOS bytes)."""
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return peak / (1024.0 * 1024.0) if sys.platform == "darwin" else peak / 1024.0
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--hours", type=float, default=72.0)
+    ap.add_argument("--rate-hz", type=float, default=100.0)
+    ap.add_argument("--reference-s", type=float, default=60.0)
+    ap.add_argument("--chunk", type=int, default=100_000)
+    args = ap.parse_args(argv)
+
+    scn = _scenario(args.hours, args.rate_hz)
+    n = scn.n_samples
+    print(f"run: {args.hours:g} h at {args.rate_hz:g} Hz = {n:,} samples, chunks of {args.chunk:,}")
+    rss0 = _rss_mb()
+
+    # 1. simulator alone
+    sim = _core.ImuSimulator(scn.to_core_config())
+    t0 = time.perf_counter()
+    done = 0
+    while (c := sim.next_chunk(args.chunk)) is not None:
+        done += len(c["t_s"])
+    t_sim = time.perf_counter() - t0
+    print(f"Rust ImuSimulator : {done / t_sim:14,.0f} samples/s   ({t_sim:.2f} s)")
+
+    # 2. navigator (simulate + navigate streamed; navigation timed around process only)
+    tracemalloc.start()
+    sim = _core.ImuSimulator(scn.to_core_config())
+    nav = _core.Navigator(_nav_config(scn))
+    dec = int(round(args.rate_hz))  # one output per second
+    t_nav = 0.0
+    done = 0
+    while (c := sim.next_chunk(args.chunk)) is not None:
+        dth, dv = np.ascontiguousarray(c["dtheta_rad"]), np.ascontiguousarray(c["dv_m_s"])
+        t0 = time.perf_counter()
+        nav.process(dth, dv, dec)
+        t_nav += time.perf_counter() - t0
+        done += len(dth)
+    _, py_peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    rust_rate = done / t_nav
+    print(f"Rust Navigator    : {rust_rate:14,.0f} samples/s   ({t_nav:.2f} s)")
+    print(f"memory            : peak RSS {_rss_mb():.0f} MB (start {rss0:.0f} MB), Python heap peak "
+          f"{py_peak / 2**20:.1f} MB while streaming; the whole run as float64 would be {n * 12 * 8 / 2**30:.1f} GiB")
+
+    # 3. numpy reference on a short span of the same data
+    n_ref = int(round(args.reference_s * args.rate_hz))
+    sim = _core.ImuSimulator(scn.to_core_config())
+    c = sim.next_chunk(n_ref)
+    ref = ReferenceNavigator(_nav_config(scn))
+    t0 = time.perf_counter()
+    ref.process(c["dtheta_rad"], c["dv_m_s"], dec)
+    t_ref = time.perf_counter() - t0
+    ref_rate = len(c["t_s"]) / t_ref
+    print(f"numpy reference   : {ref_rate:14,.0f} samples/s   ({t_ref:.2f} s for {args.reference_s:g} s of data)")
+    print(f"ratio Rust/numpy  : {rust_rate / ref_rate:14,.0f} x (navigator)")
+
+
+if __name__ == "__main__":
+    main()

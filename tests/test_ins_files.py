@@ -1,0 +1,189 @@
+"""imu.parquet / nav.parquet / summary.json formats, streaming, and the click commands."""
+
+from __future__ import annotations
+
+import json
+import tomllib
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+from click.testing import CliRunner
+
+from gyrodrift import _core
+from gyrodrift.ins import ImuData, ImuFileError, Scenario, load_scenario, navigate, simulate
+from gyrodrift.ins.commands import navigate_command, simulate_command
+from gyrodrift.ins.imu_file import IMU_COLUMNS, IMU_FORMAT
+from gyrodrift.ins.navigate import NAV_COLUMNS, NAV_ERROR_COLUMNS
+
+needs_core = pytest.mark.skipif(
+    not hasattr(_core, "Navigator"), reason="temporary: the Rust Navigator/ImuSimulator is not built yet"
+)
+
+SMALL = """
+[site]
+lat_deg = 28.222
+lon_deg = 112.99
+[run]
+duration_h = 1.05
+rate_hz = 10.0
+seed = 3
+[rotation]
+scheme = "reciprocating"
+[gyro]
+bias_deg_h = [0.01, -0.01, 0.003]
+arw_deg_rth = 0.001
+[accel]
+bias_ug = [30, -20, 10]
+[temperature]
+start_c = 20
+end_c = 30
+tau_h = 0.5
+k1_deg_h_per_c = 0.0001
+[attitude]
+yaw_deg = 30
+"""
+
+
+@pytest.fixture
+def small_toml(tmp_path):
+    path = tmp_path / "small.toml"
+    path.write_text(SMALL)
+    return path
+
+
+@needs_core
+def test_simulate_writes_streamed_parquet_with_units_truth_and_resolved_scenario(tmp_path, small_toml):
+    scn = load_scenario(small_toml)
+    out = simulate(scn, out_dir=tmp_path / "run", chunk_samples=5000)
+    assert out == tmp_path / "run" / "imu.parquet"
+    pf = pq.ParquetFile(out)
+    assert pf.schema_arrow.names == list(IMU_COLUMNS)
+    assert pf.metadata.num_rows == scn.n_samples == 37800
+    assert pf.num_row_groups == 8  # one row group per chunk: 7 x 5000 + 2800
+    meta = {k.decode(): v.decode() for k, v in pf.schema_arrow.metadata.items()}
+    assert meta["gyrodrift.format"] == IMU_FORMAT == "gyrodrift-imu/1"
+    assert json.loads(meta["gyrodrift.site"]) == {"lat_deg": 28.222, "lon_deg": 112.99, "height_m": 0.0}
+    assert Scenario.from_dict(json.loads(meta["gyrodrift.scenario"])) == scn
+    resolved = tmp_path / "run" / "scenario.resolved.toml"
+    assert load_scenario(resolved) == scn
+    assert tomllib.loads(resolved.read_text())["rotation"]["span_deg"] == 360.0  # defaults written out
+    # No temporary files left behind.
+    assert sorted(p.name for p in (tmp_path / "run").iterdir()) == ["imu.parquet", "scenario.resolved.toml"]
+
+    table = pq.read_table(out)
+    t = table.column("t_s").to_numpy()
+    np.testing.assert_allclose(t[:3], [0.1, 0.2, 0.3], rtol=1e-12)
+    temp = table.column("temp_c").to_numpy()
+    assert 20.0 <= temp[0] < 20.5 and 29.0 < temp[-1] <= 30.0
+    # In-memory simulation gives the same numbers, to the bit.
+    mem = simulate(scn)
+    assert isinstance(mem, ImuData) and len(mem) == 37800
+    for c in IMU_COLUMNS:
+        np.testing.assert_array_equal(mem[c], table.column(c).to_numpy(), err_msg=c)
+
+
+@needs_core
+def test_navigate_file_memory_and_scenario_agree_and_write_outputs(tmp_path, small_toml):
+    scn = load_scenario(small_toml)
+    imu_path = simulate(scn, out_dir=tmp_path / "run", chunk_samples=7000)
+    from_file = navigate(imu_path, out_dir=tmp_path / "run", chunk_samples=3333, decimation_s=10.0)
+    from_scn = navigate(scn, decimation_s=10.0)
+    from_mem = navigate(simulate(scn), decimation_s=10.0, chunk_samples=50_000)
+    for c in NAV_COLUMNS + NAV_ERROR_COLUMNS:
+        np.testing.assert_array_equal(from_file[c], from_scn[c], err_msg=c)
+        np.testing.assert_array_equal(from_mem[c], from_scn[c], err_msg=c)
+
+    nav = pq.read_table(tmp_path / "run" / "nav.parquet")
+    assert nav.schema.names == list(NAV_COLUMNS + NAV_ERROR_COLUMNS)
+    assert nav.num_rows == int(1.05 * 3600 / 10)
+    np.testing.assert_allclose(nav.column("t_s").to_numpy()[:2], [10.0, 20.0])
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert summary == json.loads(json.dumps(from_file.summary))
+    assert [c["t_h"] for c in summary["checkpoints"]] == [1]
+    cp = summary["checkpoints"][0]
+    # The 1 h checkpoint is the exact state at 3600 s, which is also a kept row.
+    row = int(np.argmin(np.abs(nav.column("t_s").to_numpy() - 3600.0)))
+    assert cp["lat_err_arcsec"] == pytest.approx(nav.column("lat_err_arcsec").to_numpy()[row], abs=1e-9)
+    assert cp["pos_err_nmi"] == pytest.approx(nav.column("pos_err_nmi").to_numpy()[row], abs=1e-12)
+    assert summary["final"]["t_h"] == pytest.approx(1.05)
+    assert summary["max_pos_err_nmi"] >= summary["final_pos_err_nmi"] >= 0.0
+    assert summary["max_pos_err_nmi"] == pytest.approx(max(nav.column("pos_err_nmi").to_numpy().max(),
+                                                           summary["final_pos_err_nmi"]))
+
+
+@needs_core
+def test_navigate_hours_limits_the_run(tmp_path, small_toml):
+    res = navigate(load_scenario(small_toml), hours=0.5, decimation_s=60.0)
+    assert res.summary["hours_navigated"] == pytest.approx(0.5)
+    assert res.summary["checkpoints"] == []
+    assert res["t_s"][-1] == pytest.approx(1800.0)
+
+
+@needs_core
+def test_errors_are_computed_minus_true():
+    """Start 10 arcsec north of the truth with an error-free IMU: latitude error is +10 arcsec at once."""
+    scn = Scenario.from_dict({"run": {"duration_h": 0.01, "rate_hz": 10.0}, "rotation": {"scheme": "none"}})
+    res = navigate(scn, initial={"lat_deg": scn.site.lat_deg + 10.0 / 3600.0}, decimation_s=0.1)
+    assert res["lat_err_arcsec"][0] == pytest.approx(10.0, abs=0.01)
+    assert res["lon_err_arcsec"][0] == pytest.approx(0.0, abs=0.01)
+    assert res["pos_err_nmi"][0] == pytest.approx(10.0 / 3600.0 * np.pi / 180.0 * 6335439.0 / 1852.0, rel=2e-3)
+
+
+def test_navigate_refuses_missing_and_foreign_files(tmp_path):
+    with pytest.raises(ImuFileError) as info:
+        navigate(tmp_path / "none.parquet")
+    assert str(info.value) == f"{tmp_path / 'none.parquet'}: no such file"
+    junk = tmp_path / "junk.parquet"
+    junk.write_text("not parquet")
+    with pytest.raises(ImuFileError, match=r"junk.parquet: not a Parquet file"):
+        navigate(junk)
+    import pyarrow as pa
+
+    other = tmp_path / "other.parquet"
+    pq.write_table(pa.table({"t_s": [0.1, 0.2], "x": [1.0, 2.0]}), other)
+    with pytest.raises(ImuFileError) as info:
+        navigate(other)
+    assert "missing column(s) dtheta_x_rad" in str(info.value) and str(other) in str(info.value)
+
+
+# --------------------------------------------------------------------------------------------------
+# Click commands
+# --------------------------------------------------------------------------------------------------
+
+@needs_core
+def test_cli_simulate_then_navigate(tmp_path, small_toml):
+    runner = CliRunner()
+    out = tmp_path / "cli"
+    r = runner.invoke(simulate_command, [str(small_toml), "--out", str(out), "--quiet"])
+    assert r.exit_code == 0, r.output
+    assert (out / "imu.parquet").exists() and (out / "scenario.resolved.toml").exists()
+    r = runner.invoke(navigate_command, [str(out / "imu.parquet"), "--hours", "1", "--compensate-drift-deg-h",
+                                         "0.003", "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    assert "final position error" in r.output
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["compensate_drift_deg_h"] == 0.003
+    assert summary["hours_navigated"] == pytest.approx(1.0)
+    assert [c["t_h"] for c in summary["checkpoints"]] == [1]
+
+
+def test_cli_errors_name_the_file(tmp_path):
+    runner = CliRunner()
+    missing = tmp_path / "missing.toml"
+    r = runner.invoke(simulate_command, [str(missing), "--out", str(tmp_path / "o")])
+    assert r.exit_code == 1
+    assert f"Error: {missing}: no such file" in r.output
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[gyro]\nbias_deg_h = [1, 2]\n")
+    r = runner.invoke(simulate_command, [str(bad), "--out", str(tmp_path / "o")])
+    assert r.exit_code == 1
+    assert f"Error: {bad}: [gyro] bias_deg_h: expected 3 numbers, got 2" in r.output
+    assert not (tmp_path / "o").exists()
+    r = runner.invoke(navigate_command, [str(tmp_path / "imu.parquet"), "--out", str(tmp_path / "o")])
+    assert r.exit_code == 1
+    assert f"Error: {tmp_path / 'imu.parquet'}: no such file" in r.output
+    r = runner.invoke(navigate_command, [str(bad), "--out", str(tmp_path / "o")])
+    assert r.exit_code == 1 and f"{bad}: not a Parquet file" in r.output
+    r = runner.invoke(navigate_command, [str(bad), "--hours", "-1", "--out", str(tmp_path / "o")])
+    assert r.exit_code == 2 and "--hours" in r.output
