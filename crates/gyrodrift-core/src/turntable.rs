@@ -223,7 +223,7 @@ impl Turntable {
                 check_rate_accel(*rate, *accel)?;
                 check(!positions.is_empty(), "positions_rad", "must hold at least one position")?;
                 check(positions.iter().all(|p| p.is_finite() && p.abs() <= 1000.0), "positions_rad", "positions must be finite (|p| <= 1000 rad)")?;
-                check(dwell.is_finite() && *dwell > 0.0, "dwell_s", format!("indexing needs a positive dwell, got {dwell}"))?;
+                check(dwell.is_finite() && *dwell >= 0.0, "dwell_s", format!("must be >= 0 and finite, got {dwell}"))?;
                 // Prefix: move from 0 to positions[0].
                 let mut t = push_move(&mut segs, 0.0, 0.0, positions[0], *rate, *accel);
                 n_prefix = segs.len();
@@ -235,6 +235,7 @@ impl Turntable {
                     t = push_move(&mut segs, t, positions[i], next - positions[i], *rate, *accel);
                 }
                 period = t - period_start;
+                check(period > 0.0, "positions_rad", "with dwell_s = 0 the positions must not all be equal")?;
             }
         }
         Ok(Turntable { scheme, segments: segs, period, period_start, n_prefix })

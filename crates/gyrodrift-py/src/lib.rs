@@ -1,9 +1,20 @@
 //! Thin PyO3 binding of `gyrodrift-core`: it converts types and releases the GIL, nothing else.
-//! The user-facing API lives in the Python package `gyrodrift`.
+//! The user-facing API lives in the Python package `gyrodrift`. The boundary is fixed by
+//! `docs/ins-binding-contract.md`.
 
+use gyrodrift_core::attitude::Euler;
 use gyrodrift_core::earth;
-use numpy::{PyArray1, PyReadonlyArray1};
+use gyrodrift_core::imu_error::ImuErrorParams;
+use gyrodrift_core::simulator::{ImuChunk, ImuSimulator as CoreSimulator, ImuSimulatorConfig};
+use gyrodrift_core::strapdown::{NavState, Navigator as CoreNavigator, NavigatorConfig, Vertical};
+use gyrodrift_core::temperature::TemperatureProfile;
+use gyrodrift_core::turntable::{ParamError, RotationScheme};
+use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::collections::HashMap;
+use std::f64::consts::PI;
 
 /// Normal gravity [m/s^2] for arrays of latitude [rad] and height [m] (WGS-84 Somigliana).
 #[pyfunction]
@@ -15,7 +26,7 @@ fn normal_gravity<'py>(
     let lat = lat_rad.as_slice()?;
     let h = height_m.as_slice()?;
     if lat.len() != h.len() {
-        return Err(pyo3::exceptions::PyValueError::new_err(format!(
+        return Err(PyValueError::new_err(format!(
             "lat_rad has {} values but height_m has {}",
             lat.len(),
             h.len()
@@ -27,6 +38,390 @@ fn normal_gravity<'py>(
     Ok(PyArray1::from_vec(py, out))
 }
 
+fn param_err(e: ParamError) -> PyErr {
+    PyValueError::new_err(e.to_string())
+}
+
+/// The config dict, checked against the allowed keys; values taken out by typed getters.
+struct Config<'py> {
+    map: HashMap<String, Bound<'py, PyAny>>,
+}
+
+impl<'py> Config<'py> {
+    fn new(d: &Bound<'py, PyDict>, allowed: &[&str], what: &str) -> PyResult<Self> {
+        let mut map = HashMap::new();
+        for (k, v) in d.iter() {
+            let key: String = k
+                .extract()
+                .map_err(|_| PyValueError::new_err(format!("{what} config keys must be strings, got {k}")))?;
+            if !allowed.contains(&key.as_str()) {
+                return Err(PyValueError::new_err(format!(
+                    "{key}: unknown key in the {what} config (allowed: {})",
+                    allowed.join(", ")
+                )));
+            }
+            map.insert(key, v);
+        }
+        Ok(Config { map })
+    }
+
+    fn f64_opt(&self, key: &str) -> PyResult<Option<f64>> {
+        match self.map.get(key) {
+            None => Ok(None),
+            Some(v) => v
+                .extract::<f64>()
+                .map(Some)
+                .map_err(|_| PyValueError::new_err(format!("{key}: must be a float, got {v}"))),
+        }
+    }
+
+    fn f64_or(&self, key: &str, default: f64) -> PyResult<f64> {
+        Ok(self.f64_opt(key)?.unwrap_or(default))
+    }
+
+    fn f64_req(&self, key: &str) -> PyResult<f64> {
+        self.f64_opt(key)?.ok_or_else(|| PyValueError::new_err(format!("{key}: required key is missing")))
+    }
+
+    fn list_opt(&self, key: &str) -> PyResult<Option<Vec<f64>>> {
+        match self.map.get(key) {
+            None => Ok(None),
+            Some(v) => v
+                .extract::<Vec<f64>>()
+                .map(Some)
+                .map_err(|_| PyValueError::new_err(format!("{key}: must be a sequence of floats, got {v}"))),
+        }
+    }
+
+    fn array_or<const N: usize>(&self, key: &str, default: [f64; N]) -> PyResult<[f64; N]> {
+        match self.list_opt(key)? {
+            None => Ok(default),
+            Some(v) => v
+                .try_into()
+                .map_err(|v: Vec<f64>| PyValueError::new_err(format!("{key}: must hold {N} values, got {}", v.len()))),
+        }
+    }
+
+    fn str_or(&self, key: &str, default: &str) -> PyResult<String> {
+        match self.map.get(key) {
+            None => Ok(default.to_string()),
+            Some(v) => v.extract::<String>().map_err(|_| PyValueError::new_err(format!("{key}: must be a string, got {v}"))),
+        }
+    }
+}
+
+const SIM_KEYS: &[&str] = &[
+    "lat_rad", "lon_rad", "height_m", "rate_hz", "duration_s", "seed", "pitch_rad", "roll_rad", "yaw_rad",
+    "rotation_scheme", "rotation_rate_rad_s", "rotation_accel_rad_s2", "reciprocating_span_rad", "positions_rad",
+    "dwell_s", "gyro_bias_rad_s", "gyro_arw_rad_rts", "gyro_bias_instability_rad_s", "gyro_correlation_s",
+    "gyro_rrw_rad_s_rts", "gyro_scale", "gyro_misalignment_rad", "accel_bias_m_s2", "accel_vrw_m_s_rts",
+    "accel_scale", "temp_start_c", "temp_end_c", "temp_tau_s", "temp_series_t_s", "temp_series_c", "drift_t0_c",
+    "drift_k1_rad_s_per_c", "drift_k2_rad_s_per_c2", "drift_k3_rad_s_per_c_per_s",
+];
+
+/// Defaults of optional keys (SI). Documented in docs/ins-binding-contract.md.
+const DEFAULT_RATE: f64 = 6.0 * PI / 180.0;
+const DEFAULT_ACCEL: f64 = 10.0 * PI / 180.0;
+
+fn sim_config(d: &Bound<'_, PyDict>) -> PyResult<ImuSimulatorConfig> {
+    let c = Config::new(d, SIM_KEYS, "ImuSimulator")?;
+    let seed = match c.map.get("seed") {
+        None => 0,
+        Some(v) => v
+            .extract::<u64>()
+            .map_err(|_| PyValueError::new_err(format!("seed: must be an integer in [0, 2**64), got {v}")))?,
+    };
+    let rate = c.f64_or("rotation_rate_rad_s", DEFAULT_RATE)?;
+    let accel = c.f64_or("rotation_accel_rad_s2", DEFAULT_ACCEL)?;
+    let dwell = c.f64_or("dwell_s", 0.0)?;
+    let scheme_name = c.str_or("rotation_scheme", "none")?;
+    let scheme = match scheme_name.as_str() {
+        "none" => RotationScheme::None,
+        "continuous" => RotationScheme::Continuous { rate, accel },
+        "reciprocating" => RotationScheme::Reciprocating {
+            rate,
+            accel,
+            span: c.f64_or("reciprocating_span_rad", 2.0 * PI)?,
+            dwell,
+        },
+        "indexing" => RotationScheme::Indexing {
+            rate,
+            accel,
+            positions: c.list_opt("positions_rad")?.unwrap_or_else(|| vec![0.0, 0.5 * PI, PI, 1.5 * PI]),
+            dwell,
+        },
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "rotation_scheme: must be one of \"none\", \"continuous\", \"reciprocating\", \"indexing\", got {other:?}"
+            )))
+        }
+    };
+    let d0 = ImuErrorParams::default();
+    let errors = ImuErrorParams {
+        gyro_bias: c.array_or("gyro_bias_rad_s", d0.gyro_bias)?,
+        gyro_arw: c.f64_or("gyro_arw_rad_rts", d0.gyro_arw)?,
+        gyro_bias_instability: c.f64_or("gyro_bias_instability_rad_s", d0.gyro_bias_instability)?,
+        gyro_correlation: c.f64_or("gyro_correlation_s", d0.gyro_correlation)?,
+        gyro_rrw: c.f64_or("gyro_rrw_rad_s_rts", d0.gyro_rrw)?,
+        gyro_scale: c.array_or("gyro_scale", d0.gyro_scale)?,
+        gyro_misalignment: c.array_or("gyro_misalignment_rad", d0.gyro_misalignment)?,
+        accel_bias: c.array_or("accel_bias_m_s2", d0.accel_bias)?,
+        accel_vrw: c.f64_or("accel_vrw_m_s_rts", d0.accel_vrw)?,
+        accel_scale: c.array_or("accel_scale", d0.accel_scale)?,
+        drift_t0_c: c.f64_or("drift_t0_c", d0.drift_t0_c)?,
+        drift_k1: c.f64_or("drift_k1_rad_s_per_c", 0.0)?,
+        drift_k2: c.f64_or("drift_k2_rad_s_per_c2", 0.0)?,
+        drift_k3: c.f64_or("drift_k3_rad_s_per_c_per_s", 0.0)?,
+    };
+    let series_t = c.list_opt("temp_series_t_s")?;
+    let series_c = c.list_opt("temp_series_c")?;
+    let temperature = match (series_t, series_c) {
+        (Some(t_s), Some(temp_c)) => TemperatureProfile::Series { t_s, temp_c },
+        (None, None) => {
+            let start_c = c.f64_or("temp_start_c", 20.0)?;
+            TemperatureProfile::WarmUp {
+                start_c,
+                end_c: c.f64_or("temp_end_c", start_c)?,
+                tau_s: c.f64_or("temp_tau_s", 3600.0)?,
+            }
+        }
+        (Some(_), None) => return Err(PyValueError::new_err("temp_series_c: required with temp_series_t_s")),
+        (None, Some(_)) => return Err(PyValueError::new_err("temp_series_t_s: required with temp_series_c")),
+    };
+    Ok(ImuSimulatorConfig {
+        lat: c.f64_req("lat_rad")?,
+        lon: c.f64_or("lon_rad", 0.0)?,
+        height: c.f64_or("height_m", 0.0)?,
+        rate_hz: c.f64_req("rate_hz")?,
+        duration_s: c.f64_req("duration_s")?,
+        seed,
+        attitude: Euler {
+            pitch: c.f64_or("pitch_rad", 0.0)?,
+            roll: c.f64_or("roll_rad", 0.0)?,
+            yaw: c.f64_or("yaw_rad", 0.0)?,
+        },
+        scheme,
+        errors,
+        temperature,
+    })
+}
+
+/// Static-base IMU simulator with a single-axis turntable (see gyrodrift-core `simulator`).
+/// `ImuSimulator(config: dict)` with SI floats; `next_chunk(n)` streams the run.
+#[pyclass(module = "gyrodrift._core")]
+struct ImuSimulator {
+    inner: CoreSimulator,
+    buf: ImuChunk,
+}
+
+#[pymethods]
+impl ImuSimulator {
+    #[new]
+    fn new(config: &Bound<'_, PyDict>) -> PyResult<Self> {
+        let cfg = sim_config(config)?;
+        Ok(ImuSimulator { inner: CoreSimulator::new(cfg).map_err(param_err)?, buf: ImuChunk::default() })
+    }
+
+    /// Total number of samples of the run (round(duration_s * rate_hz)).
+    #[getter]
+    fn n_samples(&self) -> u64 {
+        self.inner.n_samples()
+    }
+
+    /// Samples produced so far.
+    #[getter]
+    fn samples_done(&self) -> u64 {
+        self.inner.samples_done()
+    }
+
+    /// The next at most `n` samples as a dict of numpy arrays, or None when the run is over.
+    fn next_chunk<'py>(&mut self, py: Python<'py>, n: usize) -> PyResult<Option<Bound<'py, PyDict>>> {
+        if n == 0 {
+            return Err(PyValueError::new_err("n: must be a positive number of samples"));
+        }
+        let (inner, buf) = (&mut self.inner, &mut self.buf);
+        let m = py.detach(|| inner.next_chunk(n, buf));
+        if m == 0 {
+            return Ok(None);
+        }
+        let b = &self.buf;
+        let d = PyDict::new(py);
+        d.set_item("t_s", PyArray1::from_slice(py, &b.t_s))?;
+        d.set_item("dtheta_rad", PyArray1::from_slice(py, &b.dtheta).reshape([m, 3])?)?;
+        d.set_item("dv_m_s", PyArray1::from_slice(py, &b.dv).reshape([m, 3])?)?;
+        d.set_item("temp_c", PyArray1::from_slice(py, &b.temp_c))?;
+        d.set_item("table_angle_rad", PyArray1::from_slice(py, &b.table_angle))?;
+        d.set_item("pitch_rad", PyArray1::from_slice(py, &b.pitch))?;
+        d.set_item("roll_rad", PyArray1::from_slice(py, &b.roll))?;
+        d.set_item("yaw_rad", PyArray1::from_slice(py, &b.yaw))?;
+        Ok(Some(d))
+    }
+}
+
+const NAV_KEYS: &[&str] =
+    &["lat_rad", "lon_rad", "height_m", "vel_enu_m_s", "pitch_rad", "roll_rad", "yaw_rad", "rate_hz", "vertical"];
+
+fn nav_config(d: &Bound<'_, PyDict>) -> PyResult<NavigatorConfig> {
+    let c = Config::new(d, NAV_KEYS, "Navigator")?;
+    let vertical = match c.str_or("vertical", "fixed")?.as_str() {
+        "fixed" => Vertical::Fixed,
+        "damped" => Vertical::Damped,
+        other => return Err(PyValueError::new_err(format!("vertical: must be \"fixed\" or \"damped\", got {other:?}"))),
+    };
+    Ok(NavigatorConfig {
+        lat: c.f64_req("lat_rad")?,
+        lon: c.f64_req("lon_rad")?,
+        height: c.f64_req("height_m")?,
+        vel: c.array_or("vel_enu_m_s", [0.0; 3])?,
+        attitude: Euler { pitch: c.f64_req("pitch_rad")?, roll: c.f64_req("roll_rad")?, yaw: c.f64_req("yaw_rad")? },
+        rate_hz: c.f64_req("rate_hz")?,
+        vertical,
+    })
+}
+
+/// Output columns of `Navigator.process`.
+#[derive(Default)]
+struct NavColumns {
+    t: Vec<f64>,
+    lat: Vec<f64>,
+    lon: Vec<f64>,
+    h: Vec<f64>,
+    vel: Vec<f64>,
+    pitch: Vec<f64>,
+    roll: Vec<f64>,
+    yaw: Vec<f64>,
+}
+
+impl NavColumns {
+    fn with_capacity(n: usize) -> Self {
+        NavColumns {
+            t: Vec::with_capacity(n),
+            lat: Vec::with_capacity(n),
+            lon: Vec::with_capacity(n),
+            h: Vec::with_capacity(n),
+            vel: Vec::with_capacity(3 * n),
+            pitch: Vec::with_capacity(n),
+            roll: Vec::with_capacity(n),
+            yaw: Vec::with_capacity(n),
+        }
+    }
+
+    fn push(&mut self, s: &NavState) {
+        self.t.push(s.t);
+        self.lat.push(s.lat);
+        self.lon.push(s.lon);
+        self.h.push(s.height);
+        self.vel.extend_from_slice(&s.vel);
+        self.pitch.push(s.attitude.pitch);
+        self.roll.push(s.attitude.roll);
+        self.yaw.push(s.attitude.yaw);
+    }
+}
+
+fn vec3(v: Vec<f64>, key: &str) -> PyResult<[f64; 3]> {
+    v.try_into().map_err(|v: Vec<f64>| PyValueError::new_err(format!("{key}: must hold 3 values, got {}", v.len())))
+}
+
+/// Borrow an (n, 3) float64 array as a flat slice, copying only if it is not C-contiguous.
+fn flat_n3<'a>(a: &'a PyReadonlyArray2<'_, f64>, name: &str) -> PyResult<std::borrow::Cow<'a, [f64]>> {
+    let shape = a.shape();
+    if shape[1] != 3 {
+        return Err(PyValueError::new_err(format!("{name}: must have shape (n, 3), got ({}, {})", shape[0], shape[1])));
+    }
+    Ok(match a.as_slice() {
+        Ok(s) => std::borrow::Cow::Borrowed(s),
+        Err(_) => std::borrow::Cow::Owned(a.as_array().iter().copied().collect()),
+    })
+}
+
+/// Strapdown navigator (see gyrodrift-core `strapdown`). `Navigator(config: dict)` with SI floats.
+#[pyclass(module = "gyrodrift._core")]
+struct Navigator {
+    inner: CoreNavigator,
+}
+
+#[pymethods]
+impl Navigator {
+    #[new]
+    fn new(config: &Bound<'_, PyDict>) -> PyResult<Self> {
+        Ok(Navigator { inner: CoreNavigator::new(nav_config(config)?).map_err(param_err)? })
+    }
+
+    /// Estimated gyro bias [rad/s, body x y z], subtracted from every following sample (measured - estimate).
+    fn set_gyro_bias(&mut self, b_rad_s: Vec<f64>) -> PyResult<()> {
+        self.inner.set_gyro_bias(vec3(b_rad_s, "b_rad_s")?).map_err(param_err)
+    }
+
+    /// Estimated accelerometer bias [m/s^2, body x y z], subtracted from every following sample.
+    fn set_accel_bias(&mut self, b_m_s2: Vec<f64>) -> PyResult<()> {
+        self.inner.set_accel_bias(vec3(b_m_s2, "b_m_s2")?).map_err(param_err)
+    }
+
+    /// Samples processed since the start of the run.
+    #[getter]
+    fn samples_done(&self) -> u64 {
+        self.inner.samples_done()
+    }
+
+    /// Navigate the samples; returns the state after every `decimation`-th sample counted from the run start.
+    #[pyo3(signature = (dtheta_rad, dv_m_s, decimation = 1))]
+    fn process<'py>(
+        &mut self,
+        py: Python<'py>,
+        dtheta_rad: PyReadonlyArray2<'py, f64>,
+        dv_m_s: PyReadonlyArray2<'py, f64>,
+        decimation: u64,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        if decimation == 0 {
+            return Err(PyValueError::new_err("decimation: must be a positive integer"));
+        }
+        let n = dtheta_rad.shape()[0];
+        if dv_m_s.shape()[0] != n {
+            return Err(PyValueError::new_err(format!(
+                "dv_m_s: has {} rows but dtheta_rad has {n}",
+                dv_m_s.shape()[0]
+            )));
+        }
+        let dth = flat_n3(&dtheta_rad, "dtheta_rad")?;
+        let dv = flat_n3(&dv_m_s, "dv_m_s")?;
+        let (dth, dv): (&[f64], &[f64]) = (&dth, &dv);
+        let inner = &mut self.inner;
+        let cols = py.detach(|| {
+            let done = inner.samples_done();
+            let n_out = ((done + n as u64) / decimation - done / decimation) as usize;
+            let mut cols = NavColumns::with_capacity(n_out);
+            inner.process(dth, dv, decimation, |s| cols.push(s));
+            cols
+        });
+        let m = cols.t.len();
+        let d = PyDict::new(py);
+        d.set_item("t_s", PyArray1::from_vec(py, cols.t))?;
+        d.set_item("lat_rad", PyArray1::from_vec(py, cols.lat))?;
+        d.set_item("lon_rad", PyArray1::from_vec(py, cols.lon))?;
+        d.set_item("height_m", PyArray1::from_vec(py, cols.h))?;
+        d.set_item("vel_enu_m_s", PyArray1::from_vec(py, cols.vel).reshape([m, 3])?)?;
+        d.set_item("pitch_rad", PyArray1::from_vec(py, cols.pitch))?;
+        d.set_item("roll_rad", PyArray1::from_vec(py, cols.roll))?;
+        d.set_item("yaw_rad", PyArray1::from_vec(py, cols.yaw))?;
+        Ok(d)
+    }
+
+    /// The current state: scalars, and `vel_enu_m_s` as a (3,) array.
+    fn state<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let s = self.inner.state();
+        let d = PyDict::new(py);
+        d.set_item("t_s", s.t)?;
+        d.set_item("lat_rad", s.lat)?;
+        d.set_item("lon_rad", s.lon)?;
+        d.set_item("height_m", s.height)?;
+        d.set_item("vel_enu_m_s", PyArray1::from_slice(py, &s.vel))?;
+        d.set_item("pitch_rad", s.attitude.pitch)?;
+        d.set_item("roll_rad", s.attitude.roll)?;
+        d.set_item("yaw_rad", s.attitude.yaw)?;
+        Ok(d)
+    }
+}
+
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("WGS84_A_M", earth::A)?;
@@ -34,5 +429,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("OMEGA_IE_RAD_S", earth::OMEGA_IE)?;
     m.add("NMI_M", earth::NMI)?;
     m.add_function(wrap_pyfunction!(normal_gravity, m)?)?;
+    m.add_class::<ImuSimulator>()?;
+    m.add_class::<Navigator>()?;
     Ok(())
 }
