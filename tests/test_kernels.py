@@ -74,8 +74,12 @@ def test_rbf_has_sigma_squared_denominator_without_factor_two():
 @given(point_sets(max_d=3), st.floats(0.05, 20.0))
 def test_rbf_matches_sklearn_with_gamma_one_over_sigma_squared(X, sigma):
     X = X / 100.0
-    np.testing.assert_allclose(rbf_kernel(X, sigma=sigma), pairwise.rbf_kernel(X, gamma=1 / sigma**2),
-                               rtol=1e-12, atol=1e-300)
+    K = rbf_kernel(X, sigma=sigma)
+    brute = np.exp(-((X[:, None, :] - X[None, :, :]) ** 2).sum(axis=-1) / sigma**2)
+    np.testing.assert_allclose(K, brute, rtol=1e-12, atol=1e-300)
+    # scikit-learn expands |x|^2 + |z|^2 - 2 x.z, which loses ~eps |x|^2 / sigma^2 to cancellation
+    # (hypothesis found 2e-12 for equal points at |x|^2 / sigma^2 ~ 5e3); hence the looser tolerance.
+    np.testing.assert_allclose(K, pairwise.rbf_kernel(X, gamma=1 / sigma**2), rtol=1e-12, atol=1e-9)
 
 
 def test_rbf_from_squared_distances_broadcasts_a_stack_of_widths():

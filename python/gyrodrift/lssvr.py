@@ -8,8 +8,8 @@ axial gyro drift. Given training inputs ``x_i`` (units: whatever the caller scal
     [ 1   K + I/gamma ] [a] = [y]          f(x) = sum_i a_i K(x_i, x) + b
 
 where ``gamma`` is the regularisation (larger = less regularisation) and ``K`` the kernel matrix
-(:mod:`gyrodrift.kernels`; RBF ``exp(-|x - z|^2 / sigma^2)``). ``b`` has the unit of ``y``; ``a`` has the
-unit of ``y`` too (kernels are dimensionless for rbf).
+(:mod:`gyrodrift.kernels`; RBF ``exp(-|x - z|^2 / sigma^2)``). ``b`` has the unit of ``y``; with the
+dimensionless RBF kernel ``a`` has the unit of ``y`` too.
 
 How it is solved: ``H = K + I/gamma`` is symmetric positive definite for every positive semi-definite
 kernel; with its Cholesky factor ``H = U'U`` (LAPACK ``dpotrf``, the routine behind
@@ -101,8 +101,9 @@ def _inverse_diagonal(U: np.ndarray) -> np.ndarray:
     return np.einsum("ik,ik->i", Uinv, Uinv)
 
 
-def _hessian(K: np.ndarray, gamma: float) -> np.ndarray:
-    H = np.array(K, dtype=float, copy=True)
+def _h_matrix(K: np.ndarray, gamma: float, copy: bool = True) -> np.ndarray:
+    """``H = K + I/gamma`` (a new array unless ``copy`` is False)."""
+    H = np.array(K, dtype=float, copy=copy)
     H.flat[:: H.shape[0] + 1] += 1.0 / gamma
     return H
 
@@ -148,7 +149,7 @@ def _check_system(K, y, gamma):
 
 
 def _factor_or_raise(K: np.ndarray, gamma: float, what: str) -> np.ndarray:
-    U = _cholesky_upper(_hessian(K, gamma))
+    U = _cholesky_upper(_h_matrix(K, gamma))
     if U is None:
         raise NotPositiveDefiniteError(
             f"H = K + I/gamma is not positive definite {what}; the Cholesky factorisation failed. "
@@ -257,27 +258,36 @@ def rbf_batch_errors(sqdist, y, gammas, sigmas, kind: str = "train") -> np.ndarr
 
     Notes
     -----
-    Implementation measured on the 2-core development machine (m = 30 random candidates,
-    gamma in [0.1, 1000], sigma in [0.3, 3] times the input scale, best of several runs):
+    Two implementations, chosen by n and measured against per-candidate loops on the 2-core development
+    machine (m = 30 candidates, gamma log-uniform in [0.1, 1000], sigma log-uniform in [0.3, 3] times the
+    input scale, best of several runs, ``OPENBLAS_NUM_THREADS=1``; the machine was shared, so
+    individual numbers scatter by up to 2x between runs):
 
-    ==========  =========================  ========================  ========================
-    n, kind     per-candidate LAPACK loop  batched ``np.linalg``     batched Cholesky + loop
-                (this implementation)      (cholesky + inv(L))       of triangular solves
-    ==========  =========================  ========================  ========================
-    20 train    0.5 ms                     0.5 ms                    0.5 ms
-    20 loo      0.6-0.9 ms                 0.6 ms                    0.7 ms
-    50 train    1.0 ms                     3.8 ms                    1.1 ms
-    100 train   2.8 ms                     16 ms                     3.0 ms
-    100 loo     3.7 ms                     11 ms                     6.5 ms
-    200 loo     29 ms                      60 ms                     60 ms
-    500 train   80-90 ms                   365 ms                    89 ms
-    500 loo     110 ms                     370 ms                    215 ms
-    ==========  =========================  ========================  ========================
+    ==========  ==================  ===============  ====================  ========================
+    n, kind     this function       loop of          loop of               numpy stack for every n
+                                    ``LSSVR.fit``    ``lssvr_solve`` /     (``cholesky`` +
+                                                     ``lssvr_loo_...``     ``inv(L)`` on (m, n, n))
+    ==========  ==================  ===============  ====================  ========================
+    22 train    0.37 ms (stacked)   8.3 ms           1.5 ms                0.35 ms
+    22 loo      0.39 ms (stacked)   6.2 ms           1.8 ms                0.37 ms
+    100 train   2.1 ms (loop)       12 ms            4.5 ms                15 ms
+    100 loo     4.0 ms (loop)       14 ms            6.5 ms                13 ms
+    200 train   8.1 ms (loop)       35 ms            20 ms                 74 ms
+    200 loo     22 ms (loop)        36 ms            33 ms                 60 ms
+    500 train   72 ms (loop)        126 ms           104 ms                537 ms
+    500 loo     159 ms (loop)       201 ms           193 ms                524 ms
+    ==========  ==================  ===============  ====================  ========================
 
-    numpy's stacked ``cholesky``/``inv`` run one unblocked LAPACK call per matrix and cannot use a
-    triangular inverse, so stacking buys nothing beyond n ~ 20 and costs m*n*n memory; a single
-    non-PD candidate also makes ``np.linalg.cholesky`` raise for the whole stack. The loop over
-    ``dpotrf``/``dpotrs``/``dtrtri`` (``info`` flags failures per candidate) is kept.
+    * n <= 32 (the paper has n = 22): the candidates are stacked into an (m, n, n) array and
+      factorised by ``np.linalg.cholesky``, then ``np.linalg.inv`` of the triangular factors; this
+      removes the per-candidate Python and LAPACK-wrapper overhead (about 15 us per candidate), which
+      dominates at this size. One non-PD candidate makes the stacked Cholesky raise for all of them;
+      the function then falls back to the loop below, which flags candidates individually.
+    * n > 32: a Python loop over candidates calling LAPACK ``dpotrf``/``dpotrs`` (and ``dtrtri`` for
+      "loo") directly. numpy's stacked routines have no triangular solve or inverse, so the stack
+      needs a general inverse of each factor, 3-7x slower than ``dtrtri``/``dpotrs`` at n >= 100,
+      and m*n*n memory. Building each kernel from ``sqdist`` in place of calling the public
+      functions saves their validation (symmetry check, copies).
     """
     if kind not in ("train", "loo"):
         raise ValueError(f"kind must be 'train' or 'loo', got {kind!r}")
@@ -301,6 +311,44 @@ def rbf_batch_errors(sqdist, y, gammas, sigmas, kind: str = "train") -> np.ndarr
         if bad.size:
             raise ValueError(f"{name}[{bad[0]}] must be a finite number > 0, got {float(values[bad[0]])!r}")
 
+    if n <= _STACKED_MAX_N:
+        try:
+            return _rbf_batch_stacked(D, y, g, sg, kind)
+        except np.linalg.LinAlgError:
+            pass  # a non-PD candidate spoils the whole stack: redo candidate by candidate
+    return _rbf_batch_loop(D, y, g, sg, kind)
+
+
+#: Largest n for which :func:`rbf_batch_errors` stacks the candidates (see its Notes).
+_STACKED_MAX_N = 32
+
+
+def _rbf_batch_stacked(D, y, g, sg, kind):
+    """All candidates at once: ``np.linalg.cholesky`` and a triangular inverse on an (m, n, n) stack.
+
+    Raises ``LinAlgError`` if any candidate is not positive definite.
+    """
+    n = D.shape[0]
+    H = rbf_from_squared_distances(D, sg[:, None, None])
+    H[:, np.arange(n), np.arange(n)] += 1.0 / g[:, None]
+    L = np.linalg.cholesky(H)  # lower, H = L L'
+    # No stacked triangular inverse in numpy: inv() of the triangular factor (LU, O(n^3) like dtrtri
+    # but with a larger constant) is still the fastest for small n; H^-1 = L^-T L^-1.
+    Linv = np.linalg.inv(L)
+    B = np.column_stack([np.ones(n), y])
+    pq = np.swapaxes(Linv, 1, 2) @ (Linv @ B)
+    p, q = pq[:, :, 0], pq[:, :, 1]
+    s = p.sum(axis=1, keepdims=True)
+    alpha = q - (q.sum(axis=1, keepdims=True) / s) * p
+    if kind == "train":
+        return alpha / g[:, None]
+    hinv_diag = np.einsum("mki,mki->mi", Linv, Linv)
+    return alpha / (hinv_diag - p * p / s)
+
+
+def _rbf_batch_loop(D, y, g, sg, kind):
+    """Candidate by candidate with LAPACK ``dpotrf``/``dpotrs``/``dtrtri``; non-PD rows are +inf."""
+    n = D.shape[0]
     out = np.empty((g.size, n))
     B = np.column_stack([np.ones(n), y])
     diag = np.arange(n) * (n + 1)
@@ -433,8 +481,7 @@ class LSSVR(RegressorMixin, BaseEstimator):
                               ensure_min_samples=2)
         y = np.asarray(y, dtype=np.float64)
         K = self._kernel(X)
-        H = _hessian(K, gamma)
-        U = _cholesky_upper(H)
+        U = _cholesky_upper(_h_matrix(K, gamma, copy=False))  # K is ours: overwrite it
         if U is None:
             raise NotPositiveDefiniteError(
                 f"LSSVR: H = K + I/gamma is not positive definite for {self._describe()}; the Cholesky "
