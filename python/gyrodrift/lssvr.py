@@ -46,6 +46,7 @@ from gyrodrift.kernels import (
     check_positive,
     kernel_matrix,
     rbf_from_squared_distances,
+    squared_distances,  # re-exported: the tuner's inputs to rbf_batch_errors
 )
 
 try:  # scikit-learn >= 1.6
@@ -60,6 +61,7 @@ __all__ = [
     "lssvr_solve",
     "lssvr_loo_residuals",
     "rbf_batch_errors",
+    "squared_distances",
 ]
 
 
