@@ -457,9 +457,13 @@ def test_fit_does_not_modify_inputs_and_init_stores_parameters():
     model = LSSVR(gamma="not validated in __init__", sigma=-1)
     assert model.get_params() == dict(gamma="not validated in __init__", sigma=-1, kernel="rbf", degree=3,
                                       coef0=1.0)
-    LSSVR(gamma=4.0).fit(X, y)
+    fitted = LSSVR(gamma=4.0).fit(X, y)
     np.testing.assert_array_equal(X, X0)
     np.testing.assert_array_equal(y, y0)
+    # X_fit_ is a copy: changing the caller's array afterwards does not change the model.
+    before = fitted.predict(X0[:3])
+    X[:] = 0.0
+    np.testing.assert_array_equal(fitted.predict(X0[:3]), before)
 
 
 def test_works_in_pipeline_and_grid_search():

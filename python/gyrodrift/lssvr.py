@@ -480,7 +480,7 @@ class LSSVR(RegressorMixin, BaseEstimator):
         check_positive("sigma", self.sigma)
         check_kernel(self.kernel)
         X, y = _validate_data(self, X, y, dtype=np.float64, multi_output=True, y_numeric=True,
-                              ensure_min_samples=2)
+                              ensure_min_samples=2, copy=True)  # X_fit_ must not alias the caller's X
         y = np.asarray(y, dtype=np.float64)
         K = self._kernel(X)
         U = _cholesky_upper(_h_matrix(K, gamma, copy=False))  # K is ours: overwrite it
