@@ -7,7 +7,6 @@ import math
 import numpy as np
 import pytest
 
-from gyrodrift import _core
 from gyrodrift.earth import OMEGA_IE_RAD_S, normal_gravity
 from gyrodrift.ins import Scenario, navigate, simulate
 from gyrodrift.ins.nav_errors import position_errors, radii_of_curvature
@@ -39,10 +38,9 @@ def test_reference_navigator_axial_drift_closed_form_at_12h():
     assert lat_err == pytest.approx(2 * eps * math.cos(lat) / W / ARCSEC, rel=0.01)
 
 
-@pytest.mark.skipif(not hasattr(_core, "Navigator"), reason="temporary: the Rust Navigator is not built yet")
 def test_rust_navigator_agrees_with_the_numpy_reference_over_10_min_at_100hz():
-    """Tilted, rotating IMU with large biases, so the position moves by kilometres: the two navigators
-    agree to a few millimetres."""
+    """Tilted, rotating IMU with large biases and noise, so the position moves by tens of metres and the
+    attitude turns through 3600 deg: the two navigators agree to a few millimetres."""
     scn = Scenario.from_dict({
         "run": {"duration_h": 10.0 / 60.0, "rate_hz": 100.0, "seed": 5},
         "rotation": {"scheme": "continuous", "rate_deg_s": 6.0},
@@ -62,13 +60,15 @@ def test_rust_navigator_agrees_with_the_numpy_reference_over_10_min_at_100hz():
     out = ref.process(dtheta, dv, decimation=100)
 
     np.testing.assert_allclose(rust["t_s"], out["t_s"], rtol=0, atol=1e-9)
-    # The run really moves: kilometres of position error by the end.
-    moved = position_errors(out["lat_rad"][-1], out["lon_rad"][-1], scn.site.lat_deg * DEG, scn.site.lon_deg * DEG)
-    assert moved["pos_err_nmi"] * 1852.0 > 1000.0
+    # The run really moves: tens of metres of position error by the end.
+    moved = position_errors(out["lat_rad"], out["lon_rad"], scn.site.lat_deg * DEG, scn.site.lon_deg * DEG)
+    assert np.max(moved["pos_err_nmi"]) * 1852.0 > 50.0
     r_m, r_n = radii_of_curvature(scn.site.lat_deg * DEG)
     north = (np.deg2rad(rust["lat_deg"]) - out["lat_rad"]) * r_m
     east = (np.deg2rad(rust["lon_deg"]) - out["lon_rad"]) * r_n * math.cos(scn.site.lat_deg * DEG)
-    assert np.max(np.hypot(north, east)) < 0.005  # m
+    gap = np.hypot(north, east)
+    print(f"max position gap {gap.max() * 1000:.3f} mm, moved {np.max(moved['pos_err_nmi']) * 1852:.1f} m")
+    assert gap.max() < 0.005  # m
     vel = np.column_stack([rust["vel_e_m_s"], rust["vel_n_m_s"], rust["vel_u_m_s"]])
     np.testing.assert_allclose(vel, out["vel_enu_m_s"], rtol=0, atol=1e-5)
     for k in ("pitch", "roll"):

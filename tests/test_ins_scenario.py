@@ -2,6 +2,7 @@
 
 import math
 import tomllib
+from pathlib import Path
 
 import pytest
 from hypothesis import given, settings
@@ -24,6 +25,7 @@ def test_empty_file_gives_the_documented_defaults(tmp_path):
     assert (s.run.duration_h, s.run.rate_hz, s.run.seed) == (16.0, 100.0, 0)
     assert (s.rotation.scheme, s.rotation.rate_deg_s, s.rotation.span_deg, s.rotation.dwell_s) == (
         "reciprocating", 6.0, 360.0, 0.0)
+    assert s.rotation.accel_deg_s2 == 100.0
     assert s.gyro.bias_deg_h == (0.0, 0.0, 0.0)
     assert s.temperature.series_t_h is None
     assert s.n_samples == 16 * 3600 * 100
@@ -244,3 +246,16 @@ def test_round_trip_and_si_conversion_property(lat, bias, ug, rate):
         assert si == pytest.approx(b * math.pi / 648000.0, rel=1e-12, abs=1e-300)
     for u, si in zip(ug, cfg["accel_bias_m_s2"]):
         assert si == pytest.approx(u * 9.80665e-6, rel=1e-12, abs=1e-300)
+
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples" / "scenarios"
+
+
+def test_example_scenarios_load_and_say_what_they_claim():
+    paper = load_scenario(EXAMPLES / "paper_static.toml")
+    assert (paper.site.lat_deg, paper.run.duration_h, paper.rotation.scheme) == (28.222, 16.0, "reciprocating")
+    axial = load_scenario(EXAMPLES / "axial_drift_only.toml")
+    assert axial.gyro.bias_deg_h == (0.0, 0.0, 0.003) and axial.accel.bias_ug == (0.0, 0.0, 0.0)
+    horiz = load_scenario(EXAMPLES / "horizontal_errors.toml")
+    assert horiz.gyro.bias_deg_h == (0.01, 0.01, 0.0) and horiz.accel.bias_ug == (50.0, 50.0, 0.0)
+    assert horiz.run.duration_h == axial.run.duration_h == 72.0

@@ -53,6 +53,8 @@ def navigate_command(imu_parquet: Path, hours: float | None, compensate_drift_de
                           out_dir=out_dir, quiet=quiet)
     except ImuFileError as exc:
         raise click.ClickException(str(exc)) from None
+    except ValueError as exc:  # e.g. no truth in the file, or the core refused the data
+        raise click.ClickException(f"{imu_parquet}: {exc}") from None
     if not quiet:
         s = result.summary
         if s["final_pos_err_nmi"] is not None:

@@ -78,11 +78,15 @@ class Rotation:
     scheme : "none", "continuous" (one direction), "reciprocating" (turn `span_deg` one way, dwell
     `dwell_s`, turn back), "indexing" (slew through `positions_deg`, dwelling `dwell_s` at each, cycled).
     rate_deg_s : cruise rate [deg/s]; accel_deg_s2 : acceleration at starts, stops, reversals [deg/s^2].
+
+    The default acceleration, 100 deg/s^2 (ramp to 6 deg/s in 0.12 s), matters: reciprocating rotation
+    turns round at the same table angle at both ends, leaving a fraction T_r / (span/rate + T_r) of the
+    horizontal errors unmodulated (T_r = 2 rate / accel): 0.2 % at 100 deg/s^2, 2 % at 10 deg/s^2.
     """
 
     scheme: str = "reciprocating"
     rate_deg_s: float = 6.0
-    accel_deg_s2: float = 10.0
+    accel_deg_s2: float = 100.0
     span_deg: float = 360.0
     positions_deg: tuple[float, ...] = (0.0, 180.0, 90.0, 270.0)
     dwell_s: float = 0.0
