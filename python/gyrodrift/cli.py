@@ -136,3 +136,14 @@ def reproduce(out_dir, seed, quiet):
         for line in summary_lines(results):
             click.echo(line)
         click.echo(f"report: {out_dir}/report.html ({results['elapsed_s']:.1f} s)")
+
+
+def _register_subcommands() -> None:
+    """Commands defined next to the functions they wrap (navigation in gyrodrift.ins)."""
+    from gyrodrift.ins.commands import navigate_command, simulate_command
+
+    main.add_command(simulate_command)
+    main.add_command(navigate_command)
+
+
+_register_subcommands()
