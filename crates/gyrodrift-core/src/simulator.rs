@@ -19,11 +19,11 @@
 //! at the middle of the sample. Output times are the end times t_k. Streaming: `next_chunk` produces the next
 //! samples into reusable buffers and keeps all state, so a run of any length uses constant memory.
 
-use crate::attitude::{dcm_to_euler, euler_to_dcm, mat_mul, mat_t_vec, rot_z, wrap_pi, Euler, Mat3, Vec3};
+use crate::attitude::{dcm_to_euler, euler_to_dcm, mat_mul, mat_t_vec, Euler, Mat3, Vec3};
 use crate::earth;
 use crate::imu_error::{ImuErrorModel, ImuErrorParams};
 use crate::temperature::TemperatureProfile;
-use crate::turntable::{check, ParamError, RotationScheme, Turntable};
+use crate::turntable::{check, ParamError, RotationScheme, TableCursor, Turntable};
 
 /// Everything that defines a simulated static run (SI units).
 #[derive(Clone, Debug, PartialEq)]
@@ -133,6 +133,13 @@ impl ImuChunk {
 const GL2_LO: f64 = 0.5 - 0.288_675_134_594_812_9;
 const GL2_HI: f64 = 0.5 + 0.288_675_134_594_812_9;
 
+fn tau_decay(p: &TemperatureProfile, dt: f64) -> f64 {
+    match p {
+        TemperatureProfile::WarmUp { tau_s, .. } => (-dt / tau_s).exp(),
+        TemperatureProfile::Series { .. } => 1.0,
+    }
+}
+
 /// The simulator (see the module docs).
 #[derive(Clone, Debug)]
 pub struct ImuSimulator {
@@ -149,8 +156,15 @@ pub struct ImuSimulator {
     level: bool,
     table: Turntable,
     errors: ImuErrorModel,
-    /// Table angle at the end of the previous sample [rad].
-    alpha_prev: f64,
+    cursor: TableCursor,
+    /// Table angle at the end of the previous sample [rad], its sine and cosine.
+    alpha: f64,
+    sin_alpha: f64,
+    cos_alpha: f64,
+    /// Warm-up recurrence: exp(-t_k / tau) at the last sample, exp(-dt / tau), exp(-dt / (2 tau)).
+    decay: f64,
+    decay_step: f64,
+    decay_half: f64,
 }
 
 impl ImuSimulator {
@@ -173,7 +187,13 @@ impl ImuSimulator {
             u_f,
             table,
             errors,
-            alpha_prev: 0.0,
+            cursor: TableCursor::default(),
+            alpha: 0.0,
+            sin_alpha: 0.0,
+            cos_alpha: 1.0,
+            decay: 1.0,
+            decay_step: tau_decay(&cfg.temperature, dt),
+            decay_half: tau_decay(&cfg.temperature, 0.5 * dt),
             cfg,
         })
     }
@@ -202,28 +222,62 @@ impl ImuSimulator {
         self.dt
     }
 
-    /// True increments (dtheta [rad], dv [m/s]) of sample k (1-based, ending at t_k = k dt) and the table angle
-    /// at its end. `alpha0` is the table angle at its start.
+    /// True increments (dtheta [rad], dv [m/s]) of sample k (1-based, ending at t_k = k dt); advances the
+    /// table state (angle and its sine/cosine at t_k).
     #[inline]
-    fn true_increments(&self, k: u64, alpha0: f64) -> (Vec3, Vec3, f64) {
+    fn true_increments(&mut self, k: u64, t0: f64, t1: f64) -> (Vec3, Vec3) {
         let dt = self.dt;
-        let rate = self.cfg.rate_hz;
-        let t1 = k as f64 / rate;
         let (u, a) = (self.u_w, self.u_f);
         if self.table.is_static() {
-            return ([u[0] * dt, u[1] * dt, u[2] * dt], [a[0] * dt, a[1] * dt, a[2] * dt], 0.0);
+            return ([u[0] * dt, u[1] * dt, u[2] * dt], [a[0] * dt, a[1] * dt, a[2] * dt]);
         }
-        let t0 = (k - 1) as f64 / rate;
-        let alpha1 = self.table.angle(t1);
-        let (s1, c1) = self.table.angle(t0 + GL2_LO * dt).sin_cos();
-        let (s2, c2) = self.table.angle(t0 + GL2_HI * dt).sin_cos();
-        let ic = 0.5 * dt * (c1 + c2);
-        let is = 0.5 * dt * (s1 + s2);
+        let alpha0 = self.alpha;
+        let (s0, c0) = (self.sin_alpha, self.cos_alpha);
+        let a_lo = self.table.state_at(&mut self.cursor, t0 + GL2_LO * dt).angle;
+        let a_hi = self.table.state_at(&mut self.cursor, t0 + GL2_HI * dt).angle;
+        let alpha1 = self.table.state_at(&mut self.cursor, t1).angle;
+        // sin/cos at the nodes by the addition theorem from the start of the sample (small angles by series).
+        let (s_lo, c_lo) = rotate(s0, c0, a_lo - alpha0);
+        let (s_hi, c_hi) = rotate(s0, c0, a_hi - alpha0);
+        let ic = 0.5 * dt * (c_lo + c_hi);
+        let is = 0.5 * dt * (s_lo + s_hi);
+        // Exact re-synchronisation every SINCOS_RESYNC samples bounds the rounding random walk (< 1e-14).
+        let (s1, c1) = if k % SINCOS_RESYNC == 0 { alpha1.sin_cos() } else { rotate(s0, c0, alpha1 - alpha0) };
+        self.alpha = alpha1;
+        self.sin_alpha = s1;
+        self.cos_alpha = c1;
         (
             [ic * u[0] + is * u[1], -is * u[0] + ic * u[1], u[2] * dt + (alpha1 - alpha0)],
             [ic * a[0] + is * a[1], -is * a[0] + ic * a[1], a[2] * dt],
-            alpha1,
         )
+    }
+
+    /// Temperature [deg C] at t_k and, if needed, temperature and rate at the middle of the sample.
+    #[inline]
+    fn temperature(&mut self, k: u64, t1: f64, need_mid: bool) -> (f64, (f64, f64)) {
+        match self.cfg.temperature {
+            TemperatureProfile::WarmUp { start_c, end_c, tau_s } => {
+                if start_c == end_c {
+                    return (end_c, (end_c, 0.0));
+                }
+                // e_k = exp(-t_k / tau) by recurrence, exact every SINCOS_RESYNC samples.
+                let e_prev = self.decay;
+                let e1 = if k % SINCOS_RESYNC == 0 { (-t1 / tau_s).exp() } else { e_prev * self.decay_step };
+                self.decay = e1;
+                let d = start_c - end_c;
+                let mid = if need_mid {
+                    let em = e_prev * self.decay_half;
+                    (end_c + d * em, -d / tau_s * em)
+                } else {
+                    (0.0, 0.0)
+                };
+                (end_c + d * e1, mid)
+            }
+            TemperatureProfile::Series { .. } => {
+                let mid = if need_mid { self.cfg.temperature.at(t1 - 0.5 * self.dt) } else { (0.0, 0.0) };
+                (self.cfg.temperature.at(t1).0, mid)
+            }
+        }
     }
 
     /// Produce the next at most `n` samples into `out` (cleared first). Returns the number produced;
@@ -231,24 +285,20 @@ impl ImuSimulator {
     pub fn next_chunk(&mut self, n: usize, out: &mut ImuChunk) -> usize {
         let m = (n as u64).min(self.n_samples - self.k) as usize;
         out.clear_reserve(m);
-        let rate = self.cfg.rate_hz;
-        let dt = self.dt;
         let temp_drift = self.errors.params().has_temperature_drift();
         let yaw0 = self.cfg.attitude.yaw;
+        let rate = self.cfg.rate_hz;
+        let mut t0 = self.k as f64 / rate;
         for _ in 0..m {
             let k = self.k + 1;
             let t1 = k as f64 / rate;
-            let (mut dth, mut dv, alpha1) = self.true_increments(k, self.alpha_prev);
-            self.alpha_prev = alpha1;
-            let drift = if temp_drift {
-                let (tm, rm) = self.cfg.temperature.at(t1 - 0.5 * dt);
-                self.errors.params().axial_drift(tm, rm)
-            } else {
-                0.0
-            };
+            let (mut dth, mut dv) = self.true_increments(k, t0, t1);
+            let (temp, (temp_mid, rate_mid)) = self.temperature(k, t1, temp_drift);
+            let drift = if temp_drift { self.errors.params().axial_drift(temp_mid, rate_mid) } else { 0.0 };
             self.errors.apply(drift, &mut dth, &mut dv);
-            let temp = self.cfg.temperature.at(t1).0;
+            let alpha1 = self.alpha;
             out.t_s.push(t1);
+            t0 = t1;
             out.dtheta.extend_from_slice(&dth);
             out.dv.extend_from_slice(&dv);
             out.temp_c.push(temp);
@@ -256,9 +306,12 @@ impl ImuSimulator {
             if self.level {
                 out.pitch.push(0.0);
                 out.roll.push(0.0);
-                out.yaw.push(wrap_pi(yaw0 + alpha1));
+                out.yaw.push(wrap_pi_fast(yaw0 + alpha1));
             } else {
-                let e = dcm_to_euler(&mat_mul(&self.c_b0n, &rot_z(alpha1)));
+                // C_b^n = C_b0^n Rz(alpha), using the sine and cosine already known.
+                let (s, c) = (self.sin_alpha, self.cos_alpha);
+                let rz = [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]];
+                let e = dcm_to_euler(&mat_mul(&self.c_b0n, &rz));
                 out.pitch.push(e.pitch);
                 out.roll.push(e.roll);
                 out.yaw.push(e.yaw);
@@ -269,10 +322,49 @@ impl ImuSimulator {
     }
 }
 
+/// Samples between exact evaluations of recurrences (table sine/cosine, warm-up exponential).
+const SINCOS_RESYNC: u64 = 256;
+
+/// (sin, cos) of (alpha + d) from (sin alpha, cos alpha); series for |d| < 0.05 (truncation < 1e-19).
+#[inline(always)]
+fn rotate(s: f64, c: f64, d: f64) -> (f64, f64) {
+    let (sd, cd) = if d.abs() < 0.05 {
+        let d2 = d * d;
+        // Multiplications by constant reciprocals (a division costs ~10x a multiplication).
+        let sd = d * (1.0 - d2 * (1.0 / 6.0) * (1.0 - d2 * (1.0 / 20.0) * (1.0 - d2 * (1.0 / 42.0) * (1.0 - d2 * (1.0 / 72.0)))));
+        let cd = 1.0
+            - d2 * 0.5 * (1.0 - d2 * (1.0 / 12.0) * (1.0 - d2 * (1.0 / 30.0) * (1.0 - d2 * (1.0 / 56.0) * (1.0 - d2 * (1.0 / 90.0)))));
+        (sd, cd)
+    } else {
+        d.sin_cos()
+    };
+    (s * cd + c * sd, c * cd - s * sd)
+}
+
+/// Wrap to (-pi, pi] without a division in the common case.
+#[inline(always)]
+fn wrap_pi_fast(a: f64) -> f64 {
+    use std::f64::consts::{PI, TAU};
+    if a > -PI && a <= PI {
+        return a;
+    }
+    // Round to nearest by the 1.5 * 2^52 trick (exact for |x| < 2^51; avoids a libm call).
+    const MAGIC: f64 = 6_755_399_441_055_744.0;
+    let n = (a * (1.0 / TAU) + MAGIC) - MAGIC;
+    let w = a - TAU * n;
+    if w <= -PI {
+        w + TAU
+    } else if w > PI {
+        w - TAU
+    } else {
+        w
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::attitude::{add, norm, quat_mul, quat_to_rotvec, rotvec_to_quat, euler_to_quat, quat_conj, sub};
+    use crate::attitude::{rot_z, add, norm, quat_mul, quat_to_rotvec, rotvec_to_quat, euler_to_quat, quat_conj, sub};
 
     fn rotating(level: bool) -> ImuSimulatorConfig {
         ImuSimulatorConfig {

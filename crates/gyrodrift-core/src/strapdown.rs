@@ -31,7 +31,7 @@
 //! w_v = 0.01 rad/s (period 628 s), zeta_v = 0.707.
 
 use crate::attitude::{
-    add, cross, dcm_to_euler, euler_to_quat, quat_mul, quat_normalize, quat_rotate, quat_to_dcm, rotvec_to_quat, scale,
+    add, cross, dcm_to_euler, dot, euler_to_quat, quat_mul, quat_rotate, quat_to_dcm, rotvec_to_quat, scale,
     sub, Euler, Quat, Vec3,
 };
 use crate::earth;
@@ -102,11 +102,11 @@ pub struct NavState {
 /// Position-dependent Earth quantities, refreshed every `EARTH_REFRESH` samples.
 #[derive(Clone, Copy, Debug)]
 struct EarthTerms {
-    cos_lat: f64,
     tan_lat: f64,
-    /// R_M + h, R_N + h [m].
-    rm_h: f64,
-    rn_h: f64,
+    /// 1 / (R_M + h), 1 / (R_N + h), 1 / ((R_N + h) cos lat) [1/m].
+    inv_rm_h: f64,
+    inv_rn_h: f64,
+    inv_rn_h_cos: f64,
     /// Gravity vector in ENU (0, 0, -g) [m/s^2].
     g_n: Vec3,
     /// Earth rate in ENU [rad/s].
@@ -122,10 +122,10 @@ impl EarthTerms {
         let rm_h = earth::meridian_radius(lat) + h;
         let rn_h = earth::transverse_radius(lat) + h;
         EarthTerms {
-            cos_lat: c,
             tan_lat: s / c,
-            rm_h,
-            rn_h,
+            inv_rm_h: 1.0 / rm_h,
+            inv_rn_h: 1.0 / rn_h,
+            inv_rn_h_cos: 1.0 / (rn_h * c),
             g_n: [0.0, 0.0, -g],
             w_ie: earth::earth_rate_enu(lat),
             two_g_over_r: 2.0 * g / (rm_h * rn_h).sqrt(),
@@ -135,8 +135,8 @@ impl EarthTerms {
     /// Transport rate w_en^n = (-v_N / (R_M + h), v_E / (R_N + h), v_E tan(lat) / (R_N + h)) [rad/s].
     #[inline(always)]
     fn transport_rate(&self, v: Vec3) -> Vec3 {
-        let e = v[0] / self.rn_h;
-        [-v[1] / self.rm_h, e, e * self.tan_lat]
+        let e = v[0] * self.inv_rn_h;
+        [-v[1] * self.inv_rm_h, e, e * self.tan_lat]
     }
 }
 
@@ -265,8 +265,8 @@ impl Navigator {
     fn update_position(&mut self, v_old: Vec3, v_new: Vec3) {
         let e = &self.earth;
         let half_dt = 0.5 * self.dt;
-        self.lat += (v_old[1] + v_new[1]) * half_dt / e.rm_h;
-        self.lon += (v_old[0] + v_new[0]) * half_dt / (e.rn_h * e.cos_lat);
+        self.lat += (v_old[1] + v_new[1]) * half_dt * e.inv_rm_h;
+        self.lon += (v_old[0] + v_new[0]) * half_dt * e.inv_rn_h_cos;
         if self.cfg.vertical == Vertical::Damped {
             self.height += ((v_old[2] + v_new[2]) * half_dt) - self.k1 * (self.height - self.cfg.height) * self.dt;
         }
@@ -275,8 +275,12 @@ impl Navigator {
     /// Attitude update (module docs, step 4): q_k = q(-zeta) o q_{k-1} o q(phi).
     #[inline(always)]
     fn update_attitude(&mut self, phi: Vec3, zeta: Vec3) {
-        let q_nn = rotvec_to_quat(scale(zeta, -1.0));
-        self.q = quat_normalize(quat_mul(q_nn, quat_mul(self.q, rotvec_to_quat(phi))));
+        // |zeta| < 1e-6 rad: q(-zeta) = [1 - |zeta|^2 / 8, -zeta / 2] is exact to 1e-26.
+        let q_nn = [1.0 - 0.125 * dot(zeta, zeta), -0.5 * zeta[0], -0.5 * zeta[1], -0.5 * zeta[2]];
+        let q = quat_mul(q_nn, quat_mul(self.q, rotvec_to_quat(phi)));
+        // First-order normalisation q (3 - |q|^2) / 2: the norm error after it is O(e^2), e ~ 1e-16.
+        let f = 0.5 * (3.0 - (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]));
+        self.q = [q[0] * f, q[1] * f, q[2] * f, q[3] * f];
     }
 
     /// One complete update with one sample's increments (before bias compensation).
@@ -307,10 +311,14 @@ impl Navigator {
         assert_eq!(dtheta.len(), dv.len());
         assert_eq!(dtheta.len() % 3, 0);
         assert!(decimation >= 1);
+        // Countdown instead of a modulo per sample: samples left until the next output.
+        let mut left = decimation - self.k % decimation;
         for (a, b) in dtheta.chunks_exact(3).zip(dv.chunks_exact(3)) {
             self.step([a[0], a[1], a[2]], [b[0], b[1], b[2]]);
-            if self.k % decimation == 0 {
+            left -= 1;
+            if left == 0 {
                 sink(&self.state());
+                left = decimation;
             }
         }
     }

@@ -108,6 +108,41 @@ impl Segment {
     }
 }
 
+/// The reciprocating span near `turns` full turns whose finite-acceleration reversals leave no first-harmonic
+/// residual ([`Turntable::modulation_residual`] = 0): the extra time spent near the reversal headings is
+/// balanced by shortening the span below 2 pi `turns`. Bisection on the residual's component along the
+/// symmetry direction e^{i S / 2} (the residual of a symmetric move is parallel to it).
+pub fn balanced_reciprocating_span(rate: f64, accel: f64, dwell: f64, turns: u32) -> Result<f64, ParamError> {
+    check(turns >= 1, "turns", "must be at least 1")?;
+    let component = |span: f64| -> Result<f64, ParamError> {
+        let t = Turntable::new(RotationScheme::Reciprocating { rate, accel, span, dwell })?;
+        let (c, s) = t.modulation_residual();
+        Ok(c * (0.5 * span).cos() + s * (0.5 * span).sin())
+    };
+    let full = TAU * turns as f64;
+    let (mut lo, mut hi) = (full - std::f64::consts::PI, full);
+    let (f_lo, f_hi) = (component(lo)?, component(hi)?);
+    check(f_lo * f_hi <= 0.0, "rotation_accel_rad_s2", "too slow for a balanced span within half a turn")?;
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if component(mid)? * f_lo > 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Ok(0.5 * (lo + hi))
+}
+
+/// Position of a monotone time stream in a [`Turntable`] profile (see [`Turntable::state_at`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct TableCursor {
+    seg: usize,
+    n_period: u64,
+    /// Time offset of the current repetition of the period [s].
+    base: f64,
+}
+
 /// A turntable profile: exact closed-form angle, rate and acceleration as functions of time.
 #[derive(Clone, Debug)]
 pub struct Turntable {
@@ -273,10 +308,77 @@ impl Turntable {
         segs[i].eval(tt)
     }
 
+    /// State at time t [s] using `cursor` to find the segment: O(1) for non-decreasing times, identical in
+    /// value to [`Turntable::state`] up to rounding of the period offset. Use one cursor per time stream.
+    #[inline]
+    pub fn state_at(&self, cursor: &mut TableCursor, t: f64) -> TableState {
+        if self.segments.is_empty() {
+            return TableState::default();
+        }
+        if t < cursor.base + self.segments[cursor.seg].t0 {
+            *cursor = TableCursor::default();
+        }
+        loop {
+            let s = &self.segments[cursor.seg];
+            if t < cursor.base + s.t0 + s.duration {
+                return s.eval(t - cursor.base);
+            }
+            cursor.seg += 1;
+            if cursor.seg == self.segments.len() {
+                if self.period > 0.0 {
+                    cursor.n_period += 1;
+                    cursor.seg = self.n_prefix;
+                    cursor.base = cursor.n_period as f64 * self.period;
+                } else {
+                    // Only `Continuous` ends in an infinite cruise; keep it (guards against t = inf).
+                    cursor.seg -= 1;
+                    return self.segments[cursor.seg].eval(t - cursor.base);
+                }
+            }
+        }
+    }
+
     /// Angle [rad] at time t [s].
     #[inline]
     pub fn angle(&self, t: f64) -> f64 {
         self.state(t).angle
+    }
+
+    /// Time average over one period of (cos alpha, sin alpha): the fraction of a body-fixed horizontal sensor
+    /// error that the scheme leaves un-modulated in the navigation frame (relative to the table-zero heading).
+    /// (1, 0) for `None`; for `Continuous` the average over one revolution of the cruise, i.e. (0, 0).
+    /// Slow starts, stops and dwells weight their headings more, so a reciprocating scheme that reverses at
+    /// the same heading (span 2 pi) leaves about 2 T_r / period, T_r = 2 rate / accel; see
+    /// [`balanced_reciprocating_span`].
+    pub fn modulation_residual(&self) -> (f64, f64) {
+        match self.scheme {
+            RotationScheme::None => return (1.0, 0.0),
+            RotationScheme::Continuous { .. } => return (0.0, 0.0),
+            _ => {}
+        }
+        let segs = &self.segments[self.n_prefix..];
+        let (mut c, mut s) = (0.0, 0.0);
+        // Gauss-Legendre 4 points on pieces of at most 0.05 rad of table travel (error < 1e-12).
+        const X: [f64; 4] = [-0.861_136_311_594_052_6, -0.339_981_043_584_856_3, 0.339_981_043_584_856_3, 0.861_136_311_594_052_6];
+        const W: [f64; 4] = [0.347_854_845_137_453_9, 0.652_145_154_862_546_1, 0.652_145_154_862_546_1, 0.347_854_845_137_453_9];
+        for g in segs {
+            let travel = match g.kind {
+                Kind::Dwell => 0.0,
+                Kind::Cruise { rate } => rate.abs() * g.duration,
+                Kind::RampUp { peak } | Kind::RampDown { peak } => 0.5 * peak.abs() * g.duration,
+            };
+            let n = ((travel / 0.05).ceil() as usize).max(1);
+            let h = g.duration / n as f64;
+            for i in 0..n {
+                let mid = g.t0 + (i as f64 + 0.5) * h;
+                for j in 0..4 {
+                    let a = g.eval(mid + 0.5 * h * X[j]).angle;
+                    c += 0.5 * h * W[j] * a.cos();
+                    s += 0.5 * h * W[j] * a.sin();
+                }
+            }
+        }
+        (c / self.period, s / self.period)
     }
 
     /// Largest rate magnitude any segment reaches [rad/s].
@@ -353,6 +455,14 @@ mod tests {
                 t += dt;
             }
             assert!(max_rate <= RATE * (1.0 + 1e-12));
+            // The cursor evaluation agrees with the direct one.
+            let mut cur = TableCursor::default();
+            let mut t = 0.0;
+            while t < horizon {
+                let (a, b) = (tt.state(t), tt.state_at(&mut cur, t));
+                assert!((a.angle - b.angle).abs() < 1e-9 && (a.rate - b.rate).abs() < 1e-12, "{sch:?} cursor at {t}");
+                t += 0.0137;
+            }
             // Segment ends in closed form agree with evaluation.
             for (te, s) in tt.segment_ends() {
                 if te.is_finite() {
@@ -413,6 +523,32 @@ mod tests {
             }
         }
         assert!((tt.period() - t / 2.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn modulation_residual_of_the_schemes() {
+        let r = Turntable::new(RotationScheme::None).unwrap().modulation_residual();
+        assert_eq!(r, (1.0, 0.0));
+        // Reciprocating 2 pi reversing at heading 0: about 2 T_r / period left along heading 0.
+        let tt = Turntable::new(RotationScheme::Reciprocating { rate: RATE, accel: ACC, span: 2.0 * PI, dwell: 0.0 }).unwrap();
+        let (c, s) = tt.modulation_residual();
+        let tr = 2.0 * RATE / ACC;
+        assert!(s.abs() < 1e-9);
+        assert!(c > 0.5 * 2.0 * tr / tt.period() && c < 1.5 * 2.0 * tr / tt.period(), "{c}");
+        // The balanced span removes it.
+        let span = balanced_reciprocating_span(RATE, ACC, 0.0, 1).unwrap();
+        assert!(span < 2.0 * PI && span > PI);
+        let tb = Turntable::new(RotationScheme::Reciprocating { rate: RATE, accel: ACC, span, dwell: 0.0 }).unwrap();
+        let (c, s) = tb.modulation_residual();
+        assert!(c.hypot(s) < 1e-9, "{c} {s}");
+        // 8-step indexing through four positions and back is balanced; [0, 90, 180, 270] with a -270 return is not.
+        let d = PI / 2.0;
+        let eight = Turntable::new(RotationScheme::Indexing { rate: RATE, accel: ACC, positions: vec![0.0, d, 2.0 * d, 3.0 * d, 4.0 * d, 3.0 * d, 2.0 * d, d], dwell: 300.0 }).unwrap();
+        let (c, s) = eight.modulation_residual();
+        assert!(c.hypot(s) < 1e-9, "{c} {s}");
+        let four = Turntable::new(RotationScheme::Indexing { rate: RATE, accel: ACC, positions: vec![0.0, d, 2.0 * d, 3.0 * d], dwell: 300.0 }).unwrap();
+        let (c, s) = four.modulation_residual();
+        assert!(c.hypot(s) > 1e-3);
     }
 
     #[test]

@@ -4,7 +4,7 @@ use gyrodrift_core::attitude::Euler;
 use gyrodrift_core::earth::{self, NMI};
 use gyrodrift_core::simulator::{ImuChunk, ImuSimulator, ImuSimulatorConfig};
 use gyrodrift_core::strapdown::{NavState, Navigator, NavigatorConfig, Vertical};
-use gyrodrift_core::turntable::RotationScheme;
+use gyrodrift_core::turntable::{balanced_reciprocating_span, RotationScheme};
 use std::f64::consts::PI;
 
 const DEG: f64 = PI / 180.0;
@@ -21,6 +21,16 @@ fn continuous() -> RotationScheme {
 }
 fn reciprocating() -> RotationScheme {
     RotationScheme::Reciprocating { rate: 6.0 * DEG, accel: 1.0 * DEG, span: 2.0 * PI, dwell: 0.0 }
+}
+/// Reciprocating with the span that balances the reversal ramps (see `turntable::balanced_reciprocating_span`).
+fn reciprocating_balanced() -> RotationScheme {
+    let span = balanced_reciprocating_span(6.0 * DEG, 1.0 * DEG, 0.0, 1).unwrap();
+    RotationScheme::Reciprocating { rate: 6.0 * DEG, accel: 1.0 * DEG, span, dwell: 0.0 }
+}
+/// Four positions visited in the balanced 8-step order 0, 90, 180, 270, 360, 270, 180, 90 (no net turns).
+fn indexing_8_step() -> RotationScheme {
+    let d = 90.0 * DEG;
+    RotationScheme::Indexing { rate: 6.0 * DEG, accel: 1.0 * DEG, positions: vec![0.0, d, 2.0 * d, 3.0 * d, 4.0 * d, 3.0 * d, 2.0 * d, d], dwell: 300.0 }
 }
 fn indexing() -> RotationScheme {
     RotationScheme::Indexing { rate: 6.0 * DEG, accel: 1.0 * DEG, positions: vec![0.0, 90.0 * DEG, 180.0 * DEG, 270.0 * DEG], dwell: 300.0 }
@@ -73,12 +83,137 @@ fn base(scheme: RotationScheme, rate_hz: f64, hours: f64) -> ImuSimulatorConfig 
 fn error_free_imu_navigates_72_h_within_0_01_nmi_with_every_scheme() {
     for (name, scheme) in [("none", RotationScheme::None), ("continuous", continuous()), ("reciprocating", reciprocating()), ("indexing", indexing())] {
         let mut cfg = base(scheme, 100.0, 72.0);
-        // A tilted base exercises the full truth model.
-        cfg.attitude = Euler { pitch: 0.5 * DEG, roll: -0.3 * DEG, yaw: 30.0 * DEG };
+        if name == "reciprocating" {
+            // A tilted base exercises the full truth model (the level ones take the fast path).
+            cfg.attitude = Euler { pitch: 0.5 * DEG, roll: -0.3 * DEG, yaw: 30.0 * DEG };
+        }
         let (lat, lon) = (cfg.lat, cfg.lon);
         let out = run(cfg, 600.0);
         let worst = out.iter().map(|s| pos_err_m(s, lat, lon)).fold(0.0, f64::max);
         eprintln!("error-free {name}: max position error over 72 h = {:.3e} nmi ({:.3} m)", worst / NMI, worst);
         assert!(worst < 0.01 * NMI, "{name}: {worst} m");
     }
+}
+
+/// Closed forms of method.md for a constant axial drift eps [rad/s] at latitude lat:
+/// dL(t) = (eps cos L / w_ie)(1 - cos w_ie t), dlon(t) = eps sin L (t - sin(w_ie t) / w_ie).
+fn axial_closed_form(eps: f64, lat: f64, t: f64) -> (f64, f64) {
+    let w = earth::OMEGA_IE;
+    (eps * lat.cos() / w * (1.0 - (w * t).cos()), eps * lat.sin() * (t - (w * t).sin() / w))
+}
+
+fn at_hour(out: &[NavState], h: f64) -> &NavState {
+    out.iter().find(|s| (s.t - h * HOUR).abs() < 1e-6).expect("output at that hour")
+}
+
+#[test]
+fn constant_axial_drift_gives_the_closed_form_latitude_and_position_errors() {
+    let eps = 0.003 * DEG_H;
+    for (name, scheme) in [("none", RotationScheme::None), ("reciprocating", reciprocating())] {
+        let mut cfg = base(scheme, 100.0, 72.0);
+        cfg.errors.gyro_bias = [0.0, 0.0, eps];
+        let (lat, lon, h) = (cfg.lat, cfg.lon, cfg.height);
+        let out = run(cfg, 600.0);
+        // Latitude error at 12 h (computed minus true) against 2 eps cos L / w_ie.
+        let dlat = at_hour(&out, 12.0).lat - lat;
+        let expect = 2.0 * eps * lat.cos() / earth::OMEGA_IE;
+        let dlat_as = dlat.to_degrees() * 3600.0;
+        eprintln!("axial {name}: latitude error at 12 h {dlat_as:.3} arcsec, closed form {:.3} arcsec ({:+.3} %)", expect.to_degrees() * 3600.0, (dlat / expect - 1.0) * 100.0);
+        assert!((dlat / expect - 1.0).abs() < 0.01, "{name}: {dlat_as} arcsec");
+        assert!((expect.to_degrees() * 3600.0 - 72.5).abs() < 0.1);
+        // Position error at 72 h against the closed form (5.40 nmi).
+        let s72 = at_hour(&out, 72.0);
+        let err = pos_err_m(s72, lat, lon);
+        let (dl, dlon) = axial_closed_form(eps, lat, 72.0 * HOUR);
+        let cf = ((dl * (earth::meridian_radius(lat) + h)).powi(2) + (dlon * (earth::transverse_radius(lat) + h) * lat.cos()).powi(2)).sqrt();
+        eprintln!("axial {name}: position error at 72 h {:.4} nmi, closed form {:.4} nmi ({:+.3} %)", err / NMI, cf / NMI, (err / cf - 1.0) * 100.0);
+        assert!((err / cf - 1.0).abs() < 0.02, "{name}: {} nmi", err / NMI);
+        assert!((cf / NMI - 5.40).abs() < 0.01);
+    }
+}
+
+/// (max over 72 h, value at 72 h) of the position error [nmi].
+fn horizontal_errors(scheme: RotationScheme) -> (f64, f64) {
+    let mut cfg = base(scheme, 100.0, 72.0);
+    // Yaw 0: body x, y = East, North, so the north drift is 0.01 deg/h (method.md's ~34 nmi case).
+    cfg.attitude.yaw = 0.0;
+    cfg.errors.gyro_bias = [0.01 * DEG_H, 0.01 * DEG_H, 0.0];
+    cfg.errors.accel_bias = [50.0 * UG, 50.0 * UG, 0.0];
+    let (lat, lon) = (cfg.lat, cfg.lon);
+    let out = run(cfg, 60.0);
+    let max = out.iter().map(|s| pos_err_m(s, lat, lon)).fold(0.0, f64::max) / NMI;
+    (max, pos_err_m(at_hour(&out, 72.0), lat, lon) / NMI)
+}
+
+#[test]
+fn horizontal_errors_without_rotation_grow_to_tens_of_nmi() {
+    let (e, e72) = horizontal_errors(RotationScheme::None);
+    eprintln!("horizontal 0.01 deg/h + 50 ug, no rotation: max position error over 72 h {e:.3} nmi, at 72 h {e72:.3} nmi");
+    assert!(e > 25.0 && e < 45.0, "{e}");
+}
+
+#[test]
+fn reciprocating_rotation_cancels_horizontal_errors() {
+    let (e, e72) = horizontal_errors(reciprocating_balanced());
+    eprintln!("horizontal 0.01 deg/h + 50 ug, reciprocating (balanced span): max position error over 72 h {e:.4} nmi, at 72 h {e72:.4} nmi");
+    assert!(e < 0.1, "{e}");
+}
+
+#[test]
+fn four_position_indexing_cancels_horizontal_errors() {
+    let (e, e72) = horizontal_errors(indexing_8_step());
+    eprintln!("horizontal 0.01 deg/h + 50 ug, 4-position 8-step indexing: max position error over 72 h {e:.4} nmi, at 72 h {e72:.4} nmi");
+    assert!(e < 0.3, "{e}");
+}
+
+#[test]
+fn z_scale_factor_error_is_an_axial_drift_only_under_unidirectional_rotation() {
+    let scale = 1e-6;
+    let rate = 6.0 * DEG;
+    let lat_err = |scheme: RotationScheme| {
+        let mut cfg = base(scheme, 50.0, 12.0);
+        cfg.errors.gyro_scale = [0.0, 0.0, scale];
+        let lat = cfg.lat;
+        let out = run(cfg, 600.0);
+        at_hour(&out, 12.0).lat - lat
+    };
+    let eps = scale * rate; // extra axial drift = scale x table rate (the Earth-rate part, scale w_ie sin L, is 1e-4 of it)
+    let expect = 2.0 * eps * lat0().cos() / earth::OMEGA_IE;
+    let cont = lat_err(continuous());
+    let recip = lat_err(reciprocating());
+    eprintln!(
+        "z scale 1 ppm at 6 deg/s (eps = {:.4} deg/h): latitude error at 12 h continuous {:.2} arcsec (closed form {:.2}, {:+.2} %), reciprocating {:.4} arcsec",
+        eps / DEG_H,
+        cont.to_degrees() * 3600.0,
+        expect.to_degrees() * 3600.0,
+        (cont / expect - 1.0) * 100.0,
+        recip.to_degrees() * 3600.0
+    );
+    assert!((cont / expect - 1.0).abs() < 0.02, "continuous");
+    assert!(recip.abs() < 0.01 * expect, "reciprocating");
+}
+
+#[test]
+fn angle_random_walk_heading_error_grows_as_sqrt_t() {
+    let arw = 0.001 * DEG / 60.0; // 0.001 deg/sqrt(h) in rad/sqrt(s)
+    let n_seeds = 200;
+    let (t1, t2) = (100.0, 400.0);
+    let (mut s1, mut s2) = (0.0, 0.0);
+    for seed in 0..n_seeds {
+        let mut cfg = base(RotationScheme::None, 100.0, t2 / HOUR);
+        cfg.seed = seed;
+        cfg.errors.gyro_arw = arw;
+        let yaw0 = cfg.attitude.yaw;
+        let out = run(cfg, 100.0);
+        let e1 = out.iter().find(|s| (s.t - t1).abs() < 1e-9).unwrap().attitude.yaw - yaw0;
+        let e2 = out.iter().find(|s| (s.t - t2).abs() < 1e-9).unwrap().attitude.yaw - yaw0;
+        s1 += e1 * e1;
+        s2 += e2 * e2;
+    }
+    let (sd1, sd2) = ((s1 / n_seeds as f64).sqrt(), (s2 / n_seeds as f64).sqrt());
+    eprintln!("ARW: heading error std {:.3e} rad at {t1} s (expected {:.3e}), {:.3e} at {t2} s (expected {:.3e}), ratio {:.3} (expected 2)", sd1, arw * t1.sqrt(), sd2, arw * t2.sqrt(), sd2 / sd1);
+    // 200 seeds: a std estimate is good to ~5 %; allow 15 %.
+    assert!((sd1 / (arw * t1.sqrt()) - 1.0).abs() < 0.15);
+    assert!((sd2 / (arw * t2.sqrt()) - 1.0).abs() < 0.15);
+    assert!((sd2 / sd1 / 2.0 - 1.0).abs() < 0.2);
 }

@@ -1,0 +1,40 @@
+//! Throughput of the simulator and the navigator, 72 h at 100 Hz, streamed in chunks (constant memory).
+//! Run: `cargo run --release -p gyrodrift-core --example throughput [scheme] [level|tilted]`.
+
+use gyrodrift_core::attitude::Euler;
+use gyrodrift_core::simulator::{ImuChunk, ImuSimulator, ImuSimulatorConfig};
+use gyrodrift_core::strapdown::{Navigator, NavigatorConfig, Vertical};
+use gyrodrift_core::turntable::RotationScheme;
+use std::time::Instant;
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let deg = std::f64::consts::PI / 180.0;
+    let scheme = match args.get(1).map(String::as_str).unwrap_or("reciprocating") {
+        "none" => RotationScheme::None,
+        "continuous" => RotationScheme::Continuous { rate: 6.0 * deg, accel: 10.0 * deg },
+        "indexing" => RotationScheme::Indexing { rate: 6.0 * deg, accel: 10.0 * deg, positions: vec![0.0, 90.0 * deg, 180.0 * deg, 270.0 * deg], dwell: 300.0 },
+        _ => RotationScheme::Reciprocating { rate: 6.0 * deg, accel: 10.0 * deg, span: 360.0 * deg, dwell: 0.0 },
+    };
+    let tilted = args.get(2).map(String::as_str) == Some("tilted");
+    let attitude = if tilted { Euler { pitch: 0.01, roll: -0.02, yaw: 0.5 } } else { Euler { pitch: 0.0, roll: 0.0, yaw: 0.5 } };
+    let cfg = ImuSimulatorConfig { rate_hz: 100.0, duration_s: 72.0 * 3600.0, attitude, scheme, ..Default::default() };
+    let nav_cfg = NavigatorConfig { lat: cfg.lat, lon: cfg.lon, height: cfg.height, vel: [0.0; 3], attitude, rate_hz: 100.0, vertical: Vertical::Fixed };
+    let mut sim = ImuSimulator::new(cfg).unwrap();
+    let mut nav = Navigator::new(nav_cfg).unwrap();
+    let mut ch = ImuChunk::default();
+    let (mut t_sim, mut t_nav) = (0.0, 0.0);
+    let mut n_out = 0usize;
+    loop {
+        let a = Instant::now();
+        if sim.next_chunk(1 << 16, &mut ch) == 0 {
+            break;
+        }
+        let b = Instant::now();
+        nav.process(&ch.dtheta, &ch.dv, 6000, |_| n_out += 1);
+        t_sim += (b - a).as_secs_f64();
+        t_nav += b.elapsed().as_secs_f64();
+    }
+    let n = sim.n_samples() as f64;
+    println!("samples {n:.0}: simulator {t_sim:.2} s ({:.1} M/s), navigator {t_nav:.2} s ({:.1} M/s), outputs {n_out}", n / t_sim / 1e6, n / t_nav / 1e6);
+}
