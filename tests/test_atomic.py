@@ -105,3 +105,17 @@ def test_atomic_directory_swaps_whole_folder_or_nothing(tmp_path):
         (d / "b.txt").write_text("3")
     assert sorted(os.listdir(dest)) == ["b.txt"]
     assert _leftovers(tmp_path) == []
+
+
+def test_written_files_get_ordinary_permissions(tmp_path):
+    old = os.umask(0o022)
+    try:
+        atomic_write_json({"a": 1}, tmp_path / "a.json")
+        atomic_write_parquet(pa.table({"x": [1.0]}), tmp_path / "a.parquet")
+        with atomic_directory(tmp_path / "d") as d:
+            (d / "f").write_text("x")
+    finally:
+        os.umask(old)
+    assert (tmp_path / "a.json").stat().st_mode & 0o777 == 0o644
+    assert (tmp_path / "a.parquet").stat().st_mode & 0o777 == 0o644
+    assert (tmp_path / "d").stat().st_mode & 0o777 == 0o755

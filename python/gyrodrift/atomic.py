@@ -11,8 +11,8 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import secrets
 import shutil
-import tempfile
 from pathlib import Path
 from typing import IO, Any, Iterator
 
@@ -23,6 +23,22 @@ __all__ = [
     "atomic_directory",
     "temporary_path",
 ]
+
+
+def _create_temporary(folder: Path, prefix: str, suffix: str, directory: bool = False) -> Path:
+    """Create a new empty file (or folder) with a random name; unlike `tempfile.mkstemp` (0600) and
+    `mkdtemp` (0700) its permissions follow the umask like any ordinary file's (0666 / 0777 & ~umask)."""
+    for _ in range(100):
+        candidate = folder / f"{prefix}{secrets.token_hex(6)}{suffix}"
+        try:
+            if directory:
+                os.mkdir(candidate, 0o777)
+            else:
+                os.close(os.open(candidate, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
+        except FileExistsError:  # pragma: no cover - 48 random bits
+            continue
+        return candidate
+    raise FileExistsError(f"cannot create a temporary file in {folder}")  # pragma: no cover
 
 
 def _fsync_directory(folder: Path) -> None:
@@ -57,9 +73,7 @@ def temporary_path(path: str | os.PathLike[str], suffix: str = ".tmp") -> Iterat
     """
     dest = Path(path)
     folder = dest.parent if str(dest.parent) else Path(".")
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=suffix, dir=folder)
-    os.close(fd)
-    tmp = Path(tmp_name)
+    tmp = _create_temporary(folder, f".{dest.name}.", suffix)
     try:
         yield tmp
         with open(tmp, "rb+") as fh:
@@ -143,7 +157,7 @@ def atomic_directory(path: str | os.PathLike[str]) -> Iterator[Path]:
     dest = Path(path)
     parent = dest.parent if str(dest.parent) else Path(".")
     parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name}.", suffix=".tmp", dir=parent))
+    tmp = _create_temporary(parent, f".{dest.name}.", ".tmp", directory=True)
     try:
         yield tmp
     except BaseException:
@@ -151,8 +165,7 @@ def atomic_directory(path: str | os.PathLike[str]) -> Iterator[Path]:
         raise
     old = None
     if dest.exists():
-        old = Path(tempfile.mkdtemp(prefix=f".{dest.name}.old-", dir=parent))
-        old.rmdir()
+        old = parent / f".{dest.name}.old-{secrets.token_hex(6)}"
         os.replace(dest, old)
     os.replace(tmp, dest)
     _fsync_directory(parent)
