@@ -183,3 +183,30 @@ def test_cli_errors_name_the_file(tmp_path):
     assert r.exit_code == 1 and f"{bad}: not a Parquet file" in r.output
     r = runner.invoke(navigate_command, [str(bad), "--hours", "-1", "--out", str(tmp_path / "o")])
     assert r.exit_code == 2 and "--hours" in r.output
+
+
+def test_temperature_series_and_axial_drift_model_reach_the_z_gyro_in_user_units(tmp_path):
+    """k1 (T - T0) + k2 (T - T0)^2 + k3 dT/dt [deg/h] on the z gyro, with a measured series from a CSV."""
+    (tmp_path / "temp.csv").write_text("t_h,temp_c\n0,20\n0.5,30\n1.0,25\n")
+    path = tmp_path / "s.toml"
+    path.write_text(
+        '[run]\nduration_h = 1.0\nrate_hz = 10.0\n[rotation]\nscheme = "none"\n'
+        '[temperature]\nseries_csv = "temp.csv"\nt0_c = 20.0\nk1_deg_h_per_c = 0.01\n'
+        "k2_deg_h_per_c2 = 0.001\nk3_deg_h_per_c_per_h = 0.002\n"
+    )
+    scn = load_scenario(path)
+    imu = simulate(scn)
+    t = imu["t_s"]
+    temp = np.interp(t / 3600.0, [0.0, 0.5, 1.0], [20.0, 30.0, 25.0])
+    np.testing.assert_allclose(imu["temp_c"], temp, rtol=0, atol=1e-9)
+    lat = np.deg2rad(scn.site.lat_deg)
+    from gyrodrift.earth import OMEGA_IE_RAD_S
+    from gyrodrift.units import DEG_PER_H
+
+    z_rate_deg_h = (imu["dtheta_z_rad"] * 10.0 - OMEGA_IE_RAD_S * np.sin(lat)) / DEG_PER_H
+    slope_c_h = np.where(t < 1800.0, 20.0, -10.0)
+    expected = 0.01 * (temp - 20.0) + 0.001 * (temp - 20.0) ** 2 + 0.002 * slope_c_h
+    away_from_kinks = np.abs(t - 1800.0) > 1.0
+    np.testing.assert_allclose(z_rate_deg_h[away_from_kinks], expected[away_from_kinks], rtol=0, atol=2e-4)
+    # x and y carry no drift.
+    assert np.max(np.abs(imu["dtheta_x_rad"] * 10.0) / DEG_PER_H) < 1e-6
