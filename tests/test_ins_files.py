@@ -210,3 +210,42 @@ def test_temperature_series_and_axial_drift_model_reach_the_z_gyro_in_user_units
     np.testing.assert_allclose(z_rate_deg_h[away_from_kinks], expected[away_from_kinks], rtol=0, atol=2e-4)
     # x and y carry no drift.
     assert np.max(np.abs(imu["dtheta_x_rad"] * 10.0) / DEG_PER_H) < 1e-6
+
+
+def test_foreign_imu_file_without_metadata_needs_an_initial_state(tmp_path):
+    import pyarrow as pa
+
+    scn = Scenario.from_dict({"run": {"duration_h": 0.05, "rate_hz": 10.0}, "rotation": {"scheme": "none"}})
+    table = simulate(scn).table()
+    bare = table.select(["t_s", "dtheta_x_rad", "dtheta_y_rad", "dtheta_z_rad", "dv_x_m_s", "dv_y_m_s", "dv_z_m_s"])
+    bare = bare.replace_schema_metadata(None)
+    path = tmp_path / "foreign.parquet"
+    pq.write_table(bare, path)
+    with pytest.raises(ValueError) as info:
+        navigate(path)
+    assert str(info.value) == f"navigate: {path} carries no truth; initial must give lat_deg"
+    r = CliRunner().invoke(navigate_command, [str(path), "--out", str(tmp_path / "o")])
+    assert r.exit_code == 1 and f"Error: {path}: navigate: {path} carries no truth" in r.output
+
+    init = {"lat_deg": scn.site.lat_deg, "lon_deg": scn.site.lon_deg, "height_m": 0.0,
+            "pitch_deg": 0.0, "roll_deg": 0.0, "yaw_deg": 0.0}
+    res = navigate(path, initial=init, decimation_s=1.0, out_dir=tmp_path / "o")
+    assert res.summary["rate_hz"] == pytest.approx(10.0)  # from the time stamps
+    assert res.summary["truth"] is None and res.summary["final_pos_err_nmi"] is None
+    assert "pos_err_nmi" not in res.columns
+    np.testing.assert_allclose(res["lat_deg"], scn.site.lat_deg, rtol=0, atol=1e-9)
+    assert json.loads((tmp_path / "o" / "summary.json").read_text())["max_pos_err_nmi"] is None
+
+
+def test_navigate_argument_checks():
+    scn = Scenario.from_dict({"run": {"duration_h": 0.01, "rate_hz": 10.0}})
+    with pytest.raises(ValueError, match=r"navigate: decimation_s must be > 0, got 0"):
+        navigate(scn, decimation_s=0)
+    with pytest.raises(ValueError, match=r"navigate: hours must be > 0, got -1"):
+        navigate(scn, hours=-1)
+    with pytest.raises(ValueError, match=r"navigate: gyro_bias_deg_h must be 3 finite numbers"):
+        navigate(scn, gyro_bias_deg_h=[0.0, 0.0])
+    with pytest.raises(ValueError, match=r"navigate: unknown initial key\(s\) \['lat'\]"):
+        navigate(scn, initial={"lat": 1.0})
+    with pytest.raises(TypeError, match="imu must be a path to imu.parquet, an ImuData or a Scenario, got int"):
+        navigate(3)

@@ -203,6 +203,10 @@ def navigate(
     """
     from gyrodrift import _core
 
+    if not (isinstance(chunk_samples, int) and chunk_samples >= 1):
+        raise ValueError(f"navigate: chunk_samples must be a positive integer, got {chunk_samples!r}")
+    if not (decimation_s > 0 and math.isfinite(decimation_s)):
+        raise ValueError(f"navigate: decimation_s must be > 0, got {decimation_s!r}")
     src = _open_source(imu, chunk_samples)
     rate = src.rate_hz
     n_total = src.n_samples
