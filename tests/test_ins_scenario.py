@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from gyrodrift.ins.scenario import Scenario, ScenarioError, load_scenario
+from gyrodrift.ins.scenario import Scenario, ScenarioError, load_scenario, write_scenario_toml
 from gyrodrift.ins.toml_writer import dumps_toml
 from gyrodrift.units import ARCSEC, DEG, DEG_PER_H, DEG_PER_SQRT_H, HOUR, MICRO_G
 
@@ -229,6 +229,9 @@ def test_resolved_toml_round_trips(tmp_path):
     d = s2.to_toml_dict()
     assert d["temperature"]["series_t_h"] == [0.0, 3.0] and "series_csv" not in d["temperature"]
     assert Scenario.from_dict(tomllib.loads(dumps_toml(d))) == s2
+    write_scenario_toml(s2, tmp_path / "resolved.toml", header="resolved")
+    assert load_scenario(tmp_path / "resolved.toml") == s2
+    assert (tmp_path / "resolved.toml").read_text().startswith("# resolved\n")
 
 
 finite = st.floats(min_value=-1e3, max_value=1e3, allow_nan=False, allow_infinity=False)

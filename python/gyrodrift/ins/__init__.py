@@ -25,6 +25,7 @@ from gyrodrift.ins.scenario import (
     Site,
     Temperature,
     load_scenario,
+    write_scenario_toml,
 )
 from gyrodrift.ins.simulate import ImuData, simulate
 
@@ -44,4 +45,5 @@ __all__ = [
     "load_scenario",
     "navigate",
     "simulate",
+    "write_scenario_toml",
 ]

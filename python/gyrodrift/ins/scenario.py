@@ -34,6 +34,7 @@ __all__ = [
     "Attitude",
     "Scenario",
     "load_scenario",
+    "write_scenario_toml",
     "ROTATION_SCHEMES",
 ]
 
@@ -263,6 +264,14 @@ class Scenario:
             cfg["temp_series_t_s"] = [x * HOUR for x in t.series_t_h]
             cfg["temp_series_c"] = [float(x) for x in t.series_temp_c]
         return cfg
+
+
+def write_scenario_toml(scenario: Scenario, path: str | os.PathLike[str], header: str | None = None) -> None:
+    """Write the resolved scenario (`Scenario.to_toml_dict`) as TOML, atomically; it reloads to an equal
+    `Scenario` with `load_scenario`."""
+    from gyrodrift.ins.toml_writer import write_toml
+
+    write_toml(scenario.to_toml_dict(), path, header=header)
 
 
 def load_scenario(path: str | os.PathLike[str]) -> Scenario:

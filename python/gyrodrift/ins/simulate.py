@@ -13,8 +13,7 @@ import pyarrow.parquet as pq
 
 from gyrodrift.atomic import temporary_path
 from gyrodrift.ins.imu_file import IMU_COLUMNS, ImuChunk, core_chunk_to_table, imu_schema, table_to_chunk
-from gyrodrift.ins.scenario import Scenario
-from gyrodrift.ins.toml_writer import write_toml
+from gyrodrift.ins.scenario import Scenario, write_scenario_toml
 from gyrodrift.progress import progress
 
 __all__ = ["ImuData", "simulate", "iter_core_chunks", "DEFAULT_CHUNK_SAMPLES"]
@@ -127,8 +126,8 @@ def simulate(
                     table = core_chunk_to_table(chunk, schema)
                     writer.write_table(table, row_group_size=max(table.num_rows, 1))
                     bar.update(table.num_rows)
-        write_toml(
-            scenario.to_toml_dict(),
+        write_scenario_toml(
+            scenario,
             folder / "scenario.resolved.toml",
             header="Resolved scenario written by gyrodrift simulate: every default written out.\n"
             "Units are in the key names; see docs/scenarios.md.",
