@@ -1,5 +1,5 @@
 //! Throughput of the simulator and the navigator, 72 h at 100 Hz, streamed in chunks (constant memory).
-//! Run: `cargo run --release -p gyrodrift-core --example throughput [scheme] [level|tilted]`.
+//! Run: `cargo run --release -p gyrodrift-core --example throughput [scheme] [level|tilted] [noisy]`.
 
 use gyrodrift_core::attitude::Euler;
 use gyrodrift_core::simulator::{ImuChunk, ImuSimulator, ImuSimulatorConfig};
@@ -18,7 +18,18 @@ fn main() {
     };
     let tilted = args.get(2).map(String::as_str) == Some("tilted");
     let attitude = if tilted { Euler { pitch: 0.01, roll: -0.02, yaw: 0.5 } } else { Euler { pitch: 0.0, roll: 0.0, yaw: 0.5 } };
-    let cfg = ImuSimulatorConfig { rate_hz: 100.0, duration_s: 72.0 * 3600.0, attitude, scheme, ..Default::default() };
+    let mut cfg = ImuSimulatorConfig { rate_hz: 100.0, duration_s: 72.0 * 3600.0, attitude, scheme, ..Default::default() };
+    if args.get(3).map(String::as_str) == Some("noisy") {
+        // The facade benchmark's sensor: every noise channel, a warm-up and a temperature drift.
+        let dh = deg / 3600.0;
+        cfg.errors.gyro_bias = [0.002 * dh, -0.002 * dh, 0.003 * dh];
+        cfg.errors.gyro_arw = 0.0005 * deg / 60.0;
+        cfg.errors.gyro_bias_instability = 0.001 * dh;
+        cfg.errors.accel_bias = [20e-5, -20e-5, 15e-5];
+        cfg.errors.accel_vrw = 5e-5;
+        cfg.errors.drift_k1 = 1e-4 * dh;
+        cfg.temperature = gyrodrift_core::temperature::TemperatureProfile::WarmUp { start_c: 20.0, end_c: 35.0, tau_s: 7200.0 };
+    }
     let nav_cfg = NavigatorConfig { lat: cfg.lat, lon: cfg.lon, height: cfg.height, vel: [0.0; 3], attitude, rate_hz: 100.0, vertical: Vertical::Fixed };
     let mut sim = ImuSimulator::new(cfg).unwrap();
     let mut nav = Navigator::new(nav_cfg).unwrap();

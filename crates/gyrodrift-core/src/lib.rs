@@ -13,9 +13,12 @@
 //! Frames: navigation frame local-level East-North-Up (ENU); body frame Right-Forward-Up.
 //! Units: SI everywhere inside the crate (rad, rad/s, m, m/s, s).
 
+pub mod alignment;
 pub mod attitude;
+pub mod coarse_alignment;
 pub mod earth;
 pub mod imu_error;
+pub mod kalman;
 pub mod simulator;
 pub mod strapdown;
 pub mod temperature;

@@ -1,0 +1,405 @@
+//! Initial alignment on a static base with the turntable running: inertial-frame coarse alignment followed by
+//! a zero-velocity Kalman fine alignment (closed loop). The boundary with Python is `docs/alignment-contract.md`.
+//!
+//! Timeline (t counted from the first sample of the log, sample k ends at k / rate_hz):
+//! 1. [0, coarse_s]: `coarse_alignment::InertialCoarseAlignment` gives C_b^n at t = coarse_s;
+//! 2. (coarse_s, coarse_s + fine_s]: a `strapdown::Navigator` (vertical channel held) starts from the coarse
+//!    attitude with zero velocity at the known site and navigates every sample with the current bias estimates
+//!    subtracted (measured - estimate). Every `update_s` the 12-state filter of `kalman` is propagated with the
+//!    mean C_b^n of the interval and updated with the navigator's velocity (zero-velocity measurement); the
+//!    estimate is fed back at once (attitude q <- q(phi) o q, velocity v <- v - dv, gyro and accelerometer bias
+//!    estimates += eps, nabla) and the error state reset to zero.
+//!
+//! The navigator has no setter for its attitude and velocity, so the feedback restarts it from the corrected
+//! state at the known position (the state of a static alignment: position is known). The restart forgets the
+//! previous sample of the coning/sculling corrections; on a static base with the table turning about z that
+//! term is below 1e-14 rad per restart.
+
+use crate::attitude::{
+    dcm_to_euler, quat_mul, quat_to_dcm, quat_to_euler, rotvec_to_quat, sub, Euler, Mat3, Vec3,
+};
+use crate::coarse_alignment::InertialCoarseAlignment;
+use crate::earth;
+use crate::kalman::{self, ErrorModel, ErrorStateFilter, StateMatrix, DV, EPS, NABLA, N_STATES, PHI};
+use crate::simulator::check_site;
+use crate::strapdown::{Navigator, NavigatorConfig, Vertical};
+use crate::turntable::{check, ParamError};
+
+/// One micro-g [m/s^2] (1 ug = 9.80665e-6 m/s^2, the conventions' value).
+pub const MICRO_G: f64 = 9.806_65e-6;
+/// One deg/h [rad/s].
+pub const DEG_PER_HOUR: f64 = std::f64::consts::PI / 180.0 / 3600.0;
+/// Default total alignment span, coarse plus fine [s] (4 h).
+pub const DEFAULT_TOTAL_S: f64 = 14_400.0;
+
+/// Settings of an alignment (SI). Keys of the contract in brackets.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AlignerConfig {
+    /// Known static site: latitude [rad] (`lat_rad`), longitude [rad] (`lon_rad`), height [m] (`height_m`).
+    pub lat: f64,
+    pub lon: f64,
+    pub height: f64,
+    /// IMU sample rate [Hz] (`rate_hz`).
+    pub rate_hz: f64,
+    /// Coarse alignment span [s] (`coarse_s`, default 300).
+    pub coarse_s: f64,
+    /// Fine alignment span after the coarse one [s] (`fine_s`, default 14400 - coarse_s).
+    pub fine_s: f64,
+    /// Zero-velocity measurement interval [s] (`update_s`, default 1).
+    pub update_s: f64,
+    /// Initial attitude error 1-sigma E, N, U [rad] (`att_sigma_rad`); None: `coarse_attitude_sigma`.
+    pub att_sigma: Option<Vec3>,
+    /// Initial gyro bias 1-sigma, body x y z [rad/s] (`gyro_bias_sigma_rad_s`, default 0.01 deg/h).
+    pub gyro_bias_sigma: Vec3,
+    /// Initial accelerometer bias 1-sigma, body x y z [m/s^2] (`accel_bias_sigma_m_s2`, default 100 ug).
+    pub accel_bias_sigma: Vec3,
+    /// Gyro angle random walk [rad/sqrt(s)] (`gyro_arw_rad_rts`, default 0.001 deg/sqrt(h)).
+    pub gyro_arw: f64,
+    /// Accelerometer velocity random walk [m/s/sqrt(s)] (`accel_vrw_m_s_rts`, default 10 ug/sqrt(Hz)).
+    pub accel_vrw: f64,
+    /// Zero-velocity measurement noise 1-sigma [m/s] (`zupt_sigma_m_s`, default 0.001).
+    pub zupt_sigma: f64,
+    /// Interval of the covariance history [s] (`history_s`, default 60).
+    pub history_s: f64,
+}
+
+impl AlignerConfig {
+    /// The defaults of the contract at a site.
+    pub fn new(lat: f64, lon: f64, height: f64, rate_hz: f64) -> Self {
+        let coarse_s = 300.0;
+        AlignerConfig {
+            lat,
+            lon,
+            height,
+            rate_hz,
+            coarse_s,
+            fine_s: DEFAULT_TOTAL_S - coarse_s,
+            update_s: 1.0,
+            att_sigma: None,
+            gyro_bias_sigma: [0.01 * DEG_PER_HOUR; 3],
+            accel_bias_sigma: [100.0 * MICRO_G; 3],
+            gyro_arw: 0.001 * std::f64::consts::PI / 180.0 / 60.0,
+            accel_vrw: 10.0 * MICRO_G,
+            zupt_sigma: 0.001,
+            history_s: 60.0,
+        }
+    }
+
+    /// Range checks; errors name the contract key.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        check_site(self.lat, self.lon, self.height, self.rate_hz)?;
+        let in_range = |x: f64, lo: f64, hi: f64| x.is_finite() && x >= lo && x <= hi;
+        check(in_range(self.coarse_s, 10.0, 86_400.0), "coarse_s", format!("must be in [10, 86400] s, got {}", self.coarse_s))?;
+        check(in_range(self.fine_s, 0.0, 604_800.0), "fine_s", format!("must be in [0, 604800] s, got {}", self.fine_s))?;
+        check(
+            in_range(self.update_s, 0.0, 60.0) && (self.update_s * self.rate_hz).round() >= 1.0,
+            "update_s",
+            format!("must be in (0, 60] s and hold at least one sample, got {}", self.update_s),
+        )?;
+        if let Some(s) = self.att_sigma {
+            check(s.iter().all(|&x| x > 0.0 && x <= 0.2), "att_sigma_rad", format!("must be in (0, 0.2] rad, got {s:?}"))?;
+        }
+        let g = self.gyro_bias_sigma;
+        check(g.iter().all(|&x| x > 0.0 && x <= 0.1), "gyro_bias_sigma_rad_s", format!("must be in (0, 0.1] rad/s, got {g:?}"))?;
+        let a = self.accel_bias_sigma;
+        check(a.iter().all(|&x| x > 0.0 && x <= 10.0), "accel_bias_sigma_m_s2", format!("must be in (0, 10] m/s^2, got {a:?}"))?;
+        check(in_range(self.gyro_arw, 0.0, 0.1), "gyro_arw_rad_rts", format!("must be in [0, 0.1] rad/sqrt(s), got {}", self.gyro_arw))?;
+        check(in_range(self.accel_vrw, 0.0, 1.0), "accel_vrw_m_s_rts", format!("must be in [0, 1] m/s/sqrt(s), got {}", self.accel_vrw))?;
+        check(self.zupt_sigma > 0.0 && self.zupt_sigma <= 10.0, "zupt_sigma_m_s", format!("must be in (0, 10] m/s, got {}", self.zupt_sigma))?;
+        check(self.history_s > 0.0 && self.history_s <= 1e6, "history_s", format!("must be in (0, 1e6] s, got {}", self.history_s))
+    }
+
+    /// Samples of the coarse span, of the fine span, and per update.
+    fn sample_counts(&self) -> (u64, u64, u64) {
+        let n = |s: f64| (s * self.rate_hz).round() as u64;
+        (n(self.coarse_s), n(self.fine_s), n(self.update_s))
+    }
+}
+
+/// Default initial attitude 1-sigma after the coarse alignment, E, N, U [rad], from its closed-form error
+/// budget without the help of the rotation (so conservative): levelling ~ horizontal accelerometer bias / g
+/// plus VRW averaged over the span, heading ~ (horizontal gyro bias + ARW averaged over the span)
+/// / (w_ie cos lat), each noise term tripled for the two-epoch (not least-squares) solution, with floors of
+/// 10 arcsec (level) and 1 arcmin (heading).
+pub fn coarse_attitude_sigma(cfg: &AlignerConfig) -> Vec3 {
+    let g = earth::normal_gravity(cfg.lat, cfg.height);
+    let span = cfg.coarse_s;
+    let arcsec = std::f64::consts::PI / 180.0 / 3600.0;
+    let acc = cfg.accel_bias_sigma[0].max(cfg.accel_bias_sigma[1]);
+    let gyro = cfg.gyro_bias_sigma[0].max(cfg.gyro_bias_sigma[1]);
+    let level = (acc / g).hypot(3.0 * cfg.accel_vrw / (g * span.sqrt())).max(10.0 * arcsec);
+    let heading = (gyro.hypot(3.0 * cfg.gyro_arw / span.sqrt()) / (earth::OMEGA_IE * cfg.lat.cos())).max(60.0 * arcsec);
+    [level, level, heading]
+}
+
+/// Everything the alignment reports (SI; contract `result()`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AlignmentResult {
+    /// End of the alignment [s] from the first sample.
+    pub t_s: f64,
+    /// Attitude at the end.
+    pub attitude: Euler,
+    /// Velocity at the end (E, N, U) [m/s] (the navigator's, after the last feedback).
+    pub vel: Vec3,
+    /// Bias estimates, body x y z [rad/s], [m/s^2]; measured - estimate is the corrected output.
+    pub gyro_bias: Vec3,
+    pub accel_bias: Vec3,
+    /// Their 1-sigma at the end.
+    pub gyro_bias_std: Vec3,
+    pub accel_bias_std: Vec3,
+    /// Attitude error 1-sigma E, N, U [rad] at the end.
+    pub att_std: Vec3,
+    /// Attitude given by the coarse alignment at t = coarse_s.
+    pub coarse_attitude: Euler,
+    /// Times of the covariance history [s] (the start of the fine alignment, then every `history_s`, and the end).
+    pub hist_t: Vec<f64>,
+    /// 1-sigma of every state (order `kalman::STATE_NAMES`) at those times.
+    pub hist_std: Vec<[f64; N_STATES]>,
+}
+
+/// The fine-alignment loop state.
+#[derive(Clone, Debug)]
+struct FineAlignment {
+    nav: Navigator,
+    nav_cfg: NavigatorConfig,
+    model: ErrorModel,
+    filter: ErrorStateFilter,
+    gyro_bias: Vec3,
+    accel_bias: Vec3,
+    /// Sum of C_b^n over the samples of the current update interval, and their count.
+    c_sum: Mat3,
+    n_interval: u64,
+    /// Updates done, and updates between history records.
+    updates: u64,
+    updates_per_history: u64,
+}
+
+/// The aligner (see the module docs). Streaming: `process` may be called with chunks of any size.
+#[derive(Clone, Debug)]
+pub struct Aligner {
+    cfg: AlignerConfig,
+    n_coarse: u64,
+    n_fine: u64,
+    n_update: u64,
+    /// Samples consumed.
+    k: u64,
+    coarse: InertialCoarseAlignment,
+    coarse_attitude: Option<Euler>,
+    fine: Option<FineAlignment>,
+    hist_t: Vec<f64>,
+    hist_std: Vec<[f64; N_STATES]>,
+}
+
+impl Aligner {
+    /// A validated aligner.
+    pub fn new(cfg: AlignerConfig) -> Result<Self, ParamError> {
+        cfg.validate()?;
+        let (n_coarse, n_fine, n_update) = cfg.sample_counts();
+        check(n_coarse >= 2, "coarse_s", "gives fewer than 2 samples at this rate")?;
+        Ok(Aligner {
+            coarse: InertialCoarseAlignment::new(cfg.lat, cfg.height, cfg.rate_hz, n_coarse),
+            cfg,
+            n_coarse,
+            n_fine,
+            n_update,
+            k: 0,
+            coarse_attitude: None,
+            fine: None,
+            hist_t: Vec::new(),
+            hist_std: Vec::new(),
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &AlignerConfig {
+        &self.cfg
+    }
+
+    /// Samples consumed so far.
+    pub fn samples_done(&self) -> u64 {
+        self.k
+    }
+
+    /// Samples of the whole alignment (coarse plus fine).
+    pub fn n_samples(&self) -> u64 {
+        self.n_coarse + self.n_fine
+    }
+
+    /// True when the whole alignment span has been consumed.
+    pub fn done(&self) -> bool {
+        self.k >= self.n_samples()
+    }
+
+    /// The covariance of the fine alignment's error state (None before the fine alignment starts).
+    pub fn covariance(&self) -> Option<&StateMatrix> {
+        self.fine.as_ref().map(|f| f.filter.covariance())
+    }
+
+    /// Consume samples given as flat row-major (n x 3) slices of raw increments (dtheta [rad], dv [m/s], body
+    /// frame); stops at the end of the alignment span. Returns how many samples were used.
+    pub fn process(&mut self, dtheta: &[f64], dv: &[f64]) -> usize {
+        assert_eq!(dtheta.len(), dv.len());
+        assert_eq!(dtheta.len() % 3, 0);
+        let mut used = 0;
+        for (a, b) in dtheta.chunks_exact(3).zip(dv.chunks_exact(3)) {
+            if self.done() {
+                break;
+            }
+            self.step([a[0], a[1], a[2]], [b[0], b[1], b[2]]);
+            used += 1;
+        }
+        used
+    }
+
+    /// One sample.
+    fn step(&mut self, dtheta: Vec3, dv: Vec3) {
+        self.k += 1;
+        if self.k <= self.n_coarse {
+            self.coarse.step(dtheta, dv);
+            if self.k == self.n_coarse {
+                self.start_fine();
+            }
+            return;
+        }
+        let last = self.k == self.n_samples();
+        let fine = self.fine.as_mut().expect("fine alignment starts after the coarse span");
+        fine.nav.step(dtheta, dv);
+        let c = quat_to_dcm(fine.nav.quaternion());
+        for i in 0..3 {
+            for j in 0..3 {
+                fine.c_sum[i][j] += c[i][j];
+            }
+        }
+        fine.n_interval += 1;
+        if fine.n_interval == self.n_update || last {
+            self.update();
+        }
+    }
+
+    /// End of the coarse span: start the navigator and the filter.
+    fn start_fine(&mut self) {
+        let c_bn = self.coarse.attitude().expect("coarse span complete");
+        let attitude = dcm_to_euler(&c_bn);
+        self.coarse_attitude = Some(attitude);
+        let cfg = &self.cfg;
+        let nav_cfg = NavigatorConfig {
+            lat: cfg.lat,
+            lon: cfg.lon,
+            height: cfg.height,
+            vel: [0.0; 3],
+            attitude,
+            rate_hz: cfg.rate_hz,
+            vertical: Vertical::Fixed,
+        };
+        let att = cfg.att_sigma.unwrap_or_else(|| coarse_attitude_sigma(cfg));
+        let mut sigma = [0.0; N_STATES];
+        sigma[PHI..PHI + 3].copy_from_slice(&att);
+        sigma[DV..DV + 3].copy_from_slice(&[cfg.zupt_sigma; 3]);
+        sigma[EPS..EPS + 3].copy_from_slice(&cfg.gyro_bias_sigma);
+        sigma[NABLA..NABLA + 3].copy_from_slice(&cfg.accel_bias_sigma);
+        let update_t = self.n_update as f64 / cfg.rate_hz;
+        let fine = FineAlignment {
+            nav: Navigator::new(nav_cfg.clone()).expect("validated site and attitude"),
+            nav_cfg,
+            model: ErrorModel::new(cfg.lat, cfg.height),
+            filter: ErrorStateFilter::new(&sigma),
+            gyro_bias: [0.0; 3],
+            accel_bias: [0.0; 3],
+            c_sum: [[0.0; 3]; 3],
+            n_interval: 0,
+            updates: 0,
+            updates_per_history: ((cfg.history_s / update_t).round() as u64).max(1),
+        };
+        self.record_history(&fine.filter);
+        self.fine = Some(fine);
+    }
+
+    /// Predict over the interval just ended, update with the zero velocity, feed back, reset.
+    fn update(&mut self) {
+        let at_end = self.k == self.n_samples();
+        let cfg = &self.cfg;
+        let fine = self.fine.as_mut().expect("fine alignment running");
+        let n = fine.n_interval as f64;
+        let t = n / cfg.rate_hz;
+        let c_mean: Mat3 = std::array::from_fn(|i| std::array::from_fn(|j| fine.c_sum[i][j] / n));
+        let phi = fine.model.transition(&c_mean, t);
+        let q = kalman::process_noise(&phi, cfg.gyro_arw, cfg.accel_vrw, t);
+        fine.filter.predict(&phi, &q);
+        let state = fine.nav.state();
+        fine.filter.update_zero_velocity(state.vel, cfg.zupt_sigma);
+        fine.feed_back();
+        fine.c_sum = [[0.0; 3]; 3];
+        fine.n_interval = 0;
+        fine.updates += 1;
+        let record = fine.updates % fine.updates_per_history == 0 || at_end;
+        if record {
+            let filter = fine.filter.clone();
+            self.record_history(&filter);
+        }
+    }
+
+    fn record_history(&mut self, filter: &ErrorStateFilter) {
+        let t = self.k as f64 / self.cfg.rate_hz;
+        if self.hist_t.last() != Some(&t) {
+            self.hist_t.push(t);
+            self.hist_std.push(filter.std());
+        }
+    }
+
+    /// The result (None until the alignment span is complete).
+    pub fn result(&self) -> Option<AlignmentResult> {
+        if !self.done() {
+            return None;
+        }
+        let coarse_attitude = self.coarse_attitude.expect("coarse span complete");
+        let t_s = self.k as f64 / self.cfg.rate_hz;
+        let fine = match &self.fine {
+            Some(f) => f,
+            None => unreachable!("the fine alignment starts with the last coarse sample"),
+        };
+        let s = fine.filter.std();
+        let state = fine.nav.state();
+        Some(AlignmentResult {
+            t_s,
+            attitude: state.attitude,
+            vel: state.vel,
+            gyro_bias: fine.gyro_bias,
+            accel_bias: fine.accel_bias,
+            gyro_bias_std: [s[EPS], s[EPS + 1], s[EPS + 2]],
+            accel_bias_std: [s[NABLA], s[NABLA + 1], s[NABLA + 2]],
+            att_std: [s[PHI], s[PHI + 1], s[PHI + 2]],
+            coarse_attitude,
+            hist_t: self.hist_t.clone(),
+            hist_std: self.hist_std.clone(),
+        })
+    }
+}
+
+impl FineAlignment {
+    /// Closed-loop feedback of the filter's estimate (module docs), then reset of the error state.
+    fn feed_back(&mut self) {
+        let x = self.filter.take_correction();
+        let phi = [x[PHI], x[PHI + 1], x[PHI + 2]];
+        let dv = [x[DV], x[DV + 1], x[DV + 2]];
+        for i in 0..3 {
+            self.gyro_bias[i] += x[EPS + i];
+            self.accel_bias[i] += x[NABLA + i];
+        }
+        // C_b^n(true) = (I + [phi x]) C_b^n(computed): q <- q(phi) o q.
+        let q = quat_mul(rotvec_to_quat(phi), self.nav.quaternion());
+        let state = self.nav.state();
+        self.nav_cfg.attitude = quat_to_euler(q);
+        self.nav_cfg.vel = sub(state.vel, dv);
+        let mut nav = Navigator::new(self.nav_cfg.clone()).expect("corrected state within the navigator's ranges");
+        nav.set_gyro_bias(self.gyro_bias).expect("gyro bias estimate within range");
+        nav.set_accel_bias(self.accel_bias).expect("accelerometer bias estimate within range");
+        self.nav = nav;
+    }
+}
+
+/// Attitude error of `estimate` against `truth` as the correction phi of the filter (E, N, U) [rad]:
+/// C_b^n(truth) = (I + [phi x]) C_b^n(estimate) to first order, computed exactly as a rotation vector.
+pub fn attitude_error(estimate: Euler, truth: Euler) -> Vec3 {
+    use crate::attitude::{euler_to_quat, quat_conj, quat_to_rotvec};
+    quat_to_rotvec(quat_mul(euler_to_quat(truth), quat_conj(euler_to_quat(estimate))))
+}

@@ -1,0 +1,208 @@
+//! Alignment with the simulator and reciprocating rotation against closed forms and the filter's own stds.
+
+use gyrodrift_core::alignment::{attitude_error, Aligner, AlignerConfig, AlignmentResult, MICRO_G, DEG_PER_HOUR};
+use gyrodrift_core::attitude::Euler;
+use gyrodrift_core::earth;
+use gyrodrift_core::imu_error::ImuErrorParams;
+use gyrodrift_core::kalman::N_STATES;
+use gyrodrift_core::simulator::{ImuChunk, ImuSimulator, ImuSimulatorConfig};
+use gyrodrift_core::turntable::RotationScheme;
+use std::f64::consts::PI;
+
+const DEG: f64 = PI / 180.0;
+const ARCSEC: f64 = DEG / 3600.0;
+const ARCMIN: f64 = DEG / 60.0;
+const RATE_HZ: f64 = 20.0;
+
+fn lat0() -> f64 {
+    28.222 * DEG
+}
+
+fn reciprocating() -> RotationScheme {
+    RotationScheme::Reciprocating { rate: 6.0 * DEG, accel: 10.0 * DEG, span: 2.0 * PI, dwell: 0.0 }
+}
+
+fn biased(seed: u64, noise: bool) -> ImuSimulatorConfig {
+    let errors = ImuErrorParams {
+        gyro_bias: [0.01 * DEG_PER_HOUR, -0.008 * DEG_PER_HOUR, 0.003 * DEG_PER_HOUR],
+        accel_bias: [50.0 * MICRO_G, -40.0 * MICRO_G, 30.0 * MICRO_G],
+        gyro_arw: if noise { 0.001 * DEG / 60.0 } else { 0.0 },
+        accel_vrw: if noise { 10.0 * MICRO_G } else { 0.0 },
+        ..Default::default()
+    };
+    ImuSimulatorConfig {
+        lat: lat0(),
+        rate_hz: RATE_HZ,
+        duration_s: 14_400.0,
+        seed,
+        attitude: Euler { pitch: 0.3 * DEG, roll: -0.2 * DEG, yaw: 40.0 * DEG },
+        scheme: reciprocating(),
+        errors,
+        ..Default::default()
+    }
+}
+
+/// What a run gives: the result, and the true attitude at the end of the coarse and of the whole span.
+struct Run {
+    res: AlignmentResult,
+    true_coarse: Euler,
+    true_end: Euler,
+    aligner: Aligner,
+}
+
+fn run(sim_cfg: ImuSimulatorConfig, cfg: AlignerConfig) -> Run {
+    let n_coarse = (cfg.coarse_s * cfg.rate_hz).round() as usize;
+    let mut sim = ImuSimulator::new(sim_cfg).unwrap();
+    let mut al = Aligner::new(cfg).unwrap();
+    let mut ch = ImuChunk::default();
+    let (mut true_coarse, mut true_end) = (None, None);
+    let mut seen = 0usize;
+    while !al.done() && sim.next_chunk(7_777, &mut ch) > 0 {
+        let used = al.process(&ch.dtheta, &ch.dv);
+        let at = |i: usize| Euler { pitch: ch.pitch[i], roll: ch.roll[i], yaw: ch.yaw[i] };
+        if seen < n_coarse && n_coarse <= seen + used {
+            true_coarse = Some(at(n_coarse - seen - 1));
+        }
+        if al.done() {
+            true_end = Some(at(used - 1));
+        }
+        seen += used;
+    }
+    Run { res: al.result().unwrap(), true_coarse: true_coarse.unwrap(), true_end: true_end.unwrap(), aligner: al }
+}
+
+fn cfg_4h() -> AlignerConfig {
+    AlignerConfig::new(lat0(), 0.0, 0.0, RATE_HZ)
+}
+
+#[test]
+fn coarse_alignment_without_sensor_errors_is_exact() {
+    let mut sim = biased(1, false);
+    sim.errors = ImuErrorParams::default();
+    let cfg = AlignerConfig { fine_s: 0.0, ..cfg_4h() };
+    let r = run(sim, cfg);
+    let e = attitude_error(r.res.coarse_attitude, r.true_coarse);
+    println!("coarse, no errors: phi = {:.3?} arcsec", e.map(|x| x / ARCSEC));
+    assert!(e.iter().all(|x| x.abs() < 0.5 * ARCSEC), "{e:?}");
+}
+
+#[test]
+fn coarse_alignment_with_biases_within_the_closed_form() {
+    let r = run(biased(2, true), AlignerConfig { fine_s: 0.0, ..cfg_4h() });
+    let e = attitude_error(r.res.coarse_attitude, r.true_coarse);
+    let g = earth::normal_gravity(lat0(), 0.0);
+    // Closed-form bounds without rotation (the rotation only makes them smaller): levelling |nabla_h| / g,
+    // heading |eps_h| / (w_ie cos lat); plus the noise terms.
+    let level_bound = (50.0f64.hypot(40.0) * MICRO_G) / g;
+    let heading_bound = (0.01f64.hypot(0.008) * DEG_PER_HOUR) / (earth::OMEGA_IE * lat0().cos());
+    println!(
+        "coarse, biases + noise: phi = {:.2?} arcsec; bounds level {:.2} heading {:.2} arcsec",
+        e.map(|x| x / ARCSEC),
+        level_bound / ARCSEC,
+        heading_bound / ARCSEC
+    );
+    assert!(e[0].hypot(e[1]) < level_bound + 5.0 * ARCSEC, "{e:?}");
+    assert!(e[2].abs() < heading_bound + 3.0 * ARCMIN, "{e:?}");
+}
+
+#[test]
+fn fine_alignment_4h_estimates_the_horizontal_biases() {
+    let r = run(biased(3, false), cfg_4h());
+    let res = &r.res;
+    let gb = [0.01, -0.008, 0.003];
+    let ab = [50.0, -40.0, 30.0];
+    let gerr: Vec<f64> = (0..3).map(|i| res.gyro_bias[i] / DEG_PER_HOUR - gb[i]).collect();
+    let aerr: Vec<f64> = (0..3).map(|i| res.accel_bias[i] / MICRO_G - ab[i]).collect();
+    let phi = attitude_error(res.attitude, r.true_end);
+    println!("fine 4 h, no noise: gyro err {gerr:.5?} deg/h, std {:.5?}", res.gyro_bias_std.map(|x| x / DEG_PER_HOUR));
+    println!("  accel err {aerr:.3?} ug, std {:.3?}", res.accel_bias_std.map(|x| x / MICRO_G));
+    println!("  att err {:.3?} arcsec, std {:.3?}", phi.map(|x| x / ARCSEC), res.att_std.map(|x| x / ARCSEC));
+    println!("  coarse err {:.3?} arcsec", attitude_error(res.coarse_attitude, r.true_coarse).map(|x| x / ARCSEC));
+    assert!((res.t_s - 14_400.0).abs() < 1e-9);
+    assert!(gerr[0].abs() < 0.001 && gerr[1].abs() < 0.001, "{gerr:?}");
+    assert!(aerr[0].abs() < 5.0 && aerr[1].abs() < 5.0, "{aerr:?}");
+    assert!(phi[0].abs() < 3.0 * ARCSEC && phi[1].abs() < 3.0 * ARCSEC, "{phi:?}");
+    for i in 0..3 {
+        assert!(gerr[i].abs() < 3.0 * res.gyro_bias_std[i] / DEG_PER_HOUR, "gyro {i}");
+        assert!(phi[i].abs() < 3.0 * res.att_std[i], "att {i}");
+    }
+    // The axial drift stays weakly observable: its std is of the order of method.md's 0.002 deg/h.
+    let z_std = res.gyro_bias_std[2] / DEG_PER_HOUR;
+    assert!(z_std > 0.001 && z_std < 0.004, "{z_std}");
+    assert!(res.gyro_bias_std[0] < res.gyro_bias_std[2] && res.gyro_bias_std[1] < res.gyro_bias_std[2]);
+}
+
+#[test]
+fn covariance_stays_symmetric_and_positive_definite() {
+    let r = run(biased(4, true), AlignerConfig { fine_s: 3600.0, ..cfg_4h() });
+    let p = r.aligner.covariance().unwrap();
+    let asym = (p - p.transpose()).abs().max();
+    assert!(asym == 0.0, "{asym}");
+    let eig = p.symmetric_eigenvalues();
+    assert!(eig.iter().all(|&x| x > 0.0), "{eig:?}");
+    assert!(p.cholesky().is_some());
+    // History: start of the fine span, every 60 s, the end; stds of the horizontal gyro biases decrease.
+    let h = &r.res;
+    assert_eq!(h.hist_t.len(), 61);
+    assert!((h.hist_t[0] - 300.0).abs() < 1e-9 && (h.hist_t[60] - 3900.0).abs() < 1e-9);
+    assert!(h.hist_std.iter().all(|s| s.len() == N_STATES && s.iter().all(|x| x.is_finite() && *x > 0.0)));
+    assert!(h.hist_std.windows(2).all(|w| w[1][6] <= w[0][6] * (1.0 + 1e-12)));
+}
+
+#[test]
+fn filter_stds_are_consistent_with_the_errors_over_seeds() {
+    let gb = [0.01, -0.008, 0.003];
+    let ab = [50.0, -40.0, 30.0];
+    for seed in [11, 12, 13] {
+        let r = run(biased(seed, true), cfg_4h());
+        let res = &r.res;
+        let phi = attitude_error(res.attitude, r.true_end);
+        let gz: Vec<f64> = (0..3).map(|i| (res.gyro_bias[i] / DEG_PER_HOUR - gb[i]) / (res.gyro_bias_std[i] / DEG_PER_HOUR)).collect();
+        let az: Vec<f64> = (0..2).map(|i| (res.accel_bias[i] / MICRO_G - ab[i]) / (res.accel_bias_std[i] / MICRO_G)).collect();
+        let pz: Vec<f64> = (0..3).map(|i| phi[i] / res.att_std[i]).collect();
+        println!("seed {seed}: gyro z-scores {gz:.2?}, accel {az:.2?}, attitude {pz:.2?}");
+        println!(
+            "  gyro err {:.5?} deg/h, accel err {:.2?} ug, att err {:.2?} arcsec",
+            (0..3).map(|i| res.gyro_bias[i] / DEG_PER_HOUR - gb[i]).collect::<Vec<_>>(),
+            (0..3).map(|i| res.accel_bias[i] / MICRO_G - ab[i]).collect::<Vec<_>>(),
+            phi.map(|x| x / ARCSEC)
+        );
+        assert!(gz.iter().chain(&az).chain(&pz).all(|z| z.abs() < 3.0), "seed {seed}");
+    }
+}
+
+#[test]
+fn streaming_in_any_chunks_gives_the_same_result_and_stops_at_the_span() {
+    let cfg = AlignerConfig { coarse_s: 60.0, fine_s: 120.0, ..cfg_4h() };
+    let mut sim = ImuSimulator::new(ImuSimulatorConfig { duration_s: 200.0, ..biased(5, true) }).unwrap();
+    let mut ch = ImuChunk::default();
+    sim.next_chunk(4000, &mut ch);
+    let mut a = Aligner::new(cfg.clone()).unwrap();
+    assert_eq!(a.process(&ch.dtheta, &ch.dv), 3600);
+    assert!(a.done());
+    let mut b = Aligner::new(cfg).unwrap();
+    let mut used = 0;
+    for (x, y) in ch.dtheta.chunks(3 * 997).zip(ch.dv.chunks(3 * 997)) {
+        used += b.process(x, y);
+    }
+    assert_eq!(used, 3600);
+    assert_eq!(a.result(), b.result());
+    assert!(Aligner::new(AlignerConfig { coarse_s: 60.0, ..cfg_4h() }).unwrap().result().is_none());
+}
+
+#[test]
+fn bad_settings_name_their_key() {
+    let bad = |c: AlignerConfig| Aligner::new(c).unwrap_err().key;
+    assert_eq!(bad(AlignerConfig { coarse_s: 1.0, ..cfg_4h() }), "coarse_s");
+    assert_eq!(bad(AlignerConfig { fine_s: -1.0, ..cfg_4h() }), "fine_s");
+    assert_eq!(bad(AlignerConfig { update_s: 0.0, ..cfg_4h() }), "update_s");
+    assert_eq!(bad(AlignerConfig { att_sigma: Some([0.0, 1e-4, 1e-3]), ..cfg_4h() }), "att_sigma_rad");
+    assert_eq!(bad(AlignerConfig { gyro_bias_sigma: [f64::NAN; 3], ..cfg_4h() }), "gyro_bias_sigma_rad_s");
+    assert_eq!(bad(AlignerConfig { accel_bias_sigma: [0.0; 3], ..cfg_4h() }), "accel_bias_sigma_m_s2");
+    assert_eq!(bad(AlignerConfig { gyro_arw: -1.0, ..cfg_4h() }), "gyro_arw_rad_rts");
+    assert_eq!(bad(AlignerConfig { accel_vrw: 2.0, ..cfg_4h() }), "accel_vrw_m_s_rts");
+    assert_eq!(bad(AlignerConfig { zupt_sigma: 0.0, ..cfg_4h() }), "zupt_sigma_m_s");
+    assert_eq!(bad(AlignerConfig { history_s: 0.0, ..cfg_4h() }), "history_s");
+    assert_eq!(bad(AlignerConfig { rate_hz: 0.0, ..cfg_4h() }), "rate_hz");
+    assert_eq!(bad(AlignerConfig { lat: 2.0, ..cfg_4h() }), "lat_rad");
+}
