@@ -28,7 +28,8 @@
 //! second-order loop towards the initial height h_ref (no other height reference on a static base):
 //!    v_U += (a_U - k2 (h - h_ref)) dt,   h += (v_U - k1 (h - h_ref)) dt,
 //! with k1 = 2 zeta_v w_v, k2 = w_v^2 + 2 g / R (cancelling the free-inertial instability 2 g / R),
-//! w_v = 0.01 rad/s (period 628 s), zeta_v = 0.707.
+//! w_v = 0.01 rad/s (period 628 s), zeta_v = 0.707. A constant vertical accelerometer error b settles at
+//! h - h_ref = b / w_v^2 with the reported v_U = k1 (h - h_ref) (e.g. 50 ug: 4.9 m and 0.069 m/s).
 
 use crate::attitude::{
     add, cross, dcm_to_euler, dot, euler_to_quat, quat_mul, quat_rotate, quat_to_dcm, rotvec_to_quat, scale,

@@ -217,3 +217,115 @@ fn angle_random_walk_heading_error_grows_as_sqrt_t() {
     assert!((sd2 / (arw * t2.sqrt()) - 1.0).abs() < 0.15);
     assert!((sd2 / sd1 / 2.0 - 1.0).abs() < 0.2);
 }
+
+#[test]
+fn bias_compensation_hook_subtracts_the_estimates() {
+    // A sensor with large constant biases, navigated with exact estimates, behaves like an error-free one.
+    let mut cfg = base(reciprocating(), 100.0, 6.0);
+    let bg = [0.05 * DEG_H, -0.03 * DEG_H, 0.02 * DEG_H];
+    let ba = [300.0 * UG, -200.0 * UG, 100.0 * UG];
+    cfg.errors.gyro_bias = bg;
+    cfg.errors.accel_bias = ba;
+    let (lat, lon) = (cfg.lat, cfg.lon);
+    let nav_cfg = NavigatorConfig { lat, lon, height: cfg.height, vel: [0.0; 3], attitude: cfg.attitude, rate_hz: cfg.rate_hz, vertical: Vertical::Fixed };
+    let mut sim = ImuSimulator::new(cfg).unwrap();
+    let mut nav = Navigator::new(nav_cfg).unwrap();
+    let mut ch = ImuChunk::default();
+    let mut worst: f64 = 0.0;
+    let mut chunks = 0;
+    while sim.next_chunk(100_000, &mut ch) > 0 {
+        // First chunk uncompensated (1000 s), then the exact estimates, changed between chunks.
+        if chunks == 1 {
+            nav.set_gyro_bias(bg).unwrap();
+            nav.set_accel_bias(ba).unwrap();
+        }
+        nav.process(&ch.dtheta, &ch.dv, 100, |_| {});
+        chunks += 1;
+    }
+    // Separate run fully compensated from the start.
+    let mut cfg = base(reciprocating(), 100.0, 6.0);
+    cfg.errors.gyro_bias = bg;
+    cfg.errors.accel_bias = ba;
+    let nav_cfg = NavigatorConfig { lat, lon, height: cfg.height, vel: [0.0; 3], attitude: cfg.attitude, rate_hz: cfg.rate_hz, vertical: Vertical::Fixed };
+    let mut sim = ImuSimulator::new(cfg).unwrap();
+    let mut nav2 = Navigator::new(nav_cfg).unwrap();
+    nav2.set_gyro_bias(bg).unwrap();
+    nav2.set_accel_bias(ba).unwrap();
+    while sim.next_chunk(100_000, &mut ch) > 0 {
+        nav2.process(&ch.dtheta, &ch.dv, 6000, |s| worst = worst.max(pos_err_m(s, lat, lon)));
+    }
+    eprintln!("bias hook: exact estimates, max position error over 6 h {:.2e} m; late-compensated run ends {:.1} m off", worst, pos_err_m(&nav.state(), lat, lon));
+    assert!(worst < 0.05, "{worst}");
+    // Without compensation for the first 1000 s the error is clearly larger.
+    assert!(pos_err_m(&nav.state(), lat, lon) > 100.0 * worst.max(1e-3));
+}
+
+#[test]
+fn vertical_channel_fixed_and_damped() {
+    let ba_up = 50.0 * UG;
+    let mut cfg = base(RotationScheme::None, 100.0, 3.0);
+    cfg.errors.accel_bias = [0.0, 0.0, ba_up];
+    let h0 = cfg.height;
+    for vertical in [Vertical::Fixed, Vertical::Damped] {
+        let nav_cfg = NavigatorConfig { lat: cfg.lat, lon: cfg.lon, height: h0, vel: [0.0; 3], attitude: cfg.attitude, rate_hz: cfg.rate_hz, vertical };
+        let mut sim = ImuSimulator::new(cfg.clone()).unwrap();
+        let mut nav = Navigator::new(nav_cfg).unwrap();
+        let mut ch = ImuChunk::default();
+        while sim.next_chunk(100_000, &mut ch) > 0 {
+            nav.process(&ch.dtheta, &ch.dv, 1_000_000, |_| {});
+        }
+        let s = nav.state();
+        match vertical {
+            Vertical::Fixed => {
+                assert_eq!(s.height, h0);
+                assert_eq!(s.vel[2], 0.0);
+            }
+            Vertical::Damped => {
+                // Steady state of the loop: dh = b / w_v^2 (k2 = w_v^2 + 2 g / R cancels the free-inertial term).
+                let expect = ba_up / (gyrodrift_core::strapdown::VERTICAL_OMEGA.powi(2));
+                eprintln!("damped vertical, 50 ug up bias: height error after 3 h {:.3} m (steady state {:.3} m), v_U {:.2e} m/s", s.height - h0, expect, s.vel[2]);
+                assert!(((s.height - h0) / expect - 1.0).abs() < 0.02);
+                // and h' = v_U - k1 dh = 0 there, so the loop reports v_U = k1 dh.
+                let k1 = 2.0 * gyrodrift_core::strapdown::VERTICAL_ZETA * gyrodrift_core::strapdown::VERTICAL_OMEGA;
+                assert!((s.vel[2] / (k1 * (s.height - h0)) - 1.0).abs() < 0.02);
+            }
+        }
+    }
+}
+
+#[test]
+fn temperature_drift_enters_gyro_z_as_k1_k2_k3() {
+    // Sum of dtheta_z differences between a run with and without the drift equals the closed-form integral.
+    let (start, end, tau, t0c) = (20.0, 35.0, 1800.0, 22.0);
+    let (k1, k2, k3) = (1e-4 * DEG_H, 2e-6 * DEG_H, 0.5 * DEG_H);
+    // No rotation keeps the summed z increments small, so the difference of the sums is not lost to rounding.
+    let mut with = base(RotationScheme::None, 100.0, 2.0);
+    with.temperature = gyrodrift_core::temperature::TemperatureProfile::WarmUp { start_c: start, end_c: end, tau_s: tau };
+    let mut without = with.clone();
+    with.errors.drift_t0_c = t0c;
+    with.errors.drift_k1 = k1;
+    with.errors.drift_k2 = k2;
+    with.errors.drift_k3 = k3;
+    let sum_z = |cfg: ImuSimulatorConfig| {
+        let mut sim = ImuSimulator::new(cfg).unwrap();
+        let mut ch = ImuChunk::default();
+        let (mut z, mut last_temp) = (0.0, 0.0);
+        while sim.next_chunk(50_000, &mut ch) > 0 {
+            z += ch.dtheta.chunks_exact(3).map(|d| d[2]).sum::<f64>();
+            last_temp = *ch.temp_c.last().unwrap();
+        }
+        (z, last_temp)
+    };
+    without.errors.drift_t0_c = t0c;
+    let ((zw, temp_end), (zo, _)) = (sum_z(with), sum_z(without));
+    let t = 2.0 * HOUR;
+    let d = start - end;
+    let e = (-t / tau).exp();
+    let int_lin = (end - t0c) * t + d * tau * (1.0 - e);
+    let int_sq = (end - t0c).powi(2) * t + 2.0 * (end - t0c) * d * tau * (1.0 - e) + d * d * tau / 2.0 * (1.0 - e * e);
+    let int_rate = -d * (1.0 - e); // T(t) - T(0)
+    let expect = k1 * int_lin + k2 * int_sq + k3 * int_rate;
+    assert!((temp_end - (end + d * e)).abs() < 1e-9);
+    eprintln!("temperature drift: integral {:.6e} rad vs closed form {:.6e} rad", zw - zo, expect);
+    assert!(((zw - zo) / expect - 1.0).abs() < 1e-6);
+}

@@ -2,6 +2,8 @@
 //! The user-facing API lives in the Python package `gyrodrift`. The boundary is fixed by
 //! `docs/ins-binding-contract.md`.
 
+mod alignment;
+
 use gyrodrift_core::attitude::Euler;
 use gyrodrift_core::earth;
 use gyrodrift_core::imu_error::ImuErrorParams;
@@ -431,5 +433,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(normal_gravity, m)?)?;
     m.add_class::<ImuSimulator>()?;
     m.add_class::<Navigator>()?;
+    m.add_class::<alignment::Aligner>()?;
     Ok(())
 }

@@ -1,0 +1,122 @@
+//! Binding of `gyrodrift_core::alignment::Aligner` as `_core.Aligner` (docs/alignment-contract.md).
+//! It converts types and releases the GIL, nothing else.
+
+use super::{flat_n3, param_err, Config};
+use gyrodrift_core::alignment::{Aligner as CoreAligner, AlignerConfig, DEFAULT_TOTAL_S};
+use gyrodrift_core::kalman::{N_STATES, STATE_NAMES};
+use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+const ALIGN_KEYS: &[&str] = &[
+    "lat_rad", "lon_rad", "height_m", "rate_hz", "coarse_s", "fine_s", "update_s", "att_sigma_rad",
+    "gyro_bias_sigma_rad_s", "accel_bias_sigma_m_s2", "gyro_arw_rad_rts", "accel_vrw_m_s_rts", "zupt_sigma_m_s",
+    "history_s",
+];
+
+fn align_config(d: &Bound<'_, PyDict>) -> PyResult<AlignerConfig> {
+    let c = Config::new(d, ALIGN_KEYS, "Aligner")?;
+    let base = AlignerConfig::new(c.f64_req("lat_rad")?, c.f64_req("lon_rad")?, c.f64_req("height_m")?, c.f64_req("rate_hz")?);
+    let coarse_s = c.f64_or("coarse_s", base.coarse_s)?;
+    let att_sigma = if c.map.contains_key("att_sigma_rad") { Some(c.array_or("att_sigma_rad", [0.0; 3])?) } else { None };
+    Ok(AlignerConfig {
+        coarse_s,
+        fine_s: c.f64_or("fine_s", (DEFAULT_TOTAL_S - coarse_s).max(0.0))?,
+        update_s: c.f64_or("update_s", base.update_s)?,
+        att_sigma,
+        gyro_bias_sigma: c.array_or("gyro_bias_sigma_rad_s", base.gyro_bias_sigma)?,
+        accel_bias_sigma: c.array_or("accel_bias_sigma_m_s2", base.accel_bias_sigma)?,
+        gyro_arw: c.f64_or("gyro_arw_rad_rts", base.gyro_arw)?,
+        accel_vrw: c.f64_or("accel_vrw_m_s_rts", base.accel_vrw)?,
+        zupt_sigma: c.f64_or("zupt_sigma_m_s", base.zupt_sigma)?,
+        history_s: c.f64_or("history_s", base.history_s)?,
+        ..base
+    })
+}
+
+/// Static-base alignment with the turntable running (see gyrodrift-core `alignment`):
+/// inertial-frame coarse alignment, then a 12-state zero-velocity Kalman fine alignment (closed loop).
+/// `Aligner(config: dict)` with SI floats; `process` streams the IMU log; `result()` once `done`.
+#[pyclass(module = "gyrodrift._core")]
+pub struct Aligner {
+    inner: CoreAligner,
+}
+
+#[pymethods]
+impl Aligner {
+    #[new]
+    fn new(config: &Bound<'_, PyDict>) -> PyResult<Self> {
+        Ok(Aligner { inner: CoreAligner::new(align_config(config)?).map_err(param_err)? })
+    }
+
+    /// State order of `hist_std`: phi E N U [rad], dv E N U [m/s], gyro bias x y z [rad/s],
+    /// accelerometer bias x y z [m/s^2].
+    #[classattr]
+    #[allow(non_snake_case)]
+    fn STATE_NAMES() -> Vec<&'static str> {
+        STATE_NAMES.to_vec()
+    }
+
+    /// True when the alignment span (coarse_s + fine_s) is complete.
+    #[getter]
+    fn done(&self) -> bool {
+        self.inner.done()
+    }
+
+    /// Samples consumed so far.
+    #[getter]
+    fn samples_done(&self) -> u64 {
+        self.inner.samples_done()
+    }
+
+    /// Samples of the whole alignment span.
+    #[getter]
+    fn n_samples(&self) -> u64 {
+        self.inner.n_samples()
+    }
+
+    /// Consume raw increments (dtheta [rad], dv [m/s], (n, 3), body frame); returns how many samples were used
+    /// (fewer than n once the alignment span is complete: the caller passes the rest to the Navigator).
+    fn process<'py>(&mut self, py: Python<'py>, dtheta_rad: PyReadonlyArray2<'py, f64>, dv_m_s: PyReadonlyArray2<'py, f64>) -> PyResult<usize> {
+        let n = dtheta_rad.shape()[0];
+        if dv_m_s.shape()[0] != n {
+            return Err(PyValueError::new_err(format!("dv_m_s: has {} rows but dtheta_rad has {n}", dv_m_s.shape()[0])));
+        }
+        let dth = flat_n3(&dtheta_rad, "dtheta_rad")?;
+        let dv = flat_n3(&dv_m_s, "dv_m_s")?;
+        let (dth, dv): (&[f64], &[f64]) = (&dth, &dv);
+        let inner = &mut self.inner;
+        Ok(py.detach(|| inner.process(dth, dv)))
+    }
+
+    /// The alignment result (SI; keys in docs/alignment-contract.md). RuntimeError before `done`.
+    fn result<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let r = self.inner.result().ok_or_else(|| {
+            PyRuntimeError::new_err(format!(
+                "alignment not complete: {} of {} samples processed",
+                self.inner.samples_done(),
+                self.inner.n_samples()
+            ))
+        })?;
+        let d = PyDict::new(py);
+        d.set_item("t_s", r.t_s)?;
+        d.set_item("pitch_rad", r.attitude.pitch)?;
+        d.set_item("roll_rad", r.attitude.roll)?;
+        d.set_item("yaw_rad", r.attitude.yaw)?;
+        d.set_item("vel_enu_m_s", PyArray1::from_slice(py, &r.vel))?;
+        d.set_item("gyro_bias_rad_s", PyArray1::from_slice(py, &r.gyro_bias))?;
+        d.set_item("accel_bias_m_s2", PyArray1::from_slice(py, &r.accel_bias))?;
+        d.set_item("gyro_bias_std_rad_s", PyArray1::from_slice(py, &r.gyro_bias_std))?;
+        d.set_item("accel_bias_std_m_s2", PyArray1::from_slice(py, &r.accel_bias_std))?;
+        d.set_item("att_std_rad", PyArray1::from_slice(py, &r.att_std))?;
+        d.set_item("coarse_pitch_rad", r.coarse_attitude.pitch)?;
+        d.set_item("coarse_roll_rad", r.coarse_attitude.roll)?;
+        d.set_item("coarse_yaw_rad", r.coarse_attitude.yaw)?;
+        let m = r.hist_t.len();
+        d.set_item("hist_t_s", PyArray1::from_vec(py, r.hist_t))?;
+        let flat: Vec<f64> = r.hist_std.iter().flatten().copied().collect();
+        d.set_item("hist_std", PyArray1::from_vec(py, flat).reshape([m, N_STATES])?)?;
+        Ok(d)
+    }
+}
