@@ -197,37 +197,38 @@ impl ImuErrorModel {
             g[1][0] * w[0] + g[1][1] * w[1] + g[1][2] * w[2],
             g[2][0] * w[0] + g[2][1] * w[1] + g[2][2] * w[2],
         ];
-        for i in 0..3 {
-            out[i] += (self.p.gyro_bias[i] + self.gm[i] + self.rrw[i]) * dt;
+        for (i, o) in out.iter_mut().enumerate() {
+            *o += (self.p.gyro_bias[i] + self.gm[i] + self.rrw[i]) * dt;
         }
         out[2] += axial_drift * dt;
         let sa = self.p.accel_scale;
         let mut v = [dv[0] * (1.0 + sa[0]), dv[1] * (1.0 + sa[1]), dv[2] * (1.0 + sa[2])];
-        for i in 0..3 {
-            v[i] += self.p.accel_bias[i] * dt;
+        for (x, b) in v.iter_mut().zip(self.p.accel_bias) {
+            *x += b * dt;
         }
         if self.arw_sd > 0.0 {
             let n = self.normal3(self.arw_sd);
-            for i in 0..3 {
-                out[i] += n[i];
+            for (o, x) in out.iter_mut().zip(n) {
+                *o += x;
             }
         }
         if self.vrw_sd > 0.0 {
             let n = self.normal3(self.vrw_sd);
-            for i in 0..3 {
-                v[i] += n[i];
+            for (o, x) in v.iter_mut().zip(n) {
+                *o += x;
             }
         }
         if self.gm_q_sd > 0.0 {
             let n = self.normal3(self.gm_q_sd);
-            for i in 0..3 {
-                self.gm[i] = self.gm_phi * self.gm[i] + n[i];
+            let phi = self.gm_phi;
+            for (g, x) in self.gm.iter_mut().zip(n) {
+                *g = phi * *g + x;
             }
         }
         if self.rrw_sd > 0.0 {
             let n = self.normal3(self.rrw_sd);
-            for i in 0..3 {
-                self.rrw[i] += n[i];
+            for (r, x) in self.rrw.iter_mut().zip(n) {
+                *r += x;
             }
         }
         *dtheta = out;

@@ -13,7 +13,7 @@
 //! 1. coning/sculling (`coning_sculling`):
 //!    phi     = dtheta_k + 1/12 dtheta_{k-1} x dtheta_k                                   (coning)
 //!    dv_b    = dv_k + 1/2 dtheta_k x dv_k + 1/12 (dtheta_{k-1} x dv_k + dv_{k-1} x dtheta_k)
-//!              (rotation compensation + sculling);
+//!    (rotation compensation + sculling);
 //! 2. velocity (`update_velocity`), zeta = (w_ie^n + w_en^n) dt:
 //!    v_k = v_{k-1} + (I - 1/2 [zeta x]) C_b^n(k-1) dv_b + (g^n - (2 w_ie^n + w_en^n) x v_{k-1}) dt;
 //! 3. position (`update_position`), trapezoidal in velocity:
