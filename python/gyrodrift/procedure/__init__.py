@@ -1,0 +1,53 @@
+"""gyrodrift.procedure: from an IMU log to a compensated navigation (the paper's procedure, issue 5).
+
+Time line (`Timeline`): alignment over log hours 0-4; every navigation pass starts at the end of alignment;
+the features use navigation hours 0-12, the true drift and the evaluation hours 0-72 (logs >= 76 h).
+
+Public API (plain functions returning dataclasses; the CLI in `gyrodrift.procedure_commands` wraps them)
+--------------------------------------------------------------------------------------------------------
+align_log(log, ...) -> Alignment
+navigate_after_alignment(log, alignment, drifts_deg_h, hours, ...) -> PassResult
+extract_features(log, ..., with_truth=False) -> RunFeatures
+features_table(paths, ..., workers=None, scheduler=None) -> list[RunFeatures]; write_features_csv(...)
+find_true_drift(log, criterion="final", hours=72, ...) -> TrueDrift
+evaluate_compensation(log, drift_deg_h, hours=72, ...) -> Evaluation; write_evaluation(ev, out_dir)
+identify(log, model, ...) -> Identification
+
+Logs are opened with `gyrodrift.logs.open_log` (Parquet or CSV, validated while streaming).
+"""
+
+from gyrodrift.procedure.align import Alignment, align_log, write_alignment
+from gyrodrift.procedure.evaluate import Evaluation, evaluate_compensation, write_evaluation
+from gyrodrift.procedure.features import RunFeatures, extract_features, features_run_table
+from gyrodrift.procedure.fleet import DaskMissingError, features_table, write_features_csv
+from gyrodrift.procedure.identify import Identification, identify
+from gyrodrift.procedure.passes import NavCurve, PassResult, TemperatureStats, navigate_after_alignment
+from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
+from gyrodrift.procedure.truth import CRITERIA, TrueDrift, find_true_drift, write_truth
+
+__all__ = [
+    "Alignment",
+    "CRITERIA",
+    "DEFAULT_TIMELINE",
+    "DaskMissingError",
+    "Evaluation",
+    "Identification",
+    "NavCurve",
+    "PassResult",
+    "RunFeatures",
+    "TemperatureStats",
+    "Timeline",
+    "TrueDrift",
+    "align_log",
+    "evaluate_compensation",
+    "extract_features",
+    "features_run_table",
+    "features_table",
+    "find_true_drift",
+    "identify",
+    "navigate_after_alignment",
+    "write_evaluation",
+    "write_alignment",
+    "write_features_csv",
+    "write_truth",
+]

@@ -1,0 +1,175 @@
+"""Model inputs of one run: the latitude at the 12th hour of free navigation and the temperature over it.
+
+After alignment (``Timeline.align_h``, 4 h), the log is navigated ``Timeline.features_h`` (12 h) with the
+alignment's x/y gyro and accelerometer biases compensated and the z gyro NOT compensated. The features are
+the latitude at navigation hour 12 (exact state after the sample at 12 h), the hourly latitude error curve
+(hours 0-12, computed minus true, arcsec), and the system temperature over the same 12 h: at the first and
+the last navigation sample, the lowest and the highest.
+
+A row of the run table (``gyrodrift.runs``): ``run`` (the log's stem), ``lat_deg``, ``lat0_deg`` (the true
+site latitude), ``temp_min_c``, ``temp_max_c``, ``temp_start_c``, ``temp_end_c`` and, when the truth is
+asked, ``drift_deg_h`` (`gyrodrift.procedure.truth`, found over 72 h in the same first read).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from gyrodrift.logs import ImuLog
+from gyrodrift.procedure.align import Alignment, align_log
+from gyrodrift.procedure.passes import NavCurve, TemperatureStats, navigate_after_alignment
+from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
+from gyrodrift.procedure.truth import TrueDrift, find_true_drift
+from gyrodrift.runs import RunTable
+from gyrodrift.units import HOUR
+
+__all__ = ["RunFeatures", "extract_features", "features_run_table", "RUN_TABLE_COLUMNS"]
+
+RUN_TABLE_COLUMNS = ("run", "lat_deg", "lat0_deg", "temp_min_c", "temp_max_c", "temp_start_c", "temp_end_c")
+"""Columns written by `gyrodrift features` (plus ``drift_deg_h`` with the truth)."""
+
+
+@dataclass(frozen=True)
+class RunFeatures:
+    """The features of one run (one row of a run table) and how they were obtained.
+
+    Attributes
+    ----------
+    run : str
+        The log's name (file stem).
+    lat_deg : float
+        Navigated latitude at navigation hour `hours` (12) [deg].
+    lat0_deg : float
+        True site latitude [deg].
+    lat_err_curve_arcsec : ndarray (hours + 1,)
+        Latitude error at navigation hours 0, 1, ..., 12 [arcsec], computed minus true.
+    temp_start_c, temp_end_c, temp_min_c, temp_max_c : float
+        Temperature over the 12 h [deg C].
+    drift_deg_h : float
+        The true drift when asked (`with_truth`), else NaN [deg/h].
+    hours : float
+        Navigation hours of the features (12).
+    alignment : Alignment
+    truth : TrueDrift or None
+    """
+
+    run: str
+    lat_deg: float
+    lat0_deg: float
+    lat_err_curve_arcsec: np.ndarray = field(repr=False)
+    temp_start_c: float = math.nan
+    temp_end_c: float = math.nan
+    temp_min_c: float = math.nan
+    temp_max_c: float = math.nan
+    drift_deg_h: float = math.nan
+    hours: float = 12.0
+    alignment: Alignment | None = field(default=None, repr=False)
+    truth: TrueDrift | None = field(default=None, repr=False)
+
+    @property
+    def lat_err_arcsec(self) -> float:
+        """Latitude error at the end of the features window [arcsec] (computed minus true)."""
+        return (self.lat_deg - self.lat0_deg) * 3600.0
+
+    def row(self) -> dict[str, Any]:
+        """The run-table row (``RUN_TABLE_COLUMNS``, plus ``drift_deg_h`` when known)."""
+        r = {
+            "run": self.run,
+            "lat_deg": self.lat_deg,
+            "lat0_deg": self.lat0_deg,
+            "temp_min_c": self.temp_min_c,
+            "temp_max_c": self.temp_max_c,
+            "temp_start_c": self.temp_start_c,
+            "temp_end_c": self.temp_end_c,
+        }
+        if math.isfinite(self.drift_deg_h):
+            r["drift_deg_h"] = self.drift_deg_h
+        return r
+
+
+def _from_curve(log: ImuLog, curve: NavCurve, temp: TemperatureStats, hours: float, alignment: Alignment,
+                truth: TrueDrift | None, lat0_deg: float | None) -> RunFeatures:
+    k = int(round(hours))
+    if abs(hours - k) > 1e-9 or len(curve.hourly_lat_deg) <= k:
+        raise ValueError(f"{log.path}: the features need whole hours of navigation, got {hours!r}")
+    lat = float(curve.hourly_lat_deg[k])
+    lat0 = float(alignment.site.lat_deg if lat0_deg is None else lat0_deg)
+    return RunFeatures(
+        run=log.name,
+        lat_deg=lat,
+        lat0_deg=lat0,
+        lat_err_curve_arcsec=(np.asarray(curve.hourly_lat_deg[: k + 1]) - lat0) * 3600.0,
+        temp_start_c=temp.start_c,
+        temp_end_c=temp.end_c,
+        temp_min_c=temp.min_c,
+        temp_max_c=temp.max_c,
+        drift_deg_h=math.nan if truth is None else truth.drift_deg_h,
+        hours=float(hours),
+        alignment=alignment,
+        truth=truth,
+    )
+
+
+def extract_features(
+    log: ImuLog,
+    *,
+    timeline: Timeline = DEFAULT_TIMELINE,
+    with_truth: bool = False,
+    criterion: str = "final",
+    lat0_deg: float | None = None,
+    alignment: Alignment | None = None,
+    chunk_samples: int = 100_000,
+    quiet: bool = True,
+) -> RunFeatures:
+    """Align, navigate 12 h without z compensation, and extract the features of the run.
+
+    Parameters
+    ----------
+    log : ImuLog
+        Opened log with a known site; at least ``align_h + features_h`` (16 h) long, or
+        ``align_h + truth_h`` (76 h) with `with_truth`.
+    timeline : Timeline
+    with_truth : bool
+        Also find the true drift (`find_true_drift`, over ``truth_h``); its first read gives the features.
+    criterion : {"final", "rms", "max"}
+        Criterion of the true drift.
+    lat0_deg : float, optional
+        True latitude written to the table (default: the site's).
+    alignment : Alignment, optional
+        Reuse an alignment of this log.
+    chunk_samples, quiet
+        Read size and progress switch.
+
+    Returns
+    -------
+    RunFeatures
+    """
+    hours = timeline.features_h
+    if with_truth:
+        truth = find_true_drift(log, criterion=criterion, timeline=timeline, alignment=alignment,
+                                temperature_hours=hours, chunk_samples=chunk_samples, quiet=quiet)
+        return _from_curve(log, truth.base, truth.temperature, hours, truth.alignment, truth, lat0_deg)
+    log.require_duration(timeline.log_hours_for(hours) * HOUR,
+                         f"the features ({timeline.align_h:g} h alignment + {hours:g} h navigation)")
+    if alignment is None:
+        alignment = align_log(log, timeline=timeline, chunk_samples=chunk_samples, quiet=quiet)
+    res = navigate_after_alignment(log, alignment, [0.0], hours, temperature_hours=hours,
+                                   chunk_samples=chunk_samples, quiet=quiet, desc="features")
+    return _from_curve(log, res.curves[0], res.temperature, hours, alignment, None, lat0_deg)
+
+
+def features_run_table(features: list[RunFeatures], source: str = "<features>") -> RunTable:
+    """The features as a `gyrodrift.runs.RunTable` (what `DriftModel.predict` and `fit_drift_model` take)."""
+    return RunTable(
+        run=np.array([f.run for f in features], dtype=object),
+        lat_deg=np.array([f.lat_deg for f in features], dtype=float),
+        lat0_deg=np.array([f.lat0_deg for f in features], dtype=float),
+        temp_min_c=np.array([f.temp_min_c for f in features], dtype=float),
+        temp_max_c=np.array([f.temp_max_c for f in features], dtype=float),
+        drift_deg_h=np.array([f.drift_deg_h for f in features], dtype=float),
+        source=source,
+    )

@@ -1,0 +1,158 @@
+"""A folder of logs becomes a training table: features of many runs, serially or on a dask cluster.
+
+Each log is one independent task (open, align, navigate, optionally find the true drift); the table lists
+the runs in the order the logs were given, whatever order the tasks finish in, so the serial and the
+distributed results are identical. dask is an optional extra (``pip install gyrodrift[dask]``), imported
+only when a cluster is asked for.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+from pathlib import Path
+from typing import Mapping, Sequence
+
+from gyrodrift.atomic import atomic_write
+from gyrodrift.logs import LogError, Site, open_log
+from gyrodrift.procedure.features import RUN_TABLE_COLUMNS, RunFeatures, extract_features
+from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
+from gyrodrift.progress import progress
+
+__all__ = ["features_table", "write_features_csv", "DaskMissingError"]
+
+
+class DaskMissingError(ImportError):
+    """dask.distributed is needed for --workers / --scheduler but is not installed."""
+
+
+def _features_task(path: str, site: Site | Mapping[str, float] | None, timeline: Timeline, with_truth: bool, criterion: str,
+                   lat0_deg: float | None, chunk_samples: int) -> RunFeatures:
+    log = open_log(path, site=site)
+    return extract_features(log, timeline=timeline, with_truth=with_truth, criterion=criterion,
+                            lat0_deg=lat0_deg, chunk_samples=chunk_samples, quiet=True)
+
+
+def _import_dask():
+    try:
+        from dask.distributed import Client, LocalCluster
+    except ImportError as exc:
+        raise DaskMissingError(
+            "distributed processing (--workers / --scheduler) needs dask.distributed: "
+            "pip install 'gyrodrift[dask]'"
+        ) from exc
+    return Client, LocalCluster
+
+
+def features_table(
+    paths: Sequence[str | os.PathLike[str]],
+    *,
+    site: Site | Mapping[str, float] | None = None,
+    lat0_deg: float | None = None,
+    timeline: Timeline = DEFAULT_TIMELINE,
+    with_truth: bool = False,
+    criterion: str = "final",
+    workers: int | None = None,
+    scheduler: str | None = None,
+    processes: bool = True,
+    chunk_samples: int = 100_000,
+    quiet: bool = True,
+) -> list[RunFeatures]:
+    """Extract the features (and optionally the true drift) of every log.
+
+    Parameters
+    ----------
+    paths : sequence of path-like
+        IMU logs (Parquet or CSV). Run names are the file stems and must be unique.
+    site : Site or mapping, optional
+        Static site (see `open_log`): a mapping such as ``{"lat_deg": 28.222}`` fills or overrides only the
+        keys it gives; logs that carry no site (CSV) need at least the latitude.
+    lat0_deg : float, optional
+        True latitude for the table (default: each log's site latitude).
+    timeline, with_truth, criterion, chunk_samples
+        As in `extract_features`.
+    workers : int, optional
+        Run on a ``dask.distributed.LocalCluster`` with this many workers (one thread each).
+    scheduler : str, optional
+        Address of a running dask scheduler (``tcp://host:8786``); exclusive with `workers`.
+    processes : bool
+        LocalCluster workers as processes (default) or threads (the core releases the GIL).
+    quiet : bool
+        True hides the progress bar (one tick per finished log).
+
+    Returns
+    -------
+    list of RunFeatures
+        In the order of `paths`.
+
+    Raises
+    ------
+    LogError
+        The first bad log (in the order of `paths`), from whichever worker met it.
+    DaskMissingError
+        `workers` or `scheduler` without dask installed.
+    """
+    if workers is not None and scheduler is not None:
+        raise ValueError("give workers or scheduler, not both")
+    paths = [str(p) for p in paths]
+    if not paths:
+        raise ValueError("no logs given")
+    logs = [open_log(p, site=site) for p in paths]  # header problems surface before any work starts
+    for log in logs:
+        if log.site is None:
+            raise LogError(f"{log.path}: the log carries no site; give its latitude (site= / --lat0-deg)")
+    names = [log.name for log in logs]
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise LogError(f"run name(s) {', '.join(dup)} appear more than once (run = the log's file stem)")
+    args = (site, timeline, with_truth, criterion, lat0_deg, chunk_samples)
+    if workers is None and scheduler is None:
+        out = []
+        with progress(len(paths), "features", quiet, unit="log") as bar:
+            for p in paths:
+                out.append(_features_task(p, *args))
+                bar.update(1)
+        return out
+    if workers is not None and workers < 1:
+        raise ValueError(f"workers must be >= 1, got {workers}")
+    Client, LocalCluster = _import_dask()
+    cluster = None
+    if scheduler is None:
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=processes,
+                               dashboard_address=None)
+        client = Client(cluster)
+    else:
+        client = Client(scheduler)
+    try:
+        futures = [client.submit(_features_task, p, *args, pure=False, key=f"features-{i}-{Path(p).name}")
+                   for i, p in enumerate(paths)]
+        results: list[RunFeatures] = []
+        with progress(len(paths), "features", quiet, unit="log") as bar:
+            for f in futures:
+                results.append(f.result())
+                bar.update(1)
+        return results
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def write_features_csv(features: Sequence[RunFeatures], path: str | os.PathLike[str]) -> None:
+    """Write the run table atomically: ``RUN_TABLE_COLUMNS`` (+ ``drift_deg_h`` when every run has it).
+
+    Floats are written with ``repr`` (shortest exact round trip), so a latitude keeps its 1e-12 deg digits.
+    Readable by `gyrodrift.runs.read_runs_csv`.
+    """
+    with_truth = bool(features) and all(math.isfinite(f.drift_deg_h) for f in features)
+    cols = list(RUN_TABLE_COLUMNS) + (["drift_deg_h"] if with_truth else [])
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(cols)
+    for f in features:
+        r = f.row()
+        w.writerow([r[c] if c == "run" else repr(float(r[c])) for c in cols])
+    with atomic_write(path, "w") as fh:
+        fh.write(buf.getvalue())

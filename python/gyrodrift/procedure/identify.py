@@ -1,0 +1,134 @@
+"""Identification of the axial drift of one run: alignment + 12 h navigation + the drift model.
+
+The model (`gyrodrift.model.DriftModel`, an LSSVR) maps the run's features (latitude at 12 h, temperature
+over the 12 h) to the axial drift [deg/h], the total constant to subtract from the z gyro. Beside it the
+result carries the physics inversion of the same latitude error (`gyrodrift.baselines.physics_inversion`)
+and the alignment's own z-drift estimate with its 1-sigma. The LSSVR gives a point estimate only: it has
+no predictive uncertainty (``model_std_deg_h`` is None and ``uncertainty_note`` says so); its training
+leave-one-out residuals are reported as an empirical spread instead.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from gyrodrift.baselines import physics_inversion
+from gyrodrift.logs import ImuLog
+from gyrodrift.model import DriftModel
+from gyrodrift.procedure.features import RunFeatures, extract_features, features_run_table
+from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
+
+__all__ = ["Identification", "identify", "NO_UNCERTAINTY_NOTE"]
+
+NO_UNCERTAINTY_NOTE = (
+    "the LSSVR model gives no predictive uncertainty (a point estimate); "
+    "loo_mae_deg_h is the mean absolute leave-one-out error on its training runs"
+)
+
+
+@dataclass(frozen=True)
+class Identification:
+    """The identified axial drift of a run.
+
+    Attributes
+    ----------
+    run : str
+    drift_deg_h : float
+        Model prediction [deg/h] (subtract from the z gyro).
+    physics_drift_deg_h : float
+        Physics inversion of the 12 h latitude error [deg/h].
+    alignment_z_drift_deg_h, alignment_z_drift_std_deg_h : float
+        The alignment's own z-gyro bias estimate and 1-sigma [deg/h] (not used).
+    model_std_deg_h : float or None
+        Predictive 1-sigma of the model; None for the LSSVR (it has none).
+    uncertainty_note : str
+    loo_mae_deg_h : float or None
+        Mean absolute closed-form leave-one-out residual of the model on its training runs [deg/h].
+    features : RunFeatures
+    """
+
+    run: str
+    drift_deg_h: float
+    physics_drift_deg_h: float
+    alignment_z_drift_deg_h: float
+    alignment_z_drift_std_deg_h: float
+    model_std_deg_h: float | None
+    uncertainty_note: str
+    loo_mae_deg_h: float | None
+    features: RunFeatures = field(repr=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        f = self.features
+        return {
+            "format": "gyrodrift-identification/1",
+            "run": self.run,
+            "drift_deg_h": self.drift_deg_h,
+            "physics_drift_deg_h": self.physics_drift_deg_h,
+            "alignment_z_drift_deg_h": self.alignment_z_drift_deg_h,
+            "alignment_z_drift_std_deg_h": self.alignment_z_drift_std_deg_h,
+            "model_std_deg_h": self.model_std_deg_h,
+            "uncertainty_note": self.uncertainty_note,
+            "loo_mae_deg_h": self.loo_mae_deg_h,
+            "features": {**f.row(), "lat_err_arcsec": f.lat_err_arcsec,
+                         "lat_err_curve_arcsec": [float(x) for x in f.lat_err_curve_arcsec]},
+        }
+
+
+def identify(
+    log: ImuLog,
+    model: DriftModel | str | os.PathLike[str],
+    *,
+    timeline: Timeline = DEFAULT_TIMELINE,
+    lat0_deg: float | None = None,
+    features: RunFeatures | None = None,
+    chunk_samples: int = 100_000,
+    quiet: bool = True,
+) -> Identification:
+    """Identify the axial drift of a run with a fitted drift model.
+
+    Parameters
+    ----------
+    log : ImuLog
+        Opened log with a known site, at least ``align_h + features_h`` (16 h) long.
+    model : DriftModel or path
+        A fitted model or its JSON file (`gyrodrift.model_io.load_model`).
+    timeline, lat0_deg, chunk_samples, quiet
+        As in `extract_features`.
+    features : RunFeatures, optional
+        Reuse features already extracted from this log.
+
+    Returns
+    -------
+    Identification
+    """
+    if not isinstance(model, DriftModel):
+        from gyrodrift.model_io import load_model
+
+        model = load_model(model)
+    if features is None:
+        features = extract_features(log, timeline=timeline, lat0_deg=lat0_deg, chunk_samples=chunk_samples,
+                                    quiet=quiet)
+    table = features_run_table([features], source=str(log.path))
+    drift = float(model.predict(table)[0])
+    physics = float(physics_inversion(table, t_h=features.hours)[0])
+    try:
+        loo = float(np.mean(np.abs(model.loo_residuals())))
+    except Exception:  # a model without stored training data
+        loo = None
+    al = features.alignment
+    return Identification(
+        run=features.run,
+        drift_deg_h=drift,
+        physics_drift_deg_h=physics,
+        alignment_z_drift_deg_h=math.nan if al is None else al.z_drift_deg_h,
+        alignment_z_drift_std_deg_h=math.nan if al is None else al.z_drift_std_deg_h,
+        model_std_deg_h=None,
+        uncertainty_note=NO_UNCERTAINTY_NOTE,
+        loo_mae_deg_h=loo,
+        features=features,
+    )

@@ -1,0 +1,267 @@
+"""The "true" axial drift of a run: the z-gyro drift that minimises the 72 h position error after alignment.
+
+The paper finds the training target offline: navigate after alignment without correcting the axial drift,
+then simulate the compensation and keep the drift that minimises the position error over 72 h. Here:
+
+1. One read of the log navigates two passes, z drift 0 and a trial value ``trial_deg_h``.
+2. The position error is, to first order, linear in the z drift ``d`` subtracted from the gyro:
+   ``north(t; d) = north_0(t) + d g_N(t)``, ``east(t; d) = east_0(t) + d g_E(t)`` with
+   ``g = (curve(trial) - curve(0)) / trial`` (north and east separately; their hypot is not linear).
+3. The criterion (nmi) is minimised over ``d``:
+
+   * ``final``: the position error at the last navigated sample (hour 72),
+   * ``rms``: root mean square of the position error over the samples of hours 0-72,
+   * ``max``: the largest position error over hours 0-72.
+
+   ``final`` and ``rms`` are quadratic in ``d`` once squared: closed form
+   ``d* = -sum(N0 gN + E0 gE) / sum(gN^2 + gE^2)`` (over the last sample or all samples). ``max`` is convex
+   in ``d`` (a maximum of norms of affine functions): `scipy.optimize.minimize_scalar` (bounded).
+4. Verification: one more read navigates ``d*`` and ``d* -+ step_deg_h`` (default 0.0002 deg/h); the
+   criterion is reported at the three, and ``verified`` says the navigated ``d*`` is no worse than both
+   neighbours.
+
+The drift is the total constant to subtract from the z-gyro output (measured - estimate) [deg/h]; the
+alignment's own z estimate plays no part.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy.optimize import minimize_scalar
+
+from gyrodrift.logs import ImuLog
+from gyrodrift.procedure.align import Alignment, align_log
+from gyrodrift.procedure.passes import NavCurve, PassResult, navigate_after_alignment
+from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
+from gyrodrift.units import HOUR
+
+__all__ = ["CRITERIA", "TrueDrift", "find_true_drift", "criterion_value", "minimise_linear_criterion", "write_truth"]
+
+CRITERIA = ("final", "rms", "max")
+"""Position-error criteria over the navigation: at its end, root mean square, maximum."""
+
+_NMI = 1852.0
+
+
+def criterion_value(north_m: np.ndarray, east_m: np.ndarray, criterion: str) -> np.ndarray:
+    """Criterion [nmi] of error curves; the last axis is time (any leading axes are kept)."""
+    p2 = np.asarray(north_m) ** 2 + np.asarray(east_m) ** 2
+    if criterion == "final":
+        return np.sqrt(p2[..., -1]) / _NMI
+    if criterion == "rms":
+        return np.sqrt(p2.mean(axis=-1)) / _NMI
+    if criterion == "max":
+        return np.sqrt(p2.max(axis=-1)) / _NMI
+    raise ValueError(f"unknown criterion {criterion!r}; expected one of {', '.join(CRITERIA)}")
+
+
+def minimise_linear_criterion(n0, e0, gn, ge, criterion: str) -> float:
+    """The drift d [deg/h] minimising the criterion of ``(n0 + d gn, e0 + d ge)`` (curves in m, g in m/(deg/h))."""
+    n0, e0, gn, ge = (np.asarray(a, dtype=float) for a in (n0, e0, gn, ge))
+    if criterion not in CRITERIA:
+        raise ValueError(f"unknown criterion {criterion!r}; expected one of {', '.join(CRITERIA)}")
+    sl = slice(-1, None) if criterion == "final" else slice(None)
+    den = float(np.sum(gn[sl] ** 2 + ge[sl] ** 2))
+    if not den > 0:
+        raise ValueError("the position error does not depend on the z drift (zero sensitivity)")
+    d_ls = -float(np.sum(n0[sl] * gn[sl] + e0[sl] * ge[sl])) / den
+    if criterion != "max":
+        return d_ls
+
+    def f(d):
+        return float(criterion_value(n0 + d * gn, e0 + d * ge, "max"))
+
+    # Convex in d: bracket generously around the rms optimum (the max optimum is never far from it).
+    d_rms = minimise_linear_criterion(n0, e0, gn, ge, "rms")
+    half = 0.01 + abs(d_rms)
+    res = minimize_scalar(f, bounds=(d_rms - half, d_rms + half), method="bounded",
+                          options={"xatol": 1e-12, "maxiter": 500})
+    return float(res.x)
+
+
+@dataclass(frozen=True)
+class TrueDrift:
+    """The true axial drift of a run and the evidence for it.
+
+    Attributes
+    ----------
+    run : str
+    drift_deg_h : float
+        The z-gyro drift minimising the criterion [deg/h] (subtract it from the z gyro).
+    criterion : str
+        ``final``, ``rms`` or ``max``.
+    hours : float
+        Navigation hours after alignment over which the criterion is taken.
+    predicted_nmi : float
+        Criterion at ``drift_deg_h`` predicted by the linear model [nmi].
+    verify_drift_deg_h : ndarray (3,)
+        ``d* - step``, ``d*``, ``d* + step`` [deg/h], navigated in the verification read.
+    verify_nmi : ndarray (3,)
+        The criterion of those three navigations [nmi].
+    verified : bool
+        The navigated criterion at ``d*`` is not above either neighbour.
+    uncompensated_nmi : float
+        Criterion with no z compensation [nmi].
+    grid_drift_deg_h, grid_nmi : ndarray
+        The criterion curve from the linear model on a grid around ``d*``.
+    sensitivity_nmi_per_deg_h : float
+        Position error at the end per deg/h of z drift (hypot of the final north/east sensitivities).
+    alignment : Alignment
+    base : NavCurve
+        The uncompensated navigation (z drift 0), kept for the features.
+    optimum : NavCurve
+        The verification navigation at ``d*``.
+    temperature : TemperatureStats or None
+        Temperature over the features window of the first read (when asked).
+    """
+
+    run: str
+    drift_deg_h: float
+    criterion: str
+    hours: float
+    trial_deg_h: float
+    predicted_nmi: float
+    verify_drift_deg_h: np.ndarray
+    verify_nmi: np.ndarray
+    verified: bool
+    uncompensated_nmi: float
+    grid_drift_deg_h: np.ndarray = field(repr=False)
+    grid_nmi: np.ndarray = field(repr=False)
+    sensitivity_nmi_per_deg_h: float = 0.0
+    alignment: Alignment | None = field(default=None, repr=False)
+    base: NavCurve | None = field(default=None, repr=False)
+    optimum: NavCurve | None = field(default=None, repr=False)
+    temperature: Any = field(default=None, repr=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready summary (user units)."""
+        return {
+            "format": "gyrodrift-true-drift/1",
+            "run": self.run,
+            "drift_deg_h": self.drift_deg_h,
+            "criterion": self.criterion,
+            "hours": self.hours,
+            "trial_deg_h": self.trial_deg_h,
+            "predicted_nmi": self.predicted_nmi,
+            "uncompensated_nmi": self.uncompensated_nmi,
+            "verify": [{"drift_deg_h": float(d), "criterion_nmi": float(v)}
+                       for d, v in zip(self.verify_drift_deg_h, self.verify_nmi)],
+            "verified": bool(self.verified),
+            "sensitivity_nmi_per_deg_h": self.sensitivity_nmi_per_deg_h,
+            "alignment_z_drift_deg_h": None if self.alignment is None else self.alignment.z_drift_deg_h,
+            "alignment_z_drift_std_deg_h": None if self.alignment is None else self.alignment.z_drift_std_deg_h,
+            "grid": {"drift_deg_h": [float(x) for x in self.grid_drift_deg_h],
+                     "criterion_nmi": [float(x) for x in self.grid_nmi]},
+        }
+
+
+def find_true_drift(
+    log: ImuLog,
+    *,
+    criterion: str = "final",
+    hours: float | None = None,
+    timeline: Timeline = DEFAULT_TIMELINE,
+    alignment: Alignment | None = None,
+    trial_deg_h: float = 0.001,
+    step_deg_h: float = 0.0002,
+    grid_half_width_deg_h: float = 0.002,
+    grid_points: int = 81,
+    decimation_s: float = 60.0,
+    temperature_hours: float | None = None,
+    chunk_samples: int = 100_000,
+    quiet: bool = True,
+) -> TrueDrift:
+    """Find the z-gyro drift [deg/h] minimising the position-error criterion over `hours` after alignment.
+
+    Parameters
+    ----------
+    log : ImuLog
+        Opened log with a known site, at least ``timeline.align_h + hours`` long.
+    criterion : {"final", "rms", "max"}
+        See the module docstring.
+    hours : float, optional
+        Navigation hours after alignment (default ``timeline.truth_h``, 72 h).
+    timeline : Timeline
+    alignment : Alignment, optional
+        Reuse an alignment of this log (else `align_log` is run).
+    trial_deg_h : float
+        Second linearisation point [deg/h] (the first is 0).
+    step_deg_h : float
+        Offset of the two verification neighbours [deg/h].
+    grid_half_width_deg_h, grid_points : float, int
+        The reported criterion curve spans ``d* +- grid_half_width_deg_h`` with `grid_points` values.
+    decimation_s : float
+        Interval of the error curves [s]; ``rms`` and ``max`` are taken over these samples.
+    temperature_hours : float, optional
+        Also collect the temperature over the first hours of navigation (the features use 12 h).
+    chunk_samples, quiet
+        Read size and progress switch.
+
+    Returns
+    -------
+    TrueDrift
+    """
+    if criterion not in CRITERIA:
+        raise ValueError(f"unknown criterion {criterion!r}; expected one of {', '.join(CRITERIA)}")
+    if not trial_deg_h:
+        raise ValueError("trial_deg_h must be non-zero")
+    hours = float(timeline.truth_h if hours is None else hours)
+    log.require_duration(timeline.log_hours_for(hours) * HOUR,
+                         f"the true drift ({timeline.align_h:g} h alignment + {hours:g} h navigation)")
+    if alignment is None:
+        alignment = align_log(log, timeline=timeline, chunk_samples=chunk_samples, quiet=quiet)
+    first: PassResult = navigate_after_alignment(
+        log, alignment, [0.0, trial_deg_h], hours, decimation_s=decimation_s,
+        temperature_hours=temperature_hours, chunk_samples=chunk_samples, quiet=quiet, desc="truth pass 1",
+    )
+    c0, c1 = first.curves
+    gn = (c1.north_m - c0.north_m) / trial_deg_h
+    ge = (c1.east_m - c0.east_m) / trial_deg_h
+    d_star = minimise_linear_criterion(c0.north_m, c0.east_m, gn, ge, criterion)
+    grid = d_star + np.linspace(-grid_half_width_deg_h, grid_half_width_deg_h, grid_points)
+    grid_nmi = criterion_value(c0.north_m + grid[:, None] * gn, c0.east_m + grid[:, None] * ge, criterion)
+    predicted = float(criterion_value(c0.north_m + d_star * gn, c0.east_m + d_star * ge, criterion))
+    verify_d = np.array([d_star - step_deg_h, d_star, d_star + step_deg_h])
+    second = navigate_after_alignment(
+        log, alignment, list(verify_d), hours, decimation_s=decimation_s, chunk_samples=chunk_samples,
+        quiet=quiet, desc="truth verify",
+    )
+    verify_nmi = np.array([float(criterion_value(c.north_m, c.east_m, criterion)) for c in second.curves])
+    verified = bool(verify_nmi[1] <= verify_nmi[0] and verify_nmi[1] <= verify_nmi[2])
+    return TrueDrift(
+        run=log.name,
+        drift_deg_h=float(d_star),
+        criterion=criterion,
+        hours=hours,
+        trial_deg_h=float(trial_deg_h),
+        predicted_nmi=predicted,
+        verify_drift_deg_h=verify_d,
+        verify_nmi=verify_nmi,
+        verified=verified,
+        uncompensated_nmi=float(criterion_value(c0.north_m, c0.east_m, criterion)),
+        grid_drift_deg_h=grid,
+        grid_nmi=np.asarray(grid_nmi, dtype=float),
+        sensitivity_nmi_per_deg_h=float(np.hypot(gn[-1], ge[-1]) / _NMI),
+        alignment=alignment,
+        base=c0,
+        optimum=second.curves[1],
+        temperature=first.temperature,
+    )
+
+
+def write_truth(truth: TrueDrift, out_dir) -> dict:
+    """Write ``true_drift.json`` and ``criterion.png`` (criterion vs drift) into `out_dir` (created), atomically."""
+    from pathlib import Path
+
+    from gyrodrift.atomic import atomic_write_json
+    from gyrodrift.procedure.figures import plot_criterion
+
+    folder = Path(out_dir)
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = {"json": folder / "true_drift.json", "png": folder / "criterion.png"}
+    atomic_write_json(truth.to_dict(), paths["json"])
+    plot_criterion(truth, paths["png"])
+    return paths

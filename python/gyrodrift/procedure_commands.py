@@ -1,0 +1,199 @@
+"""Click commands `features`, `truth`, `evaluate`, `identify`: thin wrappers over `gyrodrift.procedure`.
+
+The integrator registers `features_command`, `truth_command`, `evaluate_command` and `identify_command` in
+the `gyrodrift` CLI group. Every problem with a log, a model or the options is a `click.ClickException`
+(exit status 1) whose message names the file.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import click
+
+__all__ = ["features_command", "truth_command", "evaluate_command", "identify_command"]
+
+
+def _site(lat0_deg, lon0_deg, height_m):
+    site = {}
+    if lat0_deg is not None:
+        site["lat_deg"] = lat0_deg
+    if lon0_deg is not None:
+        site["lon_deg"] = lon0_deg
+    if height_m is not None:
+        site["height_m"] = height_m
+    return site or None
+
+
+def _site_options(f):
+    f = click.option("--height-m", type=float, default=None,
+                     help="Site height above the ellipsoid [m] (default: the log's, else 0).")(f)
+    f = click.option("--lon0-deg", type=float, default=None,
+                     help="Site longitude [deg] (default: the log's, else 0).")(f)
+    f = click.option("--lat0-deg", type=float, default=None,
+                     help="True site latitude [deg]; required for logs that carry no site (CSV).")(f)
+    return f
+
+
+def _open(path, site):
+    from gyrodrift.logs import LogError, open_log
+
+    try:
+        log = open_log(path, site=site)
+    except LogError as exc:
+        raise click.ClickException(str(exc)) from None
+    if log.site is None:
+        raise click.ClickException(f"{path}: the log carries no site; give its latitude (--lat0-deg)")
+    return log
+
+
+def _guard(fn, *args, **kwargs):
+    """Call fn, turning the procedure's expected errors into ClickExceptions."""
+    from gyrodrift.logs import LogError
+    from gyrodrift.model_io import ModelFileError
+    from gyrodrift.procedure.fleet import DaskMissingError
+
+    try:
+        return fn(*args, **kwargs)
+    except (LogError, ModelFileError, DaskMissingError) as exc:
+        raise click.ClickException(str(exc)) from None
+    except ValueError as exc:
+        raise click.ClickException(str(exc)) from None
+
+
+def _num(x):
+    return None if x is None or (isinstance(x, float) and not math.isfinite(x)) else x
+
+
+@click.command("features")
+@click.argument("logs", nargs=-1, required=True, type=click.Path(path_type=Path))
+@click.option("--out", "out", required=True, type=click.Path(dir_okay=False, path_type=Path),
+              help="Run table to write (CSV, atomically).")
+@_site_options
+@click.option("--with-truth", is_flag=True, help="Also find the true drift (logs >= 76 h) -> drift_deg_h column.")
+@click.option("--criterion", type=click.Choice(["final", "rms", "max"]), default="final", show_default=True,
+              help="Criterion of the true drift.")
+@click.option("--workers", type=click.IntRange(min=1), default=None,
+              help="Process the logs on a local dask cluster with N workers (needs the 'dask' extra).")
+@click.option("--scheduler", default=None, help="Address of a running dask scheduler (tcp://host:8786).")
+@click.option("--quiet", is_flag=True, help="No progress bar and no summary line.")
+def features_command(logs, out, lat0_deg, lon0_deg, height_m, with_truth, criterion, workers, scheduler, quiet):
+    """Align each LOG, navigate 12 h and write one run-table row per log to --out.
+
+    Columns: run (the log's stem), lat_deg (latitude at navigation hour 12), lat0_deg, temp_min_c,
+    temp_max_c, temp_start_c, temp_end_c (over those 12 h), and drift_deg_h with --with-truth.
+    """
+    from gyrodrift.procedure.fleet import features_table, write_features_csv
+
+    if workers is not None and scheduler is not None:
+        raise click.UsageError("give --workers or --scheduler, not both")
+    rows = _guard(features_table, [str(p) for p in logs], site=_site(lat0_deg, lon0_deg, height_m),
+                  with_truth=with_truth, criterion=criterion, workers=workers, scheduler=scheduler, quiet=quiet)
+    write_features_csv(rows, out)
+    if not quiet:
+        click.echo(f"wrote {len(rows)} run(s) to {out}")
+
+
+@click.command("truth")
+@click.argument("log", type=click.Path(path_type=Path))
+@click.option("--criterion", type=click.Choice(["final", "rms", "max"]), default="final", show_default=True,
+              help="Position-error criterion over the navigation: at its end, RMS, or maximum.")
+@click.option("--hours", type=click.FloatRange(min=0.0, min_open=True), default=72.0, show_default=True,
+              help="Navigation hours after the 4 h alignment.")
+@_site_options
+@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="Folder for true_drift.json, criterion.png, alignment.json and alignment_z_sigma.png.")
+@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
+@click.option("--quiet", is_flag=True, help="No progress bar.")
+def truth_command(log, criterion, hours, lat0_deg, lon0_deg, height_m, out_dir, as_json, quiet):
+    """Find the z-gyro drift [deg/h] minimising the position error of the navigation after alignment."""
+    from gyrodrift.procedure.align import write_alignment
+    from gyrodrift.procedure.truth import find_true_drift, write_truth
+
+    imu = _open(log, _site(lat0_deg, lon0_deg, height_m))
+    res = _guard(find_true_drift, imu, criterion=criterion, hours=hours, quiet=quiet)
+    if out_dir is not None:
+        write_truth(res, out_dir)
+        write_alignment(res.alignment, out_dir)
+    if as_json:
+        click.echo(json.dumps(res.to_dict(), indent=2))
+        return
+    v = res.verify_nmi
+    click.echo(f"{res.run}: true drift {res.drift_deg_h:.7f} deg/h ({criterion} criterion over {hours:g} h)")
+    click.echo(f"  criterion: {res.uncompensated_nmi:.4f} nmi uncompensated, {v[1]:.4f} nmi at the optimum "
+               f"(navigated), {v[0]:.4f} / {v[2]:.4f} nmi at -/+ {res.verify_drift_deg_h[2] - res.drift_deg_h:.4g} deg/h"
+               f" -> {'verified' if res.verified else 'NOT verified'}")
+    click.echo(f"  alignment z estimate {res.alignment.z_drift_deg_h:.5f} +- {res.alignment.z_drift_std_deg_h:.5f} "
+               f"deg/h (1-sigma, not used)")
+
+
+@click.command("evaluate")
+@click.argument("log", type=click.Path(path_type=Path))
+@click.option("--drift-deg-h", type=float, default=None, help="Axial drift [deg/h] to compensate.")
+@click.option("--model", "model_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Identify the drift with this model (JSON) instead.")
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
+              help="Folder for evaluation.json and position_error.png (created if needed).")
+@click.option("--hours", type=click.FloatRange(min=0.0, min_open=True), default=72.0, show_default=True,
+              help="Navigation hours after the 4 h alignment.")
+@_site_options
+@click.option("--quiet", is_flag=True, help="No progress bar and no summary line.")
+def evaluate_command(log, drift_deg_h, model_path, out_dir, hours, lat0_deg, lon0_deg, height_m, quiet):
+    """Navigate LOG 72 h after alignment without and with compensating the axial drift; plot both errors."""
+    from gyrodrift.procedure.evaluate import evaluate_compensation, write_evaluation
+    from gyrodrift.procedure.identify import identify
+
+    if (drift_deg_h is None) == (model_path is None):
+        raise click.UsageError("give exactly one of --drift-deg-h or --model")
+    imu = _open(log, _site(lat0_deg, lon0_deg, height_m))
+    alignment = None
+    source = "given"
+    if model_path is not None:
+        ident = _guard(identify, imu, model_path, quiet=quiet)
+        drift_deg_h, alignment, source = ident.drift_deg_h, ident.features.alignment, str(model_path)
+    ev = _guard(evaluate_compensation, imu, drift_deg_h, hours=hours, alignment=alignment, source=source,
+                quiet=quiet)
+    write_evaluation(ev, out_dir)
+    if not quiet:
+        click.echo(f"{ev.run}: compensating {ev.drift_deg_h:.6f} deg/h: {hours:g} h position error "
+                   f"{ev.before.final_nmi:.3f} -> {ev.after.final_nmi:.3f} nmi (final), "
+                   f"{ev.before.max_nmi:.3f} -> {ev.after.max_nmi:.3f} nmi (max); wrote {out_dir}")
+
+
+@click.command("identify")
+@click.argument("log", type=click.Path(path_type=Path))
+@click.option("--model", "model_path", required=True, type=click.Path(dir_okay=False, path_type=Path),
+              help="Drift model (JSON, from `gyrodrift fit`).")
+@_site_options
+@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="Folder for identification.json, alignment.json and alignment_z_sigma.png.")
+@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
+@click.option("--quiet", is_flag=True, help="No progress bar.")
+def identify_command(log, model_path, lat0_deg, lon0_deg, height_m, out_dir, as_json, quiet):
+    """Align LOG, navigate 12 h and identify its axial drift with the model."""
+    from gyrodrift.atomic import atomic_write_json
+    from gyrodrift.procedure.align import write_alignment
+    from gyrodrift.procedure.identify import identify
+
+    imu = _open(log, _site(lat0_deg, lon0_deg, height_m))
+    res = _guard(identify, imu, model_path, quiet=quiet)
+    doc = res.to_dict()
+    doc = {k: _num(v) for k, v in doc.items()}
+    if out_dir is not None:
+        write_alignment(res.features.alignment, out_dir)
+        atomic_write_json(doc, Path(out_dir) / "identification.json")
+    if as_json:
+        click.echo(json.dumps(doc, indent=2))
+        return
+    f = res.features
+    click.echo(f"{res.run}: identified axial drift {res.drift_deg_h:.6f} deg/h (model {model_path})")
+    click.echo(f"  model uncertainty: none ({res.uncertainty_note})"
+               + (f"; LOO MAE {res.loo_mae_deg_h:.2e} deg/h" if res.loo_mae_deg_h is not None else ""))
+    click.echo(f"  physics inversion of the 12 h latitude error ({f.lat_err_arcsec:.3f} arcsec): "
+               f"{res.physics_drift_deg_h:.6f} deg/h")
+    click.echo(f"  alignment z estimate: {res.alignment_z_drift_deg_h:.6f} +- {res.alignment_z_drift_std_deg_h:.6f} "
+               f"deg/h (1-sigma)")
+    click.echo(f"  temperature over 12 h: {f.temp_min_c:.2f} ~ {f.temp_max_c:.2f} deg C "
+               f"(start {f.temp_start_c:.2f}, end {f.temp_end_c:.2f})")
