@@ -265,9 +265,9 @@ impl Aligner {
         let fine = self.fine.as_mut().expect("fine alignment starts after the coarse span");
         fine.nav.step(dtheta, dv);
         let c = quat_to_dcm(fine.nav.quaternion());
-        for i in 0..3 {
-            for j in 0..3 {
-                fine.c_sum[i][j] += c[i][j];
+        for (sum_row, c_row) in fine.c_sum.iter_mut().zip(c) {
+            for (sum, x) in sum_row.iter_mut().zip(c_row) {
+                *sum += x;
             }
         }
         fine.n_interval += 1;

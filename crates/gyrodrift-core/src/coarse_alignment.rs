@@ -17,16 +17,46 @@
 //! non-collinear vector pairs (the gravity direction turns with the Earth by w_ie cos(lat) t / 4 between them),
 //! and the double-vector method (`triad`) gives C_ib0^i0. Body rotation cancels exactly: it is in C_b^ib0.
 //!
-//! Error budget (closed forms, static base, no rotation): levelling error ~ accelerometer bias / g, heading
-//! error ~ eps_E / (w_ie cos lat) (east gyro bias). With the table turning, the horizontal biases are
-//! modulated in the inertial frames and the errors are smaller; the axial (z) gyro bias is not modulated.
+//! The horizontal accelerometer bias b = (b_x, b_y) (body frame) adds M(t) b to v^ib0(t), with
+//! M(t) = int_0^t C_b^ib0 dt known from the gyros. With the table turning this term is a bounded oscillation of
+//! amplitude ~ |b| / w_table whose mean is not zero (it depends on the phase at the start and flips at every
+//! reversal): at 6 deg/s, 64 ug turns the two-epoch heading by ~330 arcsec. So b is estimated jointly, by
+//! alternating (`ALTERNATIONS` rounds at most, until the attitude moves by less than `CONVERGED_RAD`)
+//! - the two-epoch solution C_ib0^i0 = `triad` on the corrected vectors v^ib0 - M b at the two epochs, and
+//! - the least-squares fit of b to the residuals y_j = v^ib0_j - C_i0^ib0 v^i0_j = M_j b + trend_j over every
+//!   sample j, where trend_j, a cubic polynomial in time per axis, absorbs the smooth residuals that the
+//!   attitude error of the current round and the sensor noise leave (tilt ~ t, heading ~ t^2 and t^3, random
+//!   walks): b is then fixed by the oscillation only. Without the trend the fit trades b against the heading
+//!   and multiplies the ARW error several times under continuous rotation. The normal equations do not
+//!   depend on C and are summed while streaming (`BiasFitSums`, constant memory).
+//!
+//! Without rotation M_j b = b t_j looks like a tilt and b is not observable: the fit runs only if the table
+//! turned enough to modulate it, i.e. if the mean of C_b^ib0 e_x and of C_b^ib0 e_y over the span
+//! (M(T)[:, x] / T, M(T)[:, y] / T) are shorter than `MODULATION_THRESHOLD` (1 for a still table, about 0 for
+//! whole turns); otherwise the classical solution stays. (A joint Gauss-Newton fit of C and b over
+//! all samples was tried: it is 10-30 times noisier in heading with ARW, and needs a prior without rotation.)
+//!
+//! Error budget (closed forms, static base): without rotation, levelling error ~ accelerometer bias / g and
+//! heading error ~ eps_E / (w_ie cos lat) (east gyro bias). With the table turning, the horizontal gyro biases
+//! are modulated and drop out, the horizontal accelerometer biases are estimated, and what is left is the noise
+//! (ARW: heading ~ ARW / (w_ie cos lat sqrt(T)) times a small factor) and the axial gyro bias, which turns the
+//! heading by eps_z T / 2 at most.
 
 use crate::attitude::{
-    add, cross, mat_mul, norm, quat_mul, quat_normalize, quat_rotate, quat_to_dcm, rotvec_to_quat, scale,
+    add, cross, mat_mul, norm, quat_mul, quat_normalize, quat_rotate, quat_to_dcm, dcm_to_rotvec, rotvec_to_quat, scale, sub,
     transpose, Mat3, Quat, Vec3, QUAT_IDENTITY,
 };
 use crate::earth;
 use crate::strapdown::coning_sculling;
+
+/// What the coarse alignment finds at the end of its span.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CoarseSolution {
+    /// C_b^n at the end of the span.
+    pub c_bn: Mat3,
+    /// Horizontal accelerometer bias (body x, y) [m/s^2] fitted jointly (about zero without rotation).
+    pub accel_bias_xy: [f64; 2],
+}
 
 /// The inertial-frame coarse alignment of a span of `n_samples` samples (streaming).
 #[derive(Clone, Debug)]
@@ -42,10 +72,86 @@ pub struct InertialCoarseAlignment {
     q_b_ib0: Quat,
     /// Integrated specific force in ib0 [m/s].
     v_ib0: Vec3,
+    /// M = int C_b^ib0 dt [s]: the map of a body-frame accelerometer bias into v^ib0.
+    m_ib0: Mat3,
     /// v^ib0 at the middle epoch (sample n_samples / 2) [m/s].
     v_ib0_mid: Vec3,
+    /// M at the middle epoch [s].
+    m_ib0_mid: Mat3,
+    /// Normal-equation sums of the bias fit (see `BiasFitSums`).
+    sums: BiasFitSums,
     dtheta_prev: Vec3,
     dv_prev: Vec3,
+}
+
+/// The bias fit runs only below this length of the mean horizontal body axes in ib0 (module docs) [-].
+pub const MODULATION_THRESHOLD: f64 = 0.5;
+/// Largest number of rounds of the two-epoch / bias-fit alternation.
+pub const ALTERNATIONS: usize = 50;
+/// The alternation stops when the attitude changes by less than this [rad] in one round.
+pub const CONVERGED_RAD: f64 = 1e-9;
+
+/// Polynomial terms of the trend per axis (1, tau, tau^2, tau^3 with tau = t / span).
+const TREND_TERMS: usize = 4;
+/// Unknowns of the bias fit: (b_x, b_y) and the trend coefficients of the three axes.
+const FIT_UNKNOWNS: usize = 2 + 3 * TREND_TERMS;
+type FitMatrix = nalgebra::SMatrix<f64, FIT_UNKNOWNS, FIT_UNKNOWNS>;
+type FitVector = nalgebra::SVector<f64, FIT_UNKNOWNS>;
+
+/// Sums over the samples j of the fit y_j = R_j theta, R_j = [M_j[:, 0..2], I_3 (x) (1, tau, tau^2, tau^3)]
+/// (3 x `FIT_UNKNOWNS`): `rr` = sum R_j' R_j, `rw` = sum R_j' v^ib0_j, `rv[l]` = sum R_j' v^i0_j[l] e_k for
+/// each k (stored as `rv[k][l]`), so that sum R_j' y_j = rw - sum_kl C[l][k] rv[k][l] for any C = C_ib0^i0.
+#[derive(Clone, Debug)]
+struct BiasFitSums {
+    rr: FitMatrix,
+    rw: FitVector,
+    rv: [[FitVector; 3]; 3],
+}
+
+impl Default for BiasFitSums {
+    fn default() -> Self {
+        BiasFitSums { rr: FitMatrix::zeros(), rw: FitVector::zeros(), rv: [[FitVector::zeros(); 3]; 3] }
+    }
+}
+
+impl BiasFitSums {
+    /// Row k (axis) of R_j at normalised time `tau`.
+    fn row(m: &Mat3, tau: f64, k: usize) -> FitVector {
+        let mut r = FitVector::zeros();
+        r[0] = m[k][0];
+        r[1] = m[k][1];
+        let mut p = 1.0;
+        for i in 0..TREND_TERMS {
+            r[2 + k * TREND_TERMS + i] = p;
+            p *= tau;
+        }
+        r
+    }
+
+    fn add(&mut self, m: &Mat3, tau: f64, w: Vec3, v: Vec3) {
+        for (k, (rv_k, w_k)) in self.rv.iter_mut().zip(w).enumerate() {
+            let r = Self::row(m, tau, k);
+            self.rr.ger(1.0, &r, &r, 1.0);
+            self.rw.axpy(w_k, &r, 1.0);
+            for (rv_kl, v_l) in rv_k.iter_mut().zip(v) {
+                rv_kl.axpy(v_l, &r, 1.0);
+            }
+        }
+    }
+
+    /// Least-squares (b_x, b_y) [m/s^2] given C_ib0^i0 (`c`), residuals y_j = v^ib0_j - C' v^i0_j.
+    /// None if the normal matrix is singular.
+    fn solve(&self, c: &Mat3) -> Option<[f64; 2]> {
+        let mut rhs = self.rw;
+        for (k, rv_k) in self.rv.iter().enumerate() {
+            for (c_l, rv_kl) in c.iter().zip(rv_k) {
+                // (C' v)_k = sum_l C[l][k] v_l.
+                rhs.axpy(-c_l[k], rv_kl, 1.0);
+            }
+        }
+        let theta = self.rr.cholesky()?.solve(&rhs);
+        Some([theta[0], theta[1]])
+    }
 }
 
 impl InertialCoarseAlignment {
@@ -60,7 +166,10 @@ impl InertialCoarseAlignment {
             k: 0,
             q_b_ib0: QUAT_IDENTITY,
             v_ib0: [0.0; 3],
+            m_ib0: [[0.0; 3]; 3],
             v_ib0_mid: [0.0; 3],
+            m_ib0_mid: [[0.0; 3]; 3],
+            sums: BiasFitSums::default(),
             dtheta_prev: [0.0; 3],
             dv_prev: [0.0; 3],
         }
@@ -84,17 +193,40 @@ impl InertialCoarseAlignment {
         let (phi, dv_b) = coning_sculling(dtheta, dv, self.dtheta_prev, self.dv_prev);
         // dv_b is resolved in the body frame at the start of the sample: rotate with the old attitude.
         self.v_ib0 = add(self.v_ib0, quat_rotate(self.q_b_ib0, dv_b));
+        let c_old = quat_to_dcm(self.q_b_ib0);
         self.q_b_ib0 = quat_normalize(quat_mul(self.q_b_ib0, rotvec_to_quat(phi)));
+        let c_new = quat_to_dcm(self.q_b_ib0);
+        // A constant body-frame bias integrates through the mean attitude of the sample (trapezoid).
+        for i in 0..3 {
+            for j in 0..3 {
+                self.m_ib0[i][j] += 0.5 * (c_old[i][j] + c_new[i][j]) * self.dt;
+            }
+        }
         self.dtheta_prev = dtheta;
         self.dv_prev = dv;
         self.k += 1;
+        let v_i0 = earth_frame_velocity(self.lat, self.g, self.k as f64 * self.dt);
+        let tau = self.k as f64 / self.n_samples as f64;
+        self.sums.add(&self.m_ib0, tau, self.v_ib0, v_i0);
         if self.k == self.n_samples / 2 {
             self.v_ib0_mid = self.v_ib0;
+            self.m_ib0_mid = self.m_ib0;
         }
+    }
+
+    /// True if the table turned enough over the span for the horizontal accelerometer bias to be fitted.
+    fn bias_is_modulated(&self, t_end: f64) -> bool {
+        let m = &self.m_ib0;
+        (0..2).all(|a| (m[0][a].powi(2) + m[1][a].powi(2) + m[2][a].powi(2)).sqrt() < MODULATION_THRESHOLD * t_end)
     }
 
     /// C_b^n at the end of the span (None before it is complete).
     pub fn attitude(&self) -> Option<Mat3> {
+        self.solve().map(|s| s.c_bn)
+    }
+
+    /// The solution at the end of the span (None before it is complete).
+    pub fn solve(&self) -> Option<CoarseSolution> {
         if !self.is_complete() {
             return None;
         }
@@ -102,11 +234,31 @@ impl InertialCoarseAlignment {
         let t_end = self.n_samples as f64 * self.dt;
         let v_i0_mid = earth_frame_velocity(self.lat, self.g, t_mid);
         let v_i0_end = earth_frame_velocity(self.lat, self.g, t_end);
-        // C_ib0^i0 maps v^ib0 onto v^i0 at both epochs.
-        let c_ib0_i0 = triad(self.v_ib0_mid, self.v_ib0, v_i0_mid, v_i0_end);
+        // C_ib0^i0 maps the bias-corrected v^ib0 onto v^i0 at both epochs; alternate with the bias fit.
+        let mut bias = [0.0; 2];
+        let mut c_ib0_i0 = triad(self.v_ib0_mid, self.v_ib0, v_i0_mid, v_i0_end);
+        let rounds = if self.bias_is_modulated(t_end) { ALTERNATIONS } else { 0 };
+        for _ in 0..rounds {
+            let Some(b) = self.sums.solve(&c_ib0_i0) else { break };
+            bias = b;
+            let a1 = sub(self.v_ib0_mid, bias_velocity(&self.m_ib0_mid, bias));
+            let a2 = sub(self.v_ib0, bias_velocity(&self.m_ib0, bias));
+            let c_new = triad(a1, a2, v_i0_mid, v_i0_end);
+            let change = norm(dcm_to_rotvec(&mat_mul(&c_new, &transpose(&c_ib0_i0))));
+            c_ib0_i0 = c_new;
+            if change < CONVERGED_RAD {
+                break;
+            }
+        }
         let c_i0_n = transpose(&earth_rotation(self.lat, t_end));
-        Some(mat_mul(&c_i0_n, &mat_mul(&c_ib0_i0, &quat_to_dcm(self.q_b_ib0))))
+        let c_bn = mat_mul(&c_i0_n, &mat_mul(&c_ib0_i0, &quat_to_dcm(self.q_b_ib0)));
+        Some(CoarseSolution { c_bn, accel_bias_xy: bias })
     }
+}
+
+/// M[:, 0..2] b: the velocity [m/s] that a horizontal body-frame bias b = (b_x, b_y) adds to v^ib0.
+fn bias_velocity(m: &Mat3, b: [f64; 2]) -> Vec3 {
+    std::array::from_fn(|i| m[i][0] * b[0] + m[i][1] * b[1])
 }
 
 /// C_n^i0(t): the rotation of the n frame in inertial space after `t` [s] on a static base, the rotation by
