@@ -2,7 +2,9 @@
 
     python benchmarks/bench_navigation.py [--hours 72] [--rate-hz 100] [--reference-s 60] [--chunk 100000]
 
-1. Rust `ImuSimulator` alone: the whole run (default 72 h at 100 Hz = 25.9 M samples), streamed in chunks.
+1. Rust `ImuSimulator` alone: the whole run (default 72 h at 100 Hz = 25.9 M samples), streamed in chunks,
+   for the paper-like sensor (every noise channel, warm-up drift, tilted base) and for an ideal level one
+   (no noise draws, no Euler-angle trigonometry: the simulator's floor).
 2. Rust `Navigator` alone: the same run, chunks simulated beforehand are not kept (the simulator is timed
    separately and its time subtracted; the navigation time is measured around `process` only).
 3. The numpy `ReferenceNavigator` (python/gyrodrift/ins/reference_nav.py, the same equations, one sample
@@ -45,6 +47,26 @@ def _scenario(hours: float, rate_hz: float) -> Scenario:
     )
 
 
+def _ideal_scenario(hours: float, rate_hz: float) -> Scenario:
+    # Error-free, level base, same rotation: what the simulator costs without noise or tilt.
+    return Scenario.from_dict(
+        {
+            "run": {"duration_h": hours, "rate_hz": rate_hz, "seed": 1},
+            "rotation": {"scheme": "reciprocating", "rate_deg_s": 6.0},
+        },
+        source="<bench-ideal>",
+    )
+
+
+def _time_simulator(scn: Scenario, chunk: int) -> tuple[int, float]:
+    sim = _core.ImuSimulator(scn.to_core_config())
+    t0 = time.perf_counter()
+    done = 0
+    while (c := sim.next_chunk(chunk)) is not None:
+        done += len(c["t_s"])
+    return done, time.perf_counter() - t0
+
+
 def _nav_config(s: Scenario) -> dict:
     return {"lat_rad": s.site.lat_deg * DEG, "lon_rad": s.site.lon_deg * DEG, "height_m": s.site.height_m,
             "pitch_rad": s.attitude.pitch_deg * DEG, "roll_rad": s.attitude.roll_deg * DEG,
@@ -71,13 +93,10 @@ def main(argv: list[str] | None = None) -> None:
     rss0 = _rss_mb()
 
     # 1. simulator alone
-    sim = _core.ImuSimulator(scn.to_core_config())
-    t0 = time.perf_counter()
-    done = 0
-    while (c := sim.next_chunk(args.chunk)) is not None:
-        done += len(c["t_s"])
-    t_sim = time.perf_counter() - t0
-    print(f"Rust ImuSimulator : {done / t_sim:14,.0f} samples/s   ({t_sim:.2f} s)")
+    done, t_sim = _time_simulator(scn, args.chunk)
+    print(f"Rust ImuSimulator : {done / t_sim:14,.0f} samples/s   ({t_sim:.2f} s, paper-like noisy tilted sensor)")
+    done_i, t_ideal = _time_simulator(_ideal_scenario(args.hours, args.rate_hz), args.chunk)
+    print(f"Rust ImuSimulator : {done_i / t_ideal:14,.0f} samples/s   ({t_ideal:.2f} s, ideal level sensor)")
 
     # 2. navigator (simulate + navigate streamed; navigation timed around process only)
     tracemalloc.start()

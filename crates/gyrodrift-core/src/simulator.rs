@@ -117,16 +117,27 @@ impl ImuChunk {
         self.t_s.is_empty()
     }
 
-    fn clear_reserve(&mut self, n: usize) {
+    /// Set every buffer to n samples (contents are overwritten by the simulator).
+    fn resize(&mut self, n: usize) {
         for v in [&mut self.t_s, &mut self.temp_c, &mut self.table_angle, &mut self.pitch, &mut self.roll, &mut self.yaw] {
-            v.clear();
-            v.reserve(n);
+            v.resize(n, 0.0);
         }
-        self.dtheta.clear();
-        self.dtheta.reserve(3 * n);
-        self.dv.clear();
-        self.dv.reserve(3 * n);
+        self.dtheta.resize(3 * n, 0.0);
+        self.dv.resize(3 * n, 0.0);
     }
+}
+
+/// Caller-provided output buffers for [`ImuSimulator::fill`] (same meaning as the fields of [`ImuChunk`]).
+#[derive(Debug)]
+pub struct ImuChunkSlices<'a> {
+    pub t_s: &'a mut [f64],
+    pub dtheta: &'a mut [f64],
+    pub dv: &'a mut [f64],
+    pub temp_c: &'a mut [f64],
+    pub table_angle: &'a mut [f64],
+    pub pitch: &'a mut [f64],
+    pub roll: &'a mut [f64],
+    pub yaw: &'a mut [f64],
 }
 
 /// Two-point Gauss-Legendre nodes on [0, 1]: 1/2 -+ 1/(2 sqrt 3).
@@ -317,13 +328,38 @@ impl ImuSimulator {
     /// Produce the next at most `n` samples into `out` (cleared first). Returns the number produced;
     /// 0 means the run is over.
     pub fn next_chunk(&mut self, n: usize, out: &mut ImuChunk) -> usize {
-        let m = (n as u64).min(self.n_samples - self.k) as usize;
-        out.clear_reserve(m);
+        let m = self.remaining().min(n as u64) as usize;
+        out.resize(m);
+        let slices = ImuChunkSlices {
+            t_s: &mut out.t_s,
+            dtheta: &mut out.dtheta,
+            dv: &mut out.dv,
+            temp_c: &mut out.temp_c,
+            table_angle: &mut out.table_angle,
+            pitch: &mut out.pitch,
+            roll: &mut out.roll,
+            yaw: &mut out.yaw,
+        };
+        self.fill(slices)
+    }
+
+    /// Samples not produced yet.
+    pub fn remaining(&self) -> u64 {
+        self.n_samples - self.k
+    }
+
+    /// Produce the next samples into caller-provided buffers (e.g. numpy arrays): as many as `out.t_s.len()`
+    /// or the samples remaining, whichever is smaller. Returns the number produced. Every slice must hold at
+    /// least that many samples (x 3 for `dtheta` and `dv`).
+    pub fn fill(&mut self, out: ImuChunkSlices<'_>) -> usize {
+        let m = self.remaining().min(out.t_s.len() as u64) as usize;
+        assert!(out.dtheta.len() >= 3 * m && out.dv.len() >= 3 * m, "dtheta/dv buffers too short");
+        assert!([out.temp_c.len(), out.table_angle.len(), out.pitch.len(), out.roll.len(), out.yaw.len()].iter().all(|&l| l >= m), "buffers too short");
         let temp_drift = self.errors.params().has_temperature_drift();
         let yaw0 = self.cfg.attitude.yaw;
         let rate = self.cfg.rate_hz;
         let mut t0 = self.k as f64 / rate;
-        for _ in 0..m {
+        for i in 0..m {
             let k = self.k + 1;
             let t1 = k as f64 / rate;
             let (mut dth, mut dv) = self.true_increments(k, t0, t1);
@@ -331,22 +367,20 @@ impl ImuSimulator {
             let drift = if temp_drift { self.errors.params().axial_drift(temp_mid, rate_mid) } else { 0.0 };
             self.errors.apply(drift, &mut dth, &mut dv);
             let alpha1 = self.alpha;
-            out.t_s.push(t1);
+            out.t_s[i] = t1;
             t0 = t1;
-            out.dtheta.extend_from_slice(&dth);
-            out.dv.extend_from_slice(&dv);
-            out.temp_c.push(temp);
-            out.table_angle.push(alpha1);
-            if self.level {
-                out.pitch.push(0.0);
-                out.roll.push(0.0);
-                out.yaw.push(wrap_pi_fast(yaw0 + alpha1));
+            out.dtheta[3 * i..3 * i + 3].copy_from_slice(&dth);
+            out.dv[3 * i..3 * i + 3].copy_from_slice(&dv);
+            out.temp_c[i] = temp;
+            out.table_angle[i] = alpha1;
+            let e = if self.level {
+                Euler { pitch: 0.0, roll: 0.0, yaw: wrap_pi_fast(yaw0 + alpha1) }
             } else {
-                let e = self.true_attitude_tilted(alpha1);
-                out.pitch.push(e.pitch);
-                out.roll.push(e.roll);
-                out.yaw.push(e.yaw);
-            }
+                self.true_attitude_tilted(alpha1)
+            };
+            out.pitch[i] = e.pitch;
+            out.roll[i] = e.roll;
+            out.yaw[i] = e.yaw;
             self.k = k;
         }
         m

@@ -7,11 +7,11 @@ mod alignment;
 use gyrodrift_core::attitude::Euler;
 use gyrodrift_core::earth;
 use gyrodrift_core::imu_error::ImuErrorParams;
-use gyrodrift_core::simulator::{ImuChunk, ImuSimulator as CoreSimulator, ImuSimulatorConfig};
+use gyrodrift_core::simulator::{ImuChunkSlices, ImuSimulator as CoreSimulator, ImuSimulatorConfig};
 use gyrodrift_core::strapdown::{NavState, Navigator as CoreNavigator, NavigatorConfig, Vertical};
 use gyrodrift_core::temperature::TemperatureProfile;
 use gyrodrift_core::turntable::{ParamError, RotationScheme};
-use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -213,7 +213,6 @@ fn sim_config(d: &Bound<'_, PyDict>) -> PyResult<ImuSimulatorConfig> {
 #[pyclass(module = "gyrodrift._core")]
 struct ImuSimulator {
     inner: CoreSimulator,
-    buf: ImuChunk,
 }
 
 #[pymethods]
@@ -221,7 +220,7 @@ impl ImuSimulator {
     #[new]
     fn new(config: &Bound<'_, PyDict>) -> PyResult<Self> {
         let cfg = sim_config(config)?;
-        Ok(ImuSimulator { inner: CoreSimulator::new(cfg).map_err(param_err)?, buf: ImuChunk::default() })
+        Ok(ImuSimulator { inner: CoreSimulator::new(cfg).map_err(param_err)? })
     }
 
     /// Total number of samples of the run (round(duration_s * rate_hz)).
@@ -241,21 +240,62 @@ impl ImuSimulator {
         if n == 0 {
             return Err(PyValueError::new_err("n: must be a positive number of samples"));
         }
-        let (inner, buf) = (&mut self.inner, &mut self.buf);
-        let m = py.detach(|| inner.next_chunk(n, buf));
+        let m = self.inner.remaining().min(n as u64) as usize;
         if m == 0 {
             return Ok(None);
         }
-        let b = &self.buf;
+        // The simulator writes straight into fresh numpy arrays (no intermediate copy). They are created
+        // uninitialised: zeroed (calloc'd) arrays cost a page fault per 4 kB on every chunk, while malloc'd
+        // memory is recycled by the allocator.
+        // SAFETY: every element of every array is written by `fill` below before the arrays reach Python
+        // (`fill` writes exactly m samples, m <= remaining, into buffers of exactly m samples), and f64 has
+        // no invalid bit patterns.
+        let (t_s, dtheta, dv, temp_c, table, pitch, roll, yaw) = unsafe {
+            (
+                PyArray1::<f64>::new(py, m, false),
+                PyArray2::<f64>::new(py, [m, 3], false),
+                PyArray2::<f64>::new(py, [m, 3], false),
+                PyArray1::<f64>::new(py, m, false),
+                PyArray1::<f64>::new(py, m, false),
+                PyArray1::<f64>::new(py, m, false),
+                PyArray1::<f64>::new(py, m, false),
+                PyArray1::<f64>::new(py, m, false),
+            )
+        };
+        {
+            let mut bufs = [
+                t_s.readwrite(),
+                temp_c.readwrite(),
+                table.readwrite(),
+                pitch.readwrite(),
+                roll.readwrite(),
+                yaw.readwrite(),
+            ];
+            let (mut w_dtheta, mut w_dv) = (dtheta.readwrite(), dv.readwrite());
+            let [b_t, b_temp, b_table, b_pitch, b_roll, b_yaw] = &mut bufs;
+            let out = ImuChunkSlices {
+                t_s: b_t.as_slice_mut()?,
+                dtheta: w_dtheta.as_slice_mut()?,
+                dv: w_dv.as_slice_mut()?,
+                temp_c: b_temp.as_slice_mut()?,
+                table_angle: b_table.as_slice_mut()?,
+                pitch: b_pitch.as_slice_mut()?,
+                roll: b_roll.as_slice_mut()?,
+                yaw: b_yaw.as_slice_mut()?,
+            };
+            let inner = &mut self.inner;
+            let written = py.detach(|| inner.fill(out));
+            debug_assert_eq!(written, m);
+        }
         let d = PyDict::new(py);
-        d.set_item("t_s", PyArray1::from_slice(py, &b.t_s))?;
-        d.set_item("dtheta_rad", PyArray1::from_slice(py, &b.dtheta).reshape([m, 3])?)?;
-        d.set_item("dv_m_s", PyArray1::from_slice(py, &b.dv).reshape([m, 3])?)?;
-        d.set_item("temp_c", PyArray1::from_slice(py, &b.temp_c))?;
-        d.set_item("table_angle_rad", PyArray1::from_slice(py, &b.table_angle))?;
-        d.set_item("pitch_rad", PyArray1::from_slice(py, &b.pitch))?;
-        d.set_item("roll_rad", PyArray1::from_slice(py, &b.roll))?;
-        d.set_item("yaw_rad", PyArray1::from_slice(py, &b.yaw))?;
+        d.set_item("t_s", t_s)?;
+        d.set_item("dtheta_rad", dtheta)?;
+        d.set_item("dv_m_s", dv)?;
+        d.set_item("temp_c", temp_c)?;
+        d.set_item("table_angle_rad", table)?;
+        d.set_item("pitch_rad", pitch)?;
+        d.set_item("roll_rad", roll)?;
+        d.set_item("yaw_rad", yaw)?;
         Ok(Some(d))
     }
 }
