@@ -232,11 +232,16 @@ def test_features_command_writes_a_run_table(fleet, fleet_features, tmp_path):
     np.testing.assert_array_equal(runs.temp_max_c, [f.temp_max_c for f in fleet_features[:4]])
 
 
-def test_dask_cluster_gives_the_serial_table(fleet, fleet_features, tmp_path):
+def test_dask_cluster_and_scheduler_give_the_serial_table(fleet, fleet_features, tmp_path):
     pytest.importorskip("dask.distributed")
     rows = features_table(fleet[0][:3], workers=2, processes=False)
     assert [f.row() for f in rows] == [f.row() for f in fleet_features[:3]]
     np.testing.assert_array_equal(rows[2].lat_err_curve_arcsec, fleet_features[2].lat_err_curve_arcsec)
+    from dask.distributed import LocalCluster
+
+    with LocalCluster(n_workers=1, processes=False, dashboard_address=None) as cluster:
+        rows = features_table(fleet[0][3:4], scheduler=cluster.scheduler_address)
+    assert [f.row() for f in rows] == [fleet_features[3].row()]
 
 
 def test_missing_dask_is_a_clear_message(fleet, monkeypatch, tmp_path):
