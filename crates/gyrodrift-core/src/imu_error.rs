@@ -277,6 +277,28 @@ mod tests {
     }
 
     #[test]
+    fn rate_random_walk_variance_grows_as_t_at_any_rate() {
+        let rrw = 1e-7;
+        let t = 50.0;
+        for rate in [20.0, 200.0] {
+            let p = ImuErrorParams { gyro_rrw: rrw, ..Default::default() };
+            let n_seeds = 2000;
+            let mut s2 = 0.0;
+            for seed in 0..n_seeds {
+                let mut m = ImuErrorModel::new(p.clone(), 1.0 / rate, seed).unwrap();
+                let (mut a, mut b) = ([0.0; 3], [0.0; 3]);
+                for _ in 0..(t * rate) as usize {
+                    m.apply(0.0, &mut a, &mut b);
+                }
+                s2 += m.rrw[1] * m.rrw[1];
+            }
+            let var = s2 / n_seeds as f64;
+            // 2000 samples: variance estimate good to ~3 %; allow 4 sigma.
+            assert!((var / (rrw * rrw * t) - 1.0).abs() < 0.13, "rate {rate}: {var}");
+        }
+    }
+
+    #[test]
     fn deterministic_for_a_seed() {
         let p = ImuErrorParams { gyro_arw: 1e-5, accel_vrw: 1e-4, gyro_correlation: 100.0, gyro_bias_instability: 1e-7, ..Default::default() };
         let run = |seed| {
