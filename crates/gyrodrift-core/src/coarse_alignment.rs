@@ -1,6 +1,6 @@
 //! Coarse alignment on a static base in the inertial frame (indirect analytic alignment, PSINS `aligni0`).
 //!
-//! Frames (Qin Yongyuan; Yan Gongmin 2016, sec. 7.1.3 "inertial-frame alignment"):
+//! Frames (the inertial-frame alignment of Qin Yongyuan and of Yan Gongmin 2016, PSINS `aligni0`):
 //! - n: ENU at the site; i0: the n frame frozen in inertial space at the start t0 of the span;
 //! - b: the body (it may rotate on the turntable); ib0: the b frame frozen in inertial space at t0.
 //!

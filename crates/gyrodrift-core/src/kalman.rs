@@ -1,4 +1,4 @@
-//! The 15-state error-state Kalman filter of the zero-velocity fine alignment (static base, ENU).
+//! The 12-state error-state Kalman filter of the zero-velocity fine alignment (static base, ENU).
 //!
 //! State x (this order everywhere, `STATE_NAMES`):
 //!   0..3   phi = (phi_E, phi_N, phi_U) [rad], the attitude error (phi angle) of the computed n frame;
@@ -7,11 +7,11 @@
 //!          true rate after the current estimate is subtracted);
 //!   9..12  nabla = (nabla_x, nabla_y, nabla_z) [m/s^2], residual accelerometer bias, body frame.
 //!
-//! Signs (PSINS `qdelphi`, Yan Gongmin 2016 eq. 4.1.4): C_b^n' = (I - [phi x]) C_b^n, so the correction of a
+//! Signs (as PSINS `qdelphi`): the computed C_b^n' = (I - [phi x]) C_b^n, so the correction of a
 //! computed attitude is q <- q(phi) o q; v <- v - dv; the bias estimates grow by eps and nabla.
 //!
-//! Continuous model on a static base, v = 0 (Yan Gongmin 2016 eqs. 4.2.27 and 4.2.31; Titterton & Weston
-//! 2004 eqs. 12.6 and 12.10; PSINS `etm`):
+//! Continuous model on a static base, v = 0: the phi-angle error equations of the local-level mechanisation
+//! (Yan Gongmin 2016, the PSINS book, chapter on SINS error equations; PSINS `etm`; KF-GINS writes the same in NED):
 //!   phi_dot = -w_ie^n x phi + M_av dv - C_b^n eps,
 //!   dv_dot  =  f^n x phi - 2 w_ie^n x dv + C_b^n nabla,
 //! with M_av dv = (-dv_N / (R_M + h), dv_E / (R_N + h), dv_E tan(lat) / (R_N + h)) and f^n = (0, 0, g).

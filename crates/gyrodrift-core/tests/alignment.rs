@@ -235,3 +235,51 @@ fn bad_settings_name_their_key() {
     assert_eq!(bad(AlignerConfig { rate_hz: 0.0, ..cfg_4h() }), "rate_hz");
     assert_eq!(bad(AlignerConfig { lat: 2.0, ..cfg_4h() }), "lat_rad");
 }
+
+#[test]
+fn a_partial_last_update_interval_still_ends_the_alignment() {
+    // 100 s of fine alignment with 7 s updates: 14 whole intervals and a last one of 2 s; history every 21 s.
+    let cfg = AlignerConfig { coarse_s: 60.0, fine_s: 100.0, update_s: 7.0, history_s: 21.0, ..cfg_4h() };
+    let r = run(ImuSimulatorConfig { duration_s: 200.0, ..biased(6, true) }, cfg);
+    let t: Vec<f64> = r.res.hist_t.clone();
+    assert_eq!(t, vec![60.0, 81.0, 102.0, 123.0, 144.0, 160.0]);
+    assert!((r.res.t_s - 160.0).abs() < 1e-12);
+    assert!(r.res.vel.iter().all(|v| v.abs() < 0.01), "{:?}", r.res.vel);
+}
+
+/// Sensor biases and noise, 4 h, on another rotation scheme.
+fn run_scheme(scheme: RotationScheme, seed: u64) -> Run {
+    run(ImuSimulatorConfig { scheme, ..biased(seed, true) }, cfg_4h())
+}
+
+#[test]
+fn continuous_rotation_cannot_tell_horizontal_gyro_from_accelerometer_biases() {
+    // Unidirectional rotation at w: a horizontal gyro bias tilts the platform by a vector of length eps / w turning
+    // with the table, whose g x phi is exactly what a rotated accelerometer bias of g eps / w does: the filter
+    // keeps the horizontal gyro std at its prior (0.01 deg/h) and the accelerometer std near g 0.01 deg/h / w.
+    let r = run_scheme(RotationScheme::Continuous { rate: 6.0 * DEG, accel: 10.0 * DEG }, 7);
+    let prior = 0.01;
+    for i in 0..2 {
+        let std = r.res.gyro_bias_std[i] / DEG_PER_HOUR;
+        assert!((std / prior - 1.0).abs() < 0.01, "{i}: {std}");
+    }
+    let confounded = earth::normal_gravity(lat0(), 0.0) * prior * DEG_PER_HOUR / (6.0 * DEG) / MICRO_G;
+    println!("continuous: accel std {:.3?} ug, g eps / w = {confounded:.3} ug", r.res.accel_bias_std.map(|x| x / MICRO_G));
+    assert!(r.res.accel_bias_std[0] / MICRO_G < 1.5 * confounded);
+}
+
+#[test]
+fn four_position_indexing_observes_the_horizontal_gyro_biases() {
+    let scheme = RotationScheme::Indexing { rate: 6.0 * DEG, accel: 10.0 * DEG, positions: vec![0.0, 0.5 * PI, PI, 1.5 * PI], dwell: 300.0 };
+    let r = run_scheme(scheme, 8);
+    let res = &r.res;
+    let gb = [0.01, -0.008, 0.003];
+    let phi = attitude_error(res.attitude, r.true_end);
+    for i in 0..3 {
+        let err = res.gyro_bias[i] / DEG_PER_HOUR - gb[i];
+        let std = res.gyro_bias_std[i] / DEG_PER_HOUR;
+        println!("indexing: gyro {i} err {err:.5} std {std:.5} deg/h; phi {:.2} std {:.2} arcsec", phi[i] / ARCSEC, res.att_std[i] / ARCSEC);
+        assert!(err.abs() < 3.0 * std && phi[i].abs() < 3.0 * res.att_std[i]);
+    }
+    assert!(res.gyro_bias_std[0] / DEG_PER_HOUR < 0.001 && res.gyro_bias_std[1] / DEG_PER_HOUR < 0.001);
+}
