@@ -142,6 +142,7 @@ def test_true_drift_recovers_the_simulated_constant(long_log, long_alignment, tm
     res = find_true_drift(open_log(long_log), alignment=long_alignment)
     assert abs(res.drift_deg_h - LONG_DRIFT) < 1e-5
     assert res.verified and res.verify_nmi[1] < 0.05
+    assert res.refinements <= 1 and abs(res.last_step_deg_h) < 1e-7  # one secant step converges
     assert res.verify_nmi[0] > 0.3 and res.verify_nmi[2] > 0.3  # 0.0002 deg/h ~ 0.36 nmi in 72 h
     # The uncompensated 72 h error is the closed form's 5.4 nmi (method.md); 0.001 deg/h ~ 1.8 nmi.
     assert res.uncompensated_nmi == pytest.approx(5.4, abs=0.2)
@@ -157,7 +158,9 @@ def test_truth_command_other_criteria(long_log, tmp_path, criterion):
     assert r.exit_code == 0, r.output
     doc = json.loads(r.output)
     assert doc["criterion"] == criterion and doc["verified"] is True
-    assert abs(doc["drift_deg_h"] - LONG_DRIFT) < 1e-5
+    # alignment residuals pull the rms and max optima a little off the simulated drift (measured 2e-6 to 5e-6)
+    assert abs(doc["drift_deg_h"] - LONG_DRIFT) < 2e-5
+    assert doc["refinements"] <= 1 and abs(doc["last_step_deg_h"]) < 1e-7
     assert len(doc["grid"]["drift_deg_h"]) == 81 and len(doc["verify"]) == 3
     for name in ("true_drift.json", "alignment.json"):
         assert json.loads((out / name).read_text())

@@ -18,7 +18,11 @@ then simulate the compensation and keep the drift that minimises the position er
    in ``d`` (a maximum of norms of affine functions): `scipy.optimize.minimize_scalar` (bounded).
 4. Verification: one more read navigates ``d*`` and ``d* -+ step_deg_h`` (default 0.0002 deg/h); the
    criterion is reported at the three, and ``verified`` says the navigated ``d*`` is no worse than both
-   neighbours.
+   neighbours. The three also re-linearise the error at ``d*`` (central difference); if that moves the
+   optimum by more than ``tolerance_deg_h`` (1e-7 deg/h), ``d*`` moves and is verified again (at most
+   ``max_refinements`` = 3 times). At 0.003 deg/h the first linearisation is off by 1e-7 to 2e-6 deg/h and one
+   refinement converges (next step < 1e-10 deg/h); at 0.05 deg/h it is off by up to 7e-5 deg/h and one refinement
+   still converges.
 
 The drift is the total constant to subtract from the z-gyro output (measured - estimate) [deg/h]; the
 alignment's own z estimate plays no part.
@@ -109,6 +113,11 @@ class TrueDrift:
         The criterion curve from the linear model on a grid around ``d*``.
     sensitivity_nmi_per_deg_h : float
         Position error at the end per deg/h of z drift (hypot of the final north/east sensitivities).
+    refinements : int
+        Verification reads that moved ``d*`` (0 when the first linearisation was exact enough).
+    last_step_deg_h : float
+        The move the last re-linearisation asked for [deg/h] (below `tolerance_deg_h` unless the
+        refinements ran out).
     alignment : Alignment
     base : NavCurve
         The uncompensated navigation (z drift 0), kept for the features.
@@ -131,6 +140,8 @@ class TrueDrift:
     grid_drift_deg_h: np.ndarray = field(repr=False)
     grid_nmi: np.ndarray = field(repr=False)
     sensitivity_nmi_per_deg_h: float = 0.0
+    refinements: int = 0
+    last_step_deg_h: float = 0.0
     alignment: Alignment | None = field(default=None, repr=False)
     base: NavCurve | None = field(default=None, repr=False)
     optimum: NavCurve | None = field(default=None, repr=False)
@@ -151,6 +162,8 @@ class TrueDrift:
                        for d, v in zip(self.verify_drift_deg_h, self.verify_nmi)],
             "verified": bool(self.verified),
             "sensitivity_nmi_per_deg_h": self.sensitivity_nmi_per_deg_h,
+            "refinements": self.refinements,
+            "last_step_deg_h": self.last_step_deg_h,
             "alignment_z_drift_deg_h": None if self.alignment is None else self.alignment.z_drift_deg_h,
             "alignment_z_drift_std_deg_h": None if self.alignment is None else self.alignment.z_drift_std_deg_h,
             "grid": {"drift_deg_h": [float(x) for x in self.grid_drift_deg_h],
@@ -169,6 +182,8 @@ def find_true_drift(
     step_deg_h: float = 0.0002,
     grid_half_width_deg_h: float = 0.002,
     grid_points: int = 81,
+    tolerance_deg_h: float = 1e-7,
+    max_refinements: int = 3,
     decimation_s: float = 60.0,
     temperature_hours: float | None = None,
     chunk_samples: int = 100_000,
@@ -193,6 +208,11 @@ def find_true_drift(
         Offset of the two verification neighbours [deg/h].
     grid_half_width_deg_h, grid_points : float, int
         The reported criterion curve spans ``d* +- grid_half_width_deg_h`` with `grid_points` values.
+    tolerance_deg_h, max_refinements : float, int
+        After each verification read the curves are re-linearised at ``d*`` (central difference of the
+        neighbours); if the new optimum moves by more than `tolerance_deg_h` [deg/h], ``d*`` moves there and
+        is verified again, at most `max_refinements` times (large drifts, where the first linearisation
+        from 0 is not exact enough).
     decimation_s : float
         Interval of the error curves [s]; ``rms`` and ``max`` are taken over these samples.
     temperature_hours : float, optional
@@ -220,17 +240,32 @@ def find_true_drift(
     c0, c1 = first.curves
     gn = (c1.north_m - c0.north_m) / trial_deg_h
     ge = (c1.east_m - c0.east_m) / trial_deg_h
-    d_star = minimise_linear_criterion(c0.north_m, c0.east_m, gn, ge, criterion)
-    grid = d_star + np.linspace(-grid_half_width_deg_h, grid_half_width_deg_h, grid_points)
-    grid_nmi = criterion_value(c0.north_m + grid[:, None] * gn, c0.east_m + grid[:, None] * ge, criterion)
-    predicted = float(criterion_value(c0.north_m + d_star * gn, c0.east_m + d_star * ge, criterion))
-    verify_d = np.array([d_star - step_deg_h, d_star, d_star + step_deg_h])
-    second = navigate_after_alignment(
-        log, alignment, list(verify_d), hours, decimation_s=decimation_s, chunk_samples=chunk_samples,
-        quiet=quiet, desc="truth verify",
-    )
+    sensitivity = float(np.hypot(gn[-1], ge[-1]) / _NMI)
+    ref_d, ref_n, ref_e = 0.0, c0.north_m, c0.east_m  # the linearisation point and its curves
+    d_star = minimise_linear_criterion(ref_n, ref_e, gn, ge, criterion)
+    refinements = 0
+    while True:
+        verify_d = np.array([d_star - step_deg_h, d_star, d_star + step_deg_h])
+        second = navigate_after_alignment(
+            log, alignment, list(verify_d), hours, decimation_s=decimation_s, chunk_samples=chunk_samples,
+            quiet=quiet, desc="truth verify",
+        )
+        lo, mid, hi = second.curves
+        # Re-linearise at d* with the central difference of the verification passes (a secant step).
+        gn_c = (hi.north_m - lo.north_m) / (2.0 * step_deg_h)
+        ge_c = (hi.east_m - lo.east_m) / (2.0 * step_deg_h)
+        step = minimise_linear_criterion(mid.north_m, mid.east_m, gn_c, ge_c, criterion)
+        ref_d, ref_n, ref_e, gn, ge = d_star, mid.north_m, mid.east_m, gn_c, ge_c
+        if abs(step) <= tolerance_deg_h or refinements >= max_refinements:
+            break
+        d_star += step
+        refinements += 1
     verify_nmi = np.array([float(criterion_value(c.north_m, c.east_m, criterion)) for c in second.curves])
     verified = bool(verify_nmi[1] <= verify_nmi[0] and verify_nmi[1] <= verify_nmi[2])
+    grid = d_star + np.linspace(-grid_half_width_deg_h, grid_half_width_deg_h, grid_points)
+    off = grid - ref_d
+    grid_nmi = criterion_value(ref_n + off[:, None] * gn, ref_e + off[:, None] * ge, criterion)
+    predicted = float(criterion_value(ref_n + (d_star - ref_d) * gn, ref_e + (d_star - ref_d) * ge, criterion))
     return TrueDrift(
         run=log.name,
         drift_deg_h=float(d_star),
@@ -244,10 +279,12 @@ def find_true_drift(
         uncompensated_nmi=float(criterion_value(c0.north_m, c0.east_m, criterion)),
         grid_drift_deg_h=grid,
         grid_nmi=np.asarray(grid_nmi, dtype=float),
-        sensitivity_nmi_per_deg_h=float(np.hypot(gn[-1], ge[-1]) / _NMI),
+        sensitivity_nmi_per_deg_h=sensitivity,
+        refinements=refinements,
+        last_step_deg_h=float(step),
         alignment=alignment,
         base=c0,
-        optimum=second.curves[1],
+        optimum=mid,
         temperature=first.temperature,
     )
 
