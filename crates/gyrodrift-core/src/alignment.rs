@@ -12,8 +12,9 @@
 //!
 //! The navigator has no setter for its attitude and velocity, so the feedback restarts it from the corrected
 //! state at the known position (the state of a static alignment: position is known). The restart forgets the
-//! previous sample of the coning/sculling corrections; on a static base with the table turning about z that
-//! term is below 1e-14 rad per restart.
+//! previous sample of the coning/sculling corrections; on a static base with the table turning about z the
+//! previous and the current increments nearly coincide, so the terms lost are below 1e-14 rad and 1e-10 m/s per
+//! restart. (A `Navigator::correct(phi, dv)` in `strapdown` would make the restart unnecessary.)
 
 use crate::attitude::{
     dcm_to_euler, quat_mul, quat_to_dcm, quat_to_euler, rotvec_to_quat, sub, Euler, Mat3, Vec3,
