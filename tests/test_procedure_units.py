@@ -54,7 +54,8 @@ def test_minimiser_beats_a_fine_brute_force_grid(seed, criterion):
 def test_minimiser_recovers_an_exact_linear_drift():
     _, _, gn, ge = curves(1)
     for criterion in CRITERIA:
-        assert minimise_linear_criterion(-0.0031 * gn, -0.0031 * ge, gn, ge, criterion) == pytest.approx(0.0031, abs=1e-10)
+        d = minimise_linear_criterion(-0.0031 * gn, -0.0031 * ge, gn, ge, criterion)
+        assert d == pytest.approx(0.0031, abs=1e-10)
 
 
 def test_minimiser_refuses_zero_sensitivity():

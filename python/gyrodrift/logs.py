@@ -47,7 +47,7 @@ import os
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterator, Mapping
+from typing import Iterator, Mapping
 
 import numpy as np
 import pyarrow as pa
@@ -326,7 +326,8 @@ class _Validator:
                 i = first + k + 1 - off
                 what = "duplicated time stamp" if dt[k] == 0.0 else "time goes backwards"
                 raise LogError(
-                    f"{self.where(i, 't_s')}: {what} ({float(full[k + 1])!r} s after {float(full[k])!r} s); time must be strictly increasing"
+                    f"{self.where(i, 't_s')}: {what} ({float(full[k + 1])!r} s after {float(full[k])!r} s); "
+                    "time must be strictly increasing"
                 )
             gap = np.abs(dt - self.dt) > GAP_TOLERANCE * self.dt
             if gap.any():

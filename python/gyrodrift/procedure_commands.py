@@ -123,7 +123,8 @@ def truth_command(log, criterion, hours, lat0_deg, lon0_deg, height_m, out_dir, 
     v = res.verify_nmi
     click.echo(f"{res.run}: true drift {res.drift_deg_h:.7f} deg/h ({criterion} criterion over {hours:g} h)")
     click.echo(f"  criterion: {res.uncompensated_nmi:.4f} nmi uncompensated, {v[1]:.4f} nmi at the optimum "
-               f"(navigated), {v[0]:.4f} / {v[2]:.4f} nmi at -/+ {res.verify_drift_deg_h[2] - res.drift_deg_h:.4g} deg/h"
+               f"(navigated), {v[0]:.4f} / {v[2]:.4f} nmi at -/+ "
+               f"{res.verify_drift_deg_h[2] - res.drift_deg_h:.4g} deg/h"
                f" -> {'verified' if res.verified else 'NOT verified'}")
     click.echo(f"  alignment z estimate {res.alignment.z_drift_deg_h:.5f} +- {res.alignment.z_drift_std_deg_h:.5f} "
                f"deg/h (1-sigma, not used)")

@@ -28,8 +28,8 @@ class DaskMissingError(ImportError):
     """dask.distributed is needed for --workers / --scheduler but is not installed."""
 
 
-def _features_task(path: str, site: Site | Mapping[str, float] | None, timeline: Timeline, with_truth: bool, criterion: str,
-                   lat0_deg: float | None, chunk_samples: int) -> RunFeatures:
+def _features_task(path: str, site: Site | Mapping[str, float] | None, timeline: Timeline, with_truth: bool,
+                   criterion: str, lat0_deg: float | None, chunk_samples: int) -> RunFeatures:
     log = open_log(path, site=site)
     return extract_features(log, timeline=timeline, with_truth=with_truth, criterion=criterion,
                             lat0_deg=lat0_deg, chunk_samples=chunk_samples, quiet=True)

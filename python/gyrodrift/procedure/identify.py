@@ -118,7 +118,7 @@ def identify(
     physics = float(physics_inversion(table, t_h=features.hours)[0])
     try:
         loo = float(np.mean(np.abs(model.loo_residuals())))
-    except Exception:  # a model without stored training data
+    except (AttributeError, ValueError, np.linalg.LinAlgError):  # a model without usable training data
         loo = None
     al = features.alignment
     return Identification(

@@ -17,7 +17,7 @@ from typing import Sequence
 import numpy as np
 
 from gyrodrift.ins.nav_errors import position_errors
-from gyrodrift.logs import ImuLog
+from gyrodrift.logs import ImuLog, LogError
 from gyrodrift.procedure.align import Alignment
 from gyrodrift.progress import progress
 from gyrodrift.units import DEG, HOUR
@@ -131,7 +131,10 @@ def navigate_after_alignment(
     n_nav = log.samples_for(hours * HOUR)
     stop = start + n_nav
     if log.n_samples < stop:
-        log.require_duration((stop + 0.5) / rate, f"{hours:g} h of navigation after the {start / rate / HOUR:g} h alignment")
+        raise LogError(
+            f"{log.path}: the log lasts {log.duration_s / HOUR:.3f} h; {hours:g} h of navigation after the "
+            f"{start / rate / HOUR:g} h alignment need at least {stop / rate / HOUR:g} h"
+        )
     per_hour = log.samples_for(HOUR)
     dec = max(1, int(round(decimation_s * rate)))
     n_temp = None if temperature_hours is None else log.samples_for(temperature_hours * HOUR)
@@ -145,7 +148,6 @@ def navigate_after_alignment(
     lat_parts: list[list[np.ndarray]] = [[] for _ in navs]
     lon_parts: list[list[np.ndarray]] = [[] for _ in navs]
     hourly: list[list[float]] = [[float(alignment.site.lat_deg * DEG)] for _ in navs]
-    temps: list[float] = []  # start, end, min, max as they come
     t_min = np.inf
     t_max = -np.inf
     t_start = t_end = np.nan
