@@ -121,7 +121,7 @@ def test_stop_reads_only_what_is_needed_and_complains_when_the_log_is_short(sim_
     assert sum(len(p) for p in parts) == 2500
     with pytest.raises(LogError, match=r"the log ends after 7200 samples \(0\.200 h\); 7201 samples"):
         list(log.chunks(1000, stop=7201))
-    with pytest.raises(LogError, match=r"imu\.parquet: the log lasts 0\.200 h; the alignment needs at least 4 h"):
+    with pytest.raises(LogError, match=r"imu\.parquet: the log lasts 0\.200 h; the alignment takes at least 4 h"):
         log.require_duration(4 * 3600.0, "the alignment")
 
 

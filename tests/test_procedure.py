@@ -171,10 +171,10 @@ def test_truth_command_other_criteria(long_log, tmp_path, criterion):
 def test_truth_needs_76_hours(fleet):
     log = open_log(fleet[0][0])
     with pytest.raises(LogError, match=r"run00/imu\.parquet: the log lasts 16\.000 h; the true drift \(4 h "
-                                       r"alignment \+ 72 h navigation\) needs at least 76 h"):
+                                       r"alignment \+ 72 h navigation\) takes at least 76 h"):
         find_true_drift(log)
     r = CliRunner().invoke(truth_command, [str(fleet[0][0]), "--quiet"])
-    assert r.exit_code == 1 and "needs at least 76 h" in r.output
+    assert r.exit_code == 1 and "takes at least 76 h" in r.output
 
 
 # ------------------------------------------------------------------------------------------------
@@ -226,8 +226,12 @@ def test_features_of_a_run(fleet, fleet_features):
 
 def test_features_command_writes_a_run_table(fleet, fleet_features, tmp_path):
     out = tmp_path / "runs.csv"
-    r = CliRunner().invoke(features_command, [*map(str, fleet[0][:4]), "--out", str(out)])
+    r = CliRunner().invoke(features_command, [*map(str, fleet[0][:4]), "--out", str(out),
+                                              "--curves", str(tmp_path / "curves.csv")])
     assert r.exit_code == 0, r.output
+    curves = (tmp_path / "curves.csv").read_text().splitlines()
+    assert curves[0] == "run,t_h,lat_err_arcsec" and len(curves) == 1 + 4 * 13
+    assert curves[13].startswith("run00,12,") and float(curves[13].split(",")[2]) == fleet_features[0].lat_err_arcsec
     assert "wrote 4 run(s)" in r.output
     runs = read_runs_csv(out)
     assert list(runs.run) == ["run00", "run01", "run02", "run03"]
@@ -245,6 +249,20 @@ def test_dask_cluster_and_scheduler_give_the_serial_table(fleet, fleet_features,
     with LocalCluster(n_workers=1, processes=False, dashboard_address=None) as cluster:
         rows = features_table(fleet[0][3:4], scheduler=cluster.scheduler_address)
     assert [f.row() for f in rows] == [fleet_features[3].row()]
+
+
+def test_a_bad_log_on_a_cluster_raises_its_own_error(fleet, tmp_path):
+    pytest.importorskip("dask.distributed")
+    short = tmp_path / "short.csv"
+    short.write_text("t_s,gyro_x_rad_s,gyro_y_rad_s,gyro_z_rad_s,accel_x_m_s2,accel_y_m_s2,accel_z_m_s2,temp_c\n"
+                     + "".join(f"{(i + 1) / 10!r},0,0,0,0,0,9.8,20\n" for i in range(100)))
+    expected = (f"{short}: the log lasts 0.003 h; extracting the features (4 h alignment + 12 h navigation) "
+                "takes at least 16 h")
+    with pytest.raises(LogError) as info:
+        features_table([fleet[0][0], short], site={"lat_deg": 28.222}, workers=1, processes=False)
+    assert str(info.value) == expected
+    r = CliRunner().invoke(features_command, [str(short), "--lat0-deg", "28.222", "--out", str(tmp_path / "x.csv")])
+    assert r.exit_code == 1 and expected in r.output and not (tmp_path / "x.csv").exists()
 
 
 def test_missing_dask_is_a_clear_message(fleet, monkeypatch, tmp_path):

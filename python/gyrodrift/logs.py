@@ -205,7 +205,7 @@ class ImuLog:
         """Raise `LogError` if the log is shorter than `seconds` [s] (what: why that much is needed)."""
         if self.n_samples < self.samples_for(seconds):
             raise LogError(
-                f"{self.path}: the log lasts {self.duration_s / 3600.0:.3f} h; {what} needs at least "
+                f"{self.path}: the log lasts {self.duration_s / 3600.0:.3f} h; {what} takes at least "
                 f"{seconds / 3600.0:g} h"
             )
 

@@ -78,20 +78,25 @@ def _num(x):
 @click.option("--workers", type=click.IntRange(min=1), default=None,
               help="Process the logs on a local dask cluster with N workers (needs the 'dask' extra).")
 @click.option("--scheduler", default=None, help="Address of a running dask scheduler (tcp://host:8786).")
+@click.option("--curves", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Also write the hourly latitude-error curves (run, t_h, lat_err_arcsec) to this CSV.")
 @click.option("--quiet", is_flag=True, help="No progress bar and no summary line.")
-def features_command(logs, out, lat0_deg, lon0_deg, height_m, with_truth, criterion, workers, scheduler, quiet):
+def features_command(logs, out, lat0_deg, lon0_deg, height_m, with_truth, criterion, workers, scheduler, curves,
+                     quiet):
     """Align each LOG, navigate 12 h and write one run-table row per log to --out.
 
     Columns: run (the log's stem), lat_deg (latitude at navigation hour 12), lat0_deg, temp_min_c,
     temp_max_c, temp_start_c, temp_end_c (over those 12 h), and drift_deg_h with --with-truth.
     """
-    from gyrodrift.procedure.fleet import features_table, write_features_csv
+    from gyrodrift.procedure.fleet import features_table, write_curves_csv, write_features_csv
 
     if workers is not None and scheduler is not None:
         raise click.UsageError("give --workers or --scheduler, not both")
     rows = _guard(features_table, [str(p) for p in logs], site=_site(lat0_deg, lon0_deg, height_m),
                   with_truth=with_truth, criterion=criterion, workers=workers, scheduler=scheduler, quiet=quiet)
     write_features_csv(rows, out)
+    if curves is not None:
+        write_curves_csv(rows, curves)
     if not quiet:
         click.echo(f"wrote {len(rows)} run(s) to {out}")
 

@@ -19,7 +19,7 @@ Logs are opened with `gyrodrift.logs.open_log` (Parquet or CSV, validated while 
 from gyrodrift.procedure.align import Alignment, align_log, write_alignment
 from gyrodrift.procedure.evaluate import Evaluation, evaluate_compensation, write_evaluation
 from gyrodrift.procedure.features import RunFeatures, extract_features, features_run_table
-from gyrodrift.procedure.fleet import DaskMissingError, features_table, write_features_csv
+from gyrodrift.procedure.fleet import DaskMissingError, features_table, write_curves_csv, write_features_csv
 from gyrodrift.procedure.identify import Identification, identify
 from gyrodrift.procedure.passes import NavCurve, PassResult, TemperatureStats, navigate_after_alignment
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
@@ -48,6 +48,7 @@ __all__ = [
     "navigate_after_alignment",
     "write_evaluation",
     "write_alignment",
+    "write_curves_csv",
     "write_features_csv",
     "write_truth",
 ]

@@ -154,7 +154,7 @@ def extract_features(
                                 temperature_hours=hours, chunk_samples=chunk_samples, quiet=quiet)
         return _from_curve(log, truth.base, truth.temperature, hours, truth.alignment, truth, lat0_deg)
     log.require_duration(timeline.log_hours_for(hours) * HOUR,
-                         f"the features ({timeline.align_h:g} h alignment + {hours:g} h navigation)")
+                         f"extracting the features ({timeline.align_h:g} h alignment + {hours:g} h navigation)")
     if alignment is None:
         alignment = align_log(log, timeline=timeline, chunk_samples=chunk_samples, quiet=quiet)
     res = navigate_after_alignment(log, alignment, [0.0], hours, temperature_hours=hours,

@@ -21,7 +21,7 @@ from gyrodrift.procedure.features import RUN_TABLE_COLUMNS, RunFeatures, extract
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 from gyrodrift.progress import progress
 
-__all__ = ["features_table", "write_features_csv", "DaskMissingError"]
+__all__ = ["features_table", "write_features_csv", "write_curves_csv", "DaskMissingError"]
 
 
 class DaskMissingError(ImportError):
@@ -154,5 +154,21 @@ def write_features_csv(features: Sequence[RunFeatures], path: str | os.PathLike[
     for f in features:
         r = f.row()
         w.writerow([r[c] if c == "run" else repr(float(r[c])) for c in cols])
+    with atomic_write(path, "w") as fh:
+        fh.write(buf.getvalue())
+
+
+def write_curves_csv(features: Sequence[RunFeatures], path: str | os.PathLike[str]) -> None:
+    """Write the hourly latitude-error curves atomically, one row per run and hour.
+
+    Columns: ``run``, ``t_h`` (navigation hour since the end of alignment, 0..12), ``lat_err_arcsec``
+    (computed minus true).
+    """
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["run", "t_h", "lat_err_arcsec"])
+    for f in features:
+        for h, v in enumerate(f.lat_err_curve_arcsec):
+            w.writerow([f.run, h, repr(float(v))])
     with atomic_write(path, "w") as fh:
         fh.write(buf.getvalue())

@@ -133,7 +133,7 @@ def navigate_after_alignment(
     if log.n_samples < stop:
         raise LogError(
             f"{log.path}: the log lasts {log.duration_s / HOUR:.3f} h; {hours:g} h of navigation after the "
-            f"{start / rate / HOUR:g} h alignment need at least {stop / rate / HOUR:g} h"
+            f"{start / rate / HOUR:g} h alignment take at least {stop / rate / HOUR:g} h"
         )
     per_hour = log.samples_for(HOUR)
     dec = max(1, int(round(decimation_s * rate)))
