@@ -48,7 +48,8 @@ def test_minimiser_beats_a_fine_brute_force_grid(seed, criterion):
     vals = criterion_value(n0 + grid[:, None] * gn, e0 + grid[:, None] * ge, criterion)
     best = criterion_value(n0 + d * gn, e0 + d * ge, criterion)
     assert best <= vals.min() + 1e-12
-    assert abs(grid[np.argmin(vals)] - d) <= 1.5e-6  # the grid step is 1e-6 deg/h
+    if criterion != "max":  # max may be flat at its minimum (a drift-independent error peak): no unique argmin
+        assert abs(grid[np.argmin(vals)] - d) <= 1.5e-6  # the grid step is 1e-6 deg/h
 
 
 def test_minimiser_recovers_an_exact_linear_drift():
