@@ -11,6 +11,9 @@ position error = hypot(north, east) / 1852 m (`gyrodrift.ins.nav_errors.position
 
 from __future__ import annotations
 
+import contextlib
+import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Sequence
 
@@ -98,6 +101,7 @@ def navigate_after_alignment(
     decimation_s: float = 60.0,
     temperature_hours: float | None = None,
     chunk_samples: int = 100_000,
+    threads: int | None = None,
     quiet: bool = True,
     desc: str = "navigate",
 ) -> PassResult:
@@ -117,6 +121,9 @@ def navigate_after_alignment(
         Interval of the error curves [s] (rounded to whole samples).
     temperature_hours : float, optional
         Collect temperature statistics over the first `temperature_hours` of navigation.
+    threads : int, optional
+        Threads navigating the passes of one chunk side by side (default: one per pass, at most the number of
+        CPUs; 1 = in turn). Results do not depend on it: each navigator sees the same samples in order.
     chunk_samples, quiet, desc
         Chunking of the read, progress bar switch and label.
 
@@ -152,7 +159,9 @@ def navigate_after_alignment(
     t_max = -np.inf
     t_start = t_end = np.nan
     done = 0
-    with progress(n_nav, f"{desc} {log.name}", quiet) as bar:
+    n_threads = min(len(navs), os.cpu_count() or 1) if threads is None else max(1, min(int(threads), len(navs)))
+    pool = ThreadPoolExecutor(max_workers=n_threads) if n_threads > 1 else None
+    with progress(n_nav, f"{desc} {log.name}", quiet) as bar, (pool or contextlib.nullcontext()):
         for chunk in log.chunks(chunk_samples, stop=stop):
             end_idx = chunk.first_index + len(chunk)
             if end_idx <= start:
@@ -171,8 +180,11 @@ def navigate_after_alignment(
                 b = min(len(chunk), a + per_hour - (done % per_hour))
                 dth = np.ascontiguousarray(chunk.dtheta_rad[a:b])
                 dv = np.ascontiguousarray(chunk.dv_m_s[a:b])
-                for i, nav in enumerate(navs):
-                    out = nav.process(dth, dv, dec)
+                if pool is None:
+                    outs = [nav.process(dth, dv, dec) for nav in navs]
+                else:  # the core releases the GIL: the navigators of one segment run side by side
+                    outs = list(pool.map(lambda nav: nav.process(dth, dv, dec), navs))
+                for i, out in enumerate(outs):
                     if len(out["lat_rad"]):
                         lat_parts[i].append(np.asarray(out["lat_rad"], dtype=float))
                         lon_parts[i].append(np.asarray(out["lon_rad"], dtype=float))
