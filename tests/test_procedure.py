@@ -36,6 +36,7 @@ from gyrodrift.procedure import (
     features_table,
     find_true_drift,
     identify,
+    navigate_after_alignment,
     write_alignment,
     write_evaluation,
 )
@@ -132,6 +133,18 @@ def test_alignment_estimates_horizontal_errors_and_leaves_the_axial_drift_uncert
     assert doc["format"] == "gyrodrift-alignment/1" and doc["samples_used"] == 144000
     assert doc["gyro_bias_std_deg_h"][2] == pytest.approx(z[-1])
     assert paths["png"].read_bytes()[:8] == PNG_MAGIC
+
+
+def test_threaded_and_sequential_passes_are_identical(long_log, long_alignment):
+    log = open_log(long_log)
+    a = navigate_after_alignment(log, long_alignment, [0.0, 0.002], 12.0, threads=1, temperature_hours=12.0)
+    b = navigate_after_alignment(log, long_alignment, [0.0, 0.002], 12.0, threads=2, temperature_hours=12.0)
+    for x, y in zip(a.curves, b.curves):
+        np.testing.assert_array_equal(x.north_m, y.north_m)
+        np.testing.assert_array_equal(x.hourly_lat_deg, y.hourly_lat_deg)
+    assert a.temperature == b.temperature and a.temperature.min_c < a.temperature.max_c
+    assert len(a.curves[0].t_h) == 12 * 60 and a.curves[0].t_h[-1] == pytest.approx(12.0)
+    assert a.curves[1].hourly_lat_err_arcsec[12] < a.curves[0].hourly_lat_err_arcsec[12]  # 0.002 of 0.003 removed
 
 
 # ------------------------------------------------------------------------------------------------

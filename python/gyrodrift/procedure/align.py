@@ -25,7 +25,8 @@ from gyrodrift.units import ARCSEC, DEG, DEG_PER_H, HOUR, MICRO_G
 __all__ = ["Alignment", "align_log", "write_alignment", "GYRO_BIAS_Z_STATE"]
 
 GYRO_BIAS_Z_STATE = 8
-"""Column of the z-gyro bias in the aligner's covariance history (phi E N U, dv E N U, gyro bias x y z, ...)."""
+"""Column of the z-gyro bias in the aligner's covariance history (phi E N U, dv E N U, gyro bias x y z, ...);
+`_core.Aligner.STATE_NAMES` (``"gyro_bias_z"``) decides when the core exposes it."""
 
 
 @dataclass(frozen=True)
@@ -193,7 +194,9 @@ def align_log(
     r = aligner.result()
     hist_std = np.asarray(r["hist_std"], dtype=float)
     hist_t = np.asarray(r["hist_t_s"], dtype=float)
-    z_std = hist_std[:, GYRO_BIAS_Z_STATE] if hist_std.ndim == 2 and len(hist_std) else np.zeros(0)
+    names = list(getattr(_core.Aligner, "STATE_NAMES", []))
+    iz = names.index("gyro_bias_z") if "gyro_bias_z" in names else GYRO_BIAS_Z_STATE
+    z_std = hist_std[:, iz] if hist_std.ndim == 2 and len(hist_std) else np.zeros(0)
     return Alignment(
         run=log.name,
         site=site,
