@@ -311,12 +311,14 @@ def test_identify_command(fleet, model, tmp_path):
     assert doc["run"] == "run11" and doc["model_std_deg_h"] is None
     assert abs(doc["drift_deg_h"] - fleet[1][11]) < 3e-4
     assert set(doc) >= {"physics_drift_deg_h", "alignment_z_drift_deg_h", "alignment_z_drift_std_deg_h",
-                        "features", "loo_mae_deg_h"}
+                        "features", "training_error_deg_h"}
+    assert doc["training_error_kind"] == "loo_mae" and 0 < doc["training_error_deg_h"] < 3e-4
     assert (tmp_path / "alignment_z_sigma.png").read_bytes()[:8] == PNG_MAGIC
     r = CliRunner().invoke(identify_command, [str(fleet[0][11]), "--model", str(model[1]), "--quiet"])
     assert r.exit_code == 0
     assert "identified axial drift" in r.output and "model uncertainty: none" in r.output
     assert "alignment z estimate" in r.output and "physics inversion" in r.output
+    assert "error on its training runs (loo_mae)" in r.output
 
 
 def test_features_with_truth_on_a_long_log(long_log, tmp_path):

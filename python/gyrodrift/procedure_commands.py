@@ -196,7 +196,8 @@ def identify_command(log, model_path, lat0_deg, lon0_deg, height_m, out_dir, as_
     f = res.features
     click.echo(f"{res.run}: identified axial drift {res.drift_deg_h:.6f} deg/h (model {model_path})")
     click.echo(f"  model uncertainty: none ({res.uncertainty_note})"
-               + (f"; LOO MAE {res.loo_mae_deg_h:.2e} deg/h" if res.loo_mae_deg_h is not None else ""))
+               + (f"; error on its training runs ({res.training_error_kind}) {res.training_error_deg_h:.2e} deg/h"
+                  if res.training_error_deg_h is not None else ""))
     click.echo(f"  physics inversion of the 12 h latitude error ({f.lat_err_arcsec:.3f} arcsec): "
                f"{res.physics_drift_deg_h:.6f} deg/h")
     click.echo(f"  alignment z estimate: {res.alignment_z_drift_deg_h:.6f} +- {res.alignment_z_drift_std_deg_h:.6f} "

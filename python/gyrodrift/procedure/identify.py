@@ -5,7 +5,8 @@ over the 12 h) to the axial drift [deg/h], the total constant to subtract from t
 result carries the physics inversion of the same latitude error (`gyrodrift.baselines.physics_inversion`)
 and the alignment's own z-drift estimate with its 1-sigma. The LSSVR gives a point estimate only: it has
 no predictive uncertainty (``model_std_deg_h`` is None and ``uncertainty_note`` says so); its training
-leave-one-out residuals are reported as an empirical spread instead.
+error on its training runs (leave-one-out MAE when the fitted model is at hand, else the fitness its tuning
+reached, as stored in the model file) is reported as an empirical spread instead.
 """
 
 from __future__ import annotations
@@ -25,10 +26,7 @@ from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 
 __all__ = ["Identification", "identify", "NO_UNCERTAINTY_NOTE"]
 
-NO_UNCERTAINTY_NOTE = (
-    "the LSSVR model gives no predictive uncertainty (a point estimate); "
-    "loo_mae_deg_h is the mean absolute leave-one-out error on its training runs"
-)
+NO_UNCERTAINTY_NOTE = "the LSSVR gives a point estimate, no predictive uncertainty"
 
 
 @dataclass(frozen=True)
@@ -47,8 +45,12 @@ class Identification:
     model_std_deg_h : float or None
         Predictive 1-sigma of the model; None for the LSSVR (it has none).
     uncertainty_note : str
-    loo_mae_deg_h : float or None
-        Mean absolute closed-form leave-one-out residual of the model on its training runs [deg/h].
+    training_error_deg_h : float or None
+        The model's error on its training runs [deg/h]: the mean absolute closed-form leave-one-out residual
+        when the fitted estimator is at hand, else the best fitness of its tuning (model files keep no
+        factorisation); None when neither is known.
+    training_error_kind : str or None
+        ``"loo_mae"``, or the tuning objective (``"loo_mae"``, ``"train_mae"``, ``"kfold_mae"``).
     features : RunFeatures
     """
 
@@ -59,7 +61,8 @@ class Identification:
     alignment_z_drift_std_deg_h: float
     model_std_deg_h: float | None
     uncertainty_note: str
-    loo_mae_deg_h: float | None
+    training_error_deg_h: float | None
+    training_error_kind: str | None
     features: RunFeatures = field(repr=False)
 
     def to_dict(self) -> dict[str, Any]:
@@ -73,10 +76,21 @@ class Identification:
             "alignment_z_drift_std_deg_h": self.alignment_z_drift_std_deg_h,
             "model_std_deg_h": self.model_std_deg_h,
             "uncertainty_note": self.uncertainty_note,
-            "loo_mae_deg_h": self.loo_mae_deg_h,
+            "training_error_deg_h": self.training_error_deg_h,
+            "training_error_kind": self.training_error_kind,
             "features": {**f.row(), "lat_err_arcsec": f.lat_err_arcsec,
                          "lat_err_curve_arcsec": [float(x) for x in f.lat_err_curve_arcsec]},
         }
+
+
+def _training_error(model: DriftModel) -> tuple[float | None, str | None]:
+    try:
+        return float(np.mean(np.abs(model.loo_residuals()))), "loo_mae"
+    except AttributeError:  # loaded from a file: no Cholesky factor kept
+        pass
+    if model.tuning is not None:
+        return float(model.tuning.fitness), str(model.tuning.objective)
+    return None, None
 
 
 def identify(
@@ -116,10 +130,7 @@ def identify(
     table = features_run_table([features], source=str(log.path))
     drift = float(model.predict(table)[0])
     physics = float(physics_inversion(table, t_h=features.hours)[0])
-    try:
-        loo = float(np.mean(np.abs(model.loo_residuals())))
-    except (AttributeError, ValueError, np.linalg.LinAlgError):  # a model without usable training data
-        loo = None
+    err, kind = _training_error(model)
     al = features.alignment
     return Identification(
         run=features.run,
@@ -129,6 +140,7 @@ def identify(
         alignment_z_drift_std_deg_h=math.nan if al is None else al.z_drift_std_deg_h,
         model_std_deg_h=None,
         uncertainty_note=NO_UNCERTAINTY_NOTE,
-        loo_mae_deg_h=loo,
+        training_error_deg_h=err,
+        training_error_kind=kind,
         features=features,
     )
