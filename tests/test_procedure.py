@@ -145,6 +145,9 @@ def test_threaded_and_sequential_passes_are_identical(long_log, long_alignment):
     assert a.temperature == b.temperature and a.temperature.min_c < a.temperature.max_c
     assert len(a.curves[0].t_h) == 12 * 60 and a.curves[0].t_h[-1] == pytest.approx(12.0)
     assert a.curves[1].hourly_lat_err_arcsec[12] < a.curves[0].hourly_lat_err_arcsec[12]  # 0.002 of 0.003 removed
+    odd = navigate_after_alignment(log, long_alignment, [0.0], 1.0, decimation_s=7 * 60.0)
+    assert len(odd.curves[0].t_h) == 9 and odd.curves[0].t_h[-1] == pytest.approx(1.0)  # 8 x 7 min, then 1 h
+    assert odd.curves[0].lat_err_arcsec[-1] == pytest.approx(odd.curves[0].hourly_lat_err_arcsec[1], abs=1e-9)
 
 
 # ------------------------------------------------------------------------------------------------

@@ -37,7 +37,8 @@ class NavCurve:
     drift_deg_h : float
         z-gyro drift subtracted in this pass [deg/h].
     t_h : ndarray (m,)
-        Time since the start of navigation (end of alignment) [h], every ``decimation_s``.
+        Time since the start of navigation (end of alignment) [h], every ``decimation_s``, and the exact end
+        of the pass as the last value (also when it is not a multiple of ``decimation_s``).
     north_m, east_m : ndarray (m,)
         North and east position errors [m].
     lat_err_arcsec, lon_err_arcsec : ndarray (m,)
@@ -196,6 +197,13 @@ def navigate_after_alignment(
             bar.update(len(chunk))
     lat0 = alignment.site.lat_deg * DEG
     lon0 = alignment.site.lon_deg * DEG
+    t_h = np.arange(1, done // dec + 1) * dec / rate / HOUR
+    if done % dec:  # the curves always end with the exact last state (the "final" criterion's point)
+        t_h = np.append(t_h, done / rate / HOUR)
+        for i, nav in enumerate(navs):
+            st = nav.state()
+            lat_parts[i].append(np.array([float(st["lat_rad"])]))
+            lon_parts[i].append(np.array([float(st["lon_rad"])]))
     curves = []
     for i, d in enumerate(drifts_deg_h):
         lat = np.concatenate(lat_parts[i]) if lat_parts[i] else np.zeros(0)
@@ -205,7 +213,7 @@ def navigate_after_alignment(
         curves.append(
             NavCurve(
                 drift_deg_h=float(d),
-                t_h=np.arange(1, len(lat) + 1) * dec / rate / HOUR,
+                t_h=t_h,
                 north_m=pe["north_err_m"],
                 east_m=pe["east_err_m"],
                 lat_err_arcsec=pe["lat_err_arcsec"],
