@@ -5,15 +5,15 @@ the features use navigation hours 0-12, the true drift and the evaluation hours 
 
 Public API (plain functions returning dataclasses; the CLI in `gyrodrift.procedure_commands` wraps them)
 --------------------------------------------------------------------------------------------------------
-align_log(log, ...) -> Alignment
+align_log(log, ...) -> Alignment; write_alignment(alignment, out_dir)
 navigate_after_alignment(log, alignment, drifts_deg_h, hours, ...) -> PassResult
 extract_features(log, ..., with_truth=False) -> RunFeatures
-features_table(paths, ..., workers=None, scheduler=None) -> list[RunFeatures]; write_features_csv(...)
-find_true_drift(log, criterion="final", hours=72, ...) -> TrueDrift
+features_table(paths, ..., workers=None, scheduler=None) -> list[RunFeatures]; write_features_csv, write_curves_csv
+find_true_drift(log, criterion="final", hours=72, ...) -> TrueDrift; write_truth(truth, out_dir)
 evaluate_compensation(log, drift_deg_h, hours=72, ...) -> Evaluation; write_evaluation(ev, out_dir)
 identify(log, model, ...) -> Identification
 
-Logs are opened with `gyrodrift.logs.open_log` (Parquet or CSV, validated while streaming).
+Logs are opened with `gyrodrift.logs.open_log` (Parquet or CSV, validated while streaming). See docs/procedure.md.
 """
 
 from gyrodrift.procedure.align import Alignment, align_log, write_alignment
