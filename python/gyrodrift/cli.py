@@ -139,11 +139,13 @@ def reproduce(out_dir, seed, quiet):
 
 
 def _register_subcommands() -> None:
-    """Commands defined next to the functions they wrap (navigation in gyrodrift.ins)."""
+    """Commands defined next to the functions they wrap (gyrodrift.ins, gyrodrift.procedure)."""
     from gyrodrift.ins.commands import navigate_command, simulate_command
+    from gyrodrift.procedure_commands import evaluate_command, features_command, identify_command, truth_command
 
-    main.add_command(simulate_command)
-    main.add_command(navigate_command)
+    for command in (simulate_command, navigate_command, features_command, truth_command, evaluate_command,
+                    identify_command):
+        main.add_command(command)
 
 
 _register_subcommands()
