@@ -18,6 +18,8 @@ def test_paper_data_has_the_papers_split_and_values():
     t7 = d.test.select(d.test.run == "29")
     assert (t7.temp_min_c[0], t7.temp_max_c[0], t7.drift_deg_h[0]) == (40.0, 57.5, -0.00345)
     assert np.all(d.runs.lat0_deg == 28.222)
+    assert d.feature_names == ("lat_deg", "temp_min_c", "temp_max_c") and d.target_names == ("drift_deg_h",)
+    assert "Yu, Zhang, Xie, Long" in d.DESCR
     np.testing.assert_allclose(d.train.lat_err_arcsec[0], (28.2274 - 28.222) * 3600)
 
 

@@ -34,7 +34,8 @@ def load_paper() -> Bunch:
     -------
     Bunch with
         ``runs`` (RunTable, all 32), ``train`` and ``test`` (RunTable, 22 and 10 runs),
-        ``lat0_deg`` (28.222), ``DESCR``.
+        ``lat0_deg`` (28.222), ``feature_names`` (the raw input columns, before any encoding:
+        ``lat_deg``, ``temp_min_c``, ``temp_max_c``), ``target_names`` (``drift_deg_h``), ``DESCR``.
     """
     with resources.as_file(paper_csv_path()) as path:
         runs: RunTable = read_runs_csv(path, lat0_deg=PAPER_LAT0_DEG, require_truth=True)
@@ -43,5 +44,7 @@ def load_paper() -> Bunch:
         train=runs.select(runs.split == "train"),
         test=runs.select(runs.split == "test"),
         lat0_deg=PAPER_LAT0_DEG,
+        feature_names=("lat_deg", "temp_min_c", "temp_max_c"),
+        target_names=("drift_deg_h",),
         DESCR=PAPER_DESCR,
     )
