@@ -10,14 +10,18 @@
 3. The numpy `ReferenceNavigator` (python/gyrodrift/ins/reference_nav.py, the same equations, one sample
    per Python iteration) on the first `--reference-s` seconds of the same data.
 
-Prints samples/s of each, the ratio Rust / numpy, and the peak memory (resident set size from
-`resource.getrusage`, and the Python-heap peak from `tracemalloc` during the streamed run), which
-shows the run is never held whole in memory. Never fails on a slow machine: it only reports.
+Prints samples/s of each, the ratios Rust / numpy (navigator, and each simulator against the numpy
+navigator as a common yardstick) and against the issue's target of 20 M samples/s (72 h at 100 Hz in
+1.3 s), and the peak memory (resident set size from `resource.getrusage`, and the Python-heap peak from
+`tracemalloc` during the streamed run), which shows the run is never held whole in memory. Each simulator
+timing is the best of `--repeat` runs (default 1), since a shared machine only ever makes runs slower.
+Never fails on a slow machine: it only reports.
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import resource
 import sys
 import time
@@ -58,13 +62,21 @@ def _ideal_scenario(hours: float, rate_hz: float) -> Scenario:
     )
 
 
-def _time_simulator(scn: Scenario, chunk: int) -> tuple[int, float]:
-    sim = _core.ImuSimulator(scn.to_core_config())
-    t0 = time.perf_counter()
-    done = 0
-    while (c := sim.next_chunk(chunk)) is not None:
-        done += len(c["t_s"])
-    return done, time.perf_counter() - t0
+TARGET_SAMPLES_S = 20e6
+"""Issue 4: simulation and navigation each at least 20 M samples/s on one core."""
+
+
+def _time_simulator(scn: Scenario, chunk: int, repeat: int = 1) -> tuple[int, float]:
+    """Samples and the best wall time [s] of `repeat` streamed runs of the whole scenario."""
+    best = math.inf
+    for _ in range(repeat):
+        sim = _core.ImuSimulator(scn.to_core_config())
+        t0 = time.perf_counter()
+        done = 0
+        while (c := sim.next_chunk(chunk)) is not None:
+            done += len(c["t_s"])
+        best = min(best, time.perf_counter() - t0)
+    return done, best
 
 
 def _nav_config(s: Scenario) -> dict:
@@ -85,6 +97,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--rate-hz", type=float, default=100.0)
     ap.add_argument("--reference-s", type=float, default=60.0)
     ap.add_argument("--chunk", type=int, default=100_000)
+    ap.add_argument("--repeat", type=int, default=1, help="simulator runs to time; the best is reported")
     args = ap.parse_args(argv)
 
     scn = _scenario(args.hours, args.rate_hz)
@@ -93,10 +106,12 @@ def main(argv: list[str] | None = None) -> None:
     rss0 = _rss_mb()
 
     # 1. simulator alone
-    done, t_sim = _time_simulator(scn, args.chunk)
-    print(f"Rust ImuSimulator : {done / t_sim:14,.0f} samples/s   ({t_sim:.2f} s, paper-like noisy tilted sensor)")
-    done_i, t_ideal = _time_simulator(_ideal_scenario(args.hours, args.rate_hz), args.chunk)
-    print(f"Rust ImuSimulator : {done_i / t_ideal:14,.0f} samples/s   ({t_ideal:.2f} s, ideal level sensor)")
+    done, t_sim = _time_simulator(scn, args.chunk, args.repeat)
+    noisy_rate = done / t_sim
+    print(f"Rust ImuSimulator : {noisy_rate:14,.0f} samples/s   ({t_sim:.2f} s, paper-like noisy tilted sensor)")
+    done_i, t_ideal = _time_simulator(_ideal_scenario(args.hours, args.rate_hz), args.chunk, args.repeat)
+    ideal_rate = done_i / t_ideal
+    print(f"Rust ImuSimulator : {ideal_rate:14,.0f} samples/s   ({t_ideal:.2f} s, ideal level sensor)")
 
     # 2. navigator (simulate + navigate streamed; navigation timed around process only)
     tracemalloc.start()
@@ -129,6 +144,10 @@ def main(argv: list[str] | None = None) -> None:
     ref_rate = len(c["t_s"]) / t_ref
     print(f"numpy reference   : {ref_rate:14,.0f} samples/s   ({t_ref:.2f} s for {args.reference_s:g} s of data)")
     print(f"ratio Rust/numpy  : {rust_rate / ref_rate:14,.0f} x (navigator)")
+    print(f"ratio Rust/numpy  : {noisy_rate / ref_rate:14,.0f} x (noisy simulator against the numpy navigator)")
+    print(f"ratio Rust/numpy  : {ideal_rate / ref_rate:14,.0f} x (ideal simulator against the numpy navigator)")
+    for name, rate in (("navigator", rust_rate), ("noisy simulator", noisy_rate), ("ideal simulator", ideal_rate)):
+        print(f"vs 20 M/s target  : {rate / TARGET_SAMPLES_S:14.2f} x ({name}; {n:,} samples in {n / rate:.2f} s)")
 
 
 if __name__ == "__main__":

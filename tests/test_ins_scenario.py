@@ -34,7 +34,7 @@ def test_empty_file_gives_the_documented_defaults(tmp_path):
 def test_indexing_dwell_defaults_to_300_s(tmp_path):
     s = load_scenario(write(tmp_path, '[rotation]\nscheme = "indexing"\n'))
     assert s.rotation.dwell_s == 300.0
-    assert s.rotation.positions_deg == (0.0, 180.0, 90.0, 270.0)
+    assert s.rotation.positions_deg == (0.0, 90.0, 180.0, 270.0, 360.0, 270.0, 180.0, 90.0)
 
 
 def test_scenario_is_frozen():

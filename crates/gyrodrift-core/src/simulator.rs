@@ -15,7 +15,8 @@
 //! These are the integrals a real gyro and accelerometer deliver, so the navigator's coning, sculling and
 //! rotation compensations reproduce zero velocity: nothing is sampled at a single instant.
 //!
-//! The error model (`imu_error`) is then applied; the temperature drift uses the temperature and its rate
+//! The error model (`imu_error`) is then applied (its deterministic terms per sample, its random terms in a
+//! second pass over blocks of samples, in the same draw order); the temperature drift uses the temperature and its rate
 //! at the middle of the sample. Output times are the end times t_k. Streaming: `next_chunk` produces the next
 //! samples into reusable buffers and keeps all state, so a run of any length uses constant memory.
 
@@ -151,6 +152,32 @@ fn tau_decay(p: &TemperatureProfile, dt: f64) -> f64 {
     }
 }
 
+/// Constants of a sample during which the table turns at a constant rate w (cruise or dwell): with
+/// d_lo, d_hi = w dt x (Gauss-Legendre nodes) and D = w dt,
+///     Ic = a cos(alpha0) - b sin(alpha0),  Is = a sin(alpha0) + b cos(alpha0),
+///     a = dt/2 (cos d_lo + cos d_hi),  b = dt/2 (sin d_lo + sin d_hi),
+/// and (sin, cos)(alpha0 + D) by the addition theorem: no per-sample table evaluation at the nodes and no
+/// series. Same quadrature as the general path, so the same increments to rounding (1e-16 relative).
+#[derive(Clone, Copy, Debug)]
+struct Uniform {
+    rate: f64,
+    /// Absolute end time of the uniform segment [s] (-inf: none cached).
+    end: f64,
+    a: f64,
+    b: f64,
+    sin_d: f64,
+    cos_d: f64,
+}
+
+impl Uniform {
+    fn new(rate: f64, dt: f64, end: f64) -> Self {
+        let (s_lo, c_lo) = (rate * GL2_LO * dt).sin_cos();
+        let (s_hi, c_hi) = (rate * GL2_HI * dt).sin_cos();
+        let (sin_d, cos_d) = (rate * dt).sin_cos();
+        Uniform { rate, end, a: 0.5 * dt * (c_lo + c_hi), b: 0.5 * dt * (s_lo + s_hi), sin_d, cos_d }
+    }
+}
+
 /// The simulator (see the module docs).
 #[derive(Clone, Debug)]
 pub struct ImuSimulator {
@@ -172,6 +199,10 @@ pub struct ImuSimulator {
     alpha: f64,
     sin_alpha: f64,
     cos_alpha: f64,
+    /// Rotation constants of the current constant-rate table segment.
+    uniform: Uniform,
+    /// 1 / C_b^n[2][2] (= 1 / (cos pitch0 cos roll0), unchanged by the table rotation).
+    inv_c22: f64,
     /// (sin, cos) of the initial yaw.
     sincos_yaw0: (f64, f64),
     /// Warm-up recurrence: exp(-t_k / tau) at the last sample, exp(-dt / tau), exp(-dt / (2 tau)).
@@ -205,6 +236,8 @@ impl ImuSimulator {
             alpha: 0.0,
             sin_alpha: 0.0,
             cos_alpha: 1.0,
+            uniform: Uniform { end: f64::NEG_INFINITY, ..Uniform::new(f64::NAN, dt, 0.0) },
+            inv_c22: 1.0 / c_b0n[2][2],
             decay: 1.0,
             decay_step: tau_decay(&cfg.temperature, dt),
             decay_half: tau_decay(&cfg.temperature, 0.5 * dt),
@@ -247,6 +280,22 @@ impl ImuSimulator {
         }
         let alpha0 = self.alpha;
         let (s0, c0) = (self.sin_alpha, self.cos_alpha);
+        if t1 <= self.uniform.end || self.enter_uniform(t0, t1) {
+            // Constant table rate over the whole sample: the node and end angles are alpha0 plus fixed
+            // offsets, so their sines and cosines follow from (s0, c0) by fixed rotations (see `Uniform`).
+            let alpha1 = self.table.state_at(&mut self.cursor, t1).angle;
+            let w = &self.uniform;
+            let ic = w.a * c0 - w.b * s0;
+            let is = w.a * s0 + w.b * c0;
+            let (s1, c1) = if k % SINCOS_RESYNC == 0 { alpha1.sin_cos() } else { (s0 * w.cos_d + c0 * w.sin_d, c0 * w.cos_d - s0 * w.sin_d) };
+            self.alpha = alpha1;
+            self.sin_alpha = s1;
+            self.cos_alpha = c1;
+            return (
+                [ic * u[0] + is * u[1], -is * u[0] + ic * u[1], u[2] * dt + (alpha1 - alpha0)],
+                [ic * a[0] + is * a[1], -is * a[0] + ic * a[1], a[2] * dt],
+            );
+        }
         let a_lo = self.table.state_at(&mut self.cursor, t0 + GL2_LO * dt).angle;
         let a_hi = self.table.state_at(&mut self.cursor, t0 + GL2_HI * dt).angle;
         let alpha1 = self.table.state_at(&mut self.cursor, t1).angle;
@@ -264,6 +313,23 @@ impl ImuSimulator {
             [ic * u[0] + is * u[1], -is * u[0] + ic * u[1], u[2] * dt + (alpha1 - alpha0)],
             [ic * a[0] + is * a[1], -is * a[0] + ic * a[1], a[2] * dt],
         )
+    }
+
+    /// Look up the table segment holding t0; if it turns at a constant rate, cache the rotation constants of
+    /// that rate (recomputed only when the rate changes) and the segment's end. Returns true if the sample
+    /// [t0, t1] lies within it.
+    #[cold]
+    fn enter_uniform(&mut self, t0: f64, t1: f64) -> bool {
+        match self.table.uniform_at(&mut self.cursor, t0) {
+            Some((rate, end)) => {
+                if rate != self.uniform.rate {
+                    self.uniform = Uniform::new(rate, self.dt, end);
+                }
+                self.uniform.end = end;
+                t1 <= end
+            }
+            None => false,
+        }
     }
 
     /// Temperature [deg C] at t_k and, if needed, temperature and rate at the middle of the sample.
@@ -294,12 +360,11 @@ impl ImuSimulator {
         }
     }
 
-    /// Euler angles of C_b^n = C_b0^n Rz(alpha) from the sine and cosine of alpha already known.
+    /// Euler angles of C_b^n = C_b0^n Rz(alpha) from the sine `s` and cosine `c` of alpha already known.
     /// Same values as `dcm_to_euler` (to ~1e-16 rad); for tilts below ~5.7 deg the small angles (pitch, roll,
     /// and yaw relative to yaw0 + alpha) come from short series instead of libm asin/atan2.
     #[inline]
-    fn true_attitude_tilted(&self, alpha: f64) -> Euler {
-        let (s, c) = (self.sin_alpha, self.cos_alpha);
+    fn true_attitude_tilted(&self, alpha: f64, s: f64, c: f64) -> Euler {
         let b = &self.c_b0n;
         let c20 = b[2][0] * c + b[2][1] * s;
         let c21 = -b[2][0] * s + b[2][1] * c;
@@ -311,7 +376,7 @@ impl ImuSimulator {
             return dcm_to_euler(&mat_mul(b, &rz));
         }
         let pitch = asin_small(c21);
-        let roll = atan_small(-c20 / c22);
+        let roll = atan_small(-c20 * self.inv_c22);
         // yaw = yaw_hat + atan2(x, y) with yaw_hat = yaw0 + alpha and (x, y) = cos(pitch) (sin, cos)(yaw - yaw_hat).
         let (sy0, cy0) = self.sincos_yaw0;
         let (sh, ch) = (sy0 * c + cy0 * s, cy0 * c - sy0 * s);
@@ -356,36 +421,61 @@ impl ImuSimulator {
         assert!(out.dtheta.len() >= 3 * m && out.dv.len() >= 3 * m, "dtheta/dv buffers too short");
         assert!([out.temp_c.len(), out.table_angle.len(), out.pitch.len(), out.roll.len(), out.yaw.len()].iter().all(|&l| l >= m), "buffers too short");
         let temp_drift = self.errors.params().has_temperature_drift();
-        let yaw0 = self.cfg.attitude.yaw;
         let rate = self.cfg.rate_hz;
         let mut t0 = self.k as f64 / rate;
-        for i in 0..m {
-            let k = self.k + 1;
-            let t1 = k as f64 / rate;
-            let (mut dth, mut dv) = self.true_increments(k, t0, t1);
-            let (temp, (temp_mid, rate_mid)) = self.temperature(k, t1, temp_drift);
-            let drift = if temp_drift { self.errors.params().axial_drift(temp_mid, rate_mid) } else { 0.0 };
-            self.errors.apply(drift, &mut dth, &mut dv);
-            let alpha1 = self.alpha;
-            out.t_s[i] = t1;
-            t0 = t1;
-            out.dtheta[3 * i..3 * i + 3].copy_from_slice(&dth);
-            out.dv[3 * i..3 * i + 3].copy_from_slice(&dv);
-            out.temp_c[i] = temp;
-            out.table_angle[i] = alpha1;
-            let e = if self.level {
-                Euler { pitch: 0.0, roll: 0.0, yaw: wrap_pi_fast(yaw0 + alpha1) }
-            } else {
-                self.true_attitude_tilted(alpha1)
-            };
-            out.pitch[i] = e.pitch;
-            out.roll[i] = e.roll;
-            out.yaw[i] = e.yaw;
-            self.k = k;
+        // Blocks that stay in cache: the first pass produces the increments and parks sin/cos of the table
+        // angle in the pitch/roll outputs; the second turns them into the attitude. The second pass has no
+        // dependence between samples, so the processor overlaps its long polynomial chains.
+        for start in (0..m).step_by(ATTITUDE_BLOCK) {
+            let end = (start + ATTITUDE_BLOCK).min(m);
+            for i in start..end {
+                let k = self.k + 1;
+                let t1 = k as f64 / rate;
+                let (mut dth, mut dv) = self.true_increments(k, t0, t1);
+                let (temp, (temp_mid, rate_mid)) = self.temperature(k, t1, temp_drift);
+                let drift = if temp_drift { self.errors.params().axial_drift(temp_mid, rate_mid) } else { 0.0 };
+                self.errors.apply_deterministic(drift, &mut dth, &mut dv);
+                out.t_s[i] = t1;
+                t0 = t1;
+                out.dtheta[3 * i..3 * i + 3].copy_from_slice(&dth);
+                out.dv[3 * i..3 * i + 3].copy_from_slice(&dv);
+                out.temp_c[i] = temp;
+                out.table_angle[i] = self.alpha;
+                out.pitch[i] = self.sin_alpha;
+                out.roll[i] = self.cos_alpha;
+                self.k = k;
+            }
+            // Third pass: the random terms, a tight loop around the generator.
+            self.errors.add_noise(&mut out.dtheta[3 * start..3 * end], &mut out.dv[3 * start..3 * end]);
+            self.attitudes(&out.table_angle[start..end], &mut out.pitch[start..end], &mut out.roll[start..end], &mut out.yaw[start..end]);
         }
         m
     }
+
+    /// Second pass of `fill`: on entry `pitch`, `roll` hold sin and cos of the table angle; on exit the
+    /// true attitude [rad].
+    #[inline]
+    fn attitudes(&self, alpha: &[f64], pitch: &mut [f64], roll: &mut [f64], yaw: &mut [f64]) {
+        let yaw0 = self.cfg.attitude.yaw;
+        if self.level {
+            for i in 0..alpha.len() {
+                pitch[i] = 0.0;
+                roll[i] = 0.0;
+                yaw[i] = wrap_pi_fast(yaw0 + alpha[i]);
+            }
+        } else {
+            for i in 0..alpha.len() {
+                let e = self.true_attitude_tilted(alpha[i], pitch[i], roll[i]);
+                pitch[i] = e.pitch;
+                roll[i] = e.roll;
+                yaw[i] = e.yaw;
+            }
+        }
+    }
 }
+
+/// Samples per block of the two passes of `fill`.
+const ATTITUDE_BLOCK: usize = 512;
 
 /// Samples between exact evaluations of recurrences (table sine/cosine, warm-up exponential).
 const SINCOS_RESYNC: u64 = 256;
@@ -417,6 +507,15 @@ fn atan_small(x: f64) -> f64 {
         return x.atan();
     }
     let x2 = x * x;
+    if x2 < 1e-6 {
+        // |x| < 1e-3 (the yaw correction, second order in the tilt): to x^7, truncation x^8 / 9 < 1.2e-25.
+        return x * (1.0 - x2 * ((1.0 / 3.0) - x2 * ((1.0 / 5.0) - x2 * (1.0 / 7.0))));
+    }
+    if x2 < 4e-4 {
+        // |x| < 0.02 (the usual tilt, and the yaw correction, which is second order in the tilt): to x^11,
+        // truncation x^12 / 13 < 3.2e-22 relative.
+        return x * (1.0 - x2 * ((1.0 / 3.0) - x2 * ((1.0 / 5.0) - x2 * ((1.0 / 7.0) - x2 * ((1.0 / 9.0) - x2 * (1.0 / 11.0))))));
+    }
     x * (1.0
         - x2 * ((1.0 / 3.0)
             - x2 * ((1.0 / 5.0)
@@ -430,6 +529,10 @@ fn asin_small(x: f64) -> f64 {
         return x.asin();
     }
     let x2 = x * x;
+    if x2 < 4e-4 {
+        // |x| < 0.02: to x^11, truncation below 231/13312 x^12 < 3e-23 relative.
+        return x * (1.0 + x2 * ((1.0 / 6.0) + x2 * ((3.0 / 40.0) + x2 * ((5.0 / 112.0) + x2 * ((35.0 / 1152.0) + x2 * (63.0 / 2816.0))))));
+    }
     x * (1.0
         + x2 * ((1.0 / 6.0)
             + x2 * ((3.0 / 40.0)
@@ -567,6 +670,39 @@ mod tests {
                 assert!((ch.roll[k] - e.roll).abs() < 1e-13, "roll {k}");
                 let dy = (ch.yaw[k] - e.yaw).abs();
                 assert!(dy.min((dy - 2.0 * std::f64::consts::PI).abs()) < 1e-13, "yaw {k}: {} {}", ch.yaw[k], e.yaw);
+            }
+        }
+    }
+
+    #[test]
+    fn constant_rate_shortcut_matches_direct_quadrature_late_in_a_long_run() {
+        // Cruise and dwell samples take the constant-rate path (fixed rotations of sin/cos, resynchronised
+        // every SINCOS_RESYNC samples); compare with the two-point quadrature from libm sin/cos at the nodes.
+        for scheme in [
+            RotationScheme::Continuous { rate: 1.0, accel: 2.0 },
+            RotationScheme::Indexing { rate: 0.5, accel: 1.0, positions: vec![0.0, 1.0, 2.5], dwell: 3.0 },
+        ] {
+            let cfg = ImuSimulatorConfig { rate_hz: 100.0, duration_s: 2000.0, attitude: Euler { pitch: 0.01, roll: 0.02, yaw: 1.0 }, scheme, ..Default::default() };
+            let mut sim = ImuSimulator::new(cfg.clone()).unwrap();
+            let mut ch = ImuChunk::default();
+            let mut first = 0usize;
+            while sim.next_chunk(30_000, &mut ch) == 30_000 && sim.samples_done() < 180_000 {
+                first += 30_000;
+            }
+            let c_b0n = euler_to_dcm(cfg.attitude);
+            let u = mat_t_vec(&c_b0n, earth::earth_rate_enu(cfg.lat));
+            let table = Turntable::new(cfg.scheme.clone()).unwrap();
+            let dt = 0.01;
+            for i in (0..ch.len()).step_by(97) {
+                let t0 = (first + i) as f64 * dt;
+                let (a_lo, a_hi) = (table.angle(t0 + GL2_LO * dt), table.angle(t0 + GL2_HI * dt));
+                let ic = 0.5 * dt * (a_lo.cos() + a_hi.cos());
+                let is = 0.5 * dt * (a_lo.sin() + a_hi.sin());
+                let ex = [ic * u[0] + is * u[1], -is * u[0] + ic * u[1]];
+                for j in 0..2 {
+                    assert!((ch.dtheta[3 * i + j] - ex[j]).abs() < 1e-18, "{i} {j}: {} vs {}", ch.dtheta[3 * i + j], ex[j]);
+                }
+                assert!((ch.table_angle[i] - table.angle(t0 + dt)).abs() < 1e-9);
             }
         }
     }

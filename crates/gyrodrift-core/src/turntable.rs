@@ -338,6 +338,23 @@ impl Turntable {
         }
     }
 
+    /// If the segment holding time t (found through `cursor`, as in [`Turntable::state_at`]) turns at a
+    /// constant rate (a cruise, a dwell, or the whole of `None`), that rate [rad/s] and the absolute time
+    /// [s] at which the segment ends; `None` during ramps. Lets a caller reuse per-sample trigonometry.
+    #[inline]
+    pub fn uniform_at(&self, cursor: &mut TableCursor, t: f64) -> Option<(f64, f64)> {
+        if self.segments.is_empty() {
+            return Some((0.0, f64::INFINITY));
+        }
+        self.state_at(cursor, t);
+        let s = &self.segments[cursor.seg];
+        match s.kind {
+            Kind::Cruise { rate } => Some((rate, cursor.base + s.t0 + s.duration)),
+            Kind::Dwell => Some((0.0, cursor.base + s.t0 + s.duration)),
+            _ => None,
+        }
+    }
+
     /// Angle [rad] at time t [s].
     #[inline]
     pub fn angle(&self, t: f64) -> f64 {

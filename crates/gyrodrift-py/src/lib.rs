@@ -10,7 +10,7 @@ use gyrodrift_core::imu_error::ImuErrorParams;
 use gyrodrift_core::simulator::{ImuChunkSlices, ImuSimulator as CoreSimulator, ImuSimulatorConfig};
 use gyrodrift_core::strapdown::{NavState, Navigator as CoreNavigator, NavigatorConfig, Vertical};
 use gyrodrift_core::temperature::TemperatureProfile;
-use gyrodrift_core::turntable::{ParamError, RotationScheme};
+use gyrodrift_core::turntable::{balanced_reciprocating_span, ParamError, RotationScheme};
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -104,6 +104,13 @@ impl<'py> Config<'py> {
         }
     }
 
+    fn bool_or(&self, key: &str, default: bool) -> PyResult<bool> {
+        match self.map.get(key) {
+            None => Ok(default),
+            Some(v) => v.cast::<pyo3::types::PyBool>().map(|b| b.is_true()).map_err(|_| PyValueError::new_err(format!("{key}: must be a bool, got {v}"))),
+        }
+    }
+
     fn str_or(&self, key: &str, default: &str) -> PyResult<String> {
         match self.map.get(key) {
             None => Ok(default.to_string()),
@@ -114,7 +121,8 @@ impl<'py> Config<'py> {
 
 const SIM_KEYS: &[&str] = &[
     "lat_rad", "lon_rad", "height_m", "rate_hz", "duration_s", "seed", "pitch_rad", "roll_rad", "yaw_rad",
-    "rotation_scheme", "rotation_rate_rad_s", "rotation_accel_rad_s2", "reciprocating_span_rad", "positions_rad",
+    "rotation_scheme", "rotation_rate_rad_s", "rotation_accel_rad_s2", "reciprocating_span_rad",
+    "reciprocating_balanced", "positions_rad",
     "dwell_s", "gyro_bias_rad_s", "gyro_arw_rad_rts", "gyro_bias_instability_rad_s", "gyro_correlation_s",
     "gyro_rrw_rad_s_rts", "gyro_scale", "gyro_misalignment_rad", "accel_bias_m_s2", "accel_vrw_m_s_rts",
     "accel_scale", "temp_start_c", "temp_end_c", "temp_tau_s", "temp_series_t_s", "temp_series_c", "drift_t0_c",
@@ -140,16 +148,24 @@ fn sim_config(d: &Bound<'_, PyDict>) -> PyResult<ImuSimulatorConfig> {
     let scheme = match scheme_name.as_str() {
         "none" => RotationScheme::None,
         "continuous" => RotationScheme::Continuous { rate, accel },
-        "reciprocating" => RotationScheme::Reciprocating {
-            rate,
-            accel,
-            span: c.f64_or("reciprocating_span_rad", 2.0 * PI)?,
-            dwell,
-        },
+        "reciprocating" => {
+            let span = c.f64_or("reciprocating_span_rad", 2.0 * PI)?;
+            let span = if c.bool_or("reciprocating_balanced", false)? {
+                if !(span.is_finite() && span > 0.0 && span <= 1000.0) {
+                    return Err(PyValueError::new_err(format!("reciprocating_span_rad: must be positive and finite, got {span}")));
+                }
+                let turns = (span / (2.0 * PI)).round().max(1.0) as u32;
+                balanced_reciprocating_span(rate, accel, dwell, turns).map_err(param_err)?
+            } else {
+                span
+            };
+            RotationScheme::Reciprocating { rate, accel, span, dwell }
+        }
         "indexing" => RotationScheme::Indexing {
             rate,
             accel,
-            positions: c.list_opt("positions_rad")?.unwrap_or_else(|| vec![0.0, 0.5 * PI, PI, 1.5 * PI]),
+            // The 8-step order cancels exactly (see the contract's modulation residual).
+            positions: c.list_opt("positions_rad")?.unwrap_or_else(|| vec![0.0, 0.5 * PI, PI, 1.5 * PI, 2.0 * PI, 1.5 * PI, PI, 0.5 * PI]),
             dwell,
         },
         other => {
@@ -208,11 +224,102 @@ fn sim_config(d: &Bound<'_, PyDict>) -> PyResult<ImuSimulatorConfig> {
     })
 }
 
+/// The eight output arrays of one `ImuSimulator.next_chunk` call.
+struct ChunkArrays {
+    t_s: Py<PyArray1<f64>>,
+    dtheta: Py<PyArray2<f64>>,
+    dv: Py<PyArray2<f64>>,
+    temp_c: Py<PyArray1<f64>>,
+    table: Py<PyArray1<f64>>,
+    pitch: Py<PyArray1<f64>>,
+    roll: Py<PyArray1<f64>>,
+    yaw: Py<PyArray1<f64>>,
+}
+
+/// Only the pool refers to `obj` (no dict, variable, view or buffer export of it is alive in Python).
+fn sole_owner<T>(obj: &Py<T>) -> bool {
+    // SAFETY: the pointer is a valid object kept alive by `obj`; called with the GIL held.
+    unsafe { pyo3::ffi::Py_REFCNT(obj.as_ptr()) == 1 }
+}
+
+impl ChunkArrays {
+    /// Fresh uninitialised arrays of m samples (every element is written by `fill` before Python sees it).
+    fn new(py: Python<'_>, m: usize) -> Self {
+        // SAFETY: see above; f64 has no invalid bit patterns.
+        unsafe {
+            ChunkArrays {
+                t_s: PyArray1::<f64>::new(py, m, false).unbind(),
+                dtheta: PyArray2::<f64>::new(py, [m, 3], false).unbind(),
+                dv: PyArray2::<f64>::new(py, [m, 3], false).unbind(),
+                temp_c: PyArray1::<f64>::new(py, m, false).unbind(),
+                table: PyArray1::<f64>::new(py, m, false).unbind(),
+                pitch: PyArray1::<f64>::new(py, m, false).unbind(),
+                roll: PyArray1::<f64>::new(py, m, false).unbind(),
+                yaw: PyArray1::<f64>::new(py, m, false).unbind(),
+            }
+        }
+    }
+
+    fn clone_ref(&self, py: Python<'_>) -> Self {
+        ChunkArrays {
+            t_s: self.t_s.clone_ref(py),
+            dtheta: self.dtheta.clone_ref(py),
+            dv: self.dv.clone_ref(py),
+            temp_c: self.temp_c.clone_ref(py),
+            table: self.table.clone_ref(py),
+            pitch: self.pitch.clone_ref(py),
+            roll: self.roll.clone_ref(py),
+            yaw: self.yaw.clone_ref(py),
+        }
+    }
+
+    /// True if these arrays were handed out before, Python has dropped every reference to them, and they
+    /// still have m samples, C order and write access: they can be filled again without anyone noticing.
+    fn reusable(&self, py: Python<'_>, m: usize) -> bool {
+        let ones = [&self.t_s, &self.temp_c, &self.table, &self.pitch, &self.roll, &self.yaw];
+        let twos = [&self.dtheta, &self.dv];
+        ones.iter().all(|a| sole_owner(a) && a.bind(py).shape() == [m] && a.bind(py).is_c_contiguous())
+            && twos.iter().all(|a| sole_owner(a) && a.bind(py).shape() == [m, 3] && a.bind(py).is_c_contiguous())
+            && ones.iter().all(|a| a.bind(py).try_readwrite().is_ok())
+            && twos.iter().all(|a| a.bind(py).try_readwrite().is_ok())
+    }
+
+    /// Fill the arrays with the next samples of `sim` (GIL released while simulating).
+    fn fill(&self, py: Python<'_>, sim: &mut CoreSimulator) -> PyResult<usize> {
+        let ones = [&self.t_s, &self.temp_c, &self.table, &self.pitch, &self.roll, &self.yaw].map(|a| a.bind(py).clone());
+        let mut w1 = Vec::with_capacity(6);
+        for a in &ones {
+            w1.push(a.try_readwrite().map_err(|e| PyValueError::new_err(e.to_string()))?);
+        }
+        let (dtheta, dv) = (self.dtheta.bind(py), self.dv.bind(py));
+        let mut w_dtheta = dtheta.try_readwrite().map_err(|e| PyValueError::new_err(e.to_string()))?;
+        let mut w_dv = dv.try_readwrite().map_err(|e| PyValueError::new_err(e.to_string()))?;
+        let [b_t, b_temp, b_table, b_pitch, b_roll, b_yaw] = &mut w1[..] else { unreachable!() };
+        let out = ImuChunkSlices {
+            t_s: b_t.as_slice_mut()?,
+            dtheta: w_dtheta.as_slice_mut()?,
+            dv: w_dv.as_slice_mut()?,
+            temp_c: b_temp.as_slice_mut()?,
+            table_angle: b_table.as_slice_mut()?,
+            pitch: b_pitch.as_slice_mut()?,
+            roll: b_roll.as_slice_mut()?,
+            yaw: b_yaw.as_slice_mut()?,
+        };
+        Ok(py.detach(|| sim.fill(out)))
+    }
+}
+
+/// Chunks kept for reuse: the typical loop `while (c := sim.next_chunk(n)) is not None` still holds the
+/// previous chunk during the call, so the one before it is the first that can be free.
+const CHUNK_POOL: usize = 2;
+
 /// Static-base IMU simulator with a single-axis turntable (see gyrodrift-core `simulator`).
 /// `ImuSimulator(config: dict)` with SI floats; `next_chunk(n)` streams the run.
 #[pyclass(module = "gyrodrift._core")]
 struct ImuSimulator {
     inner: CoreSimulator,
+    /// The arrays of the last chunks handed out, refilled once Python has dropped them (see `next_chunk`).
+    pool: Vec<ChunkArrays>,
 }
 
 #[pymethods]
@@ -220,7 +327,7 @@ impl ImuSimulator {
     #[new]
     fn new(config: &Bound<'_, PyDict>) -> PyResult<Self> {
         let cfg = sim_config(config)?;
-        Ok(ImuSimulator { inner: CoreSimulator::new(cfg).map_err(param_err)? })
+        Ok(ImuSimulator { inner: CoreSimulator::new(cfg).map_err(param_err)?, pool: Vec::new() })
     }
 
     /// Total number of samples of the run (round(duration_s * rate_hz)).
@@ -235,6 +342,25 @@ impl ImuSimulator {
         self.inner.samples_done()
     }
 
+    /// Fraction of a body-fixed horizontal sensor error that the rotation scheme leaves un-modulated:
+    /// the magnitude of the time average of (cos, sin) of the table angle over one period (1 without
+    /// rotation, 0 for continuous rotation). The navigation error of a horizontal bias scales with it.
+    #[getter]
+    fn modulation_residual(&self) -> f64 {
+        let (c, s) = self.inner.turntable().modulation_residual();
+        c.hypot(s)
+    }
+
+    /// Reciprocating span actually used [rad] (the balanced span when `reciprocating_span_rad` is
+    /// "balanced"); None for the other schemes.
+    #[getter]
+    fn reciprocating_span_rad(&self) -> Option<f64> {
+        match self.inner.config().scheme {
+            RotationScheme::Reciprocating { span, .. } => Some(span),
+            _ => None,
+        }
+    }
+
     /// The next at most `n` samples as a dict of numpy arrays, or None when the run is over.
     fn next_chunk<'py>(&mut self, py: Python<'py>, n: usize) -> PyResult<Option<Bound<'py, PyDict>>> {
         if n == 0 {
@@ -244,58 +370,29 @@ impl ImuSimulator {
         if m == 0 {
             return Ok(None);
         }
-        // The simulator writes straight into fresh numpy arrays (no intermediate copy). They are created
-        // uninitialised: zeroed (calloc'd) arrays cost a page fault per 4 kB on every chunk, while malloc'd
-        // memory is recycled by the allocator.
-        // SAFETY: every element of every array is written by `fill` below before the arrays reach Python
-        // (`fill` writes exactly m samples, m <= remaining, into buffers of exactly m samples), and f64 has
-        // no invalid bit patterns.
-        let (t_s, dtheta, dv, temp_c, table, pitch, roll, yaw) = unsafe {
-            (
-                PyArray1::<f64>::new(py, m, false),
-                PyArray2::<f64>::new(py, [m, 3], false),
-                PyArray2::<f64>::new(py, [m, 3], false),
-                PyArray1::<f64>::new(py, m, false),
-                PyArray1::<f64>::new(py, m, false),
-                PyArray1::<f64>::new(py, m, false),
-                PyArray1::<f64>::new(py, m, false),
-                PyArray1::<f64>::new(py, m, false),
-            )
+        // The simulator writes straight into numpy arrays (no intermediate copy). Arrays of an earlier chunk
+        // that Python no longer references are refilled; fresh ones would cost a page fault per 4 kB (their
+        // memory comes from mmap at these sizes). Fresh arrays are created uninitialised: `fill` writes every
+        // element of m samples (m <= remaining) before they reach Python.
+        let arrays = match self.pool.iter().position(|a| a.reusable(py, m)) {
+            Some(i) => self.pool.remove(i),
+            None => ChunkArrays::new(py, m),
         };
-        {
-            let mut bufs = [
-                t_s.readwrite(),
-                temp_c.readwrite(),
-                table.readwrite(),
-                pitch.readwrite(),
-                roll.readwrite(),
-                yaw.readwrite(),
-            ];
-            let (mut w_dtheta, mut w_dv) = (dtheta.readwrite(), dv.readwrite());
-            let [b_t, b_temp, b_table, b_pitch, b_roll, b_yaw] = &mut bufs;
-            let out = ImuChunkSlices {
-                t_s: b_t.as_slice_mut()?,
-                dtheta: w_dtheta.as_slice_mut()?,
-                dv: w_dv.as_slice_mut()?,
-                temp_c: b_temp.as_slice_mut()?,
-                table_angle: b_table.as_slice_mut()?,
-                pitch: b_pitch.as_slice_mut()?,
-                roll: b_roll.as_slice_mut()?,
-                yaw: b_yaw.as_slice_mut()?,
-            };
-            let inner = &mut self.inner;
-            let written = py.detach(|| inner.fill(out));
-            debug_assert_eq!(written, m);
-        }
+        let written = arrays.fill(py, &mut self.inner)?;
+        debug_assert_eq!(written, m);
         let d = PyDict::new(py);
-        d.set_item("t_s", t_s)?;
-        d.set_item("dtheta_rad", dtheta)?;
-        d.set_item("dv_m_s", dv)?;
-        d.set_item("temp_c", temp_c)?;
-        d.set_item("table_angle_rad", table)?;
-        d.set_item("pitch_rad", pitch)?;
-        d.set_item("roll_rad", roll)?;
-        d.set_item("yaw_rad", yaw)?;
+        d.set_item("t_s", arrays.t_s.bind(py))?;
+        d.set_item("dtheta_rad", arrays.dtheta.bind(py))?;
+        d.set_item("dv_m_s", arrays.dv.bind(py))?;
+        d.set_item("temp_c", arrays.temp_c.bind(py))?;
+        d.set_item("table_angle_rad", arrays.table.bind(py))?;
+        d.set_item("pitch_rad", arrays.pitch.bind(py))?;
+        d.set_item("roll_rad", arrays.roll.bind(py))?;
+        d.set_item("yaw_rad", arrays.yaw.bind(py))?;
+        if self.pool.len() >= CHUNK_POOL {
+            self.pool.remove(0);
+        }
+        self.pool.push(arrays.clone_ref(py));
         Ok(Some(d))
     }
 }
@@ -464,6 +561,15 @@ impl Navigator {
     }
 }
 
+/// The reciprocating span [rad] near `turns` full turns whose reversal ramps leave no un-modulated
+/// residual (see gyrodrift-core `turntable::balanced_reciprocating_span`): rate [rad/s], accel [rad/s^2],
+/// dwell [s]. ValueError naming the key when no such span lies within half a turn below.
+#[pyfunction]
+#[pyo3(signature = (rotation_rate_rad_s, rotation_accel_rad_s2, dwell_s = 0.0, turns = 1))]
+fn balanced_reciprocating_span_rad(rotation_rate_rad_s: f64, rotation_accel_rad_s2: f64, dwell_s: f64, turns: u32) -> PyResult<f64> {
+    balanced_reciprocating_span(rotation_rate_rad_s, rotation_accel_rad_s2, dwell_s, turns).map_err(param_err)
+}
+
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("WGS84_A_M", earth::A)?;
@@ -471,6 +577,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("OMEGA_IE_RAD_S", earth::OMEGA_IE)?;
     m.add("NMI_M", earth::NMI)?;
     m.add_function(wrap_pyfunction!(normal_gravity, m)?)?;
+    m.add_function(wrap_pyfunction!(balanced_reciprocating_span_rad, m)?)?;
     m.add_class::<ImuSimulator>()?;
     m.add_class::<Navigator>()?;
     m.add_class::<alignment::Aligner>()?;

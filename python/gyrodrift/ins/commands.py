@@ -12,7 +12,7 @@ import click
 from gyrodrift.ins.imu_file import ImuFileError
 from gyrodrift.ins.navigate import navigate
 from gyrodrift.ins.scenario import ScenarioError, load_scenario
-from gyrodrift.ins.simulate import simulate
+from gyrodrift.ins.simulate import rotation_summary, simulate
 
 __all__ = ["simulate_command", "navigate_command"]
 
@@ -33,7 +33,11 @@ def simulate_command(scenario_toml: Path, out_dir: Path, quiet: bool) -> None:
     except ValueError as exc:  # the core refused the configuration
         raise click.ClickException(f"{scenario_toml}: {exc}") from None
     if not quiet:
-        click.echo(f"wrote {path} ({scenario.n_samples} samples) and {out_dir / 'scenario.resolved.toml'}")
+        rot = rotation_summary(scenario)
+        span = f", span {rot['span_deg']:.4f} deg" if rot["span_deg"] is not None else ""
+        click.echo(f"wrote {path} ({scenario.n_samples} samples) and {out_dir / 'scenario.resolved.toml'}; "
+                   f"{scenario.rotation.scheme} rotation{span}, modulation residual "
+                   f"{100 * rot['modulation_residual']:.3f} % of the horizontal sensor errors")
 
 
 @click.command("navigate")

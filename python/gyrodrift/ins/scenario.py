@@ -36,10 +36,14 @@ __all__ = [
     "load_scenario",
     "write_scenario_toml",
     "ROTATION_SCHEMES",
+    "BALANCED",
 ]
 
 ROTATION_SCHEMES = ("none", "continuous", "reciprocating", "indexing")
 """Turntable schemes understood by the core."""
+
+BALANCED = "balanced"
+"""The value of ``[rotation] span_deg`` that asks for the balanced reciprocating span."""
 
 DEG_PER_H_PER_SQRT_H = DEG_PER_H / math.sqrt(HOUR)
 """One deg/h/sqrt(h) (rate random walk) [rad/s/sqrt(s)]."""
@@ -81,16 +85,25 @@ class Rotation:
     rate_deg_s : cruise rate [deg/s]; accel_deg_s2 : acceleration at starts, stops, reversals [deg/s^2].
 
     The default acceleration, 100 deg/s^2 (ramp to 6 deg/s in 0.12 s), matters: reciprocating rotation
-    turns round at the same table angle at both ends, leaving a fraction T_r / (span/rate + T_r) of the
-    horizontal errors unmodulated (T_r = 2 rate / accel): 0.2 % at 100 deg/s^2, 2 % at 10 deg/s^2.
+    with a 360 deg span turns round at the same table angle at both ends, leaving a fraction
+    T_r / (span/rate + T_r) of the horizontal errors unmodulated (T_r = 2 rate / accel): 0.2 % at
+    100 deg/s^2, 2 % at 10 deg/s^2. ``span_deg = "balanced"`` uses instead the span just short of one turn
+    at which the reversal ramps leave no residual (`gyrodrift._core.balanced_reciprocating_span_rad`).
+    The default indexing order [0, 90, 180, 270, 360, 270, 180, 90] cancels exactly; an order whose slews
+    do not mirror each other (e.g. [0, 180, 90, 270], 4 %) does not.
     """
 
     scheme: str = "reciprocating"
     rate_deg_s: float = 6.0
     accel_deg_s2: float = 100.0
-    span_deg: float = 360.0
-    positions_deg: tuple[float, ...] = (0.0, 180.0, 90.0, 270.0)
+    span_deg: float | str = 360.0
+    positions_deg: tuple[float, ...] = (0.0, 90.0, 180.0, 270.0, 360.0, 270.0, 180.0, 90.0)
     dwell_s: float = 0.0
+
+    @property
+    def balanced_span(self) -> bool:
+        """True if the reciprocating span is the balanced one (``span_deg = "balanced"``)."""
+        return self.span_deg == BALANCED
 
 
 @dataclass(frozen=True)
@@ -239,7 +252,9 @@ class Scenario:
             "rotation_scheme": rot.scheme,
             "rotation_rate_rad_s": rot.rate_deg_s * DEG,
             "rotation_accel_rad_s2": rot.accel_deg_s2 * DEG,
-            "reciprocating_span_rad": rot.span_deg * DEG,
+            # "balanced": the core replaces the one-turn span by the balanced span near it.
+            "reciprocating_span_rad": 2.0 * math.pi if rot.balanced_span else rot.span_deg * DEG,
+            "reciprocating_balanced": rot.balanced_span,
             "positions_rad": [p * DEG for p in rot.positions_deg],
             "dwell_s": float(rot.dwell_s),
             "gyro_bias_rad_s": [b * DEG_PER_H for b in g.bias_deg_h],
@@ -460,14 +475,37 @@ class _Validator:
             opts = ", ".join(repr(s) for s in ROTATION_SCHEMES)
             raise self.fail("rotation", "scheme", f"expected one of {opts}, got {scheme!r}")
         dwell_default = 300.0 if scheme == "indexing" else d.dwell_s
-        return Rotation(
+        rot = Rotation(
             scheme=scheme,
             rate_deg_s=self.positive("rotation", t, "rate_deg_s", d.rate_deg_s),
             accel_deg_s2=self.positive("rotation", t, "accel_deg_s2", d.accel_deg_s2),
-            span_deg=self.positive("rotation", t, "span_deg", d.span_deg),
+            span_deg=self.span(t, d.span_deg),
             positions_deg=self.vector("rotation", t, "positions_deg", d.positions_deg, None),
             dwell_s=self.non_negative("rotation", t, "dwell_s", dwell_default),
         )
+        if rot.scheme == "reciprocating" and rot.balanced_span:
+            from gyrodrift import _core
+
+            try:
+                _core.balanced_reciprocating_span_rad(rot.rate_deg_s * DEG, rot.accel_deg_s2 * DEG, rot.dwell_s)
+            except ValueError:
+                raise self.fail(
+                    "rotation", "span_deg", f"no balanced span within half a turn at accel_deg_s2 = "
+                    f"{_fmt(rot.accel_deg_s2)} and rate_deg_s = {_fmt(rot.rate_deg_s)} (the ramps are too "
+                    "slow); raise accel_deg_s2 or give a number"
+                ) from None
+        return rot
+
+    def span(self, table: Mapping[str, Any], default: float | str) -> float | str:
+        """``[rotation] span_deg``: a number > 0 [deg] or the string "balanced"."""
+        v = table.get("span_deg", default)
+        if isinstance(v, str):
+            if v != BALANCED:
+                raise self.fail("rotation", "span_deg", f'expected a number > 0 or "{BALANCED}", got {v!r}')
+            return v
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise self.fail("rotation", "span_deg", f'expected a number > 0 or "{BALANCED}", got {_type_name(v)} {v!r}')
+        return self.positive("rotation", table, "span_deg", default)
 
     def gyro(self, data) -> Gyro:
         t, d = self.section(data, "gyro", Gyro), Gyro()

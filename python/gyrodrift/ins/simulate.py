@@ -16,7 +16,7 @@ from gyrodrift.ins.imu_file import IMU_COLUMNS, ImuChunk, core_chunk_to_table, i
 from gyrodrift.ins.scenario import Scenario, write_scenario_toml
 from gyrodrift.progress import progress
 
-__all__ = ["ImuData", "simulate", "iter_core_chunks", "DEFAULT_CHUNK_SAMPLES"]
+__all__ = ["ImuData", "simulate", "iter_core_chunks", "rotation_summary", "DEFAULT_CHUNK_SAMPLES"]
 
 DEFAULT_CHUNK_SAMPLES = 100_000
 """Samples per chunk (and per Parquet row group): 1000 s at 100 Hz, about 10 MB of columns."""
@@ -54,6 +54,21 @@ class ImuData:
         whole = table_to_chunk(self.table())
         for a in range(0, len(whole), chunk_samples):
             yield whole.slice(a, a + chunk_samples)
+
+
+def rotation_summary(scenario: Scenario) -> dict:
+    """What the turntable scheme of `scenario` does to horizontal sensor errors.
+
+    Returns ``{"modulation_residual": r, "span_deg": s}``: r is the fraction of a body-fixed horizontal
+    gyro or accelerometer bias left un-modulated (|time average of (cos, sin) of the table angle over one
+    period|: 1 without rotation, 0 for continuous rotation; the navigation error it causes scales with r);
+    s is the reciprocating span actually turned [deg] (the balanced span resolved), None for other schemes.
+    """
+    from gyrodrift import _core
+
+    sim = _core.ImuSimulator(scenario.to_core_config())
+    span = sim.reciprocating_span_rad
+    return {"modulation_residual": sim.modulation_residual, "span_deg": None if span is None else float(np.degrees(span))}
 
 
 def iter_core_chunks(scenario: Scenario, chunk_samples: int) -> Iterator[dict]:
