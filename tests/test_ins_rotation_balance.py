@@ -130,3 +130,19 @@ def test_chunks_held_by_python_are_never_overwritten():
         np.testing.assert_array_equal(kept[k], ref[k][:1000])
     np.testing.assert_array_equal(view, ref["dtheta_rad"][1000:2000, 2])
     np.testing.assert_array_equal(np.concatenate(got), ref["dv_m_s"][2000:])
+
+
+def test_simulate_command_prints_the_span_and_the_residual(tmp_path):
+    from click.testing import CliRunner
+
+    from gyrodrift.ins.commands import simulate_command
+
+    toml = tmp_path / "s.toml"
+    toml.write_text('[run]\nduration_h = 0.01\nrate_hz = 10.0\n[rotation]\nspan_deg = "balanced"\naccel_deg_s2 = 10.0\n')
+    r = CliRunner().invoke(simulate_command, [str(toml), "--out", str(tmp_path / "o")])
+    assert r.exit_code == 0, r.output
+    assert "reciprocating rotation, span 352.8115 deg, modulation residual 0.000 %" in r.output
+    toml.write_text('[run]\nduration_h = 0.01\nrate_hz = 10.0\n[rotation]\nscheme = "indexing"\npositions_deg = [0, 180, 90, 270]\n')
+    r = CliRunner().invoke(simulate_command, [str(toml), "--out", str(tmp_path / "p")])
+    assert r.exit_code == 0, r.output
+    assert "indexing rotation, modulation residual 4.09" in r.output
