@@ -161,8 +161,11 @@ fn tau_decay(p: &TemperatureProfile, dt: f64) -> f64 {
 #[derive(Clone, Copy, Debug)]
 struct Uniform {
     rate: f64,
-    /// Absolute end time of the uniform segment [s] (-inf: none cached).
+    /// The current uniform segment: absolute start and end times [s] (end -inf: none cached), angle at
+    /// the start [rad].
+    start: f64,
     end: f64,
+    angle0: f64,
     a: f64,
     b: f64,
     sin_d: f64,
@@ -170,11 +173,12 @@ struct Uniform {
 }
 
 impl Uniform {
-    fn new(rate: f64, dt: f64, end: f64) -> Self {
+    fn new(rate: f64, dt: f64) -> Self {
         let (s_lo, c_lo) = (rate * GL2_LO * dt).sin_cos();
         let (s_hi, c_hi) = (rate * GL2_HI * dt).sin_cos();
         let (sin_d, cos_d) = (rate * dt).sin_cos();
-        Uniform { rate, end, a: 0.5 * dt * (c_lo + c_hi), b: 0.5 * dt * (s_lo + s_hi), sin_d, cos_d }
+        let (start, end, angle0) = (0.0, f64::NEG_INFINITY, 0.0);
+        Uniform { rate, start, end, angle0, a: 0.5 * dt * (c_lo + c_hi), b: 0.5 * dt * (s_lo + s_hi), sin_d, cos_d }
     }
 }
 
@@ -236,7 +240,7 @@ impl ImuSimulator {
             alpha: 0.0,
             sin_alpha: 0.0,
             cos_alpha: 1.0,
-            uniform: Uniform { end: f64::NEG_INFINITY, ..Uniform::new(f64::NAN, dt, 0.0) },
+            uniform: Uniform::new(f64::NAN, dt),
             inv_c22: 1.0 / c_b0n[2][2],
             decay: 1.0,
             decay_step: tau_decay(&cfg.temperature, dt),
@@ -283,8 +287,9 @@ impl ImuSimulator {
         if t1 <= self.uniform.end || self.enter_uniform(t0, t1) {
             // Constant table rate over the whole sample: the node and end angles are alpha0 plus fixed
             // offsets, so their sines and cosines follow from (s0, c0) by fixed rotations (see `Uniform`).
-            let alpha1 = self.table.state_at(&mut self.cursor, t1).angle;
             let w = &self.uniform;
+            // The segment's closed form (what `Turntable::state_at` evaluates, without the segment search).
+            let alpha1 = w.angle0 + w.rate * (t1 - w.start);
             let ic = w.a * c0 - w.b * s0;
             let is = w.a * s0 + w.b * c0;
             let (s1, c1) = if k % SINCOS_RESYNC == 0 { alpha1.sin_cos() } else { (s0 * w.cos_d + c0 * w.sin_d, c0 * w.cos_d - s0 * w.sin_d) };
@@ -321,12 +326,14 @@ impl ImuSimulator {
     #[cold]
     fn enter_uniform(&mut self, t0: f64, t1: f64) -> bool {
         match self.table.uniform_at(&mut self.cursor, t0) {
-            Some((rate, end)) => {
-                if rate != self.uniform.rate {
-                    self.uniform = Uniform::new(rate, self.dt, end);
+            Some(seg) => {
+                if seg.rate != self.uniform.rate {
+                    self.uniform = Uniform::new(seg.rate, self.dt);
                 }
-                self.uniform.end = end;
-                t1 <= end
+                self.uniform.end = seg.end;
+                self.uniform.start = seg.start;
+                self.uniform.angle0 = seg.angle0;
+                t1 <= seg.end
             }
             None => false,
         }

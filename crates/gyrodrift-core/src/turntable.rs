@@ -134,6 +134,16 @@ pub fn balanced_reciprocating_span(rate: f64, accel: f64, dwell: f64, turns: u32
     Ok(0.5 * (lo + hi))
 }
 
+/// A stretch of constant table rate (see [`Turntable::uniform_at`]): angle(t) = angle0 + rate (t - start)
+/// for start <= t <= end (absolute times [s], angle [rad], rate [rad/s]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UniformSegment {
+    pub rate: f64,
+    pub start: f64,
+    pub end: f64,
+    pub angle0: f64,
+}
+
 /// Position of a monotone time stream in a [`Turntable`] profile (see [`Turntable::state_at`]).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct TableCursor {
@@ -339,18 +349,19 @@ impl Turntable {
     }
 
     /// If the segment holding time t (found through `cursor`, as in [`Turntable::state_at`]) turns at a
-    /// constant rate (a cruise, a dwell, or the whole of `None`), that rate [rad/s] and the absolute time
-    /// [s] at which the segment ends; `None` during ramps. Lets a caller reuse per-sample trigonometry.
+    /// constant rate (a cruise, a dwell, or the whole of `None`), that segment; `None` during ramps. Lets a
+    /// caller reuse per-sample trigonometry and evaluate the angle without a segment search.
     #[inline]
-    pub fn uniform_at(&self, cursor: &mut TableCursor, t: f64) -> Option<(f64, f64)> {
+    pub fn uniform_at(&self, cursor: &mut TableCursor, t: f64) -> Option<UniformSegment> {
         if self.segments.is_empty() {
-            return Some((0.0, f64::INFINITY));
+            return Some(UniformSegment { rate: 0.0, start: 0.0, end: f64::INFINITY, angle0: 0.0 });
         }
         self.state_at(cursor, t);
         let s = &self.segments[cursor.seg];
+        let (start, end) = (cursor.base + s.t0, cursor.base + s.t0 + s.duration);
         match s.kind {
-            Kind::Cruise { rate } => Some((rate, cursor.base + s.t0 + s.duration)),
-            Kind::Dwell => Some((0.0, cursor.base + s.t0 + s.duration)),
+            Kind::Cruise { rate } => Some(UniformSegment { rate, start, end, angle0: s.angle0 }),
+            Kind::Dwell => Some(UniformSegment { rate: 0.0, start, end, angle0: s.angle0 }),
             _ => None,
         }
     }
