@@ -24,6 +24,9 @@
 //! from the current position (they change by < 1e-12 relative over that time even at aircraft speed);
 //! the transport rate w_en^n is recomputed every sample from the current velocity.
 //!
+//! Feedback of an error-state filter: `Navigator::correct(phi, dv)` (q <- q(phi) o q, v <- v - dv; the phi-angle
+//! sign of `kalman`), which keeps the coning/sculling memory, so the alignment never restarts the navigator.
+//!
 //! Vertical channel: `Fixed` holds h at its initial value and v_U = 0 (static base). `Damped` is a
 //! second-order loop towards the initial height h_ref (no other height reference on a static base):
 //!    v_U += (a_U - k2 (h - h_ref)) dt,   h += (v_U - k1 (h - h_ref)) dt,
@@ -32,7 +35,7 @@
 //! h - h_ref = b / w_v^2 with the reported v_U = k1 (h - h_ref) (e.g. 50 ug: 4.9 m and 0.069 m/s).
 
 use crate::attitude::{
-    add, cross, dcm_to_euler, dot, euler_to_quat, quat_mul, quat_rotate, quat_to_dcm, rotvec_to_quat, scale,
+    add, cross, dcm_to_euler, dot, euler_to_quat, quat_mul, quat_normalize, quat_rotate, quat_to_dcm, rotvec_to_quat, scale,
     sub, Euler, Quat, Vec3,
 };
 use crate::earth;
@@ -110,8 +113,9 @@ struct EarthTerms {
     inv_rn_h_cos: f64,
     /// Gravity vector in ENU (0, 0, -g) [m/s^2].
     g_n: Vec3,
-    /// Earth rate in ENU [rad/s].
+    /// Earth rate in ENU [rad/s], and twice it (Coriolis).
     w_ie: Vec3,
+    two_w_ie: Vec3,
     /// 2 g / R (free-inertial vertical instability) [1/s^2].
     two_g_over_r: f64,
 }
@@ -129,6 +133,7 @@ impl EarthTerms {
             inv_rn_h_cos: 1.0 / (rn_h * c),
             g_n: [0.0, 0.0, -g],
             w_ie: earth::earth_rate_enu(lat),
+            two_w_ie: scale(earth::earth_rate_enu(lat), 2.0),
             two_g_over_r: 2.0 * g / (rm_h * rn_h).sqrt(),
         }
     }
@@ -170,6 +175,9 @@ pub struct Navigator {
     dv_prev: Vec3,
     gyro_bias: Vec3,
     accel_bias: Vec3,
+    /// The bias estimates times dt: what is subtracted from every sample's increments [rad], [m/s].
+    gyro_bias_dt: Vec3,
+    accel_bias_dt: Vec3,
     k1: f64,
     k2: f64,
 }
@@ -195,6 +203,8 @@ impl Navigator {
             dv_prev: [0.0; 3],
             gyro_bias: [0.0; 3],
             accel_bias: [0.0; 3],
+            gyro_bias_dt: [0.0; 3],
+            accel_bias_dt: [0.0; 3],
             k1: 2.0 * VERTICAL_ZETA * VERTICAL_OMEGA,
             k2: VERTICAL_OMEGA * VERTICAL_OMEGA + earth.two_g_over_r,
             cfg,
@@ -205,6 +215,7 @@ impl Navigator {
     pub fn set_gyro_bias(&mut self, b: Vec3) -> Result<(), ParamError> {
         check(b.iter().all(|x| x.is_finite() && x.abs() <= 0.1), "gyro_bias", "must be finite with |b| <= 0.1 rad/s")?;
         self.gyro_bias = b;
+        self.gyro_bias_dt = scale(b, self.dt);
         Ok(())
     }
 
@@ -212,6 +223,7 @@ impl Navigator {
     pub fn set_accel_bias(&mut self, b: Vec3) -> Result<(), ParamError> {
         check(b.iter().all(|x| x.is_finite() && x.abs() <= 10.0), "accel_bias", "must be finite with |b| <= 10 m/s^2")?;
         self.accel_bias = b;
+        self.accel_bias_dt = scale(b, self.dt);
         Ok(())
     }
 
@@ -233,6 +245,26 @@ impl Navigator {
         self.q
     }
 
+    /// Closed-loop correction by an estimated navigation error (feedback of an error-state filter).
+    ///
+    /// `phi` (E, N, U) [rad] is the phi angle of the computed navigation frame, the sign of PSINS `qdelphi` and
+    /// of `kalman`: the computed C_b^n' = (I - [phi x]) C_b^n, so the true attitude is
+    /// C_b^n = (I + [phi x]) C_b^n' to first order, and the correction is q <- q(phi) o q with q(phi) the exact
+    /// rotation-vector quaternion. `dv` (E, N, U) [m/s] is the velocity error, computed minus true: v <- v - dv
+    /// (with the `Fixed` vertical channel v_U stays zero). Position, time, the previous sample's increments
+    /// (the coning/sculling memory), the Earth terms and the bias estimates are kept, so a corrected run goes on
+    /// exactly as a run started from the corrected state with the same history.
+    pub fn correct(&mut self, phi: Vec3, dv: Vec3) -> Result<(), ParamError> {
+        check(phi.iter().all(|x| x.is_finite() && x.abs() <= 0.5), "phi", "must be finite with |phi| <= 0.5 rad")?;
+        check(dv.iter().all(|x| x.is_finite() && x.abs() <= 1000.0), "dv", "must be finite with |dv| <= 1000 m/s")?;
+        self.q = quat_normalize(quat_mul(rotvec_to_quat(phi), self.q));
+        self.vel = sub(self.vel, dv);
+        if self.cfg.vertical == Vertical::Fixed {
+            self.vel[2] = 0.0;
+        }
+        Ok(())
+    }
+
     /// Current state (Euler angles from q_b^n).
     pub fn state(&self) -> NavState {
         NavState {
@@ -251,7 +283,7 @@ impl Navigator {
         let e = &self.earth;
         let dv_n = quat_rotate(self.q, dv_b);
         let dv_sf = sub(dv_n, scale(cross(zeta, dv_n), 0.5));
-        let coriolis = cross(add(scale(e.w_ie, 2.0), w_en), self.vel);
+        let coriolis = cross(add(e.two_w_ie, w_en), self.vel);
         let dv_gc = scale(sub(e.g_n, coriolis), self.dt);
         let mut v = add(self.vel, add(dv_sf, dv_gc));
         match self.cfg.vertical {
@@ -285,11 +317,16 @@ impl Navigator {
     }
 
     /// One complete update with one sample's increments (before bias compensation).
-    #[inline]
     pub fn step(&mut self, dtheta_meas: Vec3, dv_meas: Vec3) {
+        self.step_inline(dtheta_meas, dv_meas);
+    }
+
+    /// `step`, always inlined: the loop of `run` keeps the state in registers only if it sees the whole update.
+    #[inline(always)]
+    fn step_inline(&mut self, dtheta_meas: Vec3, dv_meas: Vec3) {
         let dt = self.dt;
-        let dtheta = sub(dtheta_meas, scale(self.gyro_bias, dt));
-        let dv = sub(dv_meas, scale(self.accel_bias, dt));
+        let dtheta = sub(dtheta_meas, self.gyro_bias_dt);
+        let dv = sub(dv_meas, self.accel_bias_dt);
         let (phi, dv_b) = coning_sculling(dtheta, dv, self.dtheta_prev, self.dv_prev);
         let w_en = self.earth.transport_rate(self.vel);
         let zeta = scale(add(self.earth.w_ie, w_en), dt);
@@ -312,16 +349,33 @@ impl Navigator {
         assert_eq!(dtheta.len(), dv.len());
         assert_eq!(dtheta.len() % 3, 0);
         assert!(decimation >= 1);
-        // Countdown instead of a modulo per sample: samples left until the next output.
+        let mut rest = (dtheta, dv);
+        // Samples left until the next output; the samples in between run in `run`, whose code does not depend
+        // on the caller's sink.
         let mut left = decimation - self.k % decimation;
-        for (a, b) in dtheta.chunks_exact(3).zip(dv.chunks_exact(3)) {
-            self.step([a[0], a[1], a[2]], [b[0], b[1], b[2]]);
-            left -= 1;
+        while !rest.0.is_empty() {
+            let m = (rest.0.len() / 3).min(usize::try_from(left).unwrap_or(usize::MAX));
+            let (a, a_rest) = rest.0.split_at(3 * m);
+            let (b, b_rest) = rest.1.split_at(3 * m);
+            self.run(a, b);
+            rest = (a_rest, b_rest);
+            left -= m as u64;
             if left == 0 {
                 sink(&self.state());
                 left = decimation;
             }
         }
+    }
+
+    /// Navigate all samples of the slices (no output).
+    #[inline(never)]
+    fn run(&mut self, dtheta: &[f64], dv: &[f64]) {
+        // A local copy lets the state stay in registers for the whole loop.
+        let mut nav = self.clone();
+        for (a, b) in dtheta.chunks_exact(3).zip(dv.chunks_exact(3)) {
+            nav.step_inline([a[0], a[1], a[2]], [b[0], b[1], b[2]]);
+        }
+        *self = nav;
     }
 }
 
@@ -329,6 +383,78 @@ impl Navigator {
 mod tests {
     use super::*;
     use crate::attitude::{norm, quat_conj, quat_to_rotvec};
+
+    /// Increments of a tumbling body: a 1 rad/s rate whose axis turns by 0.3 rad per sample (strong coning,
+    /// so the previous-sample terms matter at 1e-5 rad per sample) and a wobbling specific force near 1 g.
+    fn tumbling(n: usize) -> (Vec<f64>, Vec<f64>) {
+        let row = |k: usize| {
+            let a = 0.3 * k as f64;
+            ([0.01 * a.sin(), 0.01 * a.cos(), 0.002], [1e-3 * a.cos(), -1e-3 * (0.7 * a).sin(), 0.0981])
+        };
+        let rows: Vec<_> = (0..n).map(row).collect();
+        (rows.iter().flat_map(|r| r.0).collect(), rows.iter().flat_map(|r| r.1).collect())
+    }
+
+    /// Rotation angle between two attitude quaternions [rad].
+    fn angle_between(p: Quat, q: Quat) -> f64 {
+        norm(quat_to_rotvec(quat_mul(p, quat_conj(q))))
+    }
+
+    #[test]
+    fn correct_removes_a_known_error_and_keeps_the_coning_memory() {
+        let cfg = NavigatorConfig { attitude: Euler { pitch: 0.01, roll: 0.02, yaw: 1.0 }, vel: [1.0, -2.0, 0.0], ..Default::default() };
+        let (dth, dv) = tumbling(600);
+        let (head, tail) = (3 * 300, 3 * 300..);
+        let mut truth = Navigator::new(cfg.clone()).unwrap();
+        truth.process(&dth[..head], &dv[..head], 1000, |_| {});
+
+        // The same navigator with a known error: computed C_b^n' = (I - [phi x]) C_b^n, i.e. q' = q(-phi) o q,
+        // and v' = v + dv (computed minus true).
+        let phi = [3e-4, -2e-4, 1e-3];
+        let dv_err = [0.05, -0.02, 0.0];
+        let mut corrected = truth.clone();
+        corrected.q = quat_mul(rotvec_to_quat(scale(phi, -1.0)), truth.q);
+        corrected.vel = add(truth.vel, dv_err);
+        // The sign convention: phi is the rotation from the computed to the true attitude, resolved in n.
+        let seen = quat_to_rotvec(quat_mul(truth.q, quat_conj(corrected.q)));
+        assert!(norm(sub(seen, phi)) < 1e-15, "{seen:?}");
+        corrected.correct(phi, dv_err).unwrap();
+        assert!(angle_between(corrected.q, truth.q) < 1e-15);
+        assert!(norm(sub(corrected.vel, truth.vel)) < 1e-15);
+        assert_eq!(corrected.samples_done(), truth.samples_done());
+
+        // A restart from the same state (what the alignment did before `correct`) forgets the previous increments.
+        let s = truth.state();
+        let mut restarted = Navigator::new(NavigatorConfig { lat: s.lat, lon: s.lon, height: s.height, vel: s.vel, attitude: s.attitude, ..cfg }).unwrap();
+        let (mut out_t, mut out_c) = (Vec::new(), Vec::new());
+        truth.process(&dth[tail.clone()], &dv[tail.clone()], 1, |s| out_t.push(*s));
+        corrected.process(&dth[tail.clone()], &dv[tail.clone()], 1, |s| out_c.push(*s));
+        restarted.process(&dth[tail.clone()], &dv[tail], 1, |_| {});
+
+        // The corrected run is the uninterrupted one to rounding, sample after sample.
+        for (a, b) in out_t.iter().zip(&out_c) {
+            assert_eq!(a.t, b.t);
+            assert!((a.lat - b.lat).abs() < 1e-15 && (a.lon - b.lon).abs() < 1e-15, "{a:?} {b:?}");
+            assert!(norm(sub(a.vel, b.vel)) < 1e-12, "{a:?} {b:?}");
+        }
+        let gap_corrected = angle_between(corrected.q, truth.q);
+        let gap_restarted = angle_between(restarted.q, truth.q);
+        println!("after 300 more samples: corrected run {gap_corrected:.1e} rad from the uninterrupted one, restarted run {gap_restarted:.1e} rad");
+        assert!(gap_corrected < 1e-13, "{gap_corrected}");
+        assert!(gap_restarted > 1e-7, "{gap_restarted}");
+    }
+
+    #[test]
+    fn correct_holds_the_fixed_vertical_channel_and_checks_its_input() {
+        let mut nav = Navigator::new(NavigatorConfig::default()).unwrap();
+        nav.correct([0.0; 3], [0.1, 0.2, 0.3]).unwrap();
+        assert_eq!(nav.state().vel, [-0.1, -0.2, 0.0]);
+        assert_eq!(nav.correct([f64::NAN, 0.0, 0.0], [0.0; 3]).unwrap_err().key, "phi");
+        assert_eq!(nav.correct([0.0; 3], [0.0, 2000.0, 0.0]).unwrap_err().key, "dv");
+        let mut damped = Navigator::new(NavigatorConfig { vertical: Vertical::Damped, ..Default::default() }).unwrap();
+        damped.correct([0.0; 3], [0.0, 0.0, 0.3]).unwrap();
+        assert_eq!(damped.state().vel, [0.0, 0.0, -0.3]);
+    }
 
     #[test]
     fn coning_correction_on_classic_coning_motion() {
@@ -380,6 +506,32 @@ mod tests {
         assert!((uncorrected / expected - 1.0).abs() < 0.02, "{uncorrected} vs {expected}");
         // The one-plus-previous algorithm leaves an error of order (W dt)^4.
         assert!(corrected < 0.01 * uncorrected, "corrected {corrected}, uncorrected {uncorrected}");
+    }
+
+    #[test]
+    fn process_equals_step_by_step_bit_for_bit() {
+        // `process` runs the samples between outputs in a separate loop on a copy of the state; it must be the
+        // per-sample `step` exactly, with bias compensation and across Earth-term refreshes.
+        let cfg = NavigatorConfig { attitude: Euler { pitch: 0.01, roll: 0.02, yaw: 1.0 }, vel: [1.0, -2.0, 0.5], vertical: Vertical::Damped, ..Default::default() };
+        let (dth, dv) = tumbling(1000);
+        let mut a = Navigator::new(cfg.clone()).unwrap();
+        let mut b = Navigator::new(cfg).unwrap();
+        for nav in [&mut a, &mut b] {
+            nav.set_gyro_bias([1e-6, -2e-6, 3e-6]).unwrap();
+            nav.set_accel_bias([1e-3, 2e-3, -3e-3]).unwrap();
+        }
+        let mut out_a = Vec::new();
+        a.process(&dth, &dv, 37, |s| out_a.push(*s));
+        let mut out_b = Vec::new();
+        for (k, (x, y)) in dth.chunks_exact(3).zip(dv.chunks_exact(3)).enumerate() {
+            b.step([x[0], x[1], x[2]], [y[0], y[1], y[2]]);
+            if (k + 1) % 37 == 0 {
+                out_b.push(b.state());
+            }
+        }
+        assert_eq!(out_a, out_b);
+        assert_eq!(a.quaternion(), b.quaternion());
+        assert_eq!(a.state(), b.state());
     }
 
     #[test]
