@@ -300,7 +300,11 @@ def test_identification_on_held_out_runs(fleet, fleet_features, model):
     assert np.max(np.abs(err)) < 3e-4
     assert np.mean(np.abs(err)) < np.mean(np.abs(phys_err))
     h = held[0]
-    assert h.model_std_deg_h is None and "no predictive uncertainty" in h.uncertainty_note
+    assert h.model_std_deg_h is None and "jackknife interval" in h.uncertainty_note
+    for x in held:  # the interval is centred on the prediction, with the half-width of the LOO residuals
+        lo, hi = x.interval_deg_h
+        assert lo < x.drift_deg_h < hi and (hi - lo) / 2 == pytest.approx(
+            np.sort(np.abs(m.loo_residuals()))[math.ceil(11 * 0.9) - 1], rel=1e-12)
     assert h.physics_drift_deg_h == pytest.approx(physics_inversion(test)[0])
     assert h.alignment_z_drift_std_deg_h > 0.0005
     np.testing.assert_allclose([x.drift_deg_h for x in held], m.predict(test), rtol=0, atol=1e-12)
@@ -312,6 +316,7 @@ def test_identify_command(fleet, model, tmp_path):
     assert r.exit_code == 0, r.output
     doc = json.loads(r.output)
     assert doc["run"] == "run11" and doc["model_std_deg_h"] is None
+    assert doc["interval_coverage"] == 0.9 and doc["interval_deg_h"][0] < doc["drift_deg_h"] < doc["interval_deg_h"][1]
     assert abs(doc["drift_deg_h"] - fleet[1][11]) < 3e-4
     assert set(doc) >= {"physics_drift_deg_h", "alignment_z_drift_deg_h", "alignment_z_drift_std_deg_h",
                         "features", "training_error_deg_h"}
@@ -319,7 +324,7 @@ def test_identify_command(fleet, model, tmp_path):
     assert (tmp_path / "alignment_z_sigma.png").read_bytes()[:8] == PNG_MAGIC
     r = CliRunner().invoke(identify_command, [str(fleet[0][11]), "--model", str(model[1]), "--quiet"])
     assert r.exit_code == 0
-    assert "identified axial drift" in r.output and "model uncertainty: none" in r.output
+    assert "identified axial drift" in r.output and "90 % interval: [" in r.output
     assert "alignment z estimate" in r.output and "physics inversion" in r.output
     assert "error on its training runs (loo_mae)" in r.output
 

@@ -83,9 +83,11 @@ def fit(data, out, encoding, scaling, objective, method, gamma, sigma, seed, lat
 @click.argument("data", type=click.Path(dir_okay=False))
 @click.option("--format", "fmt", type=click.Choice(["csv", "jsonl"]), default="csv", show_default=True)
 @click.option("--out", type=click.Path(dir_okay=False), default=None, help="Write here (atomically) instead of stdout.")
+@click.option("--coverage", type=click.FloatRange(0.0, 1.0, min_open=True, max_open=True), default=None,
+              help="Add a jackknife interval of this coverage (e.g. 0.9) from the model's leave-one-out residuals.")
 @_lat0_option
 @_split_option
-def predict(model_file, data, fmt, out, lat0_deg, split):
+def predict(model_file, data, fmt, out, coverage, lat0_deg, split):
     """Identify the axial drift [deg/h] of each run in DATA.csv with MODEL_FILE."""
     from gyrodrift.atomic import atomic_write
     from gyrodrift.model_io import ModelFileError, load_model
@@ -95,10 +97,17 @@ def predict(model_file, data, fmt, out, lat0_deg, split):
     except ModelFileError as exc:
         raise click.ClickException(str(exc)) from None
     runs = _read_runs(data, lat0_deg, False, split)
-    pred = model.predict(runs)
+    if coverage is not None:
+        if model.loo_residuals_deg_h is None:
+            raise click.ClickException(f"{model_file}: the model file has no leave-one-out residuals for an interval")
+        pred, lo, hi = model.predict_interval(runs, coverage)
+    else:
+        pred = model.predict(runs)
     rows = []
     for i, rec in enumerate(runs.records()):
         row = {"run": rec["run"], "drift_identified_deg_h": float(pred[i])}
+        if coverage is not None:
+            row["drift_lo_deg_h"], row["drift_hi_deg_h"] = float(lo[i]), float(hi[i])
         if "drift_deg_h" in rec:
             row["drift_deg_h"] = rec["drift_deg_h"]
             row["error_deg_h"] = rec["drift_deg_h"] - float(pred[i])
@@ -108,8 +117,7 @@ def predict(model_file, data, fmt, out, lat0_deg, split):
         for row in rows:
             buf.write(json.dumps(row) + "\n")
     else:
-        fields = list(rows[0]) if all(len(r) == len(rows[0]) for r in rows) else [
-            "run", "drift_identified_deg_h", "drift_deg_h", "error_deg_h"]
+        fields = max((list(r) for r in rows), key=len)
         writer = csv.DictWriter(buf, fieldnames=fields, lineterminator="\n", restval="")
         writer.writeheader()
         for row in rows:

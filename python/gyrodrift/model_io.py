@@ -8,6 +8,7 @@ Layout (``schema_version`` 1)::
      "lssvr": {"kernel": "rbf", "gamma": ..., "sigma": ..., "degree": ..., "coef0": ...,
                "support_vectors": [[...]], "alpha": [...], "intercept": ...},
      "training": {"n_runs": ..., "sha256": ..., "source": ...},
+     "loo_residuals_deg_h": [...] (optional: leave-one-out residuals on the training runs, for intervals),
      "tuning": {...} or null}
 
 ``support_vectors`` are the training inputs after scaling. Floats are written with ``repr`` precision, so a
@@ -70,6 +71,9 @@ def model_to_dict(model: DriftModel) -> dict:
             "intercept": float(est.intercept_),
         },
         "training": dict(model.training),
+        "loo_residuals_deg_h": (
+            None if model.loo_residuals_deg_h is None else np.asarray(model.loo_residuals_deg_h, float).tolist()
+        ),
         "tuning": model.tuning.to_dict() if model.tuning is not None else None,
     }
 
@@ -156,12 +160,16 @@ def model_from_dict(doc: dict, where: str = "<model>") -> DriftModel:
             tuning = TuningResult(**{**tdoc, "bounds": tuple(tuple(b) for b in tdoc["bounds"])})
         except (TypeError, KeyError) as exc:
             raise ModelFileError(f"{where}: malformed tuning record ({exc})") from None
+    loo = doc.get("loo_residuals_deg_h")
+    if loo is not None:
+        loo = _floats(loo, where, "loo_residuals_deg_h", (sv.shape[0],))
     return DriftModel(
         encoding=encoding,
         scaling=kind,
         pipeline=Pipeline([("scale", scaler), ("lssvr", est)]),
         tuning=tuning,
         training=dict(doc.get("training") or {}),
+        loo_residuals_deg_h=loo,
     )
 
 

@@ -195,9 +195,13 @@ def identify_command(log, model_path, lat0_deg, lon0_deg, height_m, out_dir, as_
         return
     f = res.features
     click.echo(f"{res.run}: identified axial drift {res.drift_deg_h:.6f} deg/h (model {model_path})")
-    click.echo(f"  model uncertainty: none ({res.uncertainty_note})"
-               + (f"; error on its training runs ({res.training_error_kind}) {res.training_error_deg_h:.2e} deg/h"
-                  if res.training_error_deg_h is not None else ""))
+    if res.interval_deg_h is not None:
+        lo, hi = res.interval_deg_h
+        click.echo(f"  {100 * res.interval_coverage:g} % interval: [{lo:.6f}, {hi:.6f}] deg/h ({res.uncertainty_note})")
+    else:
+        click.echo(f"  model uncertainty: none ({res.uncertainty_note})")
+    if res.training_error_deg_h is not None:
+        click.echo(f"  error on its training runs ({res.training_error_kind}) {res.training_error_deg_h:.2e} deg/h")
     click.echo(f"  physics inversion of the 12 h latitude error ({f.lat_err_arcsec:.3f} arcsec): "
                f"{res.physics_drift_deg_h:.6f} deg/h")
     click.echo(f"  alignment z estimate: {res.alignment_z_drift_deg_h:.6f} +- {res.alignment_z_drift_std_deg_h:.6f} "

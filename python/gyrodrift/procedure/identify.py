@@ -3,10 +3,11 @@
 The model (`gyrodrift.model.DriftModel`, an LSSVR) maps the run's features (latitude at 12 h, temperature
 over the 12 h) to the axial drift [deg/h], the total constant to subtract from the z gyro. Beside it the
 result carries the physics inversion of the same latitude error (`gyrodrift.baselines.physics_inversion`)
-and the alignment's own z-drift estimate with its 1-sigma. The LSSVR gives a point estimate only: it has
-no predictive uncertainty (``model_std_deg_h`` is None and ``uncertainty_note`` says so); its training
-error on its training runs (leave-one-out MAE when the fitted model is at hand, else the fitness its tuning
-reached, as stored in the model file) is reported as an empirical spread instead.
+and the alignment's own z-drift estimate with its 1-sigma. The LSSVR has no predictive (Bayesian)
+uncertainty, so ``model_std_deg_h`` is None; instead the result carries an empirical jackknife interval
+built from the model's leave-one-out residuals on its training runs (``DriftModel.predict_interval``,
+default coverage 90 %), valid for runs exchangeable with the training runs, and the leave-one-out MAE.
+Models whose file has no residuals fall back to the fitness their tuning reached, with no interval.
 """
 
 from __future__ import annotations
@@ -24,9 +25,13 @@ from gyrodrift.model import DriftModel
 from gyrodrift.procedure.features import RunFeatures, extract_features, features_run_table
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 
-__all__ = ["Identification", "identify", "NO_UNCERTAINTY_NOTE"]
+__all__ = ["Identification", "identify", "NO_UNCERTAINTY_NOTE", "INTERVAL_NOTE"]
 
 NO_UNCERTAINTY_NOTE = "the LSSVR gives a point estimate, no predictive uncertainty"
+INTERVAL_NOTE = (
+    "jackknife interval from the model's leave-one-out residuals on its {n} training runs (empirical, for runs "
+    "like the training runs); the LSSVR itself gives no predictive uncertainty"
+)
 
 
 @dataclass(frozen=True)
@@ -44,6 +49,10 @@ class Identification:
         The alignment's own z-gyro bias estimate and 1-sigma [deg/h] (not used).
     model_std_deg_h : float or None
         Predictive 1-sigma of the model; None for the LSSVR (it has none).
+    interval_deg_h : tuple of float or None
+        (low, high) jackknife interval of the identified drift [deg/h] at ``interval_coverage``; None when the
+        model carries no leave-one-out residuals.
+    interval_coverage : float
     uncertainty_note : str
     training_error_deg_h : float or None
         The model's error on its training runs [deg/h]: the mean absolute closed-form leave-one-out residual
@@ -60,6 +69,8 @@ class Identification:
     alignment_z_drift_deg_h: float
     alignment_z_drift_std_deg_h: float
     model_std_deg_h: float | None
+    interval_deg_h: tuple[float, float] | None
+    interval_coverage: float
     uncertainty_note: str
     training_error_deg_h: float | None
     training_error_kind: str | None
@@ -75,6 +86,8 @@ class Identification:
             "alignment_z_drift_deg_h": self.alignment_z_drift_deg_h,
             "alignment_z_drift_std_deg_h": self.alignment_z_drift_std_deg_h,
             "model_std_deg_h": self.model_std_deg_h,
+            "interval_deg_h": None if self.interval_deg_h is None else list(self.interval_deg_h),
+            "interval_coverage": self.interval_coverage,
             "uncertainty_note": self.uncertainty_note,
             "training_error_deg_h": self.training_error_deg_h,
             "training_error_kind": self.training_error_kind,
@@ -86,7 +99,7 @@ class Identification:
 def _training_error(model: DriftModel) -> tuple[float | None, str | None]:
     try:
         return float(np.mean(np.abs(model.loo_residuals()))), "loo_mae"
-    except AttributeError:  # loaded from a file: no Cholesky factor kept
+    except AttributeError:  # loaded from a file without residuals: no Cholesky factor kept
         pass
     if model.tuning is not None:
         return float(model.tuning.fitness), str(model.tuning.objective)
@@ -101,6 +114,7 @@ def identify(
     lat0_deg: float | None = None,
     features: RunFeatures | None = None,
     chunk_samples: int = 100_000,
+    coverage: float = 0.9,
     quiet: bool = True,
 ) -> Identification:
     """Identify the axial drift of a run with a fitted drift model.
@@ -115,6 +129,8 @@ def identify(
         As in `extract_features`.
     features : RunFeatures, optional
         Reuse features already extracted from this log.
+    coverage : float
+        Coverage of the jackknife interval (0.9: 90 %).
 
     Returns
     -------
@@ -129,6 +145,11 @@ def identify(
                                     quiet=quiet)
     table = features_run_table([features], source=str(log.path))
     drift = float(model.predict(table)[0])
+    if model.loo_residuals_deg_h is not None:
+        _, lo, hi = model.predict_interval(table, coverage)
+        interval, note = (float(lo[0]), float(hi[0])), INTERVAL_NOTE.format(n=len(model.loo_residuals_deg_h))
+    else:
+        interval, note = None, NO_UNCERTAINTY_NOTE
     physics = float(physics_inversion(table, t_h=features.hours)[0])
     err, kind = _training_error(model)
     al = features.alignment
@@ -139,7 +160,9 @@ def identify(
         alignment_z_drift_deg_h=math.nan if al is None else al.z_drift_deg_h,
         alignment_z_drift_std_deg_h=math.nan if al is None else al.z_drift_std_deg_h,
         model_std_deg_h=None,
-        uncertainty_note=NO_UNCERTAINTY_NOTE,
+        interval_deg_h=interval,
+        interval_coverage=coverage,
+        uncertainty_note=note,
         training_error_deg_h=err,
         training_error_kind=kind,
         features=features,
