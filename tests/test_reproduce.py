@@ -51,6 +51,11 @@ def test_schema_and_internal_consistency(run):
             hist = np.array(m["fitness_history"])
             assert np.all(np.diff(hist) <= 0) and hist[-1] == pytest.approx(m["fitness"])
             assert m["settings"]["n_particles"] == 30
+        if m["family"] in ("cpso_loo", "grid_loo"):
+            half = m["interval_90_half_width_deg_h"]
+            assert 0 < half < m["test_max_abs_err_deg_h"] * 10
+            covered = int(np.sum(np.abs(err) <= half))
+            assert covered == m["test_covered_by_interval_90"]
         if m["family"] == "cpso_loo":
             assert m["loo_mae_deg_h"] == pytest.approx(m["fitness"], rel=1e-9)
             assert m["settings"]["chaos_steps"] == 10 and m["settings"]["max_iter"] == 100

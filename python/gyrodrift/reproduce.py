@@ -85,6 +85,11 @@ def _model_entry(name: str, family: str, model: DriftModel, data, **extra) -> di
     est = model.lssvr
     loo = model.loo_residuals()
     tuning = model.tuning
+    if np.all(np.isfinite(loo)):
+        _, lo, hi = model.predict_interval(data.test, 0.9)
+        true = data.test.drift_deg_h
+        extra["interval_90_half_width_deg_h"] = float((hi[0] - lo[0]) / 2)
+        extra["test_covered_by_interval_90"] = int(np.sum((lo <= true) & (true <= hi)))
     return score(
         name,
         family,
