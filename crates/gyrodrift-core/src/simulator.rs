@@ -706,8 +706,9 @@ mod tests {
                 let ic = 0.5 * dt * (a_lo.cos() + a_hi.cos());
                 let is = 0.5 * dt * (a_lo.sin() + a_hi.sin());
                 let ex = [ic * u[0] + is * u[1], -is * u[0] + ic * u[1]];
-                for j in 0..2 {
-                    assert!((ch.dtheta[3 * i + j] - ex[j]).abs() < 1e-18, "{i} {j}: {} vs {}", ch.dtheta[3 * i + j], ex[j]);
+                for (j, want) in ex.iter().enumerate() {
+                    let got = ch.dtheta[3 * i + j];
+                    assert!((got - want).abs() < 1e-18, "{i} {j}: {got} vs {want}");
                 }
                 assert!((ch.table_angle[i] - table.angle(t0 + dt)).abs() < 1e-9);
             }
