@@ -10,35 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import Bounds, OptimizeResult
 
+from gyrodrift.benchmark_functions import ackley, griewank, rastrigin, rosenbrock, sphere
 from gyrodrift.cpso import _reseed_chaos, minimize_cpso
-
-
-# --- test functions (global minimum 0) -------------------------------------------------------------
-def sphere(x):
-    return float(np.sum(x**2))
-
-
-def rastrigin(x):
-    return float(10.0 * x.size + np.sum(x**2 - 10.0 * np.cos(2.0 * np.pi * x)))
-
-
-def rosenbrock(x):
-    return float(np.sum(100.0 * (x[1:] - x[:-1] ** 2) ** 2 + (1.0 - x[:-1]) ** 2))
-
-
-def ackley(x):
-    d = x.size
-    return float(
-        -20.0 * np.exp(-0.2 * np.sqrt(np.sum(x**2) / d))
-        - np.exp(np.sum(np.cos(2.0 * np.pi * x)) / d)
-        + 20.0
-        + np.e
-    )
-
-
-def griewank(x):
-    i = np.arange(1, x.size + 1)
-    return float(np.sum(x**2) / 4000.0 - np.prod(np.cos(x / np.sqrt(i))) + 1.0)
 
 
 # (name, function, dimension, bounds, argmin)
