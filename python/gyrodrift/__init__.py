@@ -13,13 +13,34 @@ try:
 except PackageNotFoundError:  # pragma: no cover - running from an unbuilt source tree
     __version__ = "0+unknown"
 
-from gyrodrift.cpso import minimize_cpso
-from gyrodrift.datasets import load_paper
-from gyrodrift.lssvr import LSSVR
-from gyrodrift.model import DriftModel, fit_drift_model
-from gyrodrift.model_io import load_model, save_model
-from gyrodrift.runs import RunTable, read_runs_csv
-from gyrodrift.tuning import TuningResult, tune_lssvr
+# The public names are imported on first use (PEP 562), so that `import gyrodrift` and the CLI start
+# without loading scikit-learn and scipy when the command does not need them.
+_PUBLIC = {
+    "LSSVR": "gyrodrift.lssvr",
+    "minimize_cpso": "gyrodrift.cpso",
+    "tune_lssvr": "gyrodrift.tuning",
+    "TuningResult": "gyrodrift.tuning",
+    "load_paper": "gyrodrift.datasets",
+    "RunTable": "gyrodrift.runs",
+    "read_runs_csv": "gyrodrift.runs",
+    "DriftModel": "gyrodrift.model",
+    "fit_drift_model": "gyrodrift.model",
+    "save_model": "gyrodrift.model_io",
+    "load_model": "gyrodrift.model_io",
+}
+
+
+def __getattr__(name):
+    if name in _PUBLIC:
+        import importlib
+
+        return getattr(importlib.import_module(_PUBLIC[name]), name)
+    raise AttributeError(f"module 'gyrodrift' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(list(globals()) + list(_PUBLIC))
+
 
 __all__ = [
     "__version__",

@@ -10,9 +10,8 @@ import sys
 import click
 
 from gyrodrift import __version__
+from gyrodrift.choices import METHODS, OBJECTIVES, SCALINGS
 from gyrodrift.features import ENCODINGS
-from gyrodrift.model import SCALINGS
-from gyrodrift.tuning import METHODS, OBJECTIVES
 
 
 @click.group()

@@ -16,14 +16,13 @@ import numpy as np
 from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import MinMaxScaler, StandardScaler
 
+from gyrodrift.choices import SCALINGS
 from gyrodrift.features import encode, feature_names
 from gyrodrift.lssvr import LSSVR
 from gyrodrift.progress import progress
 from gyrodrift.runs import RunTable
 from gyrodrift.tuning import DEFAULT_BOUNDS, TuningResult, tune_lssvr
 
-SCALINGS = ("standard", "minmax", "none")
-"""Input scalings: zero mean / unit variance, [0, 1] per feature, or raw inputs."""
 
 
 def make_scaler(scaling: str):

@@ -26,9 +26,10 @@ from sklearn.preprocessing import MinMaxScaler, StandardScaler
 
 from gyrodrift import __version__
 from gyrodrift.atomic import atomic_write_json
+from gyrodrift.choices import SCALINGS
 from gyrodrift.features import ENCODINGS, feature_names
 from gyrodrift.lssvr import LSSVR
-from gyrodrift.model import SCALINGS, DriftModel
+from gyrodrift.model import DriftModel
 from gyrodrift.tuning import TuningResult
 
 FORMAT = "gyrodrift-drift-model"

@@ -18,12 +18,11 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 from sklearn.model_selection import KFold
 
+from gyrodrift.choices import METHODS, OBJECTIVES
 from gyrodrift.cpso import minimize_cpso
 from gyrodrift.kernels import squared_distances
 from gyrodrift.lssvr import lssvr_solve, rbf_batch_errors
 
-OBJECTIVES = ("train_mae", "loo_mae", "kfold_mae")
-METHODS = ("cpso", "pso", "grid")
 DEFAULT_BOUNDS = ((1e-2, 1e5), (1e-3, 1e2))
 """Default search box ((gamma_lo, gamma_hi), (sigma_lo, sigma_hi)); sigma in the scaled input units."""
 

@@ -1,0 +1,14 @@
+"""The names of the options the API and the CLI accept, in one light module (no heavy imports).
+
+The CLI builds its choices from here at start-up without importing scikit-learn; the modules that implement
+the options (`gyrodrift.model`, `gyrodrift.tuning`) import the same tuples.
+"""
+
+SCALINGS = ("standard", "minmax", "none")
+"""Input scalings: zero mean / unit variance, [0, 1] per feature, or raw inputs."""
+
+OBJECTIVES = ("train_mae", "loo_mae", "kfold_mae")
+"""Tuning objectives: training MAE (the paper's eq. 16), closed-form leave-one-out MAE, contiguous k-fold MAE."""
+
+METHODS = ("cpso", "pso", "grid")
+"""Tuning methods: chaos PSO, plain PSO, log grid."""
