@@ -104,7 +104,8 @@ def test_balanced_span_round_trips_and_reaches_the_core():
     assert cfg["reciprocating_balanced"] is True
     assert scenario(rotation=SLOW).to_core_config()["reciprocating_balanced"] is False
     # The binding checks the new key's type and names it.
-    base = {"lat_rad": 0.5, "rate_hz": 10.0, "duration_s": 10.0, "rotation_scheme": "reciprocating"}
+    base = {"lat_rad": 0.5, "rate_hz": 10.0, "duration_s": 10.0, "rotation_scheme": "reciprocating",
+            "rotation_accel_rad_s2": 10 * DEG}
     with pytest.raises(ValueError, match=r"^reciprocating_balanced: must be a bool"):
         _core.ImuSimulator(dict(base, reciprocating_balanced=1))
     sim = _core.ImuSimulator(dict(base, reciprocating_balanced=True, reciprocating_span_rad=4 * math.pi))

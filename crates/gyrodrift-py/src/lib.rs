@@ -131,7 +131,8 @@ const SIM_KEYS: &[&str] = &[
 
 /// Defaults of optional keys (SI). Documented in docs/ins-binding-contract.md.
 const DEFAULT_RATE: f64 = 6.0 * PI / 180.0;
-const DEFAULT_ACCEL: f64 = 10.0 * PI / 180.0;
+/// Same default as the scenario files (python/gyrodrift/ins/scenario.py): fast reversals leave little residual.
+const DEFAULT_ACCEL: f64 = 100.0 * PI / 180.0;
 
 fn sim_config(d: &Bound<'_, PyDict>) -> PyResult<ImuSimulatorConfig> {
     let c = Config::new(d, SIM_KEYS, "ImuSimulator")?;
