@@ -64,3 +64,15 @@ def test_bad_model_file_is_named(tmp_path, paper_csv):
 def test_version():
     r = CliRunner().invoke(main, ["--version"])
     assert r.exit_code == 0 and "gyrodrift" in r.output
+
+
+def test_missing_output_folder_fails_before_any_work(tmp_path, paper_csv):
+    r = CliRunner().invoke(main, ["fit", str(paper_csv), "--out", str(tmp_path / "nodir" / "m.json"),
+                                  "--lat0-deg", "28.222"])
+    assert r.exit_code == 1 and "the folder" in r.output and "nodir does not exist" in r.output
+
+
+def test_fit_says_when_a_split_column_is_ignored(tmp_path, paper_csv):
+    r = CliRunner().invoke(main, ["fit", str(paper_csv), "--out", str(tmp_path / "m.json"), "--lat0-deg", "28.222",
+                                  "--gamma", "10", "--sigma", "1"])
+    assert r.exit_code == 0 and "has a split column; training on all 32 rows" in r.output

@@ -80,3 +80,19 @@ def test_predict_command_prints_the_interval(tmp_path):
     r = CliRunner().invoke(main, ["predict", str(tmp_path / "m.json"), str(csv_path), "--lat0-deg", "28.222",
                                   "--coverage", "1.5"])
     assert r.exit_code == 2 and "--coverage" in r.output
+
+
+def test_too_few_runs_for_the_coverage_is_said_not_printed_as_infinity(tmp_path):
+    from gyrodrift.model import min_runs_for_coverage
+
+    assert [min_runs_for_coverage(c) for c in (0.5, 0.8, 0.9, 0.95)] == [1, 4, 9, 19]
+    paper = load_paper()
+    small = paper.train.select(np.arange(5))
+    save_model(fit_drift_model(small, gamma=30.0, sigma=1.5), tmp_path / "small.json")
+    csv_path = tmp_path / "paper.csv"
+    csv_path.write_bytes(paper_csv_path().read_bytes())
+    args = ["predict", str(tmp_path / "small.json"), str(csv_path), "--lat0-deg", "28.222", "--format", "jsonl"]
+    r = CliRunner().invoke(main, args + ["--coverage", "0.9"])
+    assert r.exit_code == 1 and "5 training runs are too few for a 90 % jackknife interval (needs at least 9)" in r.output
+    r = CliRunner().invoke(main, args + ["--coverage", "0.8"])
+    assert r.exit_code == 0 and "Infinity" not in r.output

@@ -58,6 +58,10 @@ def good_doc(paper):
         (lambda d: d["lssvr"]["support_vectors"][0].append(1.0), "support_vectors"),
         (lambda d: d["scaler"].update(kind="robust"), "unknown scaler kind 'robust'"),
         (lambda d: d["lssvr"].update(intercept="zero"), "key 'intercept' has the wrong type"),
+        (lambda d: d.update(training=[1, 2]), "key 'training' must be an object"),
+        (lambda d: d["lssvr"].update(kernel="poly", degree=-3), "key 'degree' must be a whole number >= 1"),
+        (lambda d: d["lssvr"].update(kernel="sigmoid"), "unknown kernel 'sigmoid'"),
+        (lambda d: d["scaler"]["scale_"].__setitem__(0, 0.0), "key 'scale_' of the scaler holds a zero"),
     ],
 )
 def test_bad_model_documents(tmp_path, good_doc, mutate, message):

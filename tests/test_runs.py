@@ -68,7 +68,9 @@ def test_range_cells_and_lat0_column(tmp_path):
         ("run,lat_deg,temp_min_c,temp_max_c\n1,28,1\n", {"lat0_deg": 28.0}, r"row 2: expected 4 cells, got 3"),
         ("run,lat_deg,temp_min_c,temp_max_c,drift_deg_h\n1,28,1,2,\n", {"lat0_deg": 28.0, "require_truth": True}, r"row 2, column drift_deg_h: expected a drift in deg/h for training"),
         ("run,lat_deg,temp_min_c,temp_max_c,drift_deg_h\n1,28,1,2,36\n", {"lat0_deg": 28.0}, r"row 2, column drift_deg_h: \|36.0\| deg/h is not an RLG drift"),
-        ("run,lat_deg,temp_min_c,temp_max_c\n1,28,1,2\n1,28,1,2\n", {"lat0_deg": 28.0}, r"column run: run '1' appears more than once"),
+        ("run,lat_deg,temp_min_c,temp_max_c\n1,28,1,2\n1,28,1,2\n", {"lat0_deg": 28.0}, r"row 3, column run: run '1' appears more than once \(first in row 2"),
+        ("run,lat_deg,temp_min_c,temp_max_c\n1,28,1,2\n", {"lat0_deg": 1000.0}, r"runs.csv: site latitude lat0_deg must be within \[-90, 90\] deg, got 1000.0"),
+        ("run,lat_deg,temp_min_c,temp_max_c\n1,28,1,2\n", {"lat0_deg": float("nan")}, r"site latitude lat0_deg must be within"),
         ("run,lat_deg,lat_deg,temp_min_c,temp_max_c\n1,28,28,1,2\n", {"lat0_deg": 28.0}, r"column 'lat_deg' appears twice"),
         ("run,split,lat_deg,temp_min_c,temp_max_c\n1,validate,28,1,2\n", {"lat0_deg": 28.0}, r"column split: expected 'train' or 'test'"),
     ],
@@ -77,6 +79,13 @@ def test_bad_tables_name_file_row_and_column(tmp_path, text, kwargs, message):
     p = _write(tmp_path, text)
     with pytest.raises(RunTableError, match=message):
         read_runs_csv(p, **kwargs)
+
+
+def test_binary_file(tmp_path):
+    p = tmp_path / "bin.csv"
+    p.write_bytes(b"run,lat_deg,temp_min_c,temp_max_c\n1,28,1,2\n\xff\xfe\x00\x81\n")
+    with pytest.raises(RunTableError, match=r"bin.csv, row 3: not UTF-8 text"):
+        read_runs_csv(p, lat0_deg=28.0)
 
 
 def test_missing_file(tmp_path):

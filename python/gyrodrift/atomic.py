@@ -22,6 +22,7 @@ __all__ = [
     "atomic_write_parquet",
     "atomic_directory",
     "temporary_path",
+    "missing_folder_message",
 ]
 
 
@@ -171,3 +172,14 @@ def atomic_directory(path: str | os.PathLike[str]) -> Iterator[Path]:
     _fsync_directory(parent)
     if old is not None:
         shutil.rmtree(old, ignore_errors=True)
+
+
+def missing_folder_message(path: str | os.PathLike[str]) -> str | None:
+    """A message when the folder that should receive file `path` does not exist, else None.
+
+    Commands call it before long work, so that a mistyped ``--out`` fails at once instead of after hours.
+    """
+    parent = Path(path).parent
+    if str(parent) and not parent.is_dir():
+        return f"{path}: the folder {parent} does not exist"
+    return None

@@ -8,6 +8,7 @@ import json
 import sys
 
 import click
+import numpy as np
 
 from gyrodrift import __version__
 from gyrodrift.choices import METHODS, OBJECTIVES, SCALINGS
@@ -18,6 +19,13 @@ from gyrodrift.features import ENCODINGS
 @click.version_option(__version__, prog_name="gyrodrift")
 def main() -> None:
     """Identify the axial gyro drift of single-axis rotation RLG inertial navigation systems."""
+
+
+def _check_out(path) -> None:
+    from gyrodrift.atomic import missing_folder_message
+
+    if path is not None and (message := missing_folder_message(path)):
+        raise click.ClickException(message)
 
 
 def _read_runs(path, lat0_deg, require_truth, split=None):
@@ -60,7 +68,11 @@ def fit(data, out, encoding, scaling, objective, method, gamma, sigma, seed, lat
     from gyrodrift.model import fit_drift_model
     from gyrodrift.model_io import save_model
 
+    _check_out(out)
     runs = _read_runs(data, lat0_deg, True, split)
+    if split is None and any(runs.split):
+        click.echo(f"note: {data} has a split column; training on all {len(runs)} rows "
+                   "(--split train uses the training rows only)", err=True)
     try:
         model = fit_drift_model(
             runs, encoding=encoding, scaling=scaling, objective=objective, method=method,
@@ -89,8 +101,10 @@ def fit(data, out, encoding, scaling, objective, method, gamma, sigma, seed, lat
 def predict(model_file, data, fmt, out, coverage, lat0_deg, split):
     """Identify the axial drift [deg/h] of each run in DATA.csv with MODEL_FILE."""
     from gyrodrift.atomic import atomic_write
+    from gyrodrift.model import min_runs_for_coverage
     from gyrodrift.model_io import ModelFileError, load_model
 
+    _check_out(out)
     try:
         model = load_model(model_file)
     except ModelFileError as exc:
@@ -100,6 +114,11 @@ def predict(model_file, data, fmt, out, coverage, lat0_deg, split):
         if model.loo_residuals_deg_h is None:
             raise click.ClickException(f"{model_file}: the model file has no leave-one-out residuals for an interval")
         pred, lo, hi = model.predict_interval(runs, coverage)
+        if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
+            n = len(model.loo_residuals_deg_h)
+            raise click.ClickException(
+                f"{model_file}: {n} training runs are too few for a {100 * coverage:g} % jackknife interval "
+                f"(needs at least {min_runs_for_coverage(coverage)}); lower --coverage")
     else:
         pred = model.predict(runs)
     rows = []

@@ -67,6 +67,16 @@ def jackknife_half_width(residuals, coverage: float) -> float:
     return float(r[k - 1]) if k <= r.size else math.inf
 
 
+def min_runs_for_coverage(coverage: float) -> int:
+    """Smallest number of leave-one-out residuals for which ``jackknife_half_width`` is finite."""
+    if not 0.0 < coverage < 1.0:
+        raise ValueError(f"coverage must be within (0, 1), got {coverage}")
+    n = 1
+    while math.ceil((n + 1) * coverage) > n:
+        n += 1
+    return n
+
+
 def _tick(bar, callback, intermediate_result):
     bar.update(1)
     return callback(intermediate_result) if callback is not None else None

@@ -129,6 +129,8 @@ def model_from_dict(doc: dict, where: str = "<model>") -> DriftModel:
         scaler = StandardScaler() if kind == "standard" else MinMaxScaler()
         for attr in _SCALER_ATTRS[kind]:
             setattr(scaler, attr, _floats(_need(sdoc, attr, list, where + " [scaler]"), where, attr, (n_feat,)))
+        if np.any(np.asarray(scaler.scale_) == 0.0):
+            raise ModelFileError(f"{where}: key 'scale_' of the scaler holds a zero")
         scaler.n_features_in_ = n_feat
         scaler.n_samples_seen_ = int(_need(sdoc, "n_samples_seen", int, where + " [scaler]"))
     ldoc = _need(doc, "lssvr", dict, where)
@@ -148,8 +150,12 @@ def model_from_dict(doc: dict, where: str = "<model>") -> DriftModel:
         )
     except ValueError as exc:
         raise ModelFileError(f"{where}: {exc}") from None
-    if est.gamma <= 0 or est.sigma <= 0:
+    if not (est.gamma > 0 and est.sigma > 0 and np.isfinite(est.gamma) and np.isfinite(est.sigma)):
         raise ModelFileError(f"{where}: gamma and sigma must be positive, got {est.gamma} and {est.sigma}")
+    if est.kernel not in ("rbf", "linear", "poly", "polynomial"):
+        raise ModelFileError(f"{where}: unknown kernel {est.kernel!r}")
+    if est.degree < 1:
+        raise ModelFileError(f"{where}: key 'degree' must be a whole number >= 1, got {est.degree}")
     est.X_fit_ = sv
     est.alpha_ = alpha
     est.intercept_ = intercept
@@ -161,6 +167,9 @@ def model_from_dict(doc: dict, where: str = "<model>") -> DriftModel:
             tuning = TuningResult(**{**tdoc, "bounds": tuple(tuple(b) for b in tdoc["bounds"])})
         except (TypeError, KeyError) as exc:
             raise ModelFileError(f"{where}: malformed tuning record ({exc})") from None
+    training = doc.get("training") or {}
+    if not isinstance(training, dict):
+        raise ModelFileError(f"{where}: key 'training' must be an object, got {type(training).__name__}")
     loo = doc.get("loo_residuals_deg_h")
     if loo is not None:
         loo = _floats(loo, where, "loo_residuals_deg_h", (sv.shape[0],))
@@ -169,7 +178,7 @@ def model_from_dict(doc: dict, where: str = "<model>") -> DriftModel:
         scaling=kind,
         pipeline=Pipeline([("scale", scaler), ("lssvr", est)]),
         tuning=tuning,
-        training=dict(doc.get("training") or {}),
+        training=training,
         loo_residuals_deg_h=loo,
     )
 

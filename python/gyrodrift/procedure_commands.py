@@ -90,8 +90,13 @@ def features_command(logs, out, lat0_deg, lon0_deg, height_m, with_truth, criter
     """
     from gyrodrift.procedure.fleet import features_table, write_curves_csv, write_features_csv
 
+    from gyrodrift.atomic import missing_folder_message
+
     if workers is not None and scheduler is not None:
         raise click.UsageError("give --workers or --scheduler, not both")
+    for target in (out, curves):
+        if target is not None and (message := missing_folder_message(target)):
+            raise click.ClickException(message)
     rows = _guard(features_table, [str(p) for p in logs], site=_site(lat0_deg, lon0_deg, height_m),
                   with_truth=with_truth, criterion=criterion, workers=workers, scheduler=scheduler, quiet=quiet)
     write_features_csv(rows, out)

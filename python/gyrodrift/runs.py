@@ -19,6 +19,7 @@ The latitude error used by the models is ``lat_deg - lat0_deg`` (computed minus 
 from __future__ import annotations
 
 import csv
+import io
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -170,11 +171,18 @@ def read_runs_csv(path, *, lat0_deg: float | None = None, require_truth: bool = 
     """
     path = Path(path)
     name = str(path)
+    if lat0_deg is not None and not (math.isfinite(lat0_deg) and -90.0 <= lat0_deg <= 90.0):
+        raise RunTableError(f"{name}: site latitude lat0_deg must be within [-90, 90] deg, got {lat0_deg}")
     try:
-        handle = open(path, newline="", encoding="utf-8-sig")
+        raw = path.read_bytes()
     except OSError as exc:
         raise RunTableError(f"{name}: cannot open: {exc.strerror}") from None
-    with handle:
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = raw[: exc.start].count(b"\n") + 1
+        raise RunTableError(f"{name}, row {line}: not UTF-8 text (byte {exc.start}); expected a CSV table") from None
+    with io.StringIO(text, newline="") as handle:
         reader = csv.reader(handle)
         try:
             header = next(reader)
@@ -202,7 +210,7 @@ def read_runs_csv(path, *, lat0_deg: float | None = None, require_truth: bool = 
         if require_truth and "drift_deg_h" not in col:
             raise RunTableError(f"{name}, row 1: missing column 'drift_deg_h' (true axial drift, deg/h) for training")
 
-        runs, lat, lat0, tmin, tmax, drift, split = [], [], [], [], [], [], []
+        runs, lat, lat0, tmin, tmax, drift, split, rows = [], [], [], [], [], [], [], []
         for rownum, row in enumerate(reader, start=2):
             if not row or all(not cell.strip() for cell in row):
                 continue
@@ -211,6 +219,7 @@ def read_runs_csv(path, *, lat0_deg: float | None = None, require_truth: bool = 
                 raise RunTableError(f"{where}: expected {len(header)} cells, got {len(row)}")
             cell = {h: row[i].strip() for h, i in col.items()}
             runs.append(cell.get("run") or str(len(runs) + 1))
+            rows.append(rownum)
             la = _parse_float(cell["lat_deg"], where, "lat_deg", "a latitude in degrees")
             if not -90.0 <= la <= 90.0:
                 raise RunTableError(f"{where}, column lat_deg: expected a latitude within [-90, 90] deg, got {la}")
@@ -252,11 +261,14 @@ def read_runs_csv(path, *, lat0_deg: float | None = None, require_truth: bool = 
             split.append(sp)
     if not runs:
         raise RunTableError(f"{name}: no data rows after the header")
-    seen = set()
-    for i, r in enumerate(runs):
+    seen: dict[str, int] = {}
+    for r, rownum in zip(runs, rows):
         if r in seen:
-            raise RunTableError(f"{name}, column run: run {r!r} appears more than once")
-        seen.add(r)
+            raise RunTableError(
+                f"{name}, row {rownum}, column run: run {r!r} appears more than once (first in row {seen[r]}; "
+                "a blank run cell is numbered by its position among the data rows)"
+            )
+        seen[r] = rownum
     return RunTable(
         run=np.array(runs, dtype=object),
         lat_deg=np.array(lat),

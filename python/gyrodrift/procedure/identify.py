@@ -21,7 +21,7 @@ import numpy as np
 
 from gyrodrift.baselines import physics_inversion
 from gyrodrift.logs import ImuLog
-from gyrodrift.model import DriftModel
+from gyrodrift.model import DriftModel, min_runs_for_coverage
 from gyrodrift.procedure.features import RunFeatures, extract_features, features_run_table
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 
@@ -145,11 +145,15 @@ def identify(
                                     quiet=quiet)
     table = features_run_table([features], source=str(log.path))
     drift = float(model.predict(table)[0])
+    interval, note = None, NO_UNCERTAINTY_NOTE
     if model.loo_residuals_deg_h is not None:
+        n = len(model.loo_residuals_deg_h)
         _, lo, hi = model.predict_interval(table, coverage)
-        interval, note = (float(lo[0]), float(hi[0])), INTERVAL_NOTE.format(n=len(model.loo_residuals_deg_h))
-    else:
-        interval, note = None, NO_UNCERTAINTY_NOTE
+        if math.isfinite(lo[0]) and math.isfinite(hi[0]):
+            interval, note = (float(lo[0]), float(hi[0])), INTERVAL_NOTE.format(n=n)
+        else:
+            note = (f"{NO_UNCERTAINTY_NOTE}; its {n} training runs are too few for a {100 * coverage:g} % "
+                    f"jackknife interval (needs at least {min_runs_for_coverage(coverage)})")
     physics = float(physics_inversion(table, t_h=features.hours)[0])
     err, kind = _training_error(model)
     al = features.alignment
