@@ -1,6 +1,6 @@
 """Click commands `features`, `truth`, `evaluate`, `identify`: thin wrappers over `gyrodrift.procedure`.
 
-The integrator registers `features_command`, `truth_command`, `evaluate_command` and `identify_command` in
+`gyrodrift.cli` registers `features_command`, `truth_command`, `evaluate_command` and `identify_command` in
 the `gyrodrift` CLI group. Every problem with a log, a model or the options is a `click.ClickException`
 (exit status 1) whose message names the file.
 """

@@ -1,6 +1,6 @@
 """Click commands `simulate` and `navigate`: thin wrappers over `gyrodrift.ins.simulate` / `navigate`.
 
-The integrator registers `simulate_command` and `navigate_command` in the `gyrodrift` CLI group.
+`gyrodrift.cli` registers `simulate_command` and `navigate_command` in the `gyrodrift` CLI group.
 """
 
 from __future__ import annotations

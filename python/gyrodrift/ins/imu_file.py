@@ -200,7 +200,32 @@ class ImuFileReader:
         self._has_truth_columns = all(c in schema.names for c in TRUTH_COLUMNS)
 
     def chunks(self, chunk_samples: int) -> Iterator[ImuChunk]:
-        """Yield consecutive chunks of at most `chunk_samples` samples, never the whole file at once."""
+        """Yield consecutive chunks of at most `chunk_samples` samples, never the whole file at once.
+
+        Every chunk is checked before it is handed on: finite time and increments, strictly increasing time
+        (also across chunks); a bad sample raises `ImuFileError` naming the file, the sample (1-based row) and
+        the column.
+        """
         cols = list(SENSOR_COLUMNS) + (list(TRUTH_COLUMNS) if self._has_truth_columns else [])
+        first, prev_t = 0, None
         for batch in self._pf.iter_batches(batch_size=chunk_samples, columns=cols):
-            yield table_to_chunk(batch)
+            chunk = table_to_chunk(batch)
+            self._check(chunk, first, prev_t)
+            first += len(chunk.t_s)
+            prev_t = float(chunk.t_s[-1]) if len(chunk.t_s) else prev_t
+            yield chunk
+
+    def _check(self, chunk: ImuChunk, first: int, prev_t: float | None) -> None:
+        where = lambda i, column: f"{self.path}, row {first + i + 1}, column {column}"  # noqa: E731
+        for name, values in (("t_s", chunk.t_s[:, None]), ("dtheta", chunk.dtheta_rad), ("dv", chunk.dv_m_s)):
+            bad = ~np.isfinite(values)
+            if bad.any():
+                i, j = (int(k[0]) for k in np.nonzero(bad))
+                column = name if name == "t_s" else SENSOR_COLUMNS[1 + j + (3 if name == "dv" else 0)]
+                raise ImuFileError(f"{where(i, column)}: expected a finite number, got {float(values[i, j])!r}")
+        t = chunk.t_s if prev_t is None else np.concatenate([[prev_t], chunk.t_s])
+        back = np.flatnonzero(np.diff(t) <= 0.0)
+        if back.size:
+            i = int(back[0]) + (0 if prev_t is not None else 1)
+            raise ImuFileError(f"{where(i, 't_s')}: time must be strictly increasing "
+                               f"({float(t[back[0] + 1])!r} s after {float(t[back[0]])!r} s)")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 import os
 from dataclasses import dataclass
@@ -213,7 +214,10 @@ def navigate(
     if hours is not None:
         if not (hours > 0 and math.isfinite(hours)):
             raise ValueError(f"navigate: hours must be > 0, got {hours!r}")
-        n_total = min(n_total, int(round(hours * HOUR * rate)))
+        asked = int(round(hours * HOUR * rate))
+        if asked > n_total:
+            raise ValueError(f"navigate: {hours:g} h asked but the IMU data hold {n_total / (HOUR * rate):.4g} h")
+        n_total = asked
     dec = max(1, int(round(decimation_s * rate)))
     per_hour = int(round(HOUR * rate))
     init = _initial_state(initial, src.truth, src.label)
@@ -353,6 +357,7 @@ def _finish(parts, true_parts, hourly, final, src, init, rate, dec, n_total, don
         table = pa.Table.from_pydict(
             {k: pa.array(v, pa.float64()) for k, v in cols.items()},
         ).replace_schema_metadata({"gyrodrift.format": "gyrodrift-nav/1", "gyrodrift.imu": src.label})
+        json.dumps(summary, allow_nan=False)  # fail before writing either file: the two always match
         atomic_write_parquet(table, folder / "nav.parquet")
         atomic_write_json(summary, folder / "summary.json")
     return NavResult(columns=cols, summary=summary, out_dir=folder)

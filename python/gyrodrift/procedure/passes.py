@@ -19,6 +19,7 @@ from typing import Sequence
 
 import numpy as np
 
+from gyrodrift.earth import NMI_M
 from gyrodrift.ins.nav_errors import position_errors
 from gyrodrift.logs import ImuLog, LogError
 from gyrodrift.procedure.align import Alignment
@@ -59,7 +60,7 @@ class NavCurve:
     @property
     def pos_err_nmi(self) -> np.ndarray:
         """Horizontal position error [nmi, 1852 m]."""
-        return np.hypot(self.north_m, self.east_m) / 1852.0
+        return np.hypot(self.north_m, self.east_m) / NMI_M
 
     @property
     def final_nmi(self) -> float:

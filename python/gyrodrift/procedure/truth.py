@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 from scipy.optimize import minimize_scalar
 
+from gyrodrift.earth import NMI_M
 from gyrodrift.logs import ImuLog
 from gyrodrift.procedure.align import Alignment, align_log
 from gyrodrift.procedure.passes import NavCurve, PassResult, navigate_after_alignment
@@ -47,18 +48,17 @@ __all__ = ["CRITERIA", "TrueDrift", "find_true_drift", "criterion_value", "minim
 CRITERIA = ("final", "rms", "max")
 """Position-error criteria over the navigation: at its end, root mean square, maximum."""
 
-_NMI = 1852.0
 
 
 def criterion_value(north_m: np.ndarray, east_m: np.ndarray, criterion: str) -> np.ndarray:
     """Criterion [nmi] of error curves; the last axis is time (any leading axes are kept)."""
     p2 = np.asarray(north_m) ** 2 + np.asarray(east_m) ** 2
     if criterion == "final":
-        return np.sqrt(p2[..., -1]) / _NMI
+        return np.sqrt(p2[..., -1]) / NMI_M
     if criterion == "rms":
-        return np.sqrt(p2.mean(axis=-1)) / _NMI
+        return np.sqrt(p2.mean(axis=-1)) / NMI_M
     if criterion == "max":
-        return np.sqrt(p2.max(axis=-1)) / _NMI
+        return np.sqrt(p2.max(axis=-1)) / NMI_M
     raise ValueError(f"unknown criterion {criterion!r}; expected one of {', '.join(CRITERIA)}")
 
 
@@ -240,7 +240,7 @@ def find_true_drift(
     c0, c1 = first.curves
     gn = (c1.north_m - c0.north_m) / trial_deg_h
     ge = (c1.east_m - c0.east_m) / trial_deg_h
-    sensitivity = float(np.hypot(gn[-1], ge[-1]) / _NMI)
+    sensitivity = float(np.hypot(gn[-1], ge[-1]) / NMI_M)
     ref_d, ref_n, ref_e = 0.0, c0.north_m, c0.east_m  # the linearisation point and its curves
     d_star = minimise_linear_criterion(ref_n, ref_e, gn, ge, criterion)
     refinements = 0
