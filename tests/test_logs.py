@@ -235,3 +235,10 @@ def test_unusable_files(tmp_path):
     path = bad_csv(tmp_path)
     with pytest.raises(LogError, match=r"bad\.csv: the log carries no site"):
         open_log(path, site={"height_m": 3.0})
+
+
+def test_a_binary_csv_log_is_named(tmp_path):
+    p = tmp_path / "notcsv.csv"
+    p.write_bytes(b"t_s,dtheta_x_rad\n\xff\xfe\x00\x81\x82\n")
+    with pytest.raises(LogError, match=r"notcsv.csv: not UTF-8 text"):
+        open_log(p, site={"lat_deg": 28.0})

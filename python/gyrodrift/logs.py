@@ -509,7 +509,10 @@ def open_log(path: str | os.PathLike[str], *, site: Site | Mapping[str, float] |
         return ImuLog(p, "parquet", kind, cols, rate, n, _merge_site(site, file_site, label), rate_source)
     if p.suffix.lower() != ".csv":
         raise LogError(f"{label}: unknown log format {p.suffix!r} (expected .parquet, .pq or .csv)")
-    header, times, last = _csv_head_and_tail(p, label)
+    try:
+        header, times, last = _csv_head_and_tail(p, label)
+    except UnicodeDecodeError as exc:
+        raise LogError(f"{label}: not UTF-8 text near byte {exc.start}; expected a CSV log") from None
     kind, cols = _kind_from_header(header, label)
     rate = _rate_from_times(times, label)
     if last is None or not last > times[0]:
