@@ -51,6 +51,11 @@ def test_schema_and_internal_consistency(run):
             hist = np.array(m["fitness_history"])
             assert np.all(np.diff(hist) <= 0) and hist[-1] == pytest.approx(m["fitness"])
             assert m["settings"]["n_particles"] == 30
+        if "on_search_bound" in m:  # recomputed from the tuned values and the box
+            (glo, ghi), (slo, shi) = m["search_bounds"]
+            want = [n for n, v, lo, hi in (("gamma", m["gamma"], glo, ghi), ("sigma", m["sigma"], slo, shi))
+                    if np.isclose(v, lo, rtol=1e-6) or np.isclose(v, hi, rtol=1e-6)]
+            assert m["on_search_bound"] == want
         if m["family"] in ("cpso_loo", "grid_loo"):
             half = m["interval_90_half_width_deg_h"]
             assert 0 < half < m["test_max_abs_err_deg_h"] * 10

@@ -147,6 +147,8 @@ def conclusion(results: dict) -> list[str]:
     )
     cpso_paper = [m for m in results["methods"] if m["family"] == "cpso_paper"]
     within = int(np.sum(np.abs(np.array(chosen["test_err_deg_h"])) <= 0.0005))
+    tuned = [m for m in results["methods"] if "on_search_bound" in m]
+    on_bound = [m for m in tuned if m["on_search_bound"]]
     nonzero = claim_err != 0
     mags_agree = bool(np.allclose(np.abs(claim_err), np.abs(true - claim_pred), rtol=0, atol=5e-7))
     agree_true_minus = int(np.sum(np.isclose(claim_err, true - claim_pred, atol=5e-7) & nonzero))
@@ -176,6 +178,11 @@ def conclusion(results: dict) -> list[str]:
         "from the training points: " + ", ".join(
             f"{c} of 10 test predictions of {m['name']} lie within 2e-6 deg/h of one value"
             for c, m in zip(collapsed, cpso_paper + [paper_param_best])) + ".",
+        f"{len(on_bound)} of the {len(tuned)} tuned models end on the edge of the search box "
+        f"(gamma in [{_fmt(tuned[0]['search_bounds'][0][0])}, {_fmt(tuned[0]['search_bounds'][0][1])}], sigma in "
+        f"[{_fmt(tuned[0]['search_bounds'][1][0])}, {_fmt(tuned[0]['search_bounds'][1][1])}], scaled units; marked "
+        "'(bound)' in the table): " + (", ".join(m["name"] for m in on_bound) or "none") + ". Their optimum lies "
+        "outside the box or the objective is flat there; a wider box would move them.",
         f"The paper's published gamma = {claims['gamma']} and sigma = {claims['sigma']} give at best "
         f"{_fmt(paper_param_best['test_mae_deg_h'])} deg/h ({paper_param_best['encoding']}, "
         f"{paper_param_best['scaling']} scaling) with the encodings and scalings tried here; the paper does not "
@@ -214,7 +221,9 @@ def report_blocks(results: dict, figures: dict[str, Path]) -> list[tuple]:
         ("h2", "Every method"),
         ("table",
          ["method", "gamma", "sigma", "evaluations", "train MAE", "LOO MAE", "test MAE", "test max |err|"],
-         [[m["name"], _fmt(m.get("gamma")), _fmt(m.get("sigma")), str(m.get("nfev", "-")) if m.get("nfev") else "-",
+         [[m["name"], _fmt(m.get("gamma")) + (" (bound)" if "gamma" in m.get("on_search_bound", ()) else ""),
+           _fmt(m.get("sigma")) + (" (bound)" if "sigma" in m.get("on_search_bound", ()) else ""),
+           str(m.get("nfev", "-")) if m.get("nfev") else "-",
            _fmt(m["train_mae_deg_h"]), _fmt(m.get("loo_mae_deg_h")), _fmt(m["test_mae_deg_h"]),
            _fmt(m["test_max_abs_err_deg_h"])] for m in results["methods"]]),
         ("h2", "Figures"),

@@ -85,6 +85,13 @@ def _model_entry(name: str, family: str, model: DriftModel, data, **extra) -> di
     est = model.lssvr
     loo = model.loo_residuals()
     tuning = model.tuning
+    if tuning is not None:
+        values = {"gamma": float(est.gamma), "sigma": float(est.sigma)}
+        extra["search_bounds"] = [list(b) for b in tuning.bounds]
+        extra["on_search_bound"] = [
+            name for name, (low, high) in zip(values, tuning.bounds)
+            if np.isclose(values[name], low, rtol=1e-6) or np.isclose(values[name], high, rtol=1e-6)
+        ]
     if np.all(np.isfinite(loo)):
         _, lo, hi = model.predict_interval(data.test, 0.9)
         true = data.test.drift_deg_h
