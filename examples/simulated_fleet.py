@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from gyrodrift.baselines import physics_inversion
-from gyrodrift.ins import Scenario, simulate
+from gyrodrift.ins.synthetic_fleet import simulate_fleet
 from gyrodrift.model import fit_drift_model
 from gyrodrift.procedure import features_run_table, features_table
 from gyrodrift.runs import RunTable
@@ -31,22 +31,8 @@ def main():
     ap.add_argument("--seed", type=int, default=5)
     ap.add_argument("--workdir", type=Path, default=None)
     args = ap.parse_args()
-    rng = np.random.default_rng(args.seed)
     base = args.workdir or Path(tempfile.mkdtemp(prefix="gyrodrift-fleet-"))
-    paths, drifts = [], []
-    for i in range(args.runs):
-        start, end, tau = rng.uniform(15, 25), rng.uniform(28, 40), rng.uniform(0.5, 3)
-        drift = 0.0015 + 0.0002 * (end - 28.0) + rng.normal(0, 1e-4)
-        scn = Scenario.from_dict({
-            "run": {"duration_h": 16.0, "rate_hz": args.rate_hz, "seed": i},
-            "gyro": {"bias_deg_h": [0.005, -0.004, drift], "arw_deg_rth": 0.0005},
-            "accel": {"bias_ug": [30.0, -20.0, 10.0], "vrw_ug_rthz": 5.0},
-            "temperature": {"start_c": start, "end_c": end, "tau_h": tau},
-            "attitude": {"yaw_deg": float(rng.uniform(0, 360))},
-        })
-        paths.append(simulate(scn, out_dir=base / f"run{i:02d}"))
-        drifts.append(drift)
-    drifts = np.array(drifts)
+    paths, drifts = simulate_fleet(base, args.runs, rate_hz=args.rate_hz, rng=args.seed)
     table = features_run_table(features_table(paths))
     table = RunTable(run=table.run, lat_deg=table.lat_deg, lat0_deg=table.lat0_deg, temp_min_c=table.temp_min_c,
                      temp_max_c=table.temp_max_c, drift_deg_h=drifts, source=str(base))

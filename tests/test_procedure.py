@@ -25,6 +25,7 @@ from click.testing import CliRunner
 
 from gyrodrift.baselines import physics_inversion
 from gyrodrift.ins import Scenario, simulate
+from gyrodrift.ins.synthetic_fleet import simulate_fleet
 from gyrodrift.logs import LogError, open_log
 from gyrodrift.model import fit_drift_model
 from gyrodrift.model_io import save_model
@@ -48,11 +49,6 @@ LONG_DRIFT = 0.003
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 
-def fleet_drift(end_c: float, scatter: float) -> float:
-    """The fleet's thermal law [deg/h]."""
-    return 0.0015 + 0.0002 * (end_c - 28.0) + scatter
-
-
 @pytest.fixture(scope="module")
 def long_log(tmp_path_factory):
     scn = Scenario.from_dict({
@@ -73,22 +69,7 @@ def long_alignment(long_log):
 @pytest.fixture(scope="module")
 def fleet(tmp_path_factory):
     """13 simulated 16 h runs: (paths, drifts)."""
-    rng = np.random.default_rng(5)
-    base = tmp_path_factory.mktemp("fleet")
-    paths, drifts = [], []
-    for i in range(13):
-        start, end, tau = rng.uniform(15, 25), rng.uniform(28, 40), rng.uniform(0.5, 3)
-        d = fleet_drift(end, rng.normal(0, 1e-4))
-        scn = Scenario.from_dict({
-            "run": {"duration_h": 16.0, "rate_hz": 10.0, "seed": i},
-            "gyro": {"bias_deg_h": [0.005, -0.004, d], "arw_deg_rth": 0.0005},
-            "accel": {"bias_ug": [30.0, -20.0, 10.0], "vrw_ug_rthz": 5.0},
-            "temperature": {"start_c": start, "end_c": end, "tau_h": tau},
-            "attitude": {"yaw_deg": float(rng.uniform(0, 360))},
-        })
-        paths.append(simulate(scn, out_dir=base / f"run{i:02d}"))
-        drifts.append(d)
-    return paths, np.array(drifts)
+    return simulate_fleet(tmp_path_factory.mktemp("fleet"), 13, rate_hz=10.0, rng=5)
 
 
 @pytest.fixture(scope="module")
