@@ -21,9 +21,6 @@ from scipy import stats
 from gyrodrift.benchmark_functions import ackley, griewank, rastrigin, rosenbrock, sphere
 from gyrodrift.cpso import minimize_cpso
 
-
-
-
 PROBLEMS = [  # (name, function, half-width of the symmetric box)
     ("sphere", sphere, 5.12),
     ("rastrigin", rastrigin, 5.12),
@@ -57,8 +54,7 @@ def main() -> None:
     )
     print("final best fitness: median [25th, 75th percentile]; global minimum 0 for all")
     header = (
-        f"{'function':<11} {'chaos PSO':>33} {'plain PSO':>33} {'med ratio':>9} "
-        f"{'chaos better':>12} {'Wilcoxon p':>10}"
+        f"{'function':<11} {'chaos PSO':>33} {'plain PSO':>33} {'med ratio':>9} {'chaos better':>12} {'Wilcoxon p':>10}"
     )
     print(header)
     print("-" * len(header))
@@ -82,10 +78,7 @@ def main() -> None:
         wins = int(np.sum(chaos < plain))
         diff = chaos - plain
         p = stats.wilcoxon(chaos, plain).pvalue if np.any(diff != 0) else math.nan
-        print(
-            f"{name:<11} {summary(chaos):>33} {summary(plain):>33} {ratio:9.2e} "
-            f"{wins:>6}/{opts.seeds:<5} {p:10.2g}"
-        )
+        print(f"{name:<11} {summary(chaos):>33} {summary(plain):>33} {ratio:9.2e} {wins:>6}/{opts.seeds:<5} {p:10.2g}")
 
     runs = len(PROBLEMS) * opts.seeds
     plain_nfev = n * (plain_iter + 1)

@@ -41,8 +41,12 @@ def _scenario(hours: float, rate_hz: float) -> Scenario:
         {
             "run": {"duration_h": hours, "rate_hz": rate_hz, "seed": 1},
             "rotation": {"scheme": "reciprocating", "rate_deg_s": 6.0},
-            "gyro": {"bias_deg_h": [0.002, -0.002, 0.003], "arw_deg_rth": 0.0005,
-                     "bias_instability_deg_h": 0.001, "correlation_s": 3600.0},
+            "gyro": {
+                "bias_deg_h": [0.002, -0.002, 0.003],
+                "arw_deg_rth": 0.0005,
+                "bias_instability_deg_h": 0.001,
+                "correlation_s": 3600.0,
+            },
             "accel": {"bias_ug": [20.0, -20.0, 15.0], "vrw_ug_rthz": 5.0},
             "temperature": {"start_c": 20.0, "end_c": 35.0, "tau_h": 2.0, "k1_deg_h_per_c": 1e-4},
             "attitude": {"pitch_deg": 0.5, "roll_deg": -0.3, "yaw_deg": 30.0},
@@ -80,9 +84,16 @@ def _time_simulator(scn: Scenario, chunk: int, repeat: int = 1) -> tuple[int, fl
 
 
 def _nav_config(s: Scenario) -> dict:
-    return {"lat_rad": s.site.lat_deg * DEG, "lon_rad": s.site.lon_deg * DEG, "height_m": s.site.height_m,
-            "pitch_rad": s.attitude.pitch_deg * DEG, "roll_rad": s.attitude.roll_deg * DEG,
-            "yaw_rad": s.attitude.yaw_deg * DEG, "rate_hz": s.run.rate_hz, "vertical": "fixed"}
+    return {
+        "lat_rad": s.site.lat_deg * DEG,
+        "lon_rad": s.site.lon_deg * DEG,
+        "height_m": s.site.height_m,
+        "pitch_rad": s.attitude.pitch_deg * DEG,
+        "roll_rad": s.attitude.roll_deg * DEG,
+        "yaw_rad": s.attitude.yaw_deg * DEG,
+        "rate_hz": s.run.rate_hz,
+        "vertical": "fixed",
+    }
 
 
 def _rss_mb() -> float:
@@ -130,8 +141,10 @@ def main(argv: list[str] | None = None) -> None:
     tracemalloc.stop()
     rust_rate = done / t_nav
     print(f"Rust Navigator    : {rust_rate:14,.0f} samples/s   ({t_nav:.2f} s)")
-    print(f"memory            : peak RSS {_rss_mb():.0f} MB (start {rss0:.0f} MB), Python heap peak "
-          f"{py_peak / 2**20:.1f} MB while streaming; the whole run as float64 would be {n * 12 * 8 / 2**30:.1f} GiB")
+    print(
+        f"memory            : peak RSS {_rss_mb():.0f} MB (start {rss0:.0f} MB), Python heap peak "
+        f"{py_peak / 2**20:.1f} MB while streaming; the whole run as float64 would be {n * 12 * 8 / 2**30:.1f} GiB"
+    )
 
     # 3. numpy reference on a short span of the same data
     n_ref = int(round(args.reference_s * args.rate_hz))

@@ -12,7 +12,7 @@ import time
 from sklearn.preprocessing import StandardScaler
 
 from gyrodrift.datasets import load_paper
-from gyrodrift.features import encode
+from gyrodrift.encodings import encode
 from gyrodrift.reproduce import run_reproduction
 from gyrodrift.tuning import tune_lssvr
 

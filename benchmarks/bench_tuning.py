@@ -19,7 +19,7 @@ import numpy as np
 from sklearn.preprocessing import StandardScaler
 
 from gyrodrift.datasets import load_paper
-from gyrodrift.features import encode
+from gyrodrift.encodings import encode
 from gyrodrift.tuning import make_objective, tune_lssvr
 
 
@@ -77,8 +77,11 @@ def main():
     t0 = time.perf_counter()
     res = tune_lssvr(X, y, objective="loo_mae", method="cpso", rng=0)
     dt = time.perf_counter() - t0
-    print(f"CPSO tuning run, 30 x 100, chaos 10: {dt:.2f} s, nfev = {res.nfev}, "
-          f"{res.nfev / dt:.0f} evaluations/s, LOO MAE {res.fitness:.3e} deg/h at gamma {res.gamma:.4g}, sigma {res.sigma:.4g}")
+    print(
+        f"CPSO tuning run, 30 x 100, chaos 10: {dt:.2f} s, nfev = {res.nfev}, "
+        f"{res.nfev / dt:.0f} evaluations/s, LOO MAE {res.fitness:.3e} deg/h "
+        f"at gamma {res.gamma:.4g}, sigma {res.sigma:.4g}"
+    )
 
 
 if __name__ == "__main__":

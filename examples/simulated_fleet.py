@@ -34,18 +34,29 @@ def main():
     base = args.workdir or Path(tempfile.mkdtemp(prefix="gyrodrift-fleet-"))
     paths, drifts = simulate_fleet(base, args.runs, rate_hz=args.rate_hz, rng=args.seed)
     table = features_run_table(features_table(paths))
-    table = RunTable(run=table.run, lat_deg=table.lat_deg, lat0_deg=table.lat0_deg, temp_min_c=table.temp_min_c,
-                     temp_max_c=table.temp_max_c, drift_deg_h=drifts, source=str(base))
+    table = RunTable(
+        run=table.run,
+        lat_deg=table.lat_deg,
+        lat0_deg=table.lat0_deg,
+        temp_min_c=table.temp_min_c,
+        temp_max_c=table.temp_max_c,
+        drift_deg_h=drifts,
+        source=str(base),
+    )
     n_train = args.runs - args.held_out
     train, test = table.select(np.arange(n_train)), table.select(np.arange(n_train, args.runs))
     for enc in ("temp_range", "lat_only"):
         model = fit_drift_model(train, encoding=enc, rng=0)
         err = test.drift_deg_h - model.predict(test)
-        print(f"CPSO-LSSVM ({enc:10s}) held-out errors [deg/h]: {np.array2string(err, precision=2)}  "
-              f"MAE {np.mean(np.abs(err)):.2e}  (LOO MAE on training {np.mean(np.abs(model.loo_residuals())):.2e})")
+        print(
+            f"CPSO-LSSVM ({enc:10s}) held-out errors [deg/h]: {np.array2string(err, precision=2)}  "
+            f"MAE {np.mean(np.abs(err)):.2e}  (LOO MAE on training {np.mean(np.abs(model.loo_residuals())):.2e})"
+        )
     err = test.drift_deg_h - physics_inversion(test)
-    print(f"physics inversion         held-out errors [deg/h]: {np.array2string(err, precision=2)}  "
-          f"MAE {np.mean(np.abs(err)):.2e}")
+    print(
+        f"physics inversion         held-out errors [deg/h]: {np.array2string(err, precision=2)}  "
+        f"MAE {np.mean(np.abs(err)):.2e}"
+    )
     print(f"logs in {base}")
 
 

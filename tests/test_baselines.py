@@ -19,7 +19,11 @@ def test_reference_number_of_method_md():
 def test_inversion_recovers_the_drift_of_the_closed_form(drift, lat0):
     err_arcsec = latitude_error_at(12 * HOUR, drift, lat0)
     runs = RunTable(
-        run=np.array(["a"], dtype=object), lat_deg=np.array([lat0 + err_arcsec / 3600.0]), lat0_deg=np.array([lat0]),
-        temp_min_c=np.array([20.0]), temp_max_c=np.array([21.0]), drift_deg_h=np.array([np.nan]),
+        run=np.array(["a"], dtype=object),
+        lat_deg=np.array([lat0 + err_arcsec / 3600.0]),
+        lat0_deg=np.array([lat0]),
+        temp_min_c=np.array([20.0]),
+        temp_max_c=np.array([21.0]),
+        drift_deg_h=np.array([np.nan]),
     )
     np.testing.assert_allclose(physics_inversion(runs), [drift], rtol=1e-9, atol=1e-12)

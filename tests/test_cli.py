@@ -21,8 +21,22 @@ def paper_csv(tmp_path):
 def test_fit_then_predict_csv_and_jsonl(tmp_path, paper_csv):
     runner = CliRunner()
     model = tmp_path / "model.json"
-    r = runner.invoke(main, ["fit", str(paper_csv), "--out", str(model), "--split", "train", "--lat0-deg", "28.222",
-                             "--method", "grid", "--quiet"])
+    r = runner.invoke(
+        main,
+        [
+            "fit",
+            str(paper_csv),
+            "--out",
+            str(model),
+            "--split",
+            "train",
+            "--lat0-deg",
+            "28.222",
+            "--method",
+            "grid",
+            "--quiet",
+        ],
+    )
     assert r.exit_code == 0, r.output
     assert "fitted on 22 runs" in r.output and model.exists()
     r = runner.invoke(main, ["predict", str(model), str(paper_csv), "--split", "test", "--lat0-deg", "28.222"])
@@ -30,18 +44,22 @@ def test_fit_then_predict_csv_and_jsonl(tmp_path, paper_csv):
     rows = list(csv.DictReader(io.StringIO(r.output)))
     assert [row["run"] for row in rows] == [str(i) for i in range(23, 33)]
     for row in rows:
-        assert float(row["error_deg_h"]) == pytest.approx(float(row["drift_deg_h"]) - float(row["drift_identified_deg_h"]))
+        assert float(row["error_deg_h"]) == pytest.approx(
+            float(row["drift_deg_h"]) - float(row["drift_identified_deg_h"])
+        )
     out = tmp_path / "pred.jsonl"
-    r = runner.invoke(main, ["predict", str(model), str(paper_csv), "--lat0-deg", "28.222", "--format", "jsonl",
-                             "--out", str(out)])
+    r = runner.invoke(
+        main, ["predict", str(model), str(paper_csv), "--lat0-deg", "28.222", "--format", "jsonl", "--out", str(out)]
+    )
     assert r.exit_code == 0, r.output
     lines = [json.loads(line) for line in out.read_text().splitlines()]
     assert len(lines) == 32 and {"run", "drift_identified_deg_h"} <= set(lines[0])
 
 
 def test_fit_with_fixed_parameters_needs_both(tmp_path, paper_csv):
-    r = CliRunner().invoke(main, ["fit", str(paper_csv), "--out", str(tmp_path / "m.json"), "--lat0-deg", "28.222",
-                                  "--gamma", "10"])
+    r = CliRunner().invoke(
+        main, ["fit", str(paper_csv), "--out", str(tmp_path / "m.json"), "--lat0-deg", "28.222", "--gamma", "10"]
+    )
     assert r.exit_code != 0 and "give both gamma and sigma" in r.output
 
 
@@ -67,12 +85,26 @@ def test_version():
 
 
 def test_missing_output_folder_fails_before_any_work(tmp_path, paper_csv):
-    r = CliRunner().invoke(main, ["fit", str(paper_csv), "--out", str(tmp_path / "nodir" / "m.json"),
-                                  "--lat0-deg", "28.222"])
+    r = CliRunner().invoke(
+        main, ["fit", str(paper_csv), "--out", str(tmp_path / "nodir" / "m.json"), "--lat0-deg", "28.222"]
+    )
     assert r.exit_code == 1 and "the folder" in r.output and "nodir does not exist" in r.output
 
 
 def test_fit_says_when_a_split_column_is_ignored(tmp_path, paper_csv):
-    r = CliRunner().invoke(main, ["fit", str(paper_csv), "--out", str(tmp_path / "m.json"), "--lat0-deg", "28.222",
-                                  "--gamma", "10", "--sigma", "1"])
+    r = CliRunner().invoke(
+        main,
+        [
+            "fit",
+            str(paper_csv),
+            "--out",
+            str(tmp_path / "m.json"),
+            "--lat0-deg",
+            "28.222",
+            "--gamma",
+            "10",
+            "--sigma",
+            "1",
+        ],
+    )
     assert r.exit_code == 0 and "has a split column; training on all 32 rows" in r.output

@@ -13,7 +13,6 @@ from scipy.optimize import Bounds, OptimizeResult
 from gyrodrift.benchmark_functions import ackley, griewank, rastrigin, rosenbrock, sphere
 from gyrodrift.cpso import _reseed_chaos, minimize_cpso
 
-
 # (name, function, dimension, bounds, argmin)
 PROBLEMS = [
     ("sphere", sphere, 3, [(-5.0, 5.0)] * 3, np.zeros(3)),
@@ -363,7 +362,7 @@ def test_chaos_search_does_not_collapse_onto_a_fixed_point(mu):
 @settings(max_examples=25, deadline=None)
 def test_any_box_keeps_results_inside_and_history_monotone(lows, widths, seed, chaos_steps):
     w = widths.draw(st.lists(st.floats(1e-6, 1e3), min_size=len(lows), max_size=len(lows)))
-    bounds = [(lo, lo + wi) for lo, wi in zip(lows, w) if lo + wi > lo]
+    bounds = [(lo, lo + wi) for lo, wi in zip(lows, w, strict=False) if lo + wi > lo]
     if not bounds:
         return
     counted = Counted(lambda x: float(np.sum(np.sin(x) * x)))

@@ -5,8 +5,8 @@ import pyarrow.parquet as pq
 import pytest
 from click.testing import CliRunner
 
+from gyrodrift.cli.navigation import navigate_command
 from gyrodrift.ins import Scenario, navigate, simulate
-from gyrodrift.ins.commands import navigate_command
 from gyrodrift.ins.imu_file import ImuFileError
 
 

@@ -10,11 +10,10 @@ import pyarrow.parquet as pq
 import pytest
 from click.testing import CliRunner
 
+from gyrodrift.cli.navigation import navigate_command, simulate_command
 from gyrodrift.ins import ImuData, ImuFileError, Scenario, load_scenario, navigate, simulate
-from gyrodrift.ins.commands import navigate_command, simulate_command
 from gyrodrift.ins.imu_file import IMU_COLUMNS, IMU_FORMAT
 from gyrodrift.ins.navigate import NAV_COLUMNS, NAV_ERROR_COLUMNS
-
 
 SMALL = """
 [site]
@@ -103,8 +102,9 @@ def test_navigate_file_memory_and_scenario_agree_and_write_outputs(tmp_path, sma
     assert cp["pos_err_nmi"] == pytest.approx(nav.column("pos_err_nmi").to_numpy()[row], abs=1e-12)
     assert summary["final"]["t_h"] == pytest.approx(1.05)
     assert summary["max_pos_err_nmi"] >= summary["final_pos_err_nmi"] >= 0.0
-    assert summary["max_pos_err_nmi"] == pytest.approx(max(nav.column("pos_err_nmi").to_numpy().max(),
-                                                           summary["final_pos_err_nmi"]))
+    assert summary["max_pos_err_nmi"] == pytest.approx(
+        max(nav.column("pos_err_nmi").to_numpy().max(), summary["final_pos_err_nmi"])
+    )
 
 
 def test_navigate_hours_limits_the_run(tmp_path, small_toml):
@@ -148,14 +148,17 @@ def test_navigate_refuses_missing_and_foreign_files(tmp_path):
 # Click commands
 # --------------------------------------------------------------------------------------------------
 
+
 def test_cli_simulate_then_navigate(tmp_path, small_toml):
     runner = CliRunner()
     out = tmp_path / "cli"
     r = runner.invoke(simulate_command, [str(small_toml), "--out", str(out), "--quiet"])
     assert r.exit_code == 0, r.output
     assert (out / "imu.parquet").exists() and (out / "scenario.resolved.toml").exists()
-    r = runner.invoke(navigate_command, [str(out / "imu.parquet"), "--hours", "1", "--compensate-drift-deg-h",
-                                         "0.003", "--out", str(out)])
+    r = runner.invoke(
+        navigate_command,
+        [str(out / "imu.parquet"), "--hours", "1", "--compensate-drift-deg-h", "0.003", "--out", str(out)],
+    )
     assert r.exit_code == 0, r.output
     assert "final position error" in r.output
     summary = json.loads((out / "summary.json").read_text())
@@ -213,7 +216,6 @@ def test_temperature_series_and_axial_drift_model_reach_the_z_gyro_in_user_units
 
 
 def test_foreign_imu_file_without_metadata_needs_an_initial_state(tmp_path):
-    import pyarrow as pa
 
     scn = Scenario.from_dict({"run": {"duration_h": 0.05, "rate_hz": 10.0}, "rotation": {"scheme": "none"}})
     table = simulate(scn).table()
@@ -227,8 +229,14 @@ def test_foreign_imu_file_without_metadata_needs_an_initial_state(tmp_path):
     r = CliRunner().invoke(navigate_command, [str(path), "--out", str(tmp_path / "o")])
     assert r.exit_code == 1 and f"Error: {path}: navigate: {path} carries no truth" in r.output
 
-    init = {"lat_deg": scn.site.lat_deg, "lon_deg": scn.site.lon_deg, "height_m": 0.0,
-            "pitch_deg": 0.0, "roll_deg": 0.0, "yaw_deg": 0.0}
+    init = {
+        "lat_deg": scn.site.lat_deg,
+        "lon_deg": scn.site.lon_deg,
+        "height_m": 0.0,
+        "pitch_deg": 0.0,
+        "roll_deg": 0.0,
+        "yaw_deg": 0.0,
+    }
     res = navigate(path, initial=init, decimation_s=1.0, out_dir=tmp_path / "o")
     assert res.summary["rate_hz"] == pytest.approx(10.0)  # from the time stamps
     assert res.summary["truth"] is None and res.summary["final_pos_err_nmi"] is None

@@ -24,7 +24,6 @@ from gyrodrift.ins import Scenario, navigate, simulate
 from gyrodrift.ins.nav_errors import radii_of_curvature
 from gyrodrift.units import ARCSEC, DEG, DEG_PER_H, DEG_PER_SQRT_H, HOUR
 
-
 LAT_DEG = 28.222
 W = OMEGA_IE_RAD_S
 
@@ -68,13 +67,18 @@ ROTATIONS = {
 @pytest.mark.slow
 def test_error_free_imu_72h_100hz_every_scheme_stays_within_001_nmi():
     cases = [
-        (scenario(run={"duration_h": 72.0, "rate_hz": 100.0}, rotation=rot,
-                  attitude={"pitch_deg": 0.5, "roll_deg": -0.3, "yaw_deg": 20.0}),
-         {"decimation_s": 600.0})
+        (
+            scenario(
+                run={"duration_h": 72.0, "rate_hz": 100.0},
+                rotation=rot,
+                attitude={"pitch_deg": 0.5, "roll_deg": -0.3, "yaw_deg": 20.0},
+            ),
+            {"decimation_s": 600.0},
+        )
         for rot in ROTATIONS.values()
     ]
     results = run_all(cases)
-    for name, res in zip(ROTATIONS, results):
+    for name, res in zip(ROTATIONS, results, strict=False):
         s = res.summary
         assert s["hours_navigated"] == pytest.approx(72.0)
         assert len(s["checkpoints"]) == 72, name
@@ -87,13 +91,15 @@ def test_error_free_imu_72h_100hz_every_scheme_stays_within_001_nmi():
 # Axial drift alone: closed forms, with and without rotation
 # --------------------------------------------------------------------------------------------------
 
+
 @pytest.mark.slow
 @pytest.mark.parametrize("rotation", ["none", "reciprocating"])
 def test_axial_drift_matches_the_closed_form(rotation):
     eps = 0.003 * DEG_PER_H
     lat = LAT_DEG * DEG
-    scn = scenario(run={"duration_h": 72.0, "rate_hz": 10.0}, rotation=ROTATIONS[rotation],
-                   gyro={"bias_deg_h": [0.0, 0.0, 0.003]})
+    scn = scenario(
+        run={"duration_h": 72.0, "rate_hz": 10.0}, rotation=ROTATIONS[rotation], gyro={"bias_deg_h": [0.0, 0.0, 0.003]}
+    )
     res = navigate(scn, decimation_s=600.0)
 
     # Latitude error at 12 h within 1 % of 2 eps cos L / w_ie.
@@ -118,10 +124,17 @@ def test_axial_drift_matches_the_closed_form(rotation):
 
 @pytest.mark.slow
 def test_compensating_the_axial_drift_removes_it_and_the_sign_is_measured_minus_estimate():
-    scn = scenario(run={"duration_h": 13.0, "rate_hz": 10.0}, rotation=ROTATIONS["reciprocating"],
-                   gyro={"bias_deg_h": [0.0, 0.0, 0.003]})
-    good, wrong = run_all([(scn, {"compensate_drift_deg_h": 0.003, "decimation_s": 600.0}),
-                           (scn, {"compensate_drift_deg_h": -0.003, "decimation_s": 600.0})])
+    scn = scenario(
+        run={"duration_h": 13.0, "rate_hz": 10.0},
+        rotation=ROTATIONS["reciprocating"],
+        gyro={"bias_deg_h": [0.0, 0.0, 0.003]},
+    )
+    good, wrong = run_all(
+        [
+            (scn, {"compensate_drift_deg_h": 0.003, "decimation_s": 600.0}),
+            (scn, {"compensate_drift_deg_h": -0.003, "decimation_s": 600.0}),
+        ]
+    )
     peak = 2.0 * 0.003 * DEG_PER_H * math.cos(LAT_DEG * DEG) / W / ARCSEC
     assert abs(good.checkpoint(12)["lat_err_arcsec"]) < 0.01 * peak
     assert good.summary["max_pos_err_nmi"] < 0.01
@@ -133,6 +146,7 @@ def test_compensating_the_axial_drift_removes_it_and_the_sign_is_measured_minus_
 # --------------------------------------------------------------------------------------------------
 # Horizontal sensor errors are modulated away by rotation
 # --------------------------------------------------------------------------------------------------
+
 
 @pytest.mark.slow
 def test_horizontal_errors_rotation_cancels_them():
@@ -170,18 +184,29 @@ def test_horizontal_errors_rotation_cancels_them():
 # z scale-factor error: unidirectional rotation makes axial drift, reversal does not
 # --------------------------------------------------------------------------------------------------
 
+
 @pytest.mark.slow
 def test_z_scale_factor_error_is_axial_drift_only_under_unidirectional_rotation():
     ppm, rate_deg_s = 5.0, 6.0
     extra_deg_h = ppm * 1e-6 * rate_deg_s * 3600.0  # 0.108 deg/h
     base = {"run": {"duration_h": 13.0, "rate_hz": 10.0}}
     cases = [
-        (scenario(rotation={"scheme": "continuous", "rate_deg_s": rate_deg_s}, gyro={"scale_ppm": [0, 0, ppm]},
-                  **base), {"decimation_s": 600.0}),
-        (scenario(rotation={"scheme": "none"}, gyro={"bias_deg_h": [0, 0, extra_deg_h]}, **base),
-         {"decimation_s": 600.0}),
-        (scenario(rotation={"scheme": "reciprocating", "rate_deg_s": rate_deg_s}, gyro={"scale_ppm": [0, 0, ppm]},
-                  **base), {"decimation_s": 600.0}),
+        (
+            scenario(
+                rotation={"scheme": "continuous", "rate_deg_s": rate_deg_s}, gyro={"scale_ppm": [0, 0, ppm]}, **base
+            ),
+            {"decimation_s": 600.0},
+        ),
+        (
+            scenario(rotation={"scheme": "none"}, gyro={"bias_deg_h": [0, 0, extra_deg_h]}, **base),
+            {"decimation_s": 600.0},
+        ),
+        (
+            scenario(
+                rotation={"scheme": "reciprocating", "rate_deg_s": rate_deg_s}, gyro={"scale_ppm": [0, 0, ppm]}, **base
+            ),
+            {"decimation_s": 600.0},
+        ),
     ]
     uni, equivalent, recip = run_all(cases)
     lat_uni = uni.checkpoint(12)["lat_err_arcsec"]
@@ -199,6 +224,7 @@ def test_z_scale_factor_error_is_axial_drift_only_under_unidirectional_rotation(
 # Noise models, through the simulate output
 # --------------------------------------------------------------------------------------------------
 
+
 def _earth_rate_body(lat_rad):
     """Body-frame Earth rate [rad/s] for a level IMU with yaw 0 and no rotation (x east, y north, z up)."""
     return np.array([0.0, W * math.cos(lat_rad), W * math.sin(lat_rad)])
@@ -210,8 +236,13 @@ def test_angle_random_walk_grows_as_sqrt_t_across_seeds():
     lat = LAT_DEG * DEG
     walks, first = [], None
     for seed in range(seeds):
-        imu = simulate(scenario(run={"duration_h": 1.0, "rate_hz": rate, "seed": seed}, rotation={"scheme": "none"},
-                                gyro={"arw_deg_rth": arw}))
+        imu = simulate(
+            scenario(
+                run={"duration_h": 1.0, "rate_hz": rate, "seed": seed},
+                rotation={"scheme": "none"},
+                gyro={"arw_deg_rth": arw},
+            )
+        )
         first = imu["dtheta_x_rad"] if first is None else first
         truth = _earth_rate_body(lat)
         t = imu["t_s"]
@@ -225,8 +256,11 @@ def test_angle_random_walk_grows_as_sqrt_t_across_seeds():
     assert std3600 == pytest.approx(n * math.sqrt(3600.0), rel=0.25)
     assert std3600 / std900 == pytest.approx(2.0, rel=0.2)
     # Different seeds give different walks, the same seed the same one to the bit.
-    again = simulate(scenario(run={"duration_h": 1.0, "rate_hz": rate, "seed": 0}, rotation={"scheme": "none"},
-                              gyro={"arw_deg_rth": arw}))
+    again = simulate(
+        scenario(
+            run={"duration_h": 1.0, "rate_hz": rate, "seed": 0}, rotation={"scheme": "none"}, gyro={"arw_deg_rth": arw}
+        )
+    )
     np.testing.assert_array_equal(again["dtheta_x_rad"], first)
     assert not np.array_equal(walks[0], walks[3])  # seed 0 vs seed 1, same axis
 
@@ -238,9 +272,13 @@ def test_gauss_markov_variance_does_not_depend_on_the_sample_rate():
     for rate in (10.0, 100.0):
         samples = []
         for seed in range(4):
-            imu = simulate(scenario(run={"duration_h": 4000.0 / HOUR, "rate_hz": rate, "seed": seed},
-                                    rotation={"scheme": "none"},
-                                    gyro={"bias_instability_deg_h": sigma_deg_h, "correlation_s": tau_s}))
+            imu = simulate(
+                scenario(
+                    run={"duration_h": 4000.0 / HOUR, "rate_hz": rate, "seed": seed},
+                    rotation={"scheme": "none"},
+                    gyro={"bias_instability_deg_h": sigma_deg_h, "correlation_s": tau_s},
+                )
+            )
             truth = _earth_rate_body(lat)
             for axis, name in enumerate(("dtheta_x_rad", "dtheta_y_rad", "dtheta_z_rad")):
                 samples.append(imu[name] * rate - truth[axis])  # the bias [rad/s], sample by sample

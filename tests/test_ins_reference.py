@@ -31,8 +31,17 @@ def test_reference_navigator_axial_drift_closed_form_at_12h():
     n = int(12 * 3600 * rate)
     dtheta = np.tile([0.0, W * math.cos(lat) * dt, (W * math.sin(lat) + eps) * dt], (n, 1))
     dv = np.tile([0.0, 0.0, float(normal_gravity(lat, 0.0)) * dt], (n, 1))
-    nav = ReferenceNavigator({"lat_rad": lat, "lon_rad": 0.0, "height_m": 0.0, "pitch_rad": 0.0, "roll_rad": 0.0,
-                              "yaw_rad": 0.0, "rate_hz": rate})
+    nav = ReferenceNavigator(
+        {
+            "lat_rad": lat,
+            "lon_rad": 0.0,
+            "height_m": 0.0,
+            "pitch_rad": 0.0,
+            "roll_rad": 0.0,
+            "yaw_rad": 0.0,
+            "rate_hz": rate,
+        }
+    )
     out = nav.process(dtheta, dv, decimation=n)
     lat_err = (out["lat_rad"][-1] - lat) / ARCSEC
     assert lat_err == pytest.approx(2 * eps * math.cos(lat) / W / ARCSEC, rel=0.01)
@@ -41,20 +50,30 @@ def test_reference_navigator_axial_drift_closed_form_at_12h():
 def test_rust_navigator_agrees_with_the_numpy_reference_over_10_min_at_100hz():
     """Tilted, rotating IMU with large biases and noise, so the position moves by tens of metres and the
     attitude turns through 3600 deg: the two navigators agree to a few millimetres."""
-    scn = Scenario.from_dict({
-        "run": {"duration_h": 10.0 / 60.0, "rate_hz": 100.0, "seed": 5},
-        "rotation": {"scheme": "continuous", "rate_deg_s": 6.0},
-        "gyro": {"bias_deg_h": [0.5, -0.3, 0.2], "arw_deg_rth": 0.01},
-        "accel": {"bias_ug": [1000.0, -800.0, 300.0], "vrw_ug_rthz": 20.0},
-        "attitude": {"pitch_deg": 2.0, "roll_deg": -3.0, "yaw_deg": 30.0},
-    })
+    scn = Scenario.from_dict(
+        {
+            "run": {"duration_h": 10.0 / 60.0, "rate_hz": 100.0, "seed": 5},
+            "rotation": {"scheme": "continuous", "rate_deg_s": 6.0},
+            "gyro": {"bias_deg_h": [0.5, -0.3, 0.2], "arw_deg_rth": 0.01},
+            "accel": {"bias_ug": [1000.0, -800.0, 300.0], "vrw_ug_rthz": 20.0},
+            "attitude": {"pitch_deg": 2.0, "roll_deg": -3.0, "yaw_deg": 30.0},
+        }
+    )
     imu = simulate(scn)
     rust = navigate(imu, decimation_s=1.0)
 
-    ref = ReferenceNavigator({"lat_rad": scn.site.lat_deg * DEG, "lon_rad": scn.site.lon_deg * DEG,
-                              "height_m": scn.site.height_m, "pitch_rad": scn.attitude.pitch_deg * DEG,
-                              "roll_rad": scn.attitude.roll_deg * DEG, "yaw_rad": scn.attitude.yaw_deg * DEG,
-                              "rate_hz": scn.run.rate_hz, "vertical": "fixed"})
+    ref = ReferenceNavigator(
+        {
+            "lat_rad": scn.site.lat_deg * DEG,
+            "lon_rad": scn.site.lon_deg * DEG,
+            "height_m": scn.site.height_m,
+            "pitch_rad": scn.attitude.pitch_deg * DEG,
+            "roll_rad": scn.attitude.roll_deg * DEG,
+            "yaw_rad": scn.attitude.yaw_deg * DEG,
+            "rate_hz": scn.run.rate_hz,
+            "vertical": "fixed",
+        }
+    )
     dtheta = np.column_stack([imu["dtheta_x_rad"], imu["dtheta_y_rad"], imu["dtheta_z_rad"]])
     dv = np.column_stack([imu["dv_x_m_s"], imu["dv_y_m_s"], imu["dv_z_m_s"]])
     out = ref.process(dtheta, dv, decimation=100)

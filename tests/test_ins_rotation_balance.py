@@ -88,7 +88,7 @@ def test_balanced_span_cancels_horizontal_errors_that_a_full_turn_leaves():
 )
 def test_bad_span_values_name_the_key(tmp_path, value, message):
     p = tmp_path / "s.toml"
-    p.write_text(f"[rotation]\nscheme = \"reciprocating\"\nspan_deg = {value}\n")
+    p.write_text(f'[rotation]\nscheme = "reciprocating"\nspan_deg = {value}\n')
     from gyrodrift.ins import load_scenario
 
     with pytest.raises(ScenarioError) as exc:
@@ -104,8 +104,13 @@ def test_balanced_span_round_trips_and_reaches_the_core():
     assert cfg["reciprocating_balanced"] is True
     assert scenario(rotation=SLOW).to_core_config()["reciprocating_balanced"] is False
     # The binding checks the new key's type and names it.
-    base = {"lat_rad": 0.5, "rate_hz": 10.0, "duration_s": 10.0, "rotation_scheme": "reciprocating",
-            "rotation_accel_rad_s2": 10 * DEG}
+    base = {
+        "lat_rad": 0.5,
+        "rate_hz": 10.0,
+        "duration_s": 10.0,
+        "rotation_scheme": "reciprocating",
+        "rotation_accel_rad_s2": 10 * DEG,
+    }
     with pytest.raises(ValueError, match=r"^reciprocating_balanced: must be a bool"):
         _core.ImuSimulator(dict(base, reciprocating_balanced=1))
     sim = _core.ImuSimulator(dict(base, reciprocating_balanced=True, reciprocating_span_rad=4 * math.pi))
@@ -116,8 +121,9 @@ def test_balanced_span_round_trips_and_reaches_the_core():
 
 def test_chunks_held_by_python_are_never_overwritten():
     """next_chunk refills the arrays of earlier chunks only once Python has dropped every reference."""
-    cfg = scenario(run={"duration_h": 0.1, "rate_hz": 50.0, "seed": 3}, gyro={"arw_deg_rth": 0.01},
-                   rotation=SLOW).to_core_config()
+    cfg = scenario(
+        run={"duration_h": 0.1, "rate_hz": 50.0, "seed": 3}, gyro={"arw_deg_rth": 0.01}, rotation=SLOW
+    ).to_core_config()
     ref = _core.ImuSimulator(cfg).next_chunk(10**6)
     sim = _core.ImuSimulator(cfg)
     kept = sim.next_chunk(1000)
@@ -136,14 +142,18 @@ def test_chunks_held_by_python_are_never_overwritten():
 def test_simulate_command_prints_the_span_and_the_residual(tmp_path):
     from click.testing import CliRunner
 
-    from gyrodrift.ins.commands import simulate_command
+    from gyrodrift.cli.navigation import simulate_command
 
     toml = tmp_path / "s.toml"
-    toml.write_text('[run]\nduration_h = 0.01\nrate_hz = 10.0\n[rotation]\nspan_deg = "balanced"\naccel_deg_s2 = 10.0\n')
+    toml.write_text(
+        '[run]\nduration_h = 0.01\nrate_hz = 10.0\n[rotation]\nspan_deg = "balanced"\naccel_deg_s2 = 10.0\n'
+    )
     r = CliRunner().invoke(simulate_command, [str(toml), "--out", str(tmp_path / "o")])
     assert r.exit_code == 0, r.output
     assert "reciprocating rotation, span 352.8115 deg, modulation residual 0.000 %" in r.output
-    toml.write_text('[run]\nduration_h = 0.01\nrate_hz = 10.0\n[rotation]\nscheme = "indexing"\npositions_deg = [0, 180, 90, 270]\n')
+    toml.write_text(
+        '[run]\nduration_h = 0.01\nrate_hz = 10.0\n[rotation]\nscheme = "indexing"\npositions_deg = [0, 180, 90, 270]\n'
+    )
     r = CliRunner().invoke(simulate_command, [str(toml), "--out", str(tmp_path / "p")])
     assert r.exit_code == 0, r.output
     assert "indexing rotation, modulation residual 4.09" in r.output

@@ -24,7 +24,11 @@ def test_empty_file_gives_the_documented_defaults(tmp_path):
     assert (s.site.lat_deg, s.site.lon_deg, s.site.height_m) == (28.222, 112.99, 0.0)
     assert (s.run.duration_h, s.run.rate_hz, s.run.seed) == (16.0, 100.0, 0)
     assert (s.rotation.scheme, s.rotation.rate_deg_s, s.rotation.span_deg, s.rotation.dwell_s) == (
-        "reciprocating", 6.0, 360.0, 0.0)
+        "reciprocating",
+        6.0,
+        360.0,
+        0.0,
+    )
     assert s.rotation.accel_deg_s2 == 100.0
     assert s.gyro.bias_deg_h == (0.0, 0.0, 0.0)
     assert s.temperature.series_t_h is None
@@ -59,25 +63,38 @@ BAD = [
     ("[run]\nseed = -3\n", "[run] seed: must be >= 0, got -3"),
     ("[rotation]\nrate_deg_s = -6\n", "[rotation] rate_deg_s: must be > 0, got -6"),
     ("[rotation]\ndwell_s = -1\n", "[rotation] dwell_s: must be >= 0, got -1"),
-    ('[rotation]\nscheme = "spin"\n',
-     "[rotation] scheme: expected one of 'none', 'continuous', 'reciprocating', 'indexing', got 'spin'"),
+    (
+        '[rotation]\nscheme = "spin"\n',
+        "[rotation] scheme: expected one of 'none', 'continuous', 'reciprocating', 'indexing', got 'spin'",
+    ),
     ("[rotation]\npositions_deg = []\n", "[rotation] positions_deg: expected at least 1 number, got 0"),
     ("[gyro]\narw_deg_rth = -0.001\n", "[gyro] arw_deg_rth: must be >= 0, got -0.001"),
     ("[gyro]\ncorrelation_s = 0\n", "[gyro] correlation_s: must be > 0, got 0"),
     ("[accel]\nvrw_ug_rthz = -1\n", "[accel] vrw_ug_rthz: must be >= 0, got -1"),
-    ("[gyro]\nbias = [0, 0, 0]\n",
-     "[gyro] bias: unknown key (expected one of: bias_deg_h, arw_deg_rth, bias_instability_deg_h, "
-     "correlation_s, rrw_deg_h_rth, scale_ppm, misalignment_arcsec)"),
-    ("[imu]\nrate_hz = 100\n",
-     "unknown section [imu] (expected one of: site, run, rotation, gyro, accel, temperature, attitude)"),
+    (
+        "[gyro]\nbias = [0, 0, 0]\n",
+        "[gyro] bias: unknown key (expected one of: bias_deg_h, arw_deg_rth, bias_instability_deg_h, "
+        "correlation_s, rrw_deg_h_rth, scale_ppm, misalignment_arcsec)",
+    ),
+    (
+        "[imu]\nrate_hz = 100\n",
+        "unknown section [imu] (expected one of: site, run, rotation, gyro, accel, temperature, attitude)",
+    ),
     ("site = 3\n", "[site] must be a table, got number"),
     ("[attitude]\npitch_deg = 90\n", "[attitude] pitch_deg: must be strictly between -90 and 90, got 90"),
     ("[temperature]\ntau_h = 0\n", "[temperature] tau_h: must be > 0, got 0"),
-    ("[temperature]\nseries_t_h = [0, 1]\n", "[temperature] series_temp_c: missing (required together with series_t_h)"),
-    ("[temperature]\nseries_t_h = [0, 1]\nseries_temp_c = [20, 21, 22]\n",
-     "[temperature] series_temp_c: expected 2 numbers (as series_t_h), got 3"),
-    ("[temperature]\nseries_t_h = [0, 2, 1]\nseries_temp_c = [20, 21, 22]\n",
-     "[temperature] series_t_h: times must be strictly increasing"),
+    (
+        "[temperature]\nseries_t_h = [0, 1]\n",
+        "[temperature] series_temp_c: missing (required together with series_t_h)",
+    ),
+    (
+        "[temperature]\nseries_t_h = [0, 1]\nseries_temp_c = [20, 21, 22]\n",
+        "[temperature] series_temp_c: expected 2 numbers (as series_t_h), got 3",
+    ),
+    (
+        "[temperature]\nseries_t_h = [0, 2, 1]\nseries_temp_c = [20, 21, 22]\n",
+        "[temperature] series_t_h: times must be strictly increasing",
+    ),
     ("[temperature]\nseries_csv = 3\n", "[temperature] series_csv: expected a file name, got number 3"),
 ]
 
@@ -131,7 +148,8 @@ def test_series_csv_errors_name_the_csv(tmp_path):
     with pytest.raises(ScenarioError) as info:
         load_scenario(path)
     assert str(info.value) == (
-        f"{path}: [temperature] series_csv: {tmp_path / 'bad.csv'}:3: expected numbers in t_h, temp_c")
+        f"{path}: [temperature] series_csv: {tmp_path / 'bad.csv'}:3: expected numbers in t_h, temp_c"
+    )
     (tmp_path / "cols.csv").write_text("time,T\n0,20\n")
     path = write(tmp_path, '[temperature]\nseries_csv = "cols.csv"\n')
     with pytest.raises(ScenarioError, match="expected columns t_h, temp_c"):
@@ -192,8 +210,9 @@ def test_unit_conversions_to_the_core_config(tmp_path):
     assert cfg["positions_rad"] == pytest.approx([0, math.pi / 2, math.pi, 1.5 * math.pi], rel=1e-15)
     assert cfg["dwell_s"] == 60.0
     # deg/h -> rad/s: 1 deg/h = pi / 180 / 3600 rad/s = 4.84813681109536e-06 rad/s
-    assert cfg["gyro_bias_rad_s"] == pytest.approx([0.01 * 4.84813681109536e-06, -0.02 * 4.84813681109536e-06,
-                                                    0.003 * 4.84813681109536e-06], rel=1e-13)
+    assert cfg["gyro_bias_rad_s"] == pytest.approx(
+        [0.01 * 4.84813681109536e-06, -0.02 * 4.84813681109536e-06, 0.003 * 4.84813681109536e-06], rel=1e-13
+    )
     # deg/sqrt(h) -> rad/sqrt(s): divide by sqrt(3600) = 60
     assert cfg["gyro_arw_rad_rts"] == close(cfg, 0.001 * math.pi / 180 / 60)
     assert cfg["gyro_bias_instability_rad_s"] == close(cfg, 0.002 * DEG_PER_H)
@@ -238,16 +257,26 @@ finite = st.floats(min_value=-1e3, max_value=1e3, allow_nan=False, allow_infinit
 
 
 @settings(max_examples=60, deadline=None)
-@given(lat=st.floats(min_value=-89.9, max_value=89.9), bias=st.lists(finite, min_size=3, max_size=3),
-       ug=st.lists(finite, min_size=3, max_size=3), rate=st.floats(min_value=1.0, max_value=2000.0))
+@given(
+    lat=st.floats(min_value=-89.9, max_value=89.9),
+    bias=st.lists(finite, min_size=3, max_size=3),
+    ug=st.lists(finite, min_size=3, max_size=3),
+    rate=st.floats(min_value=1.0, max_value=2000.0),
+)
 def test_round_trip_and_si_conversion_property(lat, bias, ug, rate):
-    s = Scenario.from_dict({"site": {"lat_deg": lat}, "gyro": {"bias_deg_h": bias}, "accel": {"bias_ug": ug},
-                            "run": {"rate_hz": rate, "duration_h": 0.01}})
+    s = Scenario.from_dict(
+        {
+            "site": {"lat_deg": lat},
+            "gyro": {"bias_deg_h": bias},
+            "accel": {"bias_ug": ug},
+            "run": {"rate_hz": rate, "duration_h": 0.01},
+        }
+    )
     assert Scenario.from_dict(tomllib.loads(dumps_toml(s.to_toml_dict()))) == s
     cfg = s.to_core_config()
-    for b, si in zip(bias, cfg["gyro_bias_rad_s"]):
+    for b, si in zip(bias, cfg["gyro_bias_rad_s"], strict=False):
         assert si == pytest.approx(b * math.pi / 648000.0, rel=1e-12, abs=1e-300)
-    for u, si in zip(ug, cfg["accel_bias_m_s2"]):
+    for u, si in zip(ug, cfg["accel_bias_m_s2"], strict=False):
         assert si == pytest.approx(u * 9.80665e-6, rel=1e-12, abs=1e-300)
 
 

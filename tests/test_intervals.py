@@ -32,8 +32,14 @@ def _synthetic(rng, n, noise):
     tmin = rng.uniform(10, 55, n)
     tmax = tmin + rng.uniform(0.1, 8, n)
     drift = 0.13 * (lat - 28.222) + 2e-5 * (tmax - 40) + rng.normal(0, noise, n)
-    return RunTable(run=np.array([str(i) for i in range(n)], dtype=object), lat_deg=lat,
-                    lat0_deg=np.full(n, 28.222), temp_min_c=tmin, temp_max_c=tmax, drift_deg_h=drift)
+    return RunTable(
+        run=np.array([str(i) for i in range(n)], dtype=object),
+        lat_deg=lat,
+        lat0_deg=np.full(n, 28.222),
+        temp_min_c=tmin,
+        temp_max_c=tmax,
+        drift_deg_h=drift,
+    )
 
 
 def test_interval_covers_new_runs_at_about_its_coverage():
@@ -55,7 +61,7 @@ def test_residuals_survive_the_model_file(tmp_path):
     save_model(model, tmp_path / "m.json")
     again = load_model(tmp_path / "m.json")
     np.testing.assert_array_equal(again.loo_residuals(), model.loo_residuals())
-    for a, b in zip(again.predict_interval(paper.test), model.predict_interval(paper.test)):
+    for a, b in zip(again.predict_interval(paper.test), model.predict_interval(paper.test), strict=False):
         np.testing.assert_array_equal(a, b)
     doc = json.loads((tmp_path / "m.json").read_text())
     doc["loo_residuals_deg_h"] = doc["loo_residuals_deg_h"][:-1]
@@ -71,14 +77,29 @@ def test_predict_command_prints_the_interval(tmp_path):
     save_model(fit_drift_model(paper.train, gamma=30.0, sigma=1.5), tmp_path / "m.json")
     csv_path = tmp_path / "paper.csv"
     csv_path.write_bytes(paper_csv_path().read_bytes())
-    r = CliRunner().invoke(main, ["predict", str(tmp_path / "m.json"), str(csv_path), "--lat0-deg", "28.222",
-                                  "--split", "test", "--coverage", "0.8", "--format", "jsonl"])
+    r = CliRunner().invoke(
+        main,
+        [
+            "predict",
+            str(tmp_path / "m.json"),
+            str(csv_path),
+            "--lat0-deg",
+            "28.222",
+            "--split",
+            "test",
+            "--coverage",
+            "0.8",
+            "--format",
+            "jsonl",
+        ],
+    )
     assert r.exit_code == 0, r.output
     rows = [json.loads(line) for line in r.output.splitlines()]
     for row in rows:
         assert row["drift_lo_deg_h"] < row["drift_identified_deg_h"] < row["drift_hi_deg_h"]
-    r = CliRunner().invoke(main, ["predict", str(tmp_path / "m.json"), str(csv_path), "--lat0-deg", "28.222",
-                                  "--coverage", "1.5"])
+    r = CliRunner().invoke(
+        main, ["predict", str(tmp_path / "m.json"), str(csv_path), "--lat0-deg", "28.222", "--coverage", "1.5"]
+    )
     assert r.exit_code == 2 and "--coverage" in r.output
 
 
@@ -93,6 +114,8 @@ def test_too_few_runs_for_the_coverage_is_said_not_printed_as_infinity(tmp_path)
     csv_path.write_bytes(paper_csv_path().read_bytes())
     args = ["predict", str(tmp_path / "small.json"), str(csv_path), "--lat0-deg", "28.222", "--format", "jsonl"]
     r = CliRunner().invoke(main, args + ["--coverage", "0.9"])
-    assert r.exit_code == 1 and "5 training runs are too few for a 90 % jackknife interval (needs at least 9)" in r.output
+    assert (
+        r.exit_code == 1 and "5 training runs are too few for a 90 % jackknife interval (needs at least 9)" in r.output
+    )
     r = CliRunner().invoke(main, args + ["--coverage", "0.8"])
     assert r.exit_code == 0 and "Infinity" not in r.output

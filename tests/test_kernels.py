@@ -108,8 +108,10 @@ def test_kernel_matrix_dispatch_and_alias():
     X = rng.normal(size=(6, 2))
     np.testing.assert_array_equal(kernel_matrix(X, kernel="rbf", sigma=0.8), rbf_kernel(X, sigma=0.8))
     np.testing.assert_array_equal(kernel_matrix(X, kernel="linear", sigma=5.0), linear_kernel(X))
-    np.testing.assert_array_equal(kernel_matrix(X, kernel="polynomial", sigma=0.8, degree=2, coef0=0.5),
-                                  kernel_matrix(X, kernel="poly", sigma=0.8, degree=2, coef0=0.5))
+    np.testing.assert_array_equal(
+        kernel_matrix(X, kernel="polynomial", sigma=0.8, degree=2, coef0=0.5),
+        kernel_matrix(X, kernel="poly", sigma=0.8, degree=2, coef0=0.5),
+    )
     assert check_kernel("polynomial") == "poly"
 
 

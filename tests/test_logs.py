@@ -19,21 +19,28 @@ RATE = 10.0
 @pytest.fixture(scope="module")
 def sim_parquet(tmp_path_factory):
     """A 0.2 h simulated run at 10 Hz (7200 samples) with noise, rotating, warming up."""
-    scn = Scenario.from_dict({
-        "run": {"duration_h": 0.2, "rate_hz": RATE, "seed": 3},
-        "gyro": {"bias_deg_h": [0.01, -0.01, 0.003], "arw_deg_rth": 0.001},
-        "accel": {"bias_ug": [20, -20, 10], "vrw_ug_rthz": 5.0},
-        "temperature": {"start_c": 20.0, "end_c": 30.0, "tau_h": 0.1},
-        "site": {"lat_deg": 30.0, "lon_deg": 100.0, "height_m": 40.0},
-    })
+    scn = Scenario.from_dict(
+        {
+            "run": {"duration_h": 0.2, "rate_hz": RATE, "seed": 3},
+            "gyro": {"bias_deg_h": [0.01, -0.01, 0.003], "arw_deg_rth": 0.001},
+            "accel": {"bias_ug": [20, -20, 10], "vrw_ug_rthz": 5.0},
+            "temperature": {"start_c": 20.0, "end_c": 30.0, "tau_h": 0.1},
+            "site": {"lat_deg": 30.0, "lon_deg": 100.0, "height_m": 40.0},
+        }
+    )
     return simulate(scn, out_dir=tmp_path_factory.mktemp("logsim"), chunk_samples=1000)
 
 
 def whole(log, chunk_samples=997):
     parts = list(log.chunks(chunk_samples))
     assert all(len(p) <= chunk_samples for p in parts)
-    return (np.concatenate([p.t_s for p in parts]), np.concatenate([p.dtheta_rad for p in parts]),
-            np.concatenate([p.dv_m_s for p in parts]), np.concatenate([p.temp_c for p in parts]), parts)
+    return (
+        np.concatenate([p.t_s for p in parts]),
+        np.concatenate([p.dtheta_rad for p in parts]),
+        np.concatenate([p.dv_m_s for p in parts]),
+        np.concatenate([p.temp_c for p in parts]),
+        parts,
+    )
 
 
 def write_csv(path, cols: dict[str, np.ndarray], cells: dict[tuple[int, str], str] | None = None):
@@ -70,6 +77,7 @@ def static_columns(n=60, rate=RATE, kind="increments"):
 # ------------------------------------------------------------------------------------------------
 # Formats, detection, streaming
 # ------------------------------------------------------------------------------------------------
+
 
 def test_parquet_from_the_simulator_streams_the_same_samples_as_the_ins_reader(sim_parquet):
     log = open_log(sim_parquet)
@@ -129,6 +137,7 @@ def test_stop_reads_only_what_is_needed_and_complains_when_the_log_is_short(sim_
 # One exact message per bad log
 # ------------------------------------------------------------------------------------------------
 
+
 def bad_csv(tmp_path, cells=None, drop=(), n=60, tweak=None):
     cols = static_columns(n=n)
     for c in drop:
@@ -148,15 +157,18 @@ def test_duplicated_time_names_row_and_column(tmp_path):
     def dup(c):
         c["t_s"][20] = c["t_s"][19]
         c["t_s"][21:] -= 0.1
+
     path = bad_csv(tmp_path, tweak=dup)
     msg = stream_error(path)
-    assert msg == (f"{path}, row 22, column t_s: duplicated time stamp (2.0 s after 2.0 s); "
-                   "time must be strictly increasing")
+    assert msg == (
+        f"{path}, row 22, column t_s: duplicated time stamp (2.0 s after 2.0 s); time must be strictly increasing"
+    )
 
 
 def test_time_going_backwards_across_a_chunk_boundary(tmp_path):
     def back(c):
         c["t_s"][14:] -= 0.25  # sample 14 is the first of the third chunk of 7
+
     msg = stream_error(bad_csv(tmp_path, tweak=back), chunk_samples=7)
     assert "row 16, column t_s: time goes backwards (1.25 s after 1.4 s)" in msg
 
@@ -164,6 +176,7 @@ def test_time_going_backwards_across_a_chunk_boundary(tmp_path):
 def test_gap_names_the_step(tmp_path):
     def gap(c):
         c["t_s"][30:] += 0.05
+
     msg = stream_error(bad_csv(tmp_path, tweak=gap))
     assert "row 32, column t_s: gap in time: step 0.15 s from 3.0 s, expected 0.1 s (rate 10 Hz, tolerance 1%)" in msg
 
@@ -171,6 +184,7 @@ def test_gap_names_the_step(tmp_path):
 def test_dt_within_one_percent_is_no_gap(tmp_path):
     def jitter(c):
         c["t_s"][30:] += 0.0009
+
     list(open_log(bad_csv(tmp_path, tweak=jitter), site={"lat_deg": 1.0}).chunks(7))
 
 
@@ -187,22 +201,25 @@ def test_non_numeric_cell(tmp_path):
 
 def test_impossible_rate(tmp_path):
     path = bad_csv(tmp_path, cells={(5, "dtheta_x_rad"): repr(2000 * math.pi / 180 / RATE)})
-    assert stream_error(path) == (f"{path}, row 7, column dtheta_x_rad: impossible magnitude: angular rate "
-                                  "2000 deg/s exceeds 1000 deg/s")
+    assert stream_error(path) == (
+        f"{path}, row 7, column dtheta_x_rad: impossible magnitude: angular rate 2000 deg/s exceeds 1000 deg/s"
+    )
 
 
 def test_impossible_specific_force(tmp_path):
     path = bad_csv(tmp_path, cells={(50, "dv_z_m_s"): repr(-150 * 9.80665 / RATE)})
-    assert stream_error(path) == (f"{path}, row 52, column dv_z_m_s: impossible magnitude: specific force "
-                                  "150 g exceeds 100 g")
+    assert stream_error(path) == (
+        f"{path}, row 52, column dv_z_m_s: impossible magnitude: specific force 150 g exceeds 100 g"
+    )
 
 
 def test_missing_temperature_column(tmp_path):
     path = bad_csv(tmp_path, drop=["temp_c"])
     with pytest.raises(LogError) as info:
         open_log(path)
-    assert str(info.value) == (f"{path}, row 1: missing column temp_c (system temperature, deg C; "
-                               "the features need it)")
+    assert str(info.value) == (
+        f"{path}, row 1: missing column temp_c (system temperature, deg C; the features need it)"
+    )
 
 
 def test_missing_sensor_columns(tmp_path):

@@ -103,8 +103,14 @@ def test_rbf_matches_kernel_ridge_hypothesis(seed, n, d, log_gamma, log_sigma):
     "params, kr_params",
     [
         (dict(kernel="linear"), dict(kernel="linear")),
-        (dict(kernel="poly", sigma=1.7, degree=3, coef0=1.0), dict(kernel="poly", gamma=1 / 1.7**2, degree=3, coef0=1.0)),
-        (dict(kernel="polynomial", sigma=0.6, degree=2, coef0=0.5), dict(kernel="poly", gamma=1 / 0.36, degree=2, coef0=0.5)),
+        (
+            dict(kernel="poly", sigma=1.7, degree=3, coef0=1.0),
+            dict(kernel="poly", gamma=1 / 1.7**2, degree=3, coef0=1.0),
+        ),
+        (
+            dict(kernel="polynomial", sigma=0.6, degree=2, coef0=0.5),
+            dict(kernel="poly", gamma=1 / 0.36, degree=2, coef0=0.5),
+        ),
     ],
 )
 @pytest.mark.parametrize("gamma", [0.5, 20.0])
@@ -214,7 +220,7 @@ def test_rbf_batch_errors_equal_per_candidate_fits(kind, n):
     sigmas = 10.0 ** rng.uniform(-0.7, 0.5, 30)
     E = rbf_batch_errors(squared_distances(X), y, gammas, sigmas, kind)
     assert E.shape == (30, n)
-    for j, (g, s) in enumerate(zip(gammas, sigmas)):
+    for j, (g, s) in enumerate(zip(gammas, sigmas, strict=False)):
         model = LSSVR(gamma=g, sigma=s).fit(X, y)
         if kind == "train":
             expected = y - model.predict(X)
@@ -258,8 +264,9 @@ def test_non_positive_definite_candidates_give_inf_rows_not_errors(n):
         assert np.all(np.isfinite(E[[0, 2]]))
         # The surviving candidates are unaffected by the failing one (to rounding: without it, n = 3 is
         # solved by the stacked path).
-        np.testing.assert_allclose(E[[0, 2]], rbf_batch_errors(D, y, [1.0, 10.0], [1.0, 2.0], kind),
-                                   rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(
+            E[[0, 2]], rbf_batch_errors(D, y, [1.0, 10.0], [1.0, 2.0], kind), rtol=1e-12, atol=1e-12
+        )
 
 
 def test_rbf_batch_errors_bad_arguments():
@@ -289,7 +296,9 @@ def test_rbf_batch_errors_bad_arguments():
 def test_singular_kernel_with_huge_gamma_raises_naming_gamma_and_sigma():
     X = np.ones((3, 2))
     y = np.array([1.0, 2.0, 3.0])
-    with pytest.raises(NotPositiveDefiniteError, match=r"not positive definite for gamma=1e\+300, sigma=0\.5, kernel='rbf'"):
+    with pytest.raises(
+        NotPositiveDefiniteError, match=r"not positive definite for gamma=1e\+300, sigma=0\.5, kernel='rbf'"
+    ):
         LSSVR(gamma=1e300, sigma=0.5).fit(X, y)
     # With regularisation the same data have a closed form: K = 11' and sum(alpha) = 0 give K alpha = 0,
     # so alpha / gamma = y - b, hence b = mean(y) and alpha = gamma (y - mean(y)).
@@ -455,8 +464,7 @@ def test_fit_does_not_modify_inputs_and_init_stores_parameters():
     X, y = make_data(n=10)
     X0, y0 = X.copy(), y.copy()
     model = LSSVR(gamma="not validated in __init__", sigma=-1)
-    assert model.get_params() == dict(gamma="not validated in __init__", sigma=-1, kernel="rbf", degree=3,
-                                      coef0=1.0)
+    assert model.get_params() == dict(gamma="not validated in __init__", sigma=-1, kernel="rbf", degree=3, coef0=1.0)
     fitted = LSSVR(gamma=4.0).fit(X, y)
     np.testing.assert_array_equal(X, X0)
     np.testing.assert_array_equal(y, y0)
@@ -468,8 +476,9 @@ def test_fit_does_not_modify_inputs_and_init_stores_parameters():
 
 def test_works_in_pipeline_and_grid_search():
     X, y = make_data(n=40, seed=22)
-    search = GridSearchCV(make_pipeline(StandardScaler(), LSSVR()),
-                          {"lssvr__gamma": [0.1, 100.0], "lssvr__sigma": [0.5, 2.0]}, cv=4)
+    search = GridSearchCV(
+        make_pipeline(StandardScaler(), LSSVR()), {"lssvr__gamma": [0.1, 100.0], "lssvr__sigma": [0.5, 2.0]}, cv=4
+    )
     search.fit(X, y)
     assert search.best_params_["lssvr__gamma"] == 100.0
     assert search.best_score_ > 0.9

@@ -24,6 +24,7 @@ import pytest
 from click.testing import CliRunner
 
 from gyrodrift.baselines import physics_inversion
+from gyrodrift.cli.procedure import evaluate_command, features_command, identify_command, truth_command
 from gyrodrift.ins import Scenario, simulate
 from gyrodrift.ins.synthetic_fleet import simulate_fleet
 from gyrodrift.logs import LogError, open_log
@@ -42,7 +43,6 @@ from gyrodrift.procedure import (
     write_evaluation,
 )
 from gyrodrift.procedure.fleet import DaskMissingError
-from gyrodrift.procedure_commands import evaluate_command, features_command, identify_command, truth_command
 from gyrodrift.runs import RunTable, read_runs_csv
 
 LONG_DRIFT = 0.003
@@ -51,13 +51,15 @@ PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 @pytest.fixture(scope="module")
 def long_log(tmp_path_factory):
-    scn = Scenario.from_dict({
-        "run": {"duration_h": 76.0, "rate_hz": 10.0, "seed": 2},
-        "gyro": {"bias_deg_h": [0.005, -0.004, LONG_DRIFT]},
-        "accel": {"bias_ug": [30.0, -20.0, 10.0]},
-        "attitude": {"yaw_deg": 40.0, "pitch_deg": 0.3},
-        "temperature": {"start_c": 20.0, "end_c": 35.5, "tau_h": 1.0},
-    })
+    scn = Scenario.from_dict(
+        {
+            "run": {"duration_h": 76.0, "rate_hz": 10.0, "seed": 2},
+            "gyro": {"bias_deg_h": [0.005, -0.004, LONG_DRIFT]},
+            "accel": {"bias_ug": [30.0, -20.0, 10.0]},
+            "attitude": {"yaw_deg": 40.0, "pitch_deg": 0.3},
+            "temperature": {"start_c": 20.0, "end_c": 35.5, "tau_h": 1.0},
+        }
+    )
     return simulate(scn, out_dir=tmp_path_factory.mktemp("long") / "long76")
 
 
@@ -78,8 +80,15 @@ def fleet_features(fleet):
 
 
 def with_drift(table: RunTable, drifts) -> RunTable:
-    return RunTable(run=table.run, lat_deg=table.lat_deg, lat0_deg=table.lat0_deg, temp_min_c=table.temp_min_c,
-                    temp_max_c=table.temp_max_c, drift_deg_h=np.asarray(drifts, float), source=table.source)
+    return RunTable(
+        run=table.run,
+        lat_deg=table.lat_deg,
+        lat0_deg=table.lat0_deg,
+        temp_min_c=table.temp_min_c,
+        temp_max_c=table.temp_max_c,
+        drift_deg_h=np.asarray(drifts, float),
+        source=table.source,
+    )
 
 
 @pytest.fixture(scope="module")
@@ -95,6 +104,7 @@ def model(fleet, fleet_features, tmp_path_factory):
 # ------------------------------------------------------------------------------------------------
 # Alignment
 # ------------------------------------------------------------------------------------------------
+
 
 def test_alignment_estimates_horizontal_errors_and_leaves_the_axial_drift_uncertain(long_alignment, tmp_path):
     al = long_alignment
@@ -120,7 +130,7 @@ def test_threaded_and_sequential_passes_are_identical(long_log, long_alignment):
     log = open_log(long_log)
     a = navigate_after_alignment(log, long_alignment, [0.0, 0.002], 12.0, threads=1, temperature_hours=12.0)
     b = navigate_after_alignment(log, long_alignment, [0.0, 0.002], 12.0, threads=2, temperature_hours=12.0)
-    for x, y in zip(a.curves, b.curves):
+    for x, y in zip(a.curves, b.curves, strict=False):
         np.testing.assert_array_equal(x.north_m, y.north_m)
         np.testing.assert_array_equal(x.hourly_lat_deg, y.hourly_lat_deg)
     assert a.temperature == b.temperature and a.temperature.min_c < a.temperature.max_c
@@ -134,6 +144,7 @@ def test_threaded_and_sequential_passes_are_identical(long_log, long_alignment):
 # ------------------------------------------------------------------------------------------------
 # True drift
 # ------------------------------------------------------------------------------------------------
+
 
 def test_true_drift_recovers_the_simulated_constant(long_log, long_alignment, tmp_path):
     res = find_true_drift(open_log(long_log), alignment=long_alignment)
@@ -150,8 +161,9 @@ def test_true_drift_recovers_the_simulated_constant(long_log, long_alignment, tm
 @pytest.mark.parametrize("criterion", ["rms", "max"])
 def test_truth_command_other_criteria(long_log, tmp_path, criterion):
     out = tmp_path / "truth"
-    r = CliRunner().invoke(truth_command, [str(long_log), "--criterion", criterion, "--json", "--quiet",
-                                           "--out", str(out)])
+    r = CliRunner().invoke(
+        truth_command, [str(long_log), "--criterion", criterion, "--json", "--quiet", "--out", str(out)]
+    )
     assert r.exit_code == 0, r.output
     doc = json.loads(r.output)
     assert doc["criterion"] == criterion and doc["verified"] is True
@@ -167,8 +179,11 @@ def test_truth_command_other_criteria(long_log, tmp_path, criterion):
 
 def test_truth_needs_76_hours(fleet):
     log = open_log(fleet[0][0])
-    with pytest.raises(LogError, match=r"run00/imu\.parquet: the log lasts 16\.000 h; the true drift \(4 h "
-                                       r"alignment \+ 72 h navigation\) takes at least 76 h"):
+    with pytest.raises(
+        LogError,
+        match=r"run00/imu\.parquet: the log lasts 16\.000 h; the true drift \(4 h "
+        r"alignment \+ 72 h navigation\) takes at least 76 h",
+    ):
         find_true_drift(log)
     r = CliRunner().invoke(truth_command, [str(fleet[0][0]), "--quiet"])
     assert r.exit_code == 1 and "takes at least 76 h" in r.output
@@ -177,6 +192,7 @@ def test_truth_needs_76_hours(fleet):
 # ------------------------------------------------------------------------------------------------
 # Evaluation
 # ------------------------------------------------------------------------------------------------
+
 
 @pytest.mark.parametrize("error_deg_h", [-0.0005, 0.0005])
 def test_drift_known_to_0_0005_keeps_72h_error_below_1_nmi(long_log, long_alignment, tmp_path, error_deg_h):
@@ -196,8 +212,9 @@ def test_evaluate_command_with_a_drift_and_with_a_model(long_log, model, tmp_pat
     doc = json.loads((tmp_path / "a" / "evaluation.json").read_text())
     assert doc["before"]["final_pos_err_nmi"] > 5.0 and doc["after"]["final_pos_err_nmi"] < 0.1
     assert re.search(r"72 h position error 5\.\d{3} -> 0\.0\d\d nmi \(final\)", r.output), r.output
-    r = CliRunner().invoke(evaluate_command, [str(long_log), "--model", str(model[1]), "--quiet",
-                                              "--out", str(tmp_path / "b")])
+    r = CliRunner().invoke(
+        evaluate_command, [str(long_log), "--model", str(model[1]), "--quiet", "--out", str(tmp_path / "b")]
+    )
     assert r.exit_code == 0, r.output
     doc = json.loads((tmp_path / "b" / "evaluation.json").read_text())
     assert doc["drift_source"] == str(model[1])
@@ -209,6 +226,7 @@ def test_evaluate_command_with_a_drift_and_with_a_model(long_log, model, tmp_pat
 # ------------------------------------------------------------------------------------------------
 # Features, fleets, identification
 # ------------------------------------------------------------------------------------------------
+
 
 def test_features_of_a_run(fleet, fleet_features):
     f = fleet_features[0]
@@ -223,8 +241,9 @@ def test_features_of_a_run(fleet, fleet_features):
 
 def test_features_command_writes_a_run_table(fleet, fleet_features, tmp_path):
     out = tmp_path / "runs.csv"
-    r = CliRunner().invoke(features_command, [*map(str, fleet[0][:4]), "--out", str(out),
-                                              "--curves", str(tmp_path / "curves.csv")])
+    r = CliRunner().invoke(
+        features_command, [*map(str, fleet[0][:4]), "--out", str(out), "--curves", str(tmp_path / "curves.csv")]
+    )
     assert r.exit_code == 0, r.output
     curves = (tmp_path / "curves.csv").read_text().splitlines()
     assert curves[0] == "run,t_h,lat_err_arcsec" and len(curves) == 1 + 4 * 13
@@ -251,10 +270,13 @@ def test_dask_cluster_and_scheduler_give_the_serial_table(fleet, fleet_features,
 def test_a_bad_log_on_a_cluster_raises_its_own_error(fleet, tmp_path):
     pytest.importorskip("dask.distributed")
     short = tmp_path / "short.csv"
-    short.write_text("t_s,gyro_x_rad_s,gyro_y_rad_s,gyro_z_rad_s,accel_x_m_s2,accel_y_m_s2,accel_z_m_s2,temp_c\n"
-                     + "".join(f"{(i + 1) / 10!r},0,0,0,0,0,9.8,20\n" for i in range(100)))
-    expected = (f"{short}: the log lasts 0.003 h; extracting the features (4 h alignment + 12 h navigation) "
-                "takes at least 16 h")
+    short.write_text(
+        "t_s,gyro_x_rad_s,gyro_y_rad_s,gyro_z_rad_s,accel_x_m_s2,accel_y_m_s2,accel_z_m_s2,temp_c\n"
+        + "".join(f"{(i + 1) / 10!r},0,0,0,0,0,9.8,20\n" for i in range(100))
+    )
+    expected = (
+        f"{short}: the log lasts 0.003 h; extracting the features (4 h alignment + 12 h navigation) takes at least 16 h"
+    )
     with pytest.raises(LogError) as info:
         features_table([fleet[0][0], short], site={"lat_deg": 28.222}, workers=1, processes=False)
     assert str(info.value) == expected
@@ -273,7 +295,7 @@ def test_missing_dask_is_a_clear_message(fleet, monkeypatch, tmp_path):
 def test_identification_on_held_out_runs(fleet, fleet_features, model):
     m, path = model
     paths, drifts = fleet
-    held = [identify(open_log(p), path, features=f) for p, f in zip(paths[10:], fleet_features[10:])]
+    held = [identify(open_log(p), path, features=f) for p, f in zip(paths[10:], fleet_features[10:], strict=False)]
     err = drifts[10:] - np.array([h.drift_deg_h for h in held])  # true minus identified (Table 3 sign)
     test = with_drift(features_run_table(fleet_features[10:]), drifts[10:])
     phys_err = drifts[10:] - physics_inversion(test)
@@ -285,22 +307,29 @@ def test_identification_on_held_out_runs(fleet, fleet_features, model):
     for x in held:  # the interval is centred on the prediction, with the half-width of the LOO residuals
         lo, hi = x.interval_deg_h
         assert lo < x.drift_deg_h < hi and (hi - lo) / 2 == pytest.approx(
-            np.sort(np.abs(m.loo_residuals()))[math.ceil(11 * 0.9) - 1], rel=1e-12)
+            np.sort(np.abs(m.loo_residuals()))[math.ceil(11 * 0.9) - 1], rel=1e-12
+        )
     assert h.physics_drift_deg_h == pytest.approx(physics_inversion(test)[0])
     assert h.alignment_z_drift_std_deg_h > 0.0005
     np.testing.assert_allclose([x.drift_deg_h for x in held], m.predict(test), rtol=0, atol=1e-12)
 
 
 def test_identify_command(fleet, model, tmp_path):
-    r = CliRunner().invoke(identify_command, [str(fleet[0][11]), "--model", str(model[1]), "--json", "--quiet",
-                                              "--out", str(tmp_path)])
+    r = CliRunner().invoke(
+        identify_command, [str(fleet[0][11]), "--model", str(model[1]), "--json", "--quiet", "--out", str(tmp_path)]
+    )
     assert r.exit_code == 0, r.output
     doc = json.loads(r.output)
     assert doc["run"] == "run11" and doc["model_std_deg_h"] is None
     assert doc["interval_coverage"] == 0.9 and doc["interval_deg_h"][0] < doc["drift_deg_h"] < doc["interval_deg_h"][1]
     assert abs(doc["drift_deg_h"] - fleet[1][11]) < 3e-4
-    assert set(doc) >= {"physics_drift_deg_h", "alignment_z_drift_deg_h", "alignment_z_drift_std_deg_h",
-                        "features", "training_error_deg_h"}
+    assert set(doc) >= {
+        "physics_drift_deg_h",
+        "alignment_z_drift_deg_h",
+        "alignment_z_drift_std_deg_h",
+        "features",
+        "training_error_deg_h",
+    }
     assert doc["training_error_kind"] == "loo_mae" and 0 < doc["training_error_deg_h"] < 3e-4
     assert (tmp_path / "alignment_z_sigma.png").read_bytes()[:8] == PNG_MAGIC
     r = CliRunner().invoke(identify_command, [str(fleet[0][11]), "--model", str(model[1]), "--quiet"])

@@ -22,7 +22,14 @@ def run(tmp_path_factory):
 
 def test_files_and_figures(run):
     out, _ = run
-    for name in ("results.json", "report.md", "report.html", "fitness_curve.png", "pred_vs_true.png", "error_per_run.png"):
+    for name in (
+        "results.json",
+        "report.md",
+        "report.html",
+        "fitness_curve.png",
+        "pred_vs_true.png",
+        "error_per_run.png",
+    ):
         assert (out / name).is_file(), name
     for png in out.glob("*.png"):
         data = png.read_bytes()
@@ -41,7 +48,14 @@ def test_schema_and_internal_consistency(run):
     assert len(true) == 10
     assert {m["family"] for m in doc["methods"]} == FAMILIES
     for m in doc["methods"]:
-        for key in ("name", "test_pred_deg_h", "test_err_deg_h", "test_mae_deg_h", "test_max_abs_err_deg_h", "train_mae_deg_h"):
+        for key in (
+            "name",
+            "test_pred_deg_h",
+            "test_err_deg_h",
+            "test_mae_deg_h",
+            "test_max_abs_err_deg_h",
+            "train_mae_deg_h",
+        ):
             assert key in m, (m["name"], key)
         pred, err = np.array(m["test_pred_deg_h"]), np.array(m["test_err_deg_h"])
         np.testing.assert_allclose(err, true - pred, atol=1e-15)
@@ -53,8 +67,11 @@ def test_schema_and_internal_consistency(run):
             assert m["settings"]["n_particles"] == 30
         if "on_search_bound" in m:  # recomputed from the tuned values and the box
             (glo, ghi), (slo, shi) = m["search_bounds"]
-            want = [n for n, v, lo, hi in (("gamma", m["gamma"], glo, ghi), ("sigma", m["sigma"], slo, shi))
-                    if np.isclose(v, lo, rtol=1e-6) or np.isclose(v, hi, rtol=1e-6)]
+            want = [
+                n
+                for n, v, lo, hi in (("gamma", m["gamma"], glo, ghi), ("sigma", m["sigma"], slo, shi))
+                if np.isclose(v, lo, rtol=1e-6) or np.isclose(v, hi, rtol=1e-6)
+            ]
             assert m["on_search_bound"] == want
         if m["family"] in ("cpso_loo", "grid_loo"):
             half = m["interval_90_half_width_deg_h"]

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from gyrodrift.datasets import load_paper
-from gyrodrift.features import ENCODINGS, encode, feature_names
+from gyrodrift.encodings import ENCODINGS, encode, feature_names
 from gyrodrift.runs import RunTableError, parse_temp_range, read_runs_csv
 
 
@@ -42,7 +42,10 @@ def _write(tmp_path, text, name="runs.csv"):
 
 
 def test_range_cells_and_lat0_column(tmp_path):
-    p = _write(tmp_path, "run,lat_deg,lat0_deg,temp_range_c,drift_deg_h\na,28.2274,28.222,37.1~39.5,0.0007\nb,45.0,45.001,10 ~ 12,\n")
+    p = _write(
+        tmp_path,
+        "run,lat_deg,lat0_deg,temp_range_c,drift_deg_h\na,28.2274,28.222,37.1~39.5,0.0007\nb,45.0,45.001,10 ~ 12,\n",
+    )
     runs = read_runs_csv(p)
     assert list(runs.temp_min_c) == [37.1, 10.0] and list(runs.temp_max_c) == [39.5, 12.0]
     assert np.isnan(runs.drift_deg_h[1]) and not runs.has_truth
@@ -55,24 +58,80 @@ def test_range_cells_and_lat0_column(tmp_path):
     [
         ("", {}, r"runs.csv: empty file"),
         ("run,lat_deg,temp_min_c,temp_max_c\n", {"lat0_deg": 28.0}, r"runs.csv: no data rows"),
-        ("run,lat_deg,temp_min_c,temp_max_c,colour\n1,28,1,2,red\n", {"lat0_deg": 28.0}, r"row 1: unknown column 'colour'"),
+        (
+            "run,lat_deg,temp_min_c,temp_max_c,colour\n1,28,1,2,red\n",
+            {"lat0_deg": 28.0},
+            r"row 1: unknown column 'colour'",
+        ),
         ("run,temp_min_c,temp_max_c\n1,1,2\n", {"lat0_deg": 28.0}, r"row 1: missing column 'lat_deg'"),
         ("run,lat_deg\n1,28\n", {"lat0_deg": 28.0}, r"row 1: missing temperature columns"),
         ("run,lat_deg,temp_min_c,temp_max_c\n1,28,1,2\n", {}, r"no lat0_deg column and no site latitude"),
-        ("run,lat_deg,temp_min_c,temp_max_c\n1,28,1,2\n", {"lat0_deg": 28.0, "require_truth": True}, r"missing column 'drift_deg_h'"),
-        ("run,lat_deg,temp_min_c,temp_max_c\n1,28,1,2\n2,abc,1,2\n", {"lat0_deg": 28.0}, r"runs.csv, row 3, column lat_deg: expected a latitude in degrees, got 'abc'"),
-        ("run,lat_deg,temp_min_c,temp_max_c\n1,128,1,2\n", {"lat0_deg": 28.0}, r"row 2, column lat_deg: expected a latitude within \[-90, 90\]"),
-        ("run,lat_deg,temp_min_c,temp_max_c\n1,28,nan,2\n", {"lat0_deg": 28.0}, r"row 2, column temp_min_c: expected a finite number"),
-        ("run,lat_deg,temp_min_c,temp_max_c\n1,28,5,2\n", {"lat0_deg": 28.0}, r"row 2, column temp_max_c: maximum temperature 2.0 is below the minimum 5.0"),
-        ("run,lat_deg,temp_range_c\n1,28,37.1-39.5\n", {"lat0_deg": 28.0}, r"row 2, column temp_range_c: expected a range like 37.1~39.5, got '37.1-39.5'"),
+        (
+            "run,lat_deg,temp_min_c,temp_max_c\n1,28,1,2\n",
+            {"lat0_deg": 28.0, "require_truth": True},
+            r"missing column 'drift_deg_h'",
+        ),
+        (
+            "run,lat_deg,temp_min_c,temp_max_c\n1,28,1,2\n2,abc,1,2\n",
+            {"lat0_deg": 28.0},
+            r"runs.csv, row 3, column lat_deg: expected a latitude in degrees, got 'abc'",
+        ),
+        (
+            "run,lat_deg,temp_min_c,temp_max_c\n1,128,1,2\n",
+            {"lat0_deg": 28.0},
+            r"row 2, column lat_deg: expected a latitude within \[-90, 90\]",
+        ),
+        (
+            "run,lat_deg,temp_min_c,temp_max_c\n1,28,nan,2\n",
+            {"lat0_deg": 28.0},
+            r"row 2, column temp_min_c: expected a finite number",
+        ),
+        (
+            "run,lat_deg,temp_min_c,temp_max_c\n1,28,5,2\n",
+            {"lat0_deg": 28.0},
+            r"row 2, column temp_max_c: maximum temperature 2.0 is below the minimum 5.0",
+        ),
+        (
+            "run,lat_deg,temp_range_c\n1,28,37.1-39.5\n",
+            {"lat0_deg": 28.0},
+            r"row 2, column temp_range_c: expected a range like 37.1~39.5, got '37.1-39.5'",
+        ),
         ("run,lat_deg,temp_min_c,temp_max_c\n1,28,1\n", {"lat0_deg": 28.0}, r"row 2: expected 4 cells, got 3"),
-        ("run,lat_deg,temp_min_c,temp_max_c,drift_deg_h\n1,28,1,2,\n", {"lat0_deg": 28.0, "require_truth": True}, r"row 2, column drift_deg_h: expected a drift in deg/h for training"),
-        ("run,lat_deg,temp_min_c,temp_max_c,drift_deg_h\n1,28,1,2,36\n", {"lat0_deg": 28.0}, r"row 2, column drift_deg_h: \|36.0\| deg/h is not an RLG drift"),
-        ("run,lat_deg,temp_min_c,temp_max_c\n1,28,1,2\n1,28,1,2\n", {"lat0_deg": 28.0}, r"row 3, column run: run '1' appears more than once \(first in row 2"),
-        ("run,lat_deg,temp_min_c,temp_max_c\n1,28,1,2\n", {"lat0_deg": 1000.0}, r"runs.csv: site latitude lat0_deg must be within \[-90, 90\] deg, got 1000.0"),
-        ("run,lat_deg,temp_min_c,temp_max_c\n1,28,1,2\n", {"lat0_deg": float("nan")}, r"site latitude lat0_deg must be within"),
-        ("run,lat_deg,lat_deg,temp_min_c,temp_max_c\n1,28,28,1,2\n", {"lat0_deg": 28.0}, r"column 'lat_deg' appears twice"),
-        ("run,split,lat_deg,temp_min_c,temp_max_c\n1,validate,28,1,2\n", {"lat0_deg": 28.0}, r"column split: expected 'train' or 'test'"),
+        (
+            "run,lat_deg,temp_min_c,temp_max_c,drift_deg_h\n1,28,1,2,\n",
+            {"lat0_deg": 28.0, "require_truth": True},
+            r"row 2, column drift_deg_h: expected a drift in deg/h for training",
+        ),
+        (
+            "run,lat_deg,temp_min_c,temp_max_c,drift_deg_h\n1,28,1,2,36\n",
+            {"lat0_deg": 28.0},
+            r"row 2, column drift_deg_h: \|36.0\| deg/h is not an RLG drift",
+        ),
+        (
+            "run,lat_deg,temp_min_c,temp_max_c\n1,28,1,2\n1,28,1,2\n",
+            {"lat0_deg": 28.0},
+            r"row 3, column run: run '1' appears more than once \(first in row 2",
+        ),
+        (
+            "run,lat_deg,temp_min_c,temp_max_c\n1,28,1,2\n",
+            {"lat0_deg": 1000.0},
+            r"runs.csv: site latitude lat0_deg must be within \[-90, 90\] deg, got 1000.0",
+        ),
+        (
+            "run,lat_deg,temp_min_c,temp_max_c\n1,28,1,2\n",
+            {"lat0_deg": float("nan")},
+            r"site latitude lat0_deg must be within",
+        ),
+        (
+            "run,lat_deg,lat_deg,temp_min_c,temp_max_c\n1,28,28,1,2\n",
+            {"lat0_deg": 28.0},
+            r"column 'lat_deg' appears twice",
+        ),
+        (
+            "run,split,lat_deg,temp_min_c,temp_max_c\n1,validate,28,1,2\n",
+            {"lat0_deg": 28.0},
+            r"column split: expected 'train' or 'test'",
+        ),
     ],
 )
 def test_bad_tables_name_file_row_and_column(tmp_path, text, kwargs, message):

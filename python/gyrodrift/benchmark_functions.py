@@ -30,10 +30,7 @@ def ackley(x) -> float:
     """Ackley's function: a nearly flat outer region around a deep central hole."""
     d = x.size
     return float(
-        -20.0 * np.exp(-0.2 * np.sqrt(np.sum(x**2) / d))
-        - np.exp(np.sum(np.cos(2.0 * np.pi * x)) / d)
-        + 20.0
-        + np.e
+        -20.0 * np.exp(-0.2 * np.sqrt(np.sum(x**2) / d)) - np.exp(np.sum(np.cos(2.0 * np.pi * x)) / d) + 20.0 + np.e
     )
 
 

@@ -12,3 +12,11 @@ OBJECTIVES = ("train_mae", "loo_mae", "kfold_mae")
 
 METHODS = ("cpso", "pso", "grid")
 """Tuning methods: chaos PSO, plain PSO, log grid."""
+
+ENCODINGS: dict[str, tuple[str, ...]] = {
+    "temp_range": ("lat_err_arcsec", "temp_min_c", "temp_max_c"),
+    "temp_mean": ("lat_err_arcsec", "temp_mean_c"),
+    "temp_span": ("lat_err_arcsec", "temp_span_c"),
+    "lat_only": ("lat_err_arcsec",),
+}
+"""Run encodings: name -> feature names (units in the names); implemented in `gyrodrift.encodings`."""

@@ -208,9 +208,7 @@ def minimize_cpso(
     if not (0.0 < chaos_radius <= 1.0):
         raise ValueError(f"chaos_radius must be in (0, 1], got {chaos_radius!r}")
     if not (0.0 < chaos_radius_end <= chaos_radius):
-        raise ValueError(
-            f"chaos_radius_end must be in (0, chaos_radius={chaos_radius!r}], got {chaos_radius_end!r}"
-        )
+        raise ValueError(f"chaos_radius_end must be in (0, chaos_radius={chaos_radius!r}], got {chaos_radius_end!r}")
     if vmax_frac is not None and not (math.isfinite(vmax_frac) and vmax_frac > 0):
         raise ValueError(f"vmax_frac must be a positive finite number or None, got {vmax_frac!r}")
     if patience is not None:
@@ -316,8 +314,7 @@ def minimize_cpso(
                     break
             if patience is not None and nit > patience and history[-1 - patience] - gbest_fit <= tol:
                 message = (
-                    f"Converged: best fitness improved by no more than tol={tol!r} "
-                    f"over the last {patience} iterations."
+                    f"Converged: best fitness improved by no more than tol={tol!r} over the last {patience} iterations."
                 )
                 break
 
@@ -384,9 +381,7 @@ def _make_mapper(workers, stack: ExitStack):
     try:
         n = operator.index(workers)
     except TypeError:
-        raise ValueError(
-            f"workers must be a positive int, -1 or a map-like callable, got {workers!r}"
-        ) from None
+        raise ValueError(f"workers must be a positive int, -1 or a map-like callable, got {workers!r}") from None
     if n == -1:
         import os
 
@@ -430,7 +425,7 @@ def _validate_bounds(bounds) -> tuple[np.ndarray, np.ndarray]:
         lo, hi = arr[:, 0].copy(), arr[:, 1].copy()
     if lo.ndim != 1 or lo.size < 1:
         raise ValueError(f"bounds must describe at least one dimension, got {bounds!r}")
-    for i, (a, b) in enumerate(zip(lo.tolist(), hi.tolist())):
+    for i, (a, b) in enumerate(zip(lo.tolist(), hi.tolist(), strict=False)):
         if not (math.isfinite(a) and math.isfinite(b)):
             raise ValueError(f"bounds must be finite, got ({a!r}, {b!r}) in dimension {i}")
         if not a < b:
@@ -445,14 +440,11 @@ def _validate_log_scale(log_scale, lo: np.ndarray, hi: np.ndarray) -> np.ndarray
     else:
         mask = np.asarray(log_scale)
         if mask.shape != (n_dim,) or mask.dtype != bool:
-            raise ValueError(
-                f"log_scale must be a bool or a sequence of {n_dim} bools, got {log_scale!r}"
-            )
+            raise ValueError(f"log_scale must be a bool or a sequence of {n_dim} bools, got {log_scale!r}")
     for i in np.flatnonzero(mask):
         if lo[i] <= 0:
             raise ValueError(
-                "log_scale requires positive bounds, "
-                f"got ({float(lo[i])!r}, {float(hi[i])!r}) in dimension {i}"
+                f"log_scale requires positive bounds, got ({float(lo[i])!r}, {float(hi[i])!r}) in dimension {i}"
             )
     return mask
 

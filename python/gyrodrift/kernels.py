@@ -120,8 +120,13 @@ def polynomial_kernel(X, Z=None, sigma: float = 1.0, degree: int = 3, coef0: flo
 
 def _check_degree(degree) -> int:
     """Integer >= 1; integral floats such as 3.0 (e.g. from a parameter grid) are accepted."""
-    ok = (not isinstance(degree, bool) and isinstance(degree, numbers.Real) and np.isfinite(degree)
-          and float(degree).is_integer() and degree >= 1)
+    ok = (
+        not isinstance(degree, bool)
+        and isinstance(degree, numbers.Real)
+        and np.isfinite(degree)
+        and float(degree).is_integer()
+        and degree >= 1
+    )
     if not ok:
         raise ValueError(f"degree must be an integer >= 1, got {degree!r}")
     return int(degree)
@@ -134,8 +139,9 @@ def check_kernel(kernel) -> str:
     return "poly" if kernel == "polynomial" else kernel
 
 
-def kernel_matrix(X, Z=None, *, kernel: str = "rbf", sigma: float = 1.0, degree: int = 3,
-                  coef0: float = 1.0) -> np.ndarray:
+def kernel_matrix(
+    X, Z=None, *, kernel: str = "rbf", sigma: float = 1.0, degree: int = 3, coef0: float = 1.0
+) -> np.ndarray:
     """Kernel matrix ``K[i, j] = k(X[i], Z[j])`` for a named kernel.
 
     Parameters

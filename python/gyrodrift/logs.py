@@ -45,12 +45,14 @@ import json
 import math
 import os
 import re
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterator, Mapping
 
 import numpy as np
 import pyarrow as pa
+
+from gyrodrift.errors import InputError
 
 __all__ = [
     "LogError",
@@ -80,7 +82,7 @@ _G0 = 9.80665
 _RATE_PROBE = 1000
 
 
-class LogError(ValueError):
+class LogError(InputError):
     """An IMU log that cannot be used; the message starts with the file (and row and column when known)."""
 
 
@@ -118,7 +120,7 @@ class LogChunk:
     def __len__(self) -> int:
         return len(self.t_s)
 
-    def slice(self, a: int, b: int) -> "LogChunk":
+    def slice(self, a: int, b: int) -> LogChunk:
         """Samples a..b-1 of the chunk (views)."""
         return LogChunk(self.first_index + a, self.t_s[a:b], self.dtheta_rad[a:b], self.dv_m_s[a:b], self.temp_c[a:b])
 
@@ -170,8 +172,17 @@ class ImuLog:
         The true static site when the file says it (Parquet metadata) or the caller gave it.
     """
 
-    def __init__(self, path: Path, fmt: str, kind: str, columns: tuple[str, ...], rate_hz: float,
-                 n_samples: int, site: Site | None, rate_source: str):
+    def __init__(
+        self,
+        path: Path,
+        fmt: str,
+        kind: str,
+        columns: tuple[str, ...],
+        rate_hz: float,
+        n_samples: int,
+        site: Site | None,
+        rate_source: str,
+    ):
         self.path = path
         self.format = fmt
         self.kind = kind
@@ -189,8 +200,10 @@ class ImuLog:
         self.name = stem
 
     def __repr__(self) -> str:
-        return (f"ImuLog({str(self.path)!r}, format={self.format!r}, kind={self.kind!r}, rate_hz={self.rate_hz:g}, "
-                f"n_samples={self.n_samples}, site={self.site})")
+        return (
+            f"ImuLog({str(self.path)!r}, format={self.format!r}, kind={self.kind!r}, rate_hz={self.rate_hz:g}, "
+            f"n_samples={self.n_samples}, site={self.site})"
+        )
 
     @property
     def duration_s(self) -> float:
@@ -366,7 +379,7 @@ def _csv_conversion_error(path: Path, message: str) -> LogError:
         reader = csv.reader(fh)
         header = [h.strip() for h in next(reader)]
         for rownum, row in enumerate(reader, start=2):
-            for name, cell in zip(header, row):
+            for name, cell in zip(header, row, strict=False):
                 if value is not None and cell.strip() != value:
                     continue
                 try:
@@ -415,8 +428,9 @@ def _csv_head_and_tail(path: Path, label: str) -> tuple[list[str], np.ndarray, f
             try:
                 times.append(float(row[it]))
             except (ValueError, IndexError):
-                raise LogError(f"{label}, row {rownum}, column t_s: expected a number, got "
-                               f"{row[it] if it < len(row) else ''!r}") from None
+                raise LogError(
+                    f"{label}, row {rownum}, column t_s: expected a number, got {row[it] if it < len(row) else ''!r}"
+                ) from None
     last = None
     with open(path, "rb") as fh:
         fh.seek(0, os.SEEK_END)

@@ -41,6 +41,7 @@ from scipy.linalg import lapack
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted
 
+from gyrodrift.errors import GyrodriftError
 from gyrodrift.kernels import (
     check_kernel,
     check_positive,
@@ -52,8 +53,10 @@ from gyrodrift.kernels import (
 try:  # scikit-learn >= 1.6
     from sklearn.utils.validation import validate_data as _validate_data
 except ImportError:  # pragma: no cover - older scikit-learn
+
     def _validate_data(estimator, *args, **kwargs):
         return estimator._validate_data(*args, **kwargs)
+
 
 __all__ = [
     "LSSVR",
@@ -65,7 +68,7 @@ __all__ = [
 ]
 
 
-class NotPositiveDefiniteError(np.linalg.LinAlgError):
+class NotPositiveDefiniteError(GyrodriftError, np.linalg.LinAlgError):
     """``H = K + I/gamma`` is not numerically positive definite, so the LSSVM system cannot be solved.
 
     A subclass of ``numpy.linalg.LinAlgError`` (and therefore of ``ValueError``).
@@ -75,6 +78,7 @@ class NotPositiveDefiniteError(np.linalg.LinAlgError):
 # --------------------------------------------------------------------------------------------------
 # Linear algebra helpers (one Cholesky factor, triangular solves; LAPACK through scipy.linalg.lapack)
 # --------------------------------------------------------------------------------------------------
+
 
 def _cholesky_upper(H: np.ndarray) -> np.ndarray | None:
     """Upper Cholesky factor ``U`` (``U'U = H``) of the symmetric matrix ``H``, or None if not PD.
@@ -163,6 +167,7 @@ def _factor_or_raise(K: np.ndarray, gamma: float, what: str) -> np.ndarray:
 # --------------------------------------------------------------------------------------------------
 # Functional core (used by gyrodrift.tuning)
 # --------------------------------------------------------------------------------------------------
+
 
 def lssvr_solve(K, y, gamma):
     """Solve the LSSVM dual system for a precomputed kernel matrix.
@@ -376,6 +381,7 @@ def _rbf_batch_loop(D, y, g, sg, kind):
 # scikit-learn estimator
 # --------------------------------------------------------------------------------------------------
 
+
 class LSSVR(RegressorMixin, BaseEstimator):
     """Least-squares support vector regression (Suykens) with an unregularised bias.
 
@@ -448,8 +454,7 @@ class LSSVR(RegressorMixin, BaseEstimator):
         return {"multioutput": True}
 
     def _kernel(self, X, Z=None):
-        return kernel_matrix(X, Z, kernel=self.kernel, sigma=self.sigma, degree=self.degree,
-                             coef0=self.coef0)
+        return kernel_matrix(X, Z, kernel=self.kernel, sigma=self.sigma, degree=self.degree, coef0=self.coef0)
 
     def _describe(self) -> str:
         return f"gamma={self.gamma!r}, sigma={self.sigma!r}, kernel={self.kernel!r}"
@@ -479,8 +484,9 @@ class LSSVR(RegressorMixin, BaseEstimator):
         gamma = check_positive("gamma", self.gamma)
         check_positive("sigma", self.sigma)
         check_kernel(self.kernel)
-        X, y = _validate_data(self, X, y, dtype=np.float64, multi_output=True, y_numeric=True,
-                              ensure_min_samples=2, copy=True)  # X_fit_ must not alias the caller's X
+        X, y = _validate_data(
+            self, X, y, dtype=np.float64, multi_output=True, y_numeric=True, ensure_min_samples=2, copy=True
+        )  # X_fit_ must not alias the caller's X
         y = np.asarray(y, dtype=np.float64)
         K = self._kernel(X)
         U = _cholesky_upper(_h_matrix(K, gamma, copy=False))  # K is ours: overwrite it

@@ -17,12 +17,11 @@ from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import MinMaxScaler, StandardScaler
 
 from gyrodrift.choices import SCALINGS
-from gyrodrift.features import encode, feature_names
+from gyrodrift.encodings import encode, feature_names
 from gyrodrift.lssvr import LSSVR
 from gyrodrift.progress import progress
 from gyrodrift.runs import RunTable
 from gyrodrift.tuning import DEFAULT_BOUNDS, TuningResult, tune_lssvr
-
 
 
 def make_scaler(scaling: str):
@@ -42,7 +41,7 @@ def training_digest(runs: RunTable) -> str:
         [
             [str(r), repr(float(a)), repr(float(b)), repr(float(c)), repr(float(d)), repr(float(e))]
             for r, a, b, c, d, e in zip(
-                runs.run, runs.lat_deg, runs.lat0_deg, runs.temp_min_c, runs.temp_max_c, runs.drift_deg_h
+                runs.run, runs.lat_deg, runs.lat0_deg, runs.temp_min_c, runs.temp_max_c, runs.drift_deg_h, strict=False
             )
         ]
     )
@@ -89,7 +88,7 @@ class DriftModel:
     Attributes
     ----------
     encoding : str
-        How a run becomes an input vector (see ``gyrodrift.features.ENCODINGS``).
+        How a run becomes an input vector (see ``gyrodrift.encodings.ENCODINGS``).
     scaling : str
         Input scaling fitted on the training runs (``SCALINGS``).
     pipeline : sklearn Pipeline

@@ -27,7 +27,8 @@ from sklearn.preprocessing import MinMaxScaler, StandardScaler
 from gyrodrift import __version__
 from gyrodrift.atomic import atomic_write_json
 from gyrodrift.choices import SCALINGS
-from gyrodrift.features import ENCODINGS, feature_names
+from gyrodrift.encodings import ENCODINGS, feature_names
+from gyrodrift.errors import InputError
 from gyrodrift.lssvr import LSSVR
 from gyrodrift.model import DriftModel
 from gyrodrift.tuning import TuningResult
@@ -41,7 +42,7 @@ _SCALER_ATTRS = {
 }
 
 
-class ModelFileError(ValueError):
+class ModelFileError(InputError):
     """A model file that cannot be used; the message names the file and what is wrong."""
 
 

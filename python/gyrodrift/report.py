@@ -81,7 +81,9 @@ def make_figures(results: dict, folder: Path) -> dict[str, Path]:
         if m["family"] == "cpso_paper":
             axes[0].semilogy(np.arange(1, len(m["fitness_history"]) + 1), m["fitness_history"], label=m["encoding"])
     axes[0].axhline(claims["fitness"], color="k", ls="--", lw=1, label=f"paper's claim {claims['fitness']:.3e}")
-    axes[0].set(xlabel="iteration", ylabel="fitness: train MAE [deg/h]", title="CPSO, paper settings (cf. paper Fig. 3)")
+    axes[0].set(
+        xlabel="iteration", ylabel="fitness: train MAE [deg/h]", title="CPSO, paper settings (cf. paper Fig. 3)"
+    )
     axes[0].legend(fontsize=8)
     for m in results["methods"]:
         if m["family"] in ("cpso_loo", "pso_loo") and m["fitness_history"]:
@@ -102,8 +104,13 @@ def make_figures(results: dict, folder: Path) -> dict[str, Path]:
     ax.scatter(true, claims["test_pred_deg_h"], marker="x", color="k", label="paper's Table 3 (claimed)")
     for m in shown:
         ax.scatter(true, m["test_pred_deg_h"], s=18, label=short_name(m))
-    ax.set(xlabel="true drift [deg/h]", ylabel="identified drift [deg/h]", title="test runs: identified vs true",
-           xlim=(-lim, lim), ylim=(-lim, lim))
+    ax.set(
+        xlabel="true drift [deg/h]",
+        ylabel="identified drift [deg/h]",
+        title="test runs: identified vs true",
+        xlim=(-lim, lim),
+        ylim=(-lim, lim),
+    )
     ax.legend(fontsize=7)
     fig.tight_layout()
     out["pred_vs_true"] = folder / "pred_vs_true.png"
@@ -172,12 +179,18 @@ def conclusion(results: dict) -> list[str]:
         f"not selected) is {best_learned['name']} at {_fmt(best_learned['test_mae_deg_h'])} deg/h. "
         f"{n_beating_physics} of the {len(trained)} trained models beat the physics inversion on the test runs.",
         "The paper's fitness (training MAE, eq. 16) rewards interpolation: the paper-settings swarm drives it to "
-        + ", ".join(f"{_fmt(m['fitness'])} ({m['encoding']}, gamma {_fmt(m['gamma'])}, sigma {_fmt(m['sigma'])})" for m in cpso_paper)
+        + ", ".join(
+            f"{_fmt(m['fitness'])} ({m['encoding']}, gamma {_fmt(m['gamma'])}, sigma {_fmt(m['sigma'])})"
+            for m in cpso_paper
+        )
         + f" against the paper's {_fmt(claims['fitness'])}, which says little about new runs: compare their test "
         "errors with the leave-one-out tuned models. Such an interpolating model falls back to its bias b away "
-        "from the training points: " + ", ".join(
+        "from the training points: "
+        + ", ".join(
             f"{c} of 10 test predictions of {m['name']} lie within 2e-6 deg/h of one value"
-            for c, m in zip(collapsed, cpso_paper + [paper_param_best])) + ".",
+            for c, m in zip(collapsed, cpso_paper + [paper_param_best], strict=False)
+        )
+        + ".",
         f"{len(on_bound)} of the {len(tuned)} tuned models end on the edge of the search box "
         f"(gamma in [{_fmt(tuned[0]['search_bounds'][0][0])}, {_fmt(tuned[0]['search_bounds'][0][1])}], sigma in "
         f"[{_fmt(tuned[0]['search_bounds'][1][0])}, {_fmt(tuned[0]['search_bounds'][1][1])}], scaled units; marked "
@@ -202,33 +215,63 @@ def report_blocks(results: dict, figures: dict[str, Path]) -> list[tuple]:
     shown = key_methods(results)
     blocks: list[tuple] = [
         ("h1", "gyrodrift reproduce: CPSO-LSSVM axial drift identification (Yu et al. 2013)"),
-        ("p", f"gyrodrift {results['gyrodrift_version']}, seed {results['seed']}, "
-              f"{results['elapsed_s']:.1f} s. Trained on the paper's 22 training runs, tested on its 10 test runs "
-              f"(site latitude {results['data']['lat0_deg']} deg). Drifts in deg/h; errors are true minus identified."),
+        (
+            "p",
+            f"gyrodrift {results['gyrodrift_version']}, seed {results['seed']}, "
+            f"{results['elapsed_s']:.1f} s. Trained on the paper's 22 training runs, tested on its 10 test runs "
+            f"(site latitude {results['data']['lat0_deg']} deg). Drifts in deg/h; errors are true minus identified.",
+        ),
         ("h2", "How the inputs were encoded and scaled"),
-        ("p", "The paper does not say. Latitude feature: " + results["input_handling"]["latitude_feature"]
-              + ". Encodings of the temperature range: "
-              + "; ".join(f"{k}: {v}" for k, v in results["input_handling"]["encodings"].items())
-              + ". Scaling: " + results["input_handling"]["scaling"] + ". Selection: "
-              + results["selected_by_loo"]["rule"] + f" -> {results['selected_by_loo']['name']}."),
+        (
+            "p",
+            "The paper does not say. Latitude feature: "
+            + results["input_handling"]["latitude_feature"]
+            + ". Encodings of the temperature range: "
+            + "; ".join(f"{k}: {v}" for k, v in results["input_handling"]["encodings"].items())
+            + ". Scaling: "
+            + results["input_handling"]["scaling"]
+            + ". Selection: "
+            + results["selected_by_loo"]["rule"]
+            + f" -> {results['selected_by_loo']['name']}.",
+        ),
         ("h2", "Identification of the test runs (cf. the paper's Table 3)"),
-        ("table",
-         ["run", "true", "paper pred (claimed)", "paper err (published)"]
-         + [f"{short_name(m)} pred" for m in shown] + [f"{short_name(m)} err" for m in shown],
-         [[run, _fmt(true[i]), _fmt(claims["test_pred_deg_h"][i]), _fmt(claims["test_err_deg_h"][i])]
-          + [_fmt(m["test_pred_deg_h"][i]) for m in shown] + [_fmt(m["test_err_deg_h"][i]) for m in shown]
-          for i, run in enumerate(results["data"]["test_runs"])]),
+        (
+            "table",
+            ["run", "true", "paper pred (claimed)", "paper err (published)"]
+            + [f"{short_name(m)} pred" for m in shown]
+            + [f"{short_name(m)} err" for m in shown],
+            [
+                [run, _fmt(true[i]), _fmt(claims["test_pred_deg_h"][i]), _fmt(claims["test_err_deg_h"][i])]
+                + [_fmt(m["test_pred_deg_h"][i]) for m in shown]
+                + [_fmt(m["test_err_deg_h"][i]) for m in shown]
+                for i, run in enumerate(results["data"]["test_runs"])
+            ],
+        ),
         ("h2", "Every method"),
-        ("table",
-         ["method", "gamma", "sigma", "evaluations", "train MAE", "LOO MAE", "test MAE", "test max |err|"],
-         [[m["name"], _fmt(m.get("gamma")) + (" (bound)" if "gamma" in m.get("on_search_bound", ()) else ""),
-           _fmt(m.get("sigma")) + (" (bound)" if "sigma" in m.get("on_search_bound", ()) else ""),
-           str(m.get("nfev", "-")) if m.get("nfev") else "-",
-           _fmt(m["train_mae_deg_h"]), _fmt(m.get("loo_mae_deg_h")), _fmt(m["test_mae_deg_h"]),
-           _fmt(m["test_max_abs_err_deg_h"])] for m in results["methods"]]),
+        (
+            "table",
+            ["method", "gamma", "sigma", "evaluations", "train MAE", "LOO MAE", "test MAE", "test max |err|"],
+            [
+                [
+                    m["name"],
+                    _fmt(m.get("gamma")) + (" (bound)" if "gamma" in m.get("on_search_bound", ()) else ""),
+                    _fmt(m.get("sigma")) + (" (bound)" if "sigma" in m.get("on_search_bound", ()) else ""),
+                    str(m.get("nfev", "-")) if m.get("nfev") else "-",
+                    _fmt(m["train_mae_deg_h"]),
+                    _fmt(m.get("loo_mae_deg_h")),
+                    _fmt(m["test_mae_deg_h"]),
+                    _fmt(m["test_max_abs_err_deg_h"]),
+                ]
+                for m in results["methods"]
+            ],
+        ),
         ("h2", "Figures"),
-        ("img", figures["fitness_curve"], "Fitness per iteration of the paper-settings CPSO (left; paper Fig. 3) "
-                                          "and LOO MAE against evaluations, chaos vs plain PSO (right)."),
+        (
+            "img",
+            figures["fitness_curve"],
+            "Fitness per iteration of the paper-settings CPSO (left; paper Fig. 3) "
+            "and LOO MAE against evaluations, chaos vs plain PSO (right).",
+        ),
         ("img", figures["pred_vs_true"], "Identified vs true drift on the 10 test runs."),
         ("img", figures["error_per_run"], "Error per test run; dashed red: the 0.0005 deg/h budget."),
         ("h2", "Conclusion"),
@@ -276,8 +319,10 @@ def render_html(blocks: list[tuple]) -> str:
             parts.append("</table>")
         elif b[0] == "img":
             data = base64.b64encode(Path(b[1]).read_bytes()).decode()
-            parts.append(f"<figure><img src='data:image/png;base64,{data}' alt='{html.escape(b[2])}'>"
-                         f"<figcaption>{html.escape(b[2])}</figcaption></figure>")
+            parts.append(
+                f"<figure><img src='data:image/png;base64,{data}' alt='{html.escape(b[2])}'>"
+                f"<figcaption>{html.escape(b[2])}</figcaption></figure>"
+            )
     parts.append("</body></html>")
     return "\n".join(parts)
 

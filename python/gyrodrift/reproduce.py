@@ -29,7 +29,7 @@ import numpy as np
 from gyrodrift import __version__
 from gyrodrift.baselines import fit_latitude_line, physics_inversion
 from gyrodrift.datasets import load_paper
-from gyrodrift.features import ENCODING_DESCRIPTIONS
+from gyrodrift.encodings import ENCODING_DESCRIPTIONS
 from gyrodrift.model import DriftModel, fit_drift_model
 from gyrodrift.progress import progress
 from gyrodrift.runs import RunTable
@@ -89,7 +89,8 @@ def _model_entry(name: str, family: str, model: DriftModel, data, **extra) -> di
         values = {"gamma": float(est.gamma), "sigma": float(est.sigma)}
         extra["search_bounds"] = [list(b) for b in tuning.bounds]
         extra["on_search_bound"] = [
-            name for name, (low, high) in zip(values, tuning.bounds)
+            name
+            for name, (low, high) in zip(values, tuning.bounds, strict=False)
             if np.isclose(values[name], low, rtol=1e-6) or np.isclose(values[name], high, rtol=1e-6)
         ]
     if np.all(np.isfinite(loo)):
@@ -134,25 +135,42 @@ def run_reproduction(seed: int = 0, quiet: bool = True) -> dict:
         for k, enc in enumerate(REPORTED_ENCODINGS):
             common = dict(encoding=enc, scaling=SCALING, n_particles=PAPER_SETTINGS["n_particles"], quiet=True)
             m = fit_drift_model(
-                data.train, objective="train_mae", method="cpso", max_iter=PAPER_SETTINGS["max_iter"],
-                chaos_steps=PAPER_SETTINGS["chaos_steps"], rng=np.random.default_rng(seeds[3 * k]),
-                callback=tick, **common,
+                data.train,
+                objective="train_mae",
+                method="cpso",
+                max_iter=PAPER_SETTINGS["max_iter"],
+                chaos_steps=PAPER_SETTINGS["chaos_steps"],
+                rng=np.random.default_rng(seeds[3 * k]),
+                callback=tick,
+                **common,
             )
             methods.append(_model_entry(f"CPSO-LSSVM, paper settings, train MAE ({enc})", "cpso_paper", m, data))
             m = fit_drift_model(
-                data.train, objective="loo_mae", method="cpso", max_iter=PAPER_SETTINGS["max_iter"],
-                chaos_steps=PAPER_SETTINGS["chaos_steps"], rng=np.random.default_rng(seeds[3 * k + 1]),
-                callback=tick, **common,
+                data.train,
+                objective="loo_mae",
+                method="cpso",
+                max_iter=PAPER_SETTINGS["max_iter"],
+                chaos_steps=PAPER_SETTINGS["chaos_steps"],
+                rng=np.random.default_rng(seeds[3 * k + 1]),
+                callback=tick,
+                **common,
             )
             cpso_nfev = m.tuning.nfev
             methods.append(_model_entry(f"CPSO-LSSVM, LOO MAE ({enc})", "cpso_loo", m, data))
             pso_iter = math.ceil(cpso_nfev / PAPER_SETTINGS["n_particles"]) - 1
             m = fit_drift_model(
-                data.train, objective="loo_mae", method="pso", max_iter=pso_iter, chaos_steps=0,
+                data.train,
+                objective="loo_mae",
+                method="pso",
+                max_iter=pso_iter,
+                chaos_steps=0,
                 rng=np.random.default_rng(seeds[3 * k + 2]),
-                callback=lambda r: bar.update(PAPER_SETTINGS["max_iter"] / pso_iter) and None, **common,
+                callback=lambda r, pso_iter=pso_iter: bar.update(PAPER_SETTINGS["max_iter"] / pso_iter) and None,
+                **common,
             )
-            methods.append(_model_entry(f"PSO-LSSVM (no chaos), LOO MAE, equal evaluations ({enc})", "pso_loo", m, data))
+            methods.append(
+                _model_entry(f"PSO-LSSVM (no chaos), LOO MAE, equal evaluations ({enc})", "pso_loo", m, data)
+            )
     for enc in REPORTED_ENCODINGS:
         m = fit_drift_model(data.train, encoding=enc, scaling=SCALING, objective="loo_mae", method="grid", quiet=True)
         m.tuning.settings["grid_size"] = GRID_SIZE
@@ -184,7 +202,9 @@ def run_reproduction(seed: int = 0, quiet: bool = True) -> dict:
     for enc in REPORTED_ENCODINGS:
         for scaling in ("none", "standard", "minmax"):
             m = fit_drift_model(data.train, encoding=enc, scaling=scaling, gamma=PAPER_GAMMA, sigma=PAPER_SIGMA)
-            methods.append(_model_entry(f"LSSVM with the paper's gamma, sigma ({enc}, {scaling} scaling)", "paper_params", m, data))
+            methods.append(
+                _model_entry(f"LSSVM with the paper's gamma, sigma ({enc}, {scaling} scaling)", "paper_params", m, data)
+            )
     honest = [m for m in methods if m["family"] == "cpso_loo"]
     chosen = min(honest, key=lambda m: m["loo_mae_deg_h"])
     return {

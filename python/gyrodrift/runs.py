@@ -26,6 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
+from gyrodrift.errors import InputError
+
 PAPER_LAT0_DEG = 28.222
 """Site latitude of the paper's experiments [deg] (Yu et al. 2013, section 3)."""
 
@@ -43,7 +45,7 @@ KNOWN_COLUMNS = (
 )
 
 
-class RunTableError(ValueError):
+class RunTableError(InputError):
     """A run table that cannot be read; the message names the file, row and column."""
 
 
@@ -251,7 +253,9 @@ def read_runs_csv(path, *, lat0_deg: float | None = None, require_truth: bool = 
                         f"{where}, column drift_deg_h: |{d}| deg/h is not an RLG drift (expected |drift| <= 10 deg/h)"
                     )
             elif require_truth:
-                raise RunTableError(f"{where}, column drift_deg_h: expected a drift in deg/h for training, got an empty cell")
+                raise RunTableError(
+                    f"{where}, column drift_deg_h: expected a drift in deg/h for training, got an empty cell"
+                )
             else:
                 d = math.nan
             drift.append(d)
@@ -262,7 +266,7 @@ def read_runs_csv(path, *, lat0_deg: float | None = None, require_truth: bool = 
     if not runs:
         raise RunTableError(f"{name}: no data rows after the header")
     seen: dict[str, int] = {}
-    for r, rownum in zip(runs, rows):
+    for r, rownum in zip(runs, rows, strict=False):
         if r in seen:
             raise RunTableError(
                 f"{name}, row {rownum}, column run: run {r!r} appears more than once (first in row {seen[r]}; "

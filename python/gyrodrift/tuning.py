@@ -58,7 +58,7 @@ def _kfold_errors(sqdist: np.ndarray, y: np.ndarray, gammas, sigmas, n_folds: in
     m, n = len(gammas), len(y)
     errors = np.full((m, n), np.inf)
     folds = list(KFold(n_splits=n_folds, shuffle=False).split(np.arange(n)))
-    for j, (g, s) in enumerate(zip(gammas, sigmas)):
+    for j, (g, s) in enumerate(zip(gammas, sigmas, strict=False)):
         K = np.exp(-sqdist / (s * s))
         try:
             for train, test in folds:

@@ -12,13 +12,44 @@ fn main() {
     let deg = std::f64::consts::PI / 180.0;
     let scheme = match args.get(1).map(String::as_str).unwrap_or("reciprocating") {
         "none" => RotationScheme::None,
-        "continuous" => RotationScheme::Continuous { rate: 6.0 * deg, accel: 10.0 * deg },
-        "indexing" => RotationScheme::Indexing { rate: 6.0 * deg, accel: 10.0 * deg, positions: vec![0.0, 90.0 * deg, 180.0 * deg, 270.0 * deg], dwell: 300.0 },
-        _ => RotationScheme::Reciprocating { rate: 6.0 * deg, accel: 10.0 * deg, span: 360.0 * deg, dwell: 0.0 },
+        "continuous" => RotationScheme::Continuous {
+            rate: 6.0 * deg,
+            accel: 10.0 * deg,
+        },
+        "indexing" => RotationScheme::Indexing {
+            rate: 6.0 * deg,
+            accel: 10.0 * deg,
+            positions: vec![0.0, 90.0 * deg, 180.0 * deg, 270.0 * deg],
+            dwell: 300.0,
+        },
+        _ => RotationScheme::Reciprocating {
+            rate: 6.0 * deg,
+            accel: 10.0 * deg,
+            span: 360.0 * deg,
+            dwell: 0.0,
+        },
     };
     let tilted = args.get(2).map(String::as_str) == Some("tilted");
-    let attitude = if tilted { Euler { pitch: 0.01, roll: -0.02, yaw: 0.5 } } else { Euler { pitch: 0.0, roll: 0.0, yaw: 0.5 } };
-    let mut cfg = ImuSimulatorConfig { rate_hz: 100.0, duration_s: 72.0 * 3600.0, attitude, scheme, ..Default::default() };
+    let attitude = if tilted {
+        Euler {
+            pitch: 0.01,
+            roll: -0.02,
+            yaw: 0.5,
+        }
+    } else {
+        Euler {
+            pitch: 0.0,
+            roll: 0.0,
+            yaw: 0.5,
+        }
+    };
+    let mut cfg = ImuSimulatorConfig {
+        rate_hz: 100.0,
+        duration_s: 72.0 * 3600.0,
+        attitude,
+        scheme,
+        ..Default::default()
+    };
     if args.get(3).map(String::as_str) == Some("noisy") {
         // The facade benchmark's sensor: every noise channel, a warm-up and a temperature drift.
         let dh = deg / 3600.0;
@@ -28,9 +59,21 @@ fn main() {
         cfg.errors.accel_bias = [20e-5, -20e-5, 15e-5];
         cfg.errors.accel_vrw = 5e-5;
         cfg.errors.drift_k1 = 1e-4 * dh;
-        cfg.temperature = gyrodrift_core::temperature::TemperatureProfile::WarmUp { start_c: 20.0, end_c: 35.0, tau_s: 7200.0 };
+        cfg.temperature = gyrodrift_core::temperature::TemperatureProfile::WarmUp {
+            start_c: 20.0,
+            end_c: 35.0,
+            tau_s: 7200.0,
+        };
     }
-    let nav_cfg = NavigatorConfig { lat: cfg.lat, lon: cfg.lon, height: cfg.height, vel: [0.0; 3], attitude, rate_hz: 100.0, vertical: Vertical::Fixed };
+    let nav_cfg = NavigatorConfig {
+        lat: cfg.lat,
+        lon: cfg.lon,
+        height: cfg.height,
+        vel: [0.0; 3],
+        attitude,
+        rate_hz: 100.0,
+        vertical: Vertical::Fixed,
+    };
     let mut sim = ImuSimulator::new(cfg).unwrap();
     let mut nav = Navigator::new(nav_cfg).unwrap();
     let mut ch = ImuChunk::default();
@@ -47,5 +90,9 @@ fn main() {
         t_nav += b.elapsed().as_secs_f64();
     }
     let n = sim.n_samples() as f64;
-    println!("samples {n:.0}: simulator {t_sim:.2} s ({:.1} M/s), navigator {t_nav:.2} s ({:.1} M/s), outputs {n_out}", n / t_sim / 1e6, n / t_nav / 1e6);
+    println!(
+        "samples {n:.0}: simulator {t_sim:.2} s ({:.1} M/s), navigator {t_nav:.2} s ({:.1} M/s), outputs {n_out}",
+        n / t_sim / 1e6,
+        n / t_nav / 1e6
+    );
 }

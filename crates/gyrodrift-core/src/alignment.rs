@@ -88,24 +88,63 @@ impl AlignerConfig {
     pub fn validate(&self) -> Result<(), ParamError> {
         check_site(self.lat, self.lon, self.height, self.rate_hz)?;
         let in_range = |x: f64, lo: f64, hi: f64| x.is_finite() && x >= lo && x <= hi;
-        check(in_range(self.coarse_s, 10.0, 86_400.0), "coarse_s", format!("must be in [10, 86400] s, got {}", self.coarse_s))?;
-        check(in_range(self.fine_s, 0.0, 604_800.0), "fine_s", format!("must be in [0, 604800] s, got {}", self.fine_s))?;
+        check(
+            in_range(self.coarse_s, 10.0, 86_400.0),
+            "coarse_s",
+            format!("must be in [10, 86400] s, got {}", self.coarse_s),
+        )?;
+        check(
+            in_range(self.fine_s, 0.0, 604_800.0),
+            "fine_s",
+            format!("must be in [0, 604800] s, got {}", self.fine_s),
+        )?;
         check(
             in_range(self.update_s, 0.0, 60.0) && (self.update_s * self.rate_hz).round() >= 1.0,
             "update_s",
-            format!("must be in (0, 60] s and hold at least one sample, got {}", self.update_s),
+            format!(
+                "must be in (0, 60] s and hold at least one sample, got {}",
+                self.update_s
+            ),
         )?;
         if let Some(s) = self.att_sigma {
-            check(s.iter().all(|&x| x > 0.0 && x <= 0.2), "att_sigma_rad", format!("must be in (0, 0.2] rad, got {s:?}"))?;
+            check(
+                s.iter().all(|&x| x > 0.0 && x <= 0.2),
+                "att_sigma_rad",
+                format!("must be in (0, 0.2] rad, got {s:?}"),
+            )?;
         }
         let g = self.gyro_bias_sigma;
-        check(g.iter().all(|&x| x > 0.0 && x <= 0.1), "gyro_bias_sigma_rad_s", format!("must be in (0, 0.1] rad/s, got {g:?}"))?;
+        check(
+            g.iter().all(|&x| x > 0.0 && x <= 0.1),
+            "gyro_bias_sigma_rad_s",
+            format!("must be in (0, 0.1] rad/s, got {g:?}"),
+        )?;
         let a = self.accel_bias_sigma;
-        check(a.iter().all(|&x| x > 0.0 && x <= 10.0), "accel_bias_sigma_m_s2", format!("must be in (0, 10] m/s^2, got {a:?}"))?;
-        check(in_range(self.gyro_arw, 0.0, 0.1), "gyro_arw_rad_rts", format!("must be in [0, 0.1] rad/sqrt(s), got {}", self.gyro_arw))?;
-        check(in_range(self.accel_vrw, 0.0, 1.0), "accel_vrw_m_s_rts", format!("must be in [0, 1] m/s/sqrt(s), got {}", self.accel_vrw))?;
-        check(self.zupt_sigma > 0.0 && self.zupt_sigma <= 10.0, "zupt_sigma_m_s", format!("must be in (0, 10] m/s, got {}", self.zupt_sigma))?;
-        check(self.history_s > 0.0 && self.history_s <= 1e6, "history_s", format!("must be in (0, 1e6] s, got {}", self.history_s))
+        check(
+            a.iter().all(|&x| x > 0.0 && x <= 10.0),
+            "accel_bias_sigma_m_s2",
+            format!("must be in (0, 10] m/s^2, got {a:?}"),
+        )?;
+        check(
+            in_range(self.gyro_arw, 0.0, 0.1),
+            "gyro_arw_rad_rts",
+            format!("must be in [0, 0.1] rad/sqrt(s), got {}", self.gyro_arw),
+        )?;
+        check(
+            in_range(self.accel_vrw, 0.0, 1.0),
+            "accel_vrw_m_s_rts",
+            format!("must be in [0, 1] m/s/sqrt(s), got {}", self.accel_vrw),
+        )?;
+        check(
+            self.zupt_sigma > 0.0 && self.zupt_sigma <= 10.0,
+            "zupt_sigma_m_s",
+            format!("must be in (0, 10] m/s, got {}", self.zupt_sigma),
+        )?;
+        check(
+            self.history_s > 0.0 && self.history_s <= 1e6,
+            "history_s",
+            format!("must be in (0, 1e6] s, got {}", self.history_s),
+        )
     }
 
     /// Samples of the coarse span, of the fine span, and per update.
@@ -126,7 +165,9 @@ pub fn coarse_attitude_sigma(cfg: &AlignerConfig) -> Vec3 {
     let arcsec = std::f64::consts::PI / 180.0 / 3600.0;
     let acc = cfg.accel_bias_sigma[0].max(cfg.accel_bias_sigma[1]);
     let gyro = cfg.gyro_bias_sigma[0].max(cfg.gyro_bias_sigma[1]);
-    let level = (acc / g).hypot(3.0 * cfg.accel_vrw / (g * span.sqrt())).max(10.0 * arcsec);
+    let level = (acc / g)
+        .hypot(3.0 * cfg.accel_vrw / (g * span.sqrt()))
+        .max(10.0 * arcsec);
     let heading = (gyro.hypot(3.0 * cfg.gyro_arw / span.sqrt()) / (earth::OMEGA_IE * cfg.lat.cos())).max(60.0 * arcsec);
     [level, level, heading]
 }
@@ -383,9 +424,15 @@ impl FineAlignment {
             self.accel_bias[i] += x[NABLA + i];
         }
         // C_b^n(true) = (I + [phi x]) C_b^n(computed): q <- q(phi) o q; v <- v - dv.
-        self.nav.correct(phi, dv).expect("correction within the navigator's ranges");
-        self.nav.set_gyro_bias(self.gyro_bias).expect("gyro bias estimate within range");
-        self.nav.set_accel_bias(self.accel_bias).expect("accelerometer bias estimate within range");
+        self.nav
+            .correct(phi, dv)
+            .expect("correction within the navigator's ranges");
+        self.nav
+            .set_gyro_bias(self.gyro_bias)
+            .expect("gyro bias estimate within range");
+        self.nav
+            .set_accel_bias(self.accel_bias)
+            .expect("accelerometer bias estimate within range");
     }
 }
 

@@ -54,7 +54,11 @@ pub fn norm(a: Vec3) -> f64 {
 /// Cross product a x b.
 #[inline(always)]
 pub fn cross(a: Vec3, b: Vec3) -> Vec3 {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
 }
 
 /// m v.
@@ -88,7 +92,11 @@ pub fn mat_mul(a: &Mat3, b: &Mat3) -> Mat3 {
 /// m'.
 #[inline]
 pub fn transpose(m: &Mat3) -> Mat3 {
-    [[m[0][0], m[1][0], m[2][0]], [m[0][1], m[1][1], m[2][1]], [m[0][2], m[1][2], m[2][2]]]
+    [
+        [m[0][0], m[1][0], m[2][0]],
+        [m[0][1], m[1][1], m[2][1]],
+        [m[0][2], m[1][2], m[2][2]],
+    ]
 }
 
 /// Rotation about x by angle a [rad] (active, right-handed).
@@ -131,10 +139,18 @@ pub fn dcm_to_euler(c: &Mat3) -> Euler {
     let s = c[2][1].clamp(-1.0, 1.0);
     let pitch = s.asin();
     if s.abs() <= 1.0 - 1e-12 {
-        Euler { pitch, roll: (-c[2][0]).atan2(c[2][2]), yaw: (-c[0][1]).atan2(c[1][1]) }
+        Euler {
+            pitch,
+            roll: (-c[2][0]).atan2(c[2][2]),
+            yaw: (-c[0][1]).atan2(c[1][1]),
+        }
     } else {
         // Gimbal lock: C = Rz(yaw) Rx(+-90) Ry(roll) leaves only yaw +- roll; put it all in yaw.
-        Euler { pitch, roll: 0.0, yaw: c[1][0].atan2(c[0][0]) }
+        Euler {
+            pitch,
+            roll: 0.0,
+            yaw: c[1][0].atan2(c[0][0]),
+        }
     }
 }
 
@@ -210,16 +226,36 @@ pub fn dcm_to_quat(c: &Mat3) -> Quat {
     let tr = c[0][0] + c[1][1] + c[2][2];
     let q = if tr > c[0][0].max(c[1][1]).max(c[2][2]) {
         let s = 2.0 * (1.0 + tr).sqrt();
-        [0.25 * s, (c[2][1] - c[1][2]) / s, (c[0][2] - c[2][0]) / s, (c[1][0] - c[0][1]) / s]
+        [
+            0.25 * s,
+            (c[2][1] - c[1][2]) / s,
+            (c[0][2] - c[2][0]) / s,
+            (c[1][0] - c[0][1]) / s,
+        ]
     } else if c[0][0] >= c[1][1] && c[0][0] >= c[2][2] {
         let s = 2.0 * (1.0 + c[0][0] - c[1][1] - c[2][2]).sqrt();
-        [(c[2][1] - c[1][2]) / s, 0.25 * s, (c[0][1] + c[1][0]) / s, (c[0][2] + c[2][0]) / s]
+        [
+            (c[2][1] - c[1][2]) / s,
+            0.25 * s,
+            (c[0][1] + c[1][0]) / s,
+            (c[0][2] + c[2][0]) / s,
+        ]
     } else if c[1][1] >= c[2][2] {
         let s = 2.0 * (1.0 + c[1][1] - c[0][0] - c[2][2]).sqrt();
-        [(c[0][2] - c[2][0]) / s, (c[0][1] + c[1][0]) / s, 0.25 * s, (c[1][2] + c[2][1]) / s]
+        [
+            (c[0][2] - c[2][0]) / s,
+            (c[0][1] + c[1][0]) / s,
+            0.25 * s,
+            (c[1][2] + c[2][1]) / s,
+        ]
     } else {
         let s = 2.0 * (1.0 + c[2][2] - c[0][0] - c[1][1]).sqrt();
-        [(c[1][0] - c[0][1]) / s, (c[0][2] + c[2][0]) / s, (c[1][2] + c[2][1]) / s, 0.25 * s]
+        [
+            (c[1][0] - c[0][1]) / s,
+            (c[0][2] + c[2][0]) / s,
+            (c[1][2] + c[2][1]) / s,
+            0.25 * s,
+        ]
     };
     let q = quat_normalize(q);
     if q[0] < 0.0 {
@@ -317,7 +353,11 @@ mod tests {
     #[test]
     fn euler_dcm_round_trip_and_explicit_elements() {
         for [p, r, y] in EULERS {
-            let e = Euler { pitch: p, roll: r, yaw: y };
+            let e = Euler {
+                pitch: p,
+                roll: r,
+                yaw: y,
+            };
             let c = euler_to_dcm(e);
             // Closed form of the third row and of C12, C22 for Rz(y) Rx(p) Ry(r).
             assert!((c[2][1] - p.sin()).abs() < 1e-15);
@@ -338,20 +378,36 @@ mod tests {
     #[test]
     fn yaw_is_counter_clockwise_about_up() {
         // yaw = +90 deg: the body Forward axis (y) points West (-x in ENU).
-        let c = euler_to_dcm(Euler { pitch: 0.0, roll: 0.0, yaw: FRAC_PI_2 });
+        let c = euler_to_dcm(Euler {
+            pitch: 0.0,
+            roll: 0.0,
+            yaw: FRAC_PI_2,
+        });
         let fwd = mat_vec(&c, [0.0, 1.0, 0.0]);
         assert!((fwd[0] + 1.0).abs() < 1e-15 && fwd[1].abs() < 1e-15);
         // Positive pitch raises the nose: Forward gets a positive Up component.
-        let c = euler_to_dcm(Euler { pitch: 0.1, roll: 0.0, yaw: 0.0 });
+        let c = euler_to_dcm(Euler {
+            pitch: 0.1,
+            roll: 0.0,
+            yaw: 0.0,
+        });
         assert!((mat_vec(&c, [0.0, 1.0, 0.0])[2] - 0.1f64.sin()).abs() < 1e-15);
     }
 
     #[test]
     fn dcm_is_orthonormal_and_transpose_is_inverse() {
         for [p, r, y] in EULERS {
-            let c = euler_to_dcm(Euler { pitch: p, roll: r, yaw: y });
+            let c = euler_to_dcm(Euler {
+                pitch: p,
+                roll: r,
+                yaw: y,
+            });
             let i = mat_mul(&c, &transpose(&c));
-            assert!(mat_close(&i, &[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], 1e-15));
+            assert!(mat_close(
+                &i,
+                &[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+                1e-15
+            ));
             let v = [0.3, -1.1, 2.0];
             let back = mat_t_vec(&c, mat_vec(&c, v));
             assert!(norm(sub(back, v)) < 1e-15);
@@ -366,7 +422,12 @@ mod tests {
                 let phi = scale(ax, ang);
                 let q = rotvec_to_quat(phi);
                 // Closed form.
-                let exact = [(0.5 * ang).cos(), ax[0] * (0.5 * ang).sin(), ax[1] * (0.5 * ang).sin(), ax[2] * (0.5 * ang).sin()];
+                let exact = [
+                    (0.5 * ang).cos(),
+                    ax[0] * (0.5 * ang).sin(),
+                    ax[1] * (0.5 * ang).sin(),
+                    ax[2] * (0.5 * ang).sin(),
+                ];
                 assert!(quat_close(q, exact, 2e-16 * (1.0 + ang)), "{ang}: {q:?} vs {exact:?}");
                 let back = quat_to_rotvec(q);
                 assert!(norm(sub(back, phi)) < 1e-15 * (1.0 + 10.0 * ang), "{ang}: {back:?}");
@@ -375,7 +436,11 @@ mod tests {
                 let c = rotvec_to_dcm(phi);
                 assert!(norm(sub(mat_vec(&c, ax), ax)) < 1e-15);
                 let perp = cross(ax, [0.0, 0.0, 1.0]);
-                let perp = if norm(perp) < 1e-9 { [0.0, 1.0, 0.0] } else { scale(perp, 1.0 / norm(perp)) };
+                let perp = if norm(perp) < 1e-9 {
+                    [0.0, 1.0, 0.0]
+                } else {
+                    scale(perp, 1.0 / norm(perp))
+                };
                 let cosang = dot(perp, mat_vec(&c, perp));
                 assert!((cosang - ang.cos()).abs() < 1e-14);
                 assert!(norm(sub(dcm_to_rotvec(&c), phi)) < 1e-13);
@@ -385,10 +450,22 @@ mod tests {
 
     #[test]
     fn composition_of_quaternions_matches_dcm_product() {
-        let a = euler_to_quat(Euler { pitch: 0.3, roll: -0.4, yaw: 2.0 });
-        let b = euler_to_quat(Euler { pitch: -1.0, roll: 2.5, yaw: -0.2 });
+        let a = euler_to_quat(Euler {
+            pitch: 0.3,
+            roll: -0.4,
+            yaw: 2.0,
+        });
+        let b = euler_to_quat(Euler {
+            pitch: -1.0,
+            roll: 2.5,
+            yaw: -0.2,
+        });
         let ab = quat_mul(a, b);
-        assert!(mat_close(&quat_to_dcm(ab), &mat_mul(&quat_to_dcm(a), &quat_to_dcm(b)), 1e-15));
+        assert!(mat_close(
+            &quat_to_dcm(ab),
+            &mat_mul(&quat_to_dcm(a), &quat_to_dcm(b)),
+            1e-15
+        ));
         let v = [1.0, 2.0, -0.5];
         assert!(norm(sub(quat_rotate(ab, v), mat_vec(&quat_to_dcm(ab), v))) < 1e-14);
         // Inverse.
@@ -398,12 +475,20 @@ mod tests {
         let q = quat_mul(rotvec_to_quat(scale(ax, 0.3)), rotvec_to_quat(scale(ax, 0.9)));
         assert!(quat_close(q, rotvec_to_quat(scale(ax, 1.2)), 1e-15));
         // Euler composition: Rz(y) Rx(p) Ry(r) as quaternions.
-        assert!(mat_close(&rot_z(0.7), &quat_to_dcm(rotvec_to_quat([0.0, 0.0, 0.7])), 1e-15));
+        assert!(mat_close(
+            &rot_z(0.7),
+            &quat_to_dcm(rotvec_to_quat([0.0, 0.0, 0.7])),
+            1e-15
+        ));
     }
 
     #[test]
     fn gimbal_lock_keeps_the_rotation() {
-        let c = euler_to_dcm(Euler { pitch: FRAC_PI_2, roll: 0.3, yaw: 0.5 });
+        let c = euler_to_dcm(Euler {
+            pitch: FRAC_PI_2,
+            roll: 0.3,
+            yaw: 0.5,
+        });
         let e = dcm_to_euler(&c);
         assert!(mat_close(&euler_to_dcm(e), &c, 1e-7));
     }

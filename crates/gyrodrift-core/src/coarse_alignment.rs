@@ -43,8 +43,8 @@
 //! heading by eps_z T / 2 at most.
 
 use crate::attitude::{
-    add, cross, mat_mul, norm, quat_mul, quat_normalize, quat_rotate, quat_to_dcm, dcm_to_rotvec, rotvec_to_quat, scale, sub,
-    transpose, Mat3, Quat, Vec3, QUAT_IDENTITY,
+    add, cross, dcm_to_rotvec, mat_mul, norm, quat_mul, quat_normalize, quat_rotate, quat_to_dcm, rotvec_to_quat,
+    scale, sub, transpose, Mat3, Quat, Vec3, QUAT_IDENTITY,
 };
 use crate::earth;
 use crate::strapdown::coning_sculling;
@@ -110,7 +110,11 @@ struct BiasFitSums {
 
 impl Default for BiasFitSums {
     fn default() -> Self {
-        BiasFitSums { rr: FitMatrix::zeros(), rw: FitVector::zeros(), rv: [[FitVector::zeros(); 3]; 3] }
+        BiasFitSums {
+            rr: FitMatrix::zeros(),
+            rw: FitVector::zeros(),
+            rv: [[FitVector::zeros(); 3]; 3],
+        }
     }
 }
 
@@ -252,7 +256,10 @@ impl InertialCoarseAlignment {
         }
         let c_i0_n = transpose(&earth_rotation(self.lat, t_end));
         let c_bn = mat_mul(&c_i0_n, &mat_mul(&c_ib0_i0, &quat_to_dcm(self.q_b_ib0)));
-        Some(CoarseSolution { c_bn, accel_bias_xy: bias })
+        Some(CoarseSolution {
+            c_bn,
+            accel_bias_xy: bias,
+        })
     }
 }
 
@@ -342,11 +349,18 @@ mod tests {
             v = add(v, scale([r[0][2], r[1][2], r[2][2]], g * h));
         }
         let v_cf = earth_frame_velocity(lat, g, t);
-        assert!(norm(crate::attitude::sub(v, v_cf)) < 1e-9 * norm(v_cf), "{v:?} vs {v_cf:?}");
+        assert!(
+            norm(crate::attitude::sub(v, v_cf)) < 1e-9 * norm(v_cf),
+            "{v:?} vs {v_cf:?}"
+        );
         // The Earth rotation is a proper rotation that keeps the Earth axis.
         let r = earth_rotation(lat, 5000.0);
         let u = [0.0, lat.cos(), lat.sin()];
         assert!(norm(crate::attitude::sub(mat_vec(&r, u), u)) < 1e-15);
-        assert!(close(&mat_mul(&r, &transpose(&r)), &[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], 1e-15));
+        assert!(close(
+            &mat_mul(&r, &transpose(&r)),
+            &[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            1e-15
+        ));
     }
 }

@@ -73,8 +73,7 @@ mod tests {
         // g = g_e (1 + 0.00530244 sin^2 L - 0.00000582 sin^2 2L), good to a few 1e-7 m/s^2.
         for deg in [0.0f64, 28.222, 45.0, 60.0, 89.0] {
             let lat = deg.to_radians();
-            let series = GAMMA_E
-                * (1.0 + 0.005_302_44 * lat.sin().powi(2) - 0.000_005_82 * (2.0 * lat).sin().powi(2));
+            let series = GAMMA_E * (1.0 + 0.005_302_44 * lat.sin().powi(2) - 0.000_005_82 * (2.0 * lat).sin().powi(2));
             let g = normal_gravity(lat, 0.0);
             assert!((g - series).abs() < 1e-6, "{deg} deg: {g} vs {series}");
         }

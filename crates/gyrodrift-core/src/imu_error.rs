@@ -91,20 +91,78 @@ impl ImuErrorParams {
     /// Range checks; errors name the contract key. Limits reject nonsense, not unusual sensors.
     pub fn validate(&self) -> Result<(), ParamError> {
         let fin = |v: &[f64]| v.iter().all(|x| x.is_finite());
-        check(fin(&self.gyro_bias) && self.gyro_bias.iter().all(|b| b.abs() <= 0.1), "gyro_bias_rad_s", "must be finite with |b| <= 0.1 rad/s")?;
-        check(self.gyro_arw.is_finite() && self.gyro_arw >= 0.0 && self.gyro_arw <= 0.1, "gyro_arw_rad_rts", "must be in [0, 0.1] rad/sqrt(s)")?;
-        check(self.gyro_bias_instability.is_finite() && self.gyro_bias_instability >= 0.0 && self.gyro_bias_instability <= 0.1, "gyro_bias_instability_rad_s", "must be in [0, 0.1] rad/s")?;
-        check(self.gyro_correlation.is_finite() && self.gyro_correlation > 0.0, "gyro_correlation_s", "must be positive and finite")?;
-        check(self.gyro_rrw.is_finite() && self.gyro_rrw >= 0.0 && self.gyro_rrw <= 0.1, "gyro_rrw_rad_s_rts", "must be in [0, 0.1] rad/s/sqrt(s)")?;
-        check(fin(&self.gyro_scale) && self.gyro_scale.iter().all(|s| s.abs() <= 0.1), "gyro_scale", "must be finite with |s| <= 0.1")?;
-        check(fin(&self.gyro_misalignment) && self.gyro_misalignment.iter().all(|s| s.abs() <= 0.1), "gyro_misalignment_rad", "must be finite with |m| <= 0.1 rad")?;
-        check(fin(&self.accel_bias) && self.accel_bias.iter().all(|b| b.abs() <= 10.0), "accel_bias_m_s2", "must be finite with |b| <= 10 m/s^2")?;
-        check(self.accel_vrw.is_finite() && self.accel_vrw >= 0.0 && self.accel_vrw <= 1.0, "accel_vrw_m_s_rts", "must be in [0, 1] m/s/sqrt(s)")?;
-        check(fin(&self.accel_scale) && self.accel_scale.iter().all(|s| s.abs() <= 0.1), "accel_scale", "must be finite with |s| <= 0.1")?;
-        check(self.drift_t0_c.is_finite() && (-100.0..=200.0).contains(&self.drift_t0_c), "drift_t0_c", "must be in [-100, 200] deg C")?;
-        check(self.drift_k1.is_finite() && self.drift_k1.abs() <= 1e-3, "drift_k1_rad_s_per_c", "must be finite with |k1| <= 1e-3 rad/s/degC")?;
-        check(self.drift_k2.is_finite() && self.drift_k2.abs() <= 1e-3, "drift_k2_rad_s_per_c2", "must be finite with |k2| <= 1e-3 rad/s/degC^2")?;
-        check(self.drift_k3.is_finite() && self.drift_k3.abs() <= 1.0, "drift_k3_rad_s_per_c_per_s", "must be finite with |k3| <= 1 rad/s per degC/s")
+        check(
+            fin(&self.gyro_bias) && self.gyro_bias.iter().all(|b| b.abs() <= 0.1),
+            "gyro_bias_rad_s",
+            "must be finite with |b| <= 0.1 rad/s",
+        )?;
+        check(
+            self.gyro_arw.is_finite() && self.gyro_arw >= 0.0 && self.gyro_arw <= 0.1,
+            "gyro_arw_rad_rts",
+            "must be in [0, 0.1] rad/sqrt(s)",
+        )?;
+        check(
+            self.gyro_bias_instability.is_finite()
+                && self.gyro_bias_instability >= 0.0
+                && self.gyro_bias_instability <= 0.1,
+            "gyro_bias_instability_rad_s",
+            "must be in [0, 0.1] rad/s",
+        )?;
+        check(
+            self.gyro_correlation.is_finite() && self.gyro_correlation > 0.0,
+            "gyro_correlation_s",
+            "must be positive and finite",
+        )?;
+        check(
+            self.gyro_rrw.is_finite() && self.gyro_rrw >= 0.0 && self.gyro_rrw <= 0.1,
+            "gyro_rrw_rad_s_rts",
+            "must be in [0, 0.1] rad/s/sqrt(s)",
+        )?;
+        check(
+            fin(&self.gyro_scale) && self.gyro_scale.iter().all(|s| s.abs() <= 0.1),
+            "gyro_scale",
+            "must be finite with |s| <= 0.1",
+        )?;
+        check(
+            fin(&self.gyro_misalignment) && self.gyro_misalignment.iter().all(|s| s.abs() <= 0.1),
+            "gyro_misalignment_rad",
+            "must be finite with |m| <= 0.1 rad",
+        )?;
+        check(
+            fin(&self.accel_bias) && self.accel_bias.iter().all(|b| b.abs() <= 10.0),
+            "accel_bias_m_s2",
+            "must be finite with |b| <= 10 m/s^2",
+        )?;
+        check(
+            self.accel_vrw.is_finite() && self.accel_vrw >= 0.0 && self.accel_vrw <= 1.0,
+            "accel_vrw_m_s_rts",
+            "must be in [0, 1] m/s/sqrt(s)",
+        )?;
+        check(
+            fin(&self.accel_scale) && self.accel_scale.iter().all(|s| s.abs() <= 0.1),
+            "accel_scale",
+            "must be finite with |s| <= 0.1",
+        )?;
+        check(
+            self.drift_t0_c.is_finite() && (-100.0..=200.0).contains(&self.drift_t0_c),
+            "drift_t0_c",
+            "must be in [-100, 200] deg C",
+        )?;
+        check(
+            self.drift_k1.is_finite() && self.drift_k1.abs() <= 1e-3,
+            "drift_k1_rad_s_per_c",
+            "must be finite with |k1| <= 1e-3 rad/s/degC",
+        )?;
+        check(
+            self.drift_k2.is_finite() && self.drift_k2.abs() <= 1e-3,
+            "drift_k2_rad_s_per_c2",
+            "must be finite with |k2| <= 1e-3 rad/s/degC^2",
+        )?;
+        check(
+            self.drift_k3.is_finite() && self.drift_k3.abs() <= 1.0,
+            "drift_k3_rad_s_per_c_per_s",
+            "must be finite with |k3| <= 1 rad/s per degC/s",
+        )
     }
 
     /// Temperature-dependent axial drift [rad/s]: k1 (T - T0) + k2 (T - T0)^2 + k3 dT/dt.
@@ -146,7 +204,11 @@ pub struct ImuErrorModel {
 
 /// Samples per slow step for sample interval `dt` (see the module docs).
 pub fn slow_step_samples(p: &ImuErrorParams, dt: f64) -> u32 {
-    let horizon = if p.gyro_bias_instability > 0.0 { (1e-3 * p.gyro_correlation).min(1.0) } else { 1.0 };
+    let horizon = if p.gyro_bias_instability > 0.0 {
+        (1e-3 * p.gyro_correlation).min(1.0)
+    } else {
+        1.0
+    };
     // The 1e-9 guards an exact ratio (1 s at 100 Hz) against rounding down.
     ((horizon / dt * (1.0 + 1e-9)).floor() as u32).clamp(1, 100)
 }
@@ -157,7 +219,11 @@ impl ImuErrorModel {
         p.validate()?;
         let m = p.gyro_misalignment;
         let s = p.gyro_scale;
-        let gyro_matrix = [[1.0 + s[0], m[0], m[1]], [m[2], 1.0 + s[1], m[3]], [m[4], m[5], 1.0 + s[2]]];
+        let gyro_matrix = [
+            [1.0 + s[0], m[0], m[1]],
+            [m[2], 1.0 + s[1], m[3]],
+            [m[4], m[5], 1.0 + s[2]],
+        ];
         let mut rng = Pcg64Mcg::seed_from_u64(seed);
         let sigma = p.gyro_bias_instability;
         let slow_n = slow_step_samples(&p, dt);
@@ -229,7 +295,11 @@ impl ImuErrorModel {
             g[2][0] * w[0] + g[2][1] * w[1] + g[2][2] * w[2] + (b[2] + axial_drift) * dt,
         ];
         let (sa, ba) = (self.p.accel_scale, self.p.accel_bias);
-        *dv = [dv[0] * (1.0 + sa[0]) + ba[0] * dt, dv[1] * (1.0 + sa[1]) + ba[1] * dt, dv[2] * (1.0 + sa[2]) + ba[2] * dt];
+        *dv = [
+            dv[0] * (1.0 + sa[0]) + ba[0] * dt,
+            dv[1] * (1.0 + sa[1]) + ba[1] * dt,
+            dv[2] * (1.0 + sa[2]) + ba[2] * dt,
+        ];
     }
 
     /// True if [`ImuErrorModel::add_noise`] changes anything (some random term is on).
@@ -282,7 +352,11 @@ impl ImuErrorModel {
     #[inline]
     fn held_bias_increment(&self) -> Vec3 {
         let dt = self.dt;
-        [(self.gm[0] + self.rrw[0]) * dt, (self.gm[1] + self.rrw[1]) * dt, (self.gm[2] + self.rrw[2]) * dt]
+        [
+            (self.gm[0] + self.rrw[0]) * dt,
+            (self.gm[1] + self.rrw[1]) * dt,
+            (self.gm[2] + self.rrw[2]) * dt,
+        ]
     }
 
     /// Advance the Gauss-Markov and rate-random-walk states by one slow step.
@@ -309,7 +383,11 @@ mod tests {
     use super::*;
 
     fn gm_params(sigma: f64, tau: f64) -> ImuErrorParams {
-        ImuErrorParams { gyro_bias_instability: sigma, gyro_correlation: tau, ..Default::default() }
+        ImuErrorParams {
+            gyro_bias_instability: sigma,
+            gyro_correlation: tau,
+            ..Default::default()
+        }
     }
 
     #[test]
@@ -340,7 +418,10 @@ mod tests {
             assert!((v0 / (sigma * sigma) - 1.0).abs() < 0.09, "rate {rate}: var0 {v0}");
             assert!((v1 / (sigma * sigma) - 1.0).abs() < 0.09, "rate {rate}: var1 {v1}");
             // Correlation after 30 s = exp(-3) = 0.0498.
-            assert!((c / (sigma * sigma) - (-3.0f64).exp()).abs() < 0.07, "rate {rate}: corr {c}");
+            assert!(
+                (c / (sigma * sigma) - (-3.0f64).exp()).abs() < 0.07,
+                "rate {rate}: corr {c}"
+            );
         }
     }
 
@@ -349,7 +430,10 @@ mod tests {
         let rrw = 1e-7;
         let t = 50.0;
         for rate in [20.0, 200.0] {
-            let p = ImuErrorParams { gyro_rrw: rrw, ..Default::default() };
+            let p = ImuErrorParams {
+                gyro_rrw: rrw,
+                ..Default::default()
+            };
             let n_seeds = 2000;
             let mut s2 = 0.0;
             for seed in 0..n_seeds {
@@ -368,19 +452,40 @@ mod tests {
 
     #[test]
     fn slow_step_follows_the_correlation_time_and_the_rate() {
-        let gm = |tau| ImuErrorParams { gyro_bias_instability: 1e-7, gyro_correlation: tau, ..Default::default() };
+        let gm = |tau| ImuErrorParams {
+            gyro_bias_instability: 1e-7,
+            gyro_correlation: tau,
+            ..Default::default()
+        };
         assert_eq!(slow_step_samples(&gm(3600.0), 0.01), 100); // 1 s at 100 Hz
         assert_eq!(slow_step_samples(&gm(3600.0), 0.1), 10);
         assert_eq!(slow_step_samples(&gm(10.0), 0.01), 1); // tau / 1000 = one sample
         assert_eq!(slow_step_samples(&gm(10.0), 0.001), 10);
         assert_eq!(slow_step_samples(&gm(3600.0), 1e-4), 100); // capped at 100 samples
-        assert_eq!(slow_step_samples(&ImuErrorParams { gyro_rrw: 1e-8, ..Default::default() }, 0.05), 20);
+        assert_eq!(
+            slow_step_samples(
+                &ImuErrorParams {
+                    gyro_rrw: 1e-8,
+                    ..Default::default()
+                },
+                0.05
+            ),
+            20
+        );
         assert_eq!(slow_step_samples(&gm(0.5), 0.01), 1);
     }
 
     #[test]
     fn block_noise_equals_per_sample_application() {
-        let p = ImuErrorParams { gyro_arw: 1e-5, accel_vrw: 1e-4, gyro_correlation: 100.0, gyro_bias_instability: 1e-7, gyro_rrw: 1e-8, gyro_bias: [1e-6, 0.0, 2e-6], ..Default::default() };
+        let p = ImuErrorParams {
+            gyro_arw: 1e-5,
+            accel_vrw: 1e-4,
+            gyro_correlation: 100.0,
+            gyro_bias_instability: 1e-7,
+            gyro_rrw: 1e-8,
+            gyro_bias: [1e-6, 0.0, 2e-6],
+            ..Default::default()
+        };
         let mut a = ImuErrorModel::new(p.clone(), 0.01, 5).unwrap();
         let mut b = ImuErrorModel::new(p, 0.01, 5).unwrap();
         let n = 1000;
@@ -406,7 +511,13 @@ mod tests {
 
     #[test]
     fn deterministic_for_a_seed() {
-        let p = ImuErrorParams { gyro_arw: 1e-5, accel_vrw: 1e-4, gyro_correlation: 100.0, gyro_bias_instability: 1e-7, ..Default::default() };
+        let p = ImuErrorParams {
+            gyro_arw: 1e-5,
+            accel_vrw: 1e-4,
+            gyro_correlation: 100.0,
+            gyro_bias_instability: 1e-7,
+            ..Default::default()
+        };
         let run = |seed| {
             let mut m = ImuErrorModel::new(p.clone(), 0.01, seed).unwrap();
             let (mut a, mut b) = ([0.0; 3], [0.0; 3]);
@@ -444,15 +555,28 @@ mod tests {
         }
         assert!((v[0] - (1.0001 + 1e-5)).abs() < 1e-15);
         assert!((v[2] - (3.0 * (1.0 - 1e-4) + 2e-5)).abs() < 1e-15);
-        let p = ImuErrorParams { drift_t0_c: 20.0, drift_k1: 1.0, drift_k2: 0.5, drift_k3: 10.0, ..Default::default() };
+        let p = ImuErrorParams {
+            drift_t0_c: 20.0,
+            drift_k1: 1.0,
+            drift_k2: 0.5,
+            drift_k3: 10.0,
+            ..Default::default()
+        };
         assert_eq!(p.axial_drift(22.0, 0.1), 2.0 + 2.0 + 1.0);
     }
 
     #[test]
     fn validation_names_the_key() {
-        let p = ImuErrorParams { gyro_arw: -1.0, gyro_correlation: 1.0, ..Default::default() };
+        let p = ImuErrorParams {
+            gyro_arw: -1.0,
+            gyro_correlation: 1.0,
+            ..Default::default()
+        };
         assert_eq!(p.validate().unwrap_err().key, "gyro_arw_rad_rts");
-        let p = ImuErrorParams { gyro_correlation: 0.0, ..Default::default() };
+        let p = ImuErrorParams {
+            gyro_correlation: 0.0,
+            ..Default::default()
+        };
         assert_eq!(p.validate().unwrap_err().key, "gyro_correlation_s");
         ImuErrorParams::default().validate().unwrap();
     }

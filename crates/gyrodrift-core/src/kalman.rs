@@ -39,8 +39,18 @@ pub type StateMatrix = SMatrix<f64, N_STATES, N_STATES>;
 
 /// Names of the states, in order (units: rad, m/s, rad/s, m/s^2; see the module docs).
 pub const STATE_NAMES: [&str; N_STATES] = [
-    "phi_e", "phi_n", "phi_u", "dv_e", "dv_n", "dv_u", "gyro_bias_x", "gyro_bias_y", "gyro_bias_z", "accel_bias_x",
-    "accel_bias_y", "accel_bias_z",
+    "phi_e",
+    "phi_n",
+    "phi_u",
+    "dv_e",
+    "dv_n",
+    "dv_u",
+    "gyro_bias_x",
+    "gyro_bias_y",
+    "gyro_bias_z",
+    "accel_bias_x",
+    "accel_bias_y",
+    "accel_bias_z",
 ];
 
 /// Index of the first attitude, velocity, gyro-bias and accelerometer-bias state.
@@ -131,7 +141,10 @@ impl ErrorStateFilter {
         for (i, s) in sigma.iter().enumerate() {
             p[(i, i)] = s * s;
         }
-        ErrorStateFilter { x: StateVector::zeros(), p }
+        ErrorStateFilter {
+            x: StateVector::zeros(),
+            p,
+        }
     }
 
     /// The current error-state estimate.
@@ -165,7 +178,9 @@ impl ErrorStateFilter {
         let r = SMatrix::<f64, 3, 3>::identity() * (sigma * sigma);
         let z = SVector::<f64, 3>::from_column_slice(&v);
         let s = h * self.p * h.transpose() + r;
-        let s_inv = s.try_inverse().expect("innovation covariance H P H' + R is positive definite");
+        let s_inv = s
+            .try_inverse()
+            .expect("innovation covariance H P H' + R is positive definite");
         let k = self.p * h.transpose() * s_inv;
         self.x += k * (z - h * self.x);
         let i_kh = StateMatrix::identity() - k * h;

@@ -58,32 +58,72 @@ impl Default for ImuSimulatorConfig {
             attitude: Euler::default(),
             scheme: RotationScheme::None,
             errors: ImuErrorParams::default(),
-            temperature: TemperatureProfile::WarmUp { start_c: 20.0, end_c: 20.0, tau_s: 3600.0 },
+            temperature: TemperatureProfile::WarmUp {
+                start_c: 20.0,
+                end_c: 20.0,
+                tau_s: 3600.0,
+            },
         }
     }
 }
 
 /// Checks of the site, rate, duration and attitude shared by the simulator and the navigator.
 pub(crate) fn check_site(lat: f64, lon: f64, height: f64, rate_hz: f64) -> Result<(), ParamError> {
-    check(lat.is_finite() && lat.abs() <= 89.0f64.to_radians(), "lat_rad", format!("must be within +-89 deg (+-1.5533 rad), got {lat}"))?;
-    check(lon.is_finite() && lon.abs() <= 2.0 * std::f64::consts::PI, "lon_rad", format!("must be within +-2 pi, got {lon}"))?;
-    check(height.is_finite() && (-1000.0..=20000.0).contains(&height), "height_m", format!("must be in [-1000, 20000] m, got {height}"))?;
-    check(rate_hz.is_finite() && (1.0..=100_000.0).contains(&rate_hz), "rate_hz", format!("must be in [1, 100000] Hz, got {rate_hz}"))
+    check(
+        lat.is_finite() && lat.abs() <= 89.0f64.to_radians(),
+        "lat_rad",
+        format!("must be within +-89 deg (+-1.5533 rad), got {lat}"),
+    )?;
+    check(
+        lon.is_finite() && lon.abs() <= 2.0 * std::f64::consts::PI,
+        "lon_rad",
+        format!("must be within +-2 pi, got {lon}"),
+    )?;
+    check(
+        height.is_finite() && (-1000.0..=20000.0).contains(&height),
+        "height_m",
+        format!("must be in [-1000, 20000] m, got {height}"),
+    )?;
+    check(
+        rate_hz.is_finite() && (1.0..=100_000.0).contains(&rate_hz),
+        "rate_hz",
+        format!("must be in [1, 100000] Hz, got {rate_hz}"),
+    )
 }
 
 pub(crate) fn check_attitude(e: Euler) -> Result<(), ParamError> {
     use std::f64::consts::{FRAC_PI_2, PI};
-    check(e.pitch.is_finite() && e.pitch.abs() < FRAC_PI_2, "pitch_rad", format!("must be within (-pi/2, pi/2), got {}", e.pitch))?;
-    check(e.roll.is_finite() && e.roll.abs() <= PI, "roll_rad", format!("must be within [-pi, pi], got {}", e.roll))?;
-    check(e.yaw.is_finite() && e.yaw.abs() <= 2.0 * PI, "yaw_rad", format!("must be within [-2 pi, 2 pi], got {}", e.yaw))
+    check(
+        e.pitch.is_finite() && e.pitch.abs() < FRAC_PI_2,
+        "pitch_rad",
+        format!("must be within (-pi/2, pi/2), got {}", e.pitch),
+    )?;
+    check(
+        e.roll.is_finite() && e.roll.abs() <= PI,
+        "roll_rad",
+        format!("must be within [-pi, pi], got {}", e.roll),
+    )?;
+    check(
+        e.yaw.is_finite() && e.yaw.abs() <= 2.0 * PI,
+        "yaw_rad",
+        format!("must be within [-2 pi, 2 pi], got {}", e.yaw),
+    )
 }
 
 impl ImuSimulatorConfig {
     /// Range checks; errors name the contract key.
     pub fn validate(&self) -> Result<(), ParamError> {
         check_site(self.lat, self.lon, self.height, self.rate_hz)?;
-        check(self.duration_s.is_finite() && self.duration_s > 0.0 && self.duration_s <= 1e7, "duration_s", format!("must be in (0, 1e7] s, got {}", self.duration_s))?;
-        check((self.duration_s * self.rate_hz).round() >= 1.0, "duration_s", "gives no sample at this rate")?;
+        check(
+            self.duration_s.is_finite() && self.duration_s > 0.0 && self.duration_s <= 1e7,
+            "duration_s",
+            format!("must be in (0, 1e7] s, got {}", self.duration_s),
+        )?;
+        check(
+            (self.duration_s * self.rate_hz).round() >= 1.0,
+            "duration_s",
+            "gives no sample at this rate",
+        )?;
         check_attitude(self.attitude)?;
         self.errors.validate()?;
         self.temperature.validate()
@@ -120,7 +160,14 @@ impl ImuChunk {
 
     /// Set every buffer to n samples (contents are overwritten by the simulator).
     fn resize(&mut self, n: usize) {
-        for v in [&mut self.t_s, &mut self.temp_c, &mut self.table_angle, &mut self.pitch, &mut self.roll, &mut self.yaw] {
+        for v in [
+            &mut self.t_s,
+            &mut self.temp_c,
+            &mut self.table_angle,
+            &mut self.pitch,
+            &mut self.roll,
+            &mut self.yaw,
+        ] {
             v.resize(n, 0.0);
         }
         self.dtheta.resize(3 * n, 0.0);
@@ -178,7 +225,16 @@ impl Uniform {
         let (s_hi, c_hi) = (rate * GL2_HI * dt).sin_cos();
         let (sin_d, cos_d) = (rate * dt).sin_cos();
         let (start, end, angle0) = (0.0, f64::NEG_INFINITY, 0.0);
-        Uniform { rate, start, end, angle0, a: 0.5 * dt * (c_lo + c_hi), b: 0.5 * dt * (s_lo + s_hi), sin_d, cos_d }
+        Uniform {
+            rate,
+            start,
+            end,
+            angle0,
+            a: 0.5 * dt * (c_lo + c_hi),
+            b: 0.5 * dt * (s_lo + s_hi),
+            sin_d,
+            cos_d,
+        }
     }
 }
 
@@ -292,12 +348,20 @@ impl ImuSimulator {
             let alpha1 = w.angle0 + w.rate * (t1 - w.start);
             let ic = w.a * c0 - w.b * s0;
             let is = w.a * s0 + w.b * c0;
-            let (s1, c1) = if k % SINCOS_RESYNC == 0 { alpha1.sin_cos() } else { (s0 * w.cos_d + c0 * w.sin_d, c0 * w.cos_d - s0 * w.sin_d) };
+            let (s1, c1) = if k % SINCOS_RESYNC == 0 {
+                alpha1.sin_cos()
+            } else {
+                (s0 * w.cos_d + c0 * w.sin_d, c0 * w.cos_d - s0 * w.sin_d)
+            };
             self.alpha = alpha1;
             self.sin_alpha = s1;
             self.cos_alpha = c1;
             return (
-                [ic * u[0] + is * u[1], -is * u[0] + ic * u[1], u[2] * dt + (alpha1 - alpha0)],
+                [
+                    ic * u[0] + is * u[1],
+                    -is * u[0] + ic * u[1],
+                    u[2] * dt + (alpha1 - alpha0),
+                ],
                 [ic * a[0] + is * a[1], -is * a[0] + ic * a[1], a[2] * dt],
             );
         }
@@ -310,12 +374,20 @@ impl ImuSimulator {
         let ic = 0.5 * dt * (c_lo + c_hi);
         let is = 0.5 * dt * (s_lo + s_hi);
         // Exact re-synchronisation every SINCOS_RESYNC samples bounds the rounding random walk (< 1e-14).
-        let (s1, c1) = if k % SINCOS_RESYNC == 0 { alpha1.sin_cos() } else { rotate(s0, c0, alpha1 - alpha0) };
+        let (s1, c1) = if k % SINCOS_RESYNC == 0 {
+            alpha1.sin_cos()
+        } else {
+            rotate(s0, c0, alpha1 - alpha0)
+        };
         self.alpha = alpha1;
         self.sin_alpha = s1;
         self.cos_alpha = c1;
         (
-            [ic * u[0] + is * u[1], -is * u[0] + ic * u[1], u[2] * dt + (alpha1 - alpha0)],
+            [
+                ic * u[0] + is * u[1],
+                -is * u[0] + ic * u[1],
+                u[2] * dt + (alpha1 - alpha0),
+            ],
             [ic * a[0] + is * a[1], -is * a[0] + ic * a[1], a[2] * dt],
         )
     }
@@ -349,7 +421,11 @@ impl ImuSimulator {
                 }
                 // e_k = exp(-t_k / tau) by recurrence, exact every SINCOS_RESYNC samples.
                 let e_prev = self.decay;
-                let e1 = if k % SINCOS_RESYNC == 0 { (-t1 / tau_s).exp() } else { e_prev * self.decay_step };
+                let e1 = if k % SINCOS_RESYNC == 0 {
+                    (-t1 / tau_s).exp()
+                } else {
+                    e_prev * self.decay_step
+                };
                 self.decay = e1;
                 let d = start_c - end_c;
                 let mid = if need_mid {
@@ -361,7 +437,11 @@ impl ImuSimulator {
                 (end_c + d * e1, mid)
             }
             TemperatureProfile::Series { .. } => {
-                let mid = if need_mid { self.cfg.temperature.at(t1 - 0.5 * self.dt) } else { (0.0, 0.0) };
+                let mid = if need_mid {
+                    self.cfg.temperature.at(t1 - 0.5 * self.dt)
+                } else {
+                    (0.0, 0.0)
+                };
                 (self.cfg.temperature.at(t1).0, mid)
             }
         }
@@ -425,8 +505,22 @@ impl ImuSimulator {
     /// least that many samples (x 3 for `dtheta` and `dv`).
     pub fn fill(&mut self, out: ImuChunkSlices<'_>) -> usize {
         let m = self.remaining().min(out.t_s.len() as u64) as usize;
-        assert!(out.dtheta.len() >= 3 * m && out.dv.len() >= 3 * m, "dtheta/dv buffers too short");
-        assert!([out.temp_c.len(), out.table_angle.len(), out.pitch.len(), out.roll.len(), out.yaw.len()].iter().all(|&l| l >= m), "buffers too short");
+        assert!(
+            out.dtheta.len() >= 3 * m && out.dv.len() >= 3 * m,
+            "dtheta/dv buffers too short"
+        );
+        assert!(
+            [
+                out.temp_c.len(),
+                out.table_angle.len(),
+                out.pitch.len(),
+                out.roll.len(),
+                out.yaw.len()
+            ]
+            .iter()
+            .all(|&l| l >= m),
+            "buffers too short"
+        );
         let temp_drift = self.errors.params().has_temperature_drift();
         let rate = self.cfg.rate_hz;
         let mut t0 = self.k as f64 / rate;
@@ -440,7 +534,11 @@ impl ImuSimulator {
                 let t1 = k as f64 / rate;
                 let (mut dth, mut dv) = self.true_increments(k, t0, t1);
                 let (temp, (temp_mid, rate_mid)) = self.temperature(k, t1, temp_drift);
-                let drift = if temp_drift { self.errors.params().axial_drift(temp_mid, rate_mid) } else { 0.0 };
+                let drift = if temp_drift {
+                    self.errors.params().axial_drift(temp_mid, rate_mid)
+                } else {
+                    0.0
+                };
                 self.errors.apply_deterministic(drift, &mut dth, &mut dv);
                 out.t_s[i] = t1;
                 t0 = t1;
@@ -453,8 +551,14 @@ impl ImuSimulator {
                 self.k = k;
             }
             // Third pass: the random terms, a tight loop around the generator.
-            self.errors.add_noise(&mut out.dtheta[3 * start..3 * end], &mut out.dv[3 * start..3 * end]);
-            self.attitudes(&out.table_angle[start..end], &mut out.pitch[start..end], &mut out.roll[start..end], &mut out.yaw[start..end]);
+            self.errors
+                .add_noise(&mut out.dtheta[3 * start..3 * end], &mut out.dv[3 * start..3 * end]);
+            self.attitudes(
+                &out.table_angle[start..end],
+                &mut out.pitch[start..end],
+                &mut out.roll[start..end],
+                &mut out.yaw[start..end],
+            );
         }
         m
     }
@@ -493,13 +597,21 @@ fn rotate(s: f64, c: f64, d: f64) -> (f64, f64) {
     let (sd, cd) = if d.abs() < 2e-3 {
         // Table travel within a sample is usually below 2e-3 rad: shorter series, truncation < 1e-21.
         let d2 = d * d;
-        (d * (1.0 - d2 * (1.0 / 6.0) * (1.0 - d2 * (1.0 / 20.0))), 1.0 - d2 * 0.5 * (1.0 - d2 * (1.0 / 12.0) * (1.0 - d2 * (1.0 / 30.0))))
+        (
+            d * (1.0 - d2 * (1.0 / 6.0) * (1.0 - d2 * (1.0 / 20.0))),
+            1.0 - d2 * 0.5 * (1.0 - d2 * (1.0 / 12.0) * (1.0 - d2 * (1.0 / 30.0))),
+        )
     } else if d.abs() < 0.05 {
         let d2 = d * d;
         // Multiplications by constant reciprocals (a division costs ~10x a multiplication).
-        let sd = d * (1.0 - d2 * (1.0 / 6.0) * (1.0 - d2 * (1.0 / 20.0) * (1.0 - d2 * (1.0 / 42.0) * (1.0 - d2 * (1.0 / 72.0)))));
+        let sd = d
+            * (1.0
+                - d2 * (1.0 / 6.0) * (1.0 - d2 * (1.0 / 20.0) * (1.0 - d2 * (1.0 / 42.0) * (1.0 - d2 * (1.0 / 72.0)))));
         let cd = 1.0
-            - d2 * 0.5 * (1.0 - d2 * (1.0 / 12.0) * (1.0 - d2 * (1.0 / 30.0) * (1.0 - d2 * (1.0 / 56.0) * (1.0 - d2 * (1.0 / 90.0)))));
+            - d2 * 0.5
+                * (1.0
+                    - d2 * (1.0 / 12.0)
+                        * (1.0 - d2 * (1.0 / 30.0) * (1.0 - d2 * (1.0 / 56.0) * (1.0 - d2 * (1.0 / 90.0)))));
         (sd, cd)
     } else {
         d.sin_cos()
@@ -521,12 +633,16 @@ fn atan_small(x: f64) -> f64 {
     if x2 < 4e-4 {
         // |x| < 0.02 (the usual tilt, and the yaw correction, which is second order in the tilt): to x^11,
         // truncation x^12 / 13 < 3.2e-22 relative.
-        return x * (1.0 - x2 * ((1.0 / 3.0) - x2 * ((1.0 / 5.0) - x2 * ((1.0 / 7.0) - x2 * ((1.0 / 9.0) - x2 * (1.0 / 11.0))))));
+        return x
+            * (1.0
+                - x2 * ((1.0 / 3.0)
+                    - x2 * ((1.0 / 5.0) - x2 * ((1.0 / 7.0) - x2 * ((1.0 / 9.0) - x2 * (1.0 / 11.0))))));
     }
     x * (1.0
         - x2 * ((1.0 / 3.0)
             - x2 * ((1.0 / 5.0)
-                - x2 * ((1.0 / 7.0) - x2 * ((1.0 / 9.0) - x2 * ((1.0 / 11.0) - x2 * ((1.0 / 13.0) - x2 * (1.0 / 15.0))))))))
+                - x2 * ((1.0 / 7.0)
+                    - x2 * ((1.0 / 9.0) - x2 * ((1.0 / 11.0) - x2 * ((1.0 / 13.0) - x2 * (1.0 / 15.0))))))))
 }
 
 /// asin(x) for |x| < 0.1 by its Taylor series to x^15 (truncation < 1e-19); libm otherwise.
@@ -538,13 +654,17 @@ fn asin_small(x: f64) -> f64 {
     let x2 = x * x;
     if x2 < 4e-4 {
         // |x| < 0.02: to x^11, truncation below 231/13312 x^12 < 3e-23 relative.
-        return x * (1.0 + x2 * ((1.0 / 6.0) + x2 * ((3.0 / 40.0) + x2 * ((5.0 / 112.0) + x2 * ((35.0 / 1152.0) + x2 * (63.0 / 2816.0))))));
+        return x
+            * (1.0
+                + x2 * ((1.0 / 6.0)
+                    + x2 * ((3.0 / 40.0) + x2 * ((5.0 / 112.0) + x2 * ((35.0 / 1152.0) + x2 * (63.0 / 2816.0))))));
     }
     x * (1.0
         + x2 * ((1.0 / 6.0)
             + x2 * ((3.0 / 40.0)
                 + x2 * ((5.0 / 112.0)
-                    + x2 * ((35.0 / 1152.0) + x2 * ((63.0 / 2816.0) + x2 * ((231.0 / 13312.0) + x2 * (143.0 / 10240.0))))))))
+                    + x2 * ((35.0 / 1152.0)
+                        + x2 * ((63.0 / 2816.0) + x2 * ((231.0 / 13312.0) + x2 * (143.0 / 10240.0))))))))
 }
 
 /// Wrap to (-pi, pi] without a division in the common case.
@@ -570,14 +690,31 @@ fn wrap_pi_fast(a: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::attitude::{rot_z, add, norm, quat_mul, quat_to_rotvec, rotvec_to_quat, euler_to_quat, quat_conj, sub};
+    use crate::attitude::{add, euler_to_quat, norm, quat_conj, quat_mul, quat_to_rotvec, rot_z, rotvec_to_quat, sub};
 
     fn rotating(level: bool) -> ImuSimulatorConfig {
         ImuSimulatorConfig {
             rate_hz: 50.0,
             duration_s: 200.0,
-            attitude: if level { Euler { pitch: 0.0, roll: 0.0, yaw: 0.3 } } else { Euler { pitch: 0.02, roll: -0.03, yaw: 0.3 } },
-            scheme: RotationScheme::Reciprocating { rate: 0.3, accel: 0.2, span: 3.0, dwell: 2.0 },
+            attitude: if level {
+                Euler {
+                    pitch: 0.0,
+                    roll: 0.0,
+                    yaw: 0.3,
+                }
+            } else {
+                Euler {
+                    pitch: 0.02,
+                    roll: -0.03,
+                    yaw: 0.3,
+                }
+            },
+            scheme: RotationScheme::Reciprocating {
+                rate: 0.3,
+                accel: 0.2,
+                span: 3.0,
+                dwell: 2.0,
+            },
             ..Default::default()
         }
     }
@@ -606,7 +743,14 @@ mod tests {
                     let cbn = mat_mul(&c_b0n, &rot_z(st.angle));
                     let w = add(mat_t_vec(&cbn, wie), [0.0, 0.0, st.rate]);
                     let f = mat_t_vec(&cbn, [0.0, 0.0, g]);
-                    let wt = if j == 0 || j == m { 1.0 } else if j % 2 == 1 { 4.0 } else { 2.0 } * dt / (3.0 * m as f64);
+                    let wt = if j == 0 || j == m {
+                        1.0
+                    } else if j % 2 == 1 {
+                        4.0
+                    } else {
+                        2.0
+                    } * dt
+                        / (3.0 * m as f64);
                     for i in 0..3 {
                         sw[i] += wt * w[i];
                         sf[i] += wt * f[i];
@@ -660,9 +804,18 @@ mod tests {
 
     #[test]
     fn fast_true_attitude_equals_the_dcm_route() {
-        for (p, r, y) in [(0.02, -0.03, 0.3), (0.0, 0.09, -3.1), (-0.3, 0.5, 2.0), (0.001, 0.0, 3.1)] {
+        for (p, r, y) in [
+            (0.02, -0.03, 0.3),
+            (0.0, 0.09, -3.1),
+            (-0.3, 0.5, 2.0),
+            (0.001, 0.0, 3.1),
+        ] {
             let cfg = ImuSimulatorConfig {
-                attitude: Euler { pitch: p, roll: r, yaw: y },
+                attitude: Euler {
+                    pitch: p,
+                    roll: r,
+                    yaw: y,
+                },
                 scheme: RotationScheme::Continuous { rate: 1.0, accel: 1.0 },
                 duration_s: 20.0,
                 ..Default::default()
@@ -676,7 +829,12 @@ mod tests {
                 assert!((ch.pitch[k] - e.pitch).abs() < 1e-13, "pitch {k}");
                 assert!((ch.roll[k] - e.roll).abs() < 1e-13, "roll {k}");
                 let dy = (ch.yaw[k] - e.yaw).abs();
-                assert!(dy.min((dy - 2.0 * std::f64::consts::PI).abs()) < 1e-13, "yaw {k}: {} {}", ch.yaw[k], e.yaw);
+                assert!(
+                    dy.min((dy - 2.0 * std::f64::consts::PI).abs()) < 1e-13,
+                    "yaw {k}: {} {}",
+                    ch.yaw[k],
+                    e.yaw
+                );
             }
         }
     }
@@ -687,9 +845,24 @@ mod tests {
         // every SINCOS_RESYNC samples); compare with the two-point quadrature from libm sin/cos at the nodes.
         for scheme in [
             RotationScheme::Continuous { rate: 1.0, accel: 2.0 },
-            RotationScheme::Indexing { rate: 0.5, accel: 1.0, positions: vec![0.0, 1.0, 2.5], dwell: 3.0 },
+            RotationScheme::Indexing {
+                rate: 0.5,
+                accel: 1.0,
+                positions: vec![0.0, 1.0, 2.5],
+                dwell: 3.0,
+            },
         ] {
-            let cfg = ImuSimulatorConfig { rate_hz: 100.0, duration_s: 2000.0, attitude: Euler { pitch: 0.01, roll: 0.02, yaw: 1.0 }, scheme, ..Default::default() };
+            let cfg = ImuSimulatorConfig {
+                rate_hz: 100.0,
+                duration_s: 2000.0,
+                attitude: Euler {
+                    pitch: 0.01,
+                    roll: 0.02,
+                    yaw: 1.0,
+                },
+                scheme,
+                ..Default::default()
+            };
             let mut sim = ImuSimulator::new(cfg.clone()).unwrap();
             let mut ch = ImuChunk::default();
             let mut first = 0usize;

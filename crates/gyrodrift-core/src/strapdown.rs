@@ -36,8 +36,8 @@
 //! h - h_ref = b / w_v^2 with the reported v_U = k1 (h - h_ref) (e.g. 50 ug: 4.9 m and 0.069 m/s).
 
 use crate::attitude::{
-    add, cross, dcm_to_euler, dot, euler_to_quat, quat_mul, quat_normalize, quat_rotate, quat_to_dcm, rotvec_to_quat, scale,
-    sub, Euler, Quat, Vec3,
+    add, cross, dcm_to_euler, dot, euler_to_quat, quat_mul, quat_normalize, quat_rotate, quat_to_dcm, rotvec_to_quat,
+    scale, sub, Euler, Quat, Vec3,
 };
 use crate::earth;
 use crate::simulator::{check_attitude, check_site};
@@ -87,7 +87,11 @@ impl Default for NavigatorConfig {
 impl NavigatorConfig {
     pub fn validate(&self) -> Result<(), ParamError> {
         check_site(self.lat, self.lon, self.height, self.rate_hz)?;
-        check(self.vel.iter().all(|v| v.is_finite() && v.abs() <= 1000.0), "vel_enu_m_s", "must be finite with |v| <= 1000 m/s")?;
+        check(
+            self.vel.iter().all(|v| v.is_finite() && v.abs() <= 1000.0),
+            "vel_enu_m_s",
+            "must be finite with |v| <= 1000 m/s",
+        )?;
         check_attitude(self.attitude)
     }
 }
@@ -214,7 +218,11 @@ impl Navigator {
 
     /// Set the estimated gyro bias [rad/s], subtracted from every following sample (measured - estimate).
     pub fn set_gyro_bias(&mut self, b: Vec3) -> Result<(), ParamError> {
-        check(b.iter().all(|x| x.is_finite() && x.abs() <= 0.1), "gyro_bias", "must be finite with |b| <= 0.1 rad/s")?;
+        check(
+            b.iter().all(|x| x.is_finite() && x.abs() <= 0.1),
+            "gyro_bias",
+            "must be finite with |b| <= 0.1 rad/s",
+        )?;
         self.gyro_bias = b;
         self.gyro_bias_dt = scale(b, self.dt);
         Ok(())
@@ -222,7 +230,11 @@ impl Navigator {
 
     /// Set the estimated accelerometer bias [m/s^2], subtracted from every following sample.
     pub fn set_accel_bias(&mut self, b: Vec3) -> Result<(), ParamError> {
-        check(b.iter().all(|x| x.is_finite() && x.abs() <= 10.0), "accel_bias", "must be finite with |b| <= 10 m/s^2")?;
+        check(
+            b.iter().all(|x| x.is_finite() && x.abs() <= 10.0),
+            "accel_bias",
+            "must be finite with |b| <= 10 m/s^2",
+        )?;
         self.accel_bias = b;
         self.accel_bias_dt = scale(b, self.dt);
         Ok(())
@@ -256,8 +268,16 @@ impl Navigator {
     /// (the coning/sculling memory), the Earth terms and the bias estimates are kept, so a corrected run goes on
     /// exactly as a run started from the corrected state with the same history.
     pub fn correct(&mut self, phi: Vec3, dv: Vec3) -> Result<(), ParamError> {
-        check(phi.iter().all(|x| x.is_finite() && x.abs() <= 0.5), "phi", "must be finite with |phi| <= 0.5 rad")?;
-        check(dv.iter().all(|x| x.is_finite() && x.abs() <= 1000.0), "dv", "must be finite with |dv| <= 1000 m/s")?;
+        check(
+            phi.iter().all(|x| x.is_finite() && x.abs() <= 0.5),
+            "phi",
+            "must be finite with |phi| <= 0.5 rad",
+        )?;
+        check(
+            dv.iter().all(|x| x.is_finite() && x.abs() <= 1000.0),
+            "dv",
+            "must be finite with |dv| <= 1000 m/s",
+        )?;
         self.q = quat_normalize(quat_mul(rotvec_to_quat(phi), self.q));
         self.vel = sub(self.vel, dv);
         if self.cfg.vertical == Vertical::Fixed {
@@ -310,7 +330,12 @@ impl Navigator {
     #[inline(always)]
     fn update_attitude(&mut self, phi: Vec3, zeta: Vec3) {
         // |zeta| < 1e-6 rad: q(-zeta) = [1 - |zeta|^2 / 8, -zeta / 2] is exact to 1e-26.
-        let q_nn = [1.0 - 0.125 * dot(zeta, zeta), -0.5 * zeta[0], -0.5 * zeta[1], -0.5 * zeta[2]];
+        let q_nn = [
+            1.0 - 0.125 * dot(zeta, zeta),
+            -0.5 * zeta[0],
+            -0.5 * zeta[1],
+            -0.5 * zeta[2],
+        ];
         // Normalised with the Earth terms (`step`), not here: products of unit quaternions keep |q| within a few
         // 1e-16 of 1 over `EARTH_REFRESH` samples (tested), and a norm error e scales the velocity increments by
         // only 1 + 2 e, while normalising every sample lengthens the sample-to-sample dependency chain (8 %).
@@ -391,10 +416,16 @@ mod tests {
     fn tumbling(n: usize) -> (Vec<f64>, Vec<f64>) {
         let row = |k: usize| {
             let a = 0.3 * k as f64;
-            ([0.01 * a.sin(), 0.01 * a.cos(), 0.002], [1e-3 * a.cos(), -1e-3 * (0.7 * a).sin(), 0.0981])
+            (
+                [0.01 * a.sin(), 0.01 * a.cos(), 0.002],
+                [1e-3 * a.cos(), -1e-3 * (0.7 * a).sin(), 0.0981],
+            )
         };
         let rows: Vec<_> = (0..n).map(row).collect();
-        (rows.iter().flat_map(|r| r.0).collect(), rows.iter().flat_map(|r| r.1).collect())
+        (
+            rows.iter().flat_map(|r| r.0).collect(),
+            rows.iter().flat_map(|r| r.1).collect(),
+        )
     }
 
     /// Rotation angle between two attitude quaternions [rad].
@@ -404,7 +435,15 @@ mod tests {
 
     #[test]
     fn correct_removes_a_known_error_and_keeps_the_coning_memory() {
-        let cfg = NavigatorConfig { attitude: Euler { pitch: 0.01, roll: 0.02, yaw: 1.0 }, vel: [1.0, -2.0, 0.0], ..Default::default() };
+        let cfg = NavigatorConfig {
+            attitude: Euler {
+                pitch: 0.01,
+                roll: 0.02,
+                yaw: 1.0,
+            },
+            vel: [1.0, -2.0, 0.0],
+            ..Default::default()
+        };
         let (dth, dv) = tumbling(600);
         let (head, tail) = (3 * 300, 3 * 300..);
         let mut truth = Navigator::new(cfg.clone()).unwrap();
@@ -427,7 +466,15 @@ mod tests {
 
         // A restart from the same state (what the alignment did before `correct`) forgets the previous increments.
         let s = truth.state();
-        let mut restarted = Navigator::new(NavigatorConfig { lat: s.lat, lon: s.lon, height: s.height, vel: s.vel, attitude: s.attitude, ..cfg }).unwrap();
+        let mut restarted = Navigator::new(NavigatorConfig {
+            lat: s.lat,
+            lon: s.lon,
+            height: s.height,
+            vel: s.vel,
+            attitude: s.attitude,
+            ..cfg
+        })
+        .unwrap();
         let (mut out_t, mut out_c) = (Vec::new(), Vec::new());
         truth.process(&dth[tail.clone()], &dv[tail.clone()], 1, |s| out_t.push(*s));
         corrected.process(&dth[tail.clone()], &dv[tail.clone()], 1, |s| out_c.push(*s));
@@ -436,7 +483,10 @@ mod tests {
         // The corrected run is the uninterrupted one to rounding, sample after sample.
         for (a, b) in out_t.iter().zip(&out_c) {
             assert_eq!(a.t, b.t);
-            assert!((a.lat - b.lat).abs() < 1e-15 && (a.lon - b.lon).abs() < 1e-15, "{a:?} {b:?}");
+            assert!(
+                (a.lat - b.lat).abs() < 1e-15 && (a.lon - b.lon).abs() < 1e-15,
+                "{a:?} {b:?}"
+            );
             assert!(norm(sub(a.vel, b.vel)) < 1e-12, "{a:?} {b:?}");
         }
         let gap_corrected = angle_between(corrected.q, truth.q);
@@ -453,7 +503,11 @@ mod tests {
         assert_eq!(nav.state().vel, [-0.1, -0.2, 0.0]);
         assert_eq!(nav.correct([f64::NAN, 0.0, 0.0], [0.0; 3]).unwrap_err().key, "phi");
         assert_eq!(nav.correct([0.0; 3], [0.0, 2000.0, 0.0]).unwrap_err().key, "dv");
-        let mut damped = Navigator::new(NavigatorConfig { vertical: Vertical::Damped, ..Default::default() }).unwrap();
+        let mut damped = Navigator::new(NavigatorConfig {
+            vertical: Vertical::Damped,
+            ..Default::default()
+        })
+        .unwrap();
         damped.correct([0.0; 3], [0.0, 0.0, 0.3]).unwrap();
         assert_eq!(damped.state().vel, [0.0, 0.0, -0.3]);
     }
@@ -470,13 +524,21 @@ mod tests {
         let q_of = |t: f64| -> Quat {
             // q(t) = qz(W t) o qx(a) o qz(-W t)
             let qz = |ang: f64| [(0.5 * ang).cos(), 0.0, 0.0, (0.5 * ang).sin()];
-            quat_mul(qz(big_w * t), quat_mul([(0.5 * a).cos(), (0.5 * a).sin(), 0.0, 0.0], qz(-big_w * t)))
+            quat_mul(
+                qz(big_w * t),
+                quat_mul([(0.5 * a).cos(), (0.5 * a).sin(), 0.0, 0.0], qz(-big_w * t)),
+            )
         };
         // Body rate from q' = 1/2 q o [0, w]: w = 2 q* o q'.
         let w_of = |t: f64| -> Vec3 {
             let h = 1e-6;
             let (qa, qb) = (q_of(t - h), q_of(t + h));
-            let qd = [(qb[0] - qa[0]) / (2.0 * h), (qb[1] - qa[1]) / (2.0 * h), (qb[2] - qa[2]) / (2.0 * h), (qb[3] - qa[3]) / (2.0 * h)];
+            let qd = [
+                (qb[0] - qa[0]) / (2.0 * h),
+                (qb[1] - qa[1]) / (2.0 * h),
+                (qb[2] - qa[2]) / (2.0 * h),
+                (qb[3] - qa[3]) / (2.0 * h),
+            ];
             let w = quat_mul(quat_conj(q_of(t)), qd);
             [2.0 * w[1], 2.0 * w[2], 2.0 * w[3]]
         };
@@ -487,13 +549,21 @@ mod tests {
             for k in 0..n {
                 let t0 = k as f64 * dt;
                 // Gauss-Legendre 3 points per sample for the increment.
-                let nodes = [(-0.774_596_669_241_483_4, 5.0 / 9.0), (0.0, 8.0 / 9.0), (0.774_596_669_241_483_4, 5.0 / 9.0)];
+                let nodes = [
+                    (-0.774_596_669_241_483_4, 5.0 / 9.0),
+                    (0.0, 8.0 / 9.0),
+                    (0.774_596_669_241_483_4, 5.0 / 9.0),
+                ];
                 let mut d = [0.0; 3];
                 for (x, wgt) in nodes {
                     let w = w_of(t0 + 0.5 * dt * (1.0 + x));
                     d = add(d, scale(w, 0.5 * dt * wgt));
                 }
-                let phi = if coning { coning_sculling(d, [0.0; 3], prev, [0.0; 3]).0 } else { d };
+                let phi = if coning {
+                    coning_sculling(d, [0.0; 3], prev, [0.0; 3]).0
+                } else {
+                    d
+                };
                 q = quat_mul(q, rotvec_to_quat(phi));
                 prev = d;
             }
@@ -505,14 +575,28 @@ mod tests {
         let uncorrected = run(false);
         let corrected = run(true);
         let expected = drift_rate * (1.0 - wdt.sin() / wdt) * 10.0;
-        assert!((uncorrected / expected - 1.0).abs() < 0.02, "{uncorrected} vs {expected}");
+        assert!(
+            (uncorrected / expected - 1.0).abs() < 0.02,
+            "{uncorrected} vs {expected}"
+        );
         // The one-plus-previous algorithm leaves an error of order (W dt)^4.
-        assert!(corrected < 0.01 * uncorrected, "corrected {corrected}, uncorrected {uncorrected}");
+        assert!(
+            corrected < 0.01 * uncorrected,
+            "corrected {corrected}, uncorrected {uncorrected}"
+        );
     }
 
     #[test]
     fn quaternion_norm_stays_unit_between_normalisations() {
-        let mut nav = Navigator::new(NavigatorConfig { attitude: Euler { pitch: 0.01, roll: 0.02, yaw: 1.0 }, ..Default::default() }).unwrap();
+        let mut nav = Navigator::new(NavigatorConfig {
+            attitude: Euler {
+                pitch: 0.01,
+                roll: 0.02,
+                yaw: 1.0,
+            },
+            ..Default::default()
+        })
+        .unwrap();
         let (dth, dv) = tumbling(20_000);
         let mut worst: f64 = 0.0;
         for (x, y) in dth.chunks_exact(3).zip(dv.chunks_exact(3)) {
@@ -528,7 +612,16 @@ mod tests {
     fn process_equals_step_by_step_bit_for_bit() {
         // `process` runs the samples between outputs in a separate loop on a copy of the state; it must be the
         // per-sample `step` exactly, with bias compensation and across Earth-term refreshes.
-        let cfg = NavigatorConfig { attitude: Euler { pitch: 0.01, roll: 0.02, yaw: 1.0 }, vel: [1.0, -2.0, 0.5], vertical: Vertical::Damped, ..Default::default() };
+        let cfg = NavigatorConfig {
+            attitude: Euler {
+                pitch: 0.01,
+                roll: 0.02,
+                yaw: 1.0,
+            },
+            vel: [1.0, -2.0, 0.5],
+            vertical: Vertical::Damped,
+            ..Default::default()
+        };
         let (dth, dv) = tumbling(1000);
         let mut a = Navigator::new(cfg.clone()).unwrap();
         let mut b = Navigator::new(cfg).unwrap();
@@ -552,12 +645,27 @@ mod tests {
 
     #[test]
     fn chunking_and_decimation() {
-        let cfg = NavigatorConfig { attitude: Euler { pitch: 0.01, roll: 0.02, yaw: 1.0 }, ..Default::default() };
+        let cfg = NavigatorConfig {
+            attitude: Euler {
+                pitch: 0.01,
+                roll: 0.02,
+                yaw: 1.0,
+            },
+            ..Default::default()
+        };
         let mut a = Navigator::new(cfg.clone()).unwrap();
         let mut b = Navigator::new(cfg).unwrap();
         let n = 1000;
         let dth: Vec<f64> = (0..3 * n).map(|i| 1e-5 * ((i as f64) * 0.37).sin()).collect();
-        let dv: Vec<f64> = (0..3 * n).map(|i| if i % 3 == 2 { 0.098 } else { 1e-3 * ((i as f64) * 0.11).cos() }).collect();
+        let dv: Vec<f64> = (0..3 * n)
+            .map(|i| {
+                if i % 3 == 2 {
+                    0.098
+                } else {
+                    1e-3 * ((i as f64) * 0.11).cos()
+                }
+            })
+            .collect();
         let mut out_a = Vec::new();
         a.process(&dth, &dv, 7, |s| out_a.push(*s));
         let mut out_b = Vec::new();

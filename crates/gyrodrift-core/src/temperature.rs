@@ -18,16 +18,40 @@ impl TemperatureProfile {
     pub fn validate(&self) -> Result<(), ParamError> {
         match self {
             TemperatureProfile::WarmUp { start_c, end_c, tau_s } => {
-                check(start_c.is_finite() && (-100.0..=200.0).contains(start_c), "temp_start_c", format!("must be in [-100, 200] deg C, got {start_c}"))?;
-                check(end_c.is_finite() && (-100.0..=200.0).contains(end_c), "temp_end_c", format!("must be in [-100, 200] deg C, got {end_c}"))?;
-                check(tau_s.is_finite() && *tau_s > 0.0, "temp_tau_s", format!("must be positive and finite, got {tau_s}"))
+                check(
+                    start_c.is_finite() && (-100.0..=200.0).contains(start_c),
+                    "temp_start_c",
+                    format!("must be in [-100, 200] deg C, got {start_c}"),
+                )?;
+                check(
+                    end_c.is_finite() && (-100.0..=200.0).contains(end_c),
+                    "temp_end_c",
+                    format!("must be in [-100, 200] deg C, got {end_c}"),
+                )?;
+                check(
+                    tau_s.is_finite() && *tau_s > 0.0,
+                    "temp_tau_s",
+                    format!("must be positive and finite, got {tau_s}"),
+                )
             }
             TemperatureProfile::Series { t_s, temp_c } => {
                 check(!t_s.is_empty(), "temp_series_t_s", "must not be empty")?;
-                check(t_s.len() == temp_c.len(), "temp_series_c", format!("has {} values but temp_series_t_s has {}", temp_c.len(), t_s.len()))?;
+                check(
+                    t_s.len() == temp_c.len(),
+                    "temp_series_c",
+                    format!("has {} values but temp_series_t_s has {}", temp_c.len(), t_s.len()),
+                )?;
                 check(t_s.iter().all(|t| t.is_finite()), "temp_series_t_s", "must be finite")?;
-                check(t_s.windows(2).all(|w| w[1] > w[0]), "temp_series_t_s", "must be strictly increasing")?;
-                check(temp_c.iter().all(|c| c.is_finite() && (-100.0..=200.0).contains(c)), "temp_series_c", "must be finite and in [-100, 200] deg C")
+                check(
+                    t_s.windows(2).all(|w| w[1] > w[0]),
+                    "temp_series_t_s",
+                    "must be strictly increasing",
+                )?;
+                check(
+                    temp_c.iter().all(|c| c.is_finite() && (-100.0..=200.0).contains(c)),
+                    "temp_series_c",
+                    "must be finite and in [-100, 200] deg C",
+                )
             }
         }
     }
@@ -62,7 +86,11 @@ mod tests {
 
     #[test]
     fn warm_up_closed_form() {
-        let p = TemperatureProfile::WarmUp { start_c: 20.0, end_c: 40.0, tau_s: 3600.0 };
+        let p = TemperatureProfile::WarmUp {
+            start_c: 20.0,
+            end_c: 40.0,
+            tau_s: 3600.0,
+        };
         let (t0, r0) = p.at(0.0);
         assert_eq!(t0, 20.0);
         assert!((r0 - 20.0 / 3600.0).abs() < 1e-15);
@@ -73,13 +101,19 @@ mod tests {
 
     #[test]
     fn series_interpolates_and_holds() {
-        let p = TemperatureProfile::Series { t_s: vec![0.0, 10.0, 30.0], temp_c: vec![20.0, 21.0, 20.0] };
+        let p = TemperatureProfile::Series {
+            t_s: vec![0.0, 10.0, 30.0],
+            temp_c: vec![20.0, 21.0, 20.0],
+        };
         p.validate().unwrap();
         assert_eq!(p.at(5.0), (20.5, 0.1));
         assert_eq!(p.at(20.0), (20.5, -0.05));
         assert_eq!(p.at(40.0), (20.0, 0.0));
         assert_eq!(p.at(-1.0), (20.0, 0.0));
-        let bad = TemperatureProfile::Series { t_s: vec![0.0, 0.0], temp_c: vec![1.0, 2.0] };
+        let bad = TemperatureProfile::Series {
+            t_s: vec![0.0, 0.0],
+            temp_c: vec![1.0, 2.0],
+        };
         assert_eq!(bad.validate().unwrap_err().key, "temp_series_t_s");
     }
 }

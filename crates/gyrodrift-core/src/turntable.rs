@@ -29,9 +29,22 @@ use std::f64::consts::TAU;
 #[derive(Clone, Debug, PartialEq)]
 pub enum RotationScheme {
     None,
-    Continuous { rate: f64, accel: f64 },
-    Reciprocating { rate: f64, accel: f64, span: f64, dwell: f64 },
-    Indexing { rate: f64, accel: f64, positions: Vec<f64>, dwell: f64 },
+    Continuous {
+        rate: f64,
+        accel: f64,
+    },
+    Reciprocating {
+        rate: f64,
+        accel: f64,
+        span: f64,
+        dwell: f64,
+    },
+    Indexing {
+        rate: f64,
+        accel: f64,
+        positions: Vec<f64>,
+        dwell: f64,
+    },
 }
 
 /// Table state at one time: angle [rad], rate [rad/s], acceleration [rad/s^2], all about body Up (CCW +).
@@ -79,15 +92,30 @@ impl Segment {
     fn eval(&self, t: f64) -> TableState {
         let tau = t - self.t0;
         match self.kind {
-            Kind::Dwell => TableState { angle: self.angle0, rate: 0.0, accel: 0.0 },
-            Kind::Cruise { rate } => TableState { angle: self.angle0 + rate * tau, rate, accel: 0.0 },
+            Kind::Dwell => TableState {
+                angle: self.angle0,
+                rate: 0.0,
+                accel: 0.0,
+            },
+            Kind::Cruise { rate } => TableState {
+                angle: self.angle0 + rate * tau,
+                rate,
+                accel: 0.0,
+            },
             Kind::RampUp { peak } => {
                 let s = ramp_up(peak, self.duration, tau);
-                TableState { angle: self.angle0 + s.angle, ..s }
+                TableState {
+                    angle: self.angle0 + s.angle,
+                    ..s
+                }
             }
             Kind::RampDown { peak } => {
                 let s = ramp_up(peak, self.duration, tau);
-                TableState { angle: self.angle0 + peak * tau - s.angle, rate: peak - s.rate, accel: -s.accel }
+                TableState {
+                    angle: self.angle0 + peak * tau - s.angle,
+                    rate: peak - s.rate,
+                    accel: -s.accel,
+                }
             }
         }
     }
@@ -97,12 +125,16 @@ impl Segment {
         let t = self.t0 + self.duration;
         match self.kind {
             // Closed-form end values avoid rounding of sin/cos at u = 1.
-            Kind::RampUp { peak } => {
-                TableState { angle: self.angle0 + 0.5 * peak * self.duration, rate: peak, accel: 0.0 }
-            }
-            Kind::RampDown { peak } => {
-                TableState { angle: self.angle0 + 0.5 * peak * self.duration, rate: 0.0, accel: 0.0 }
-            }
+            Kind::RampUp { peak } => TableState {
+                angle: self.angle0 + 0.5 * peak * self.duration,
+                rate: peak,
+                accel: 0.0,
+            },
+            Kind::RampDown { peak } => TableState {
+                angle: self.angle0 + 0.5 * peak * self.duration,
+                rate: 0.0,
+                accel: 0.0,
+            },
             _ => self.eval(t),
         }
     }
@@ -115,14 +147,23 @@ impl Segment {
 pub fn balanced_reciprocating_span(rate: f64, accel: f64, dwell: f64, turns: u32) -> Result<f64, ParamError> {
     check(turns >= 1, "turns", "must be at least 1")?;
     let component = |span: f64| -> Result<f64, ParamError> {
-        let t = Turntable::new(RotationScheme::Reciprocating { rate, accel, span, dwell })?;
+        let t = Turntable::new(RotationScheme::Reciprocating {
+            rate,
+            accel,
+            span,
+            dwell,
+        })?;
         let (c, s) = t.modulation_residual();
         Ok(c * (0.5 * span).cos() + s * (0.5 * span).sin())
     };
     let full = TAU * turns as f64;
     let (mut lo, mut hi) = (full - std::f64::consts::PI, full);
     let (f_lo, f_hi) = (component(lo)?, component(hi)?);
-    check(f_lo * f_hi <= 0.0, "rotation_accel_rad_s2", "too slow for a balanced span within half a turn")?;
+    check(
+        f_lo * f_hi <= 0.0,
+        "rotation_accel_rad_s2",
+        "too slow for a balanced span within half a turn",
+    )?;
     for _ in 0..60 {
         let mid = 0.5 * (lo + hi);
         if component(mid)? * f_lo > 0.0 {
@@ -186,7 +227,10 @@ pub(crate) fn check(ok: bool, key: &'static str, message: impl Into<String>) -> 
     if ok {
         Ok(())
     } else {
-        Err(ParamError { key, message: message.into() })
+        Err(ParamError {
+            key,
+            message: message.into(),
+        })
     }
 }
 
@@ -207,28 +251,56 @@ fn push_move(segs: &mut Vec<Segment>, t: f64, angle: f64, d: f64, rate: f64, acc
     let cruise_t = (dist - w * tr) / w;
     let mut t = t;
     let mut a = angle;
-    segs.push(Segment { t0: t, duration: tr, angle0: a, kind: Kind::RampUp { peak } });
+    segs.push(Segment {
+        t0: t,
+        duration: tr,
+        angle0: a,
+        kind: Kind::RampUp { peak },
+    });
     t += tr;
     a += 0.5 * peak * tr;
     if cruise_t > 0.0 {
-        segs.push(Segment { t0: t, duration: cruise_t, angle0: a, kind: Kind::Cruise { rate: peak } });
+        segs.push(Segment {
+            t0: t,
+            duration: cruise_t,
+            angle0: a,
+            kind: Kind::Cruise { rate: peak },
+        });
         t += cruise_t;
         a += peak * cruise_t;
     }
-    segs.push(Segment { t0: t, duration: tr, angle0: a, kind: Kind::RampDown { peak } });
+    segs.push(Segment {
+        t0: t,
+        duration: tr,
+        angle0: a,
+        kind: Kind::RampDown { peak },
+    });
     t + tr
 }
 
 fn push_dwell(segs: &mut Vec<Segment>, t: f64, angle: f64, dwell: f64) -> f64 {
     if dwell > 0.0 {
-        segs.push(Segment { t0: t, duration: dwell, angle0: angle, kind: Kind::Dwell });
+        segs.push(Segment {
+            t0: t,
+            duration: dwell,
+            angle0: angle,
+            kind: Kind::Dwell,
+        });
     }
     t + dwell
 }
 
 fn check_rate_accel(rate: f64, accel: f64) -> Result<(), ParamError> {
-    check(rate.is_finite() && rate != 0.0 && rate.abs() <= 10.0, "rotation_rate_rad_s", format!("must be non-zero, finite and at most 10 rad/s in magnitude, got {rate}"))?;
-    check(accel.is_finite() && accel > 0.0 && accel <= 100.0, "rotation_accel_rad_s2", format!("must be positive, finite and at most 100 rad/s^2, got {accel}"))
+    check(
+        rate.is_finite() && rate != 0.0 && rate.abs() <= 10.0,
+        "rotation_rate_rad_s",
+        format!("must be non-zero, finite and at most 10 rad/s in magnitude, got {rate}"),
+    )?;
+    check(
+        accel.is_finite() && accel > 0.0 && accel <= 100.0,
+        "rotation_accel_rad_s2",
+        format!("must be positive, finite and at most 100 rad/s^2, got {accel}"),
+    )
 }
 
 impl Turntable {
@@ -245,16 +317,39 @@ impl Turntable {
             RotationScheme::Continuous { rate, accel } => {
                 check_rate_accel(*rate, *accel)?;
                 let tr = 2.0 * rate.abs() / accel;
-                segs.push(Segment { t0: 0.0, duration: tr, angle0: 0.0, kind: Kind::RampUp { peak: *rate } });
-                segs.push(Segment { t0: tr, duration: f64::INFINITY, angle0: 0.5 * rate * tr, kind: Kind::Cruise { rate: *rate } });
+                segs.push(Segment {
+                    t0: 0.0,
+                    duration: tr,
+                    angle0: 0.0,
+                    kind: Kind::RampUp { peak: *rate },
+                });
+                segs.push(Segment {
+                    t0: tr,
+                    duration: f64::INFINITY,
+                    angle0: 0.5 * rate * tr,
+                    kind: Kind::Cruise { rate: *rate },
+                });
                 period = 0.0;
                 period_start = 0.0;
                 n_prefix = 0;
             }
-            RotationScheme::Reciprocating { rate, accel, span, dwell } => {
+            RotationScheme::Reciprocating {
+                rate,
+                accel,
+                span,
+                dwell,
+            } => {
                 check_rate_accel(*rate, *accel)?;
-                check(span.is_finite() && *span > 0.0 && *span <= 1000.0, "reciprocating_span_rad", format!("must be positive and finite, got {span}"))?;
-                check(dwell.is_finite() && *dwell >= 0.0, "dwell_s", format!("must be >= 0 and finite, got {dwell}"))?;
+                check(
+                    span.is_finite() && *span > 0.0 && *span <= 1000.0,
+                    "reciprocating_span_rad",
+                    format!("must be positive and finite, got {span}"),
+                )?;
+                check(
+                    dwell.is_finite() && *dwell >= 0.0,
+                    "dwell_s",
+                    format!("must be >= 0 and finite, got {dwell}"),
+                )?;
                 let d = span * rate.signum();
                 let mut t = push_move(&mut segs, 0.0, 0.0, d, *rate, *accel);
                 t = push_dwell(&mut segs, t, d, *dwell);
@@ -264,11 +359,28 @@ impl Turntable {
                 period_start = 0.0;
                 n_prefix = 0;
             }
-            RotationScheme::Indexing { rate, accel, positions, dwell } => {
+            RotationScheme::Indexing {
+                rate,
+                accel,
+                positions,
+                dwell,
+            } => {
                 check_rate_accel(*rate, *accel)?;
-                check(!positions.is_empty(), "positions_rad", "must hold at least one position")?;
-                check(positions.iter().all(|p| p.is_finite() && p.abs() <= 1000.0), "positions_rad", "positions must be finite (|p| <= 1000 rad)")?;
-                check(dwell.is_finite() && *dwell >= 0.0, "dwell_s", format!("must be >= 0 and finite, got {dwell}"))?;
+                check(
+                    !positions.is_empty(),
+                    "positions_rad",
+                    "must hold at least one position",
+                )?;
+                check(
+                    positions.iter().all(|p| p.is_finite() && p.abs() <= 1000.0),
+                    "positions_rad",
+                    "positions must be finite (|p| <= 1000 rad)",
+                )?;
+                check(
+                    dwell.is_finite() && *dwell >= 0.0,
+                    "dwell_s",
+                    format!("must be >= 0 and finite, got {dwell}"),
+                )?;
                 // Prefix: move from 0 to positions[0].
                 let mut t = push_move(&mut segs, 0.0, 0.0, positions[0], *rate, *accel);
                 n_prefix = segs.len();
@@ -280,10 +392,20 @@ impl Turntable {
                     t = push_move(&mut segs, t, positions[i], next - positions[i], *rate, *accel);
                 }
                 period = t - period_start;
-                check(period > 0.0, "positions_rad", "with dwell_s = 0 the positions must not all be equal")?;
+                check(
+                    period > 0.0,
+                    "positions_rad",
+                    "with dwell_s = 0 the positions must not all be equal",
+                )?;
             }
         }
-        Ok(Turntable { scheme, segments: segs, period, period_start, n_prefix })
+        Ok(Turntable {
+            scheme,
+            segments: segs,
+            period,
+            period_start,
+            n_prefix,
+        })
     }
 
     /// The scheme this profile was built from.
@@ -354,14 +476,29 @@ impl Turntable {
     #[inline]
     pub fn uniform_at(&self, cursor: &mut TableCursor, t: f64) -> Option<UniformSegment> {
         if self.segments.is_empty() {
-            return Some(UniformSegment { rate: 0.0, start: 0.0, end: f64::INFINITY, angle0: 0.0 });
+            return Some(UniformSegment {
+                rate: 0.0,
+                start: 0.0,
+                end: f64::INFINITY,
+                angle0: 0.0,
+            });
         }
         self.state_at(cursor, t);
         let s = &self.segments[cursor.seg];
         let (start, end) = (cursor.base + s.t0, cursor.base + s.t0 + s.duration);
         match s.kind {
-            Kind::Cruise { rate } => Some(UniformSegment { rate, start, end, angle0: s.angle0 }),
-            Kind::Dwell => Some(UniformSegment { rate: 0.0, start, end, angle0: s.angle0 }),
+            Kind::Cruise { rate } => Some(UniformSegment {
+                rate,
+                start,
+                end,
+                angle0: s.angle0,
+            }),
+            Kind::Dwell => Some(UniformSegment {
+                rate: 0.0,
+                start,
+                end,
+                angle0: s.angle0,
+            }),
             _ => None,
         }
     }
@@ -387,8 +524,18 @@ impl Turntable {
         let segs = &self.segments[self.n_prefix..];
         let (mut c, mut s) = (0.0, 0.0);
         // Gauss-Legendre 4 points on pieces of at most 0.05 rad of table travel (error < 1e-12).
-        const X: [f64; 4] = [-0.861_136_311_594_052_6, -0.339_981_043_584_856_3, 0.339_981_043_584_856_3, 0.861_136_311_594_052_6];
-        const W: [f64; 4] = [0.347_854_845_137_453_9, 0.652_145_154_862_546_1, 0.652_145_154_862_546_1, 0.347_854_845_137_453_9];
+        const X: [f64; 4] = [
+            -0.861_136_311_594_052_6,
+            -0.339_981_043_584_856_3,
+            0.339_981_043_584_856_3,
+            0.861_136_311_594_052_6,
+        ];
+        const W: [f64; 4] = [
+            0.347_854_845_137_453_9,
+            0.652_145_154_862_546_1,
+            0.652_145_154_862_546_1,
+            0.347_854_845_137_453_9,
+        ];
         for g in segs {
             let travel = match g.kind {
                 Kind::Dwell => 0.0,
@@ -438,12 +585,40 @@ mod tests {
     fn schemes() -> Vec<RotationScheme> {
         vec![
             RotationScheme::Continuous { rate: RATE, accel: ACC },
-            RotationScheme::Continuous { rate: -RATE, accel: ACC },
-            RotationScheme::Reciprocating { rate: RATE, accel: ACC, span: 2.0 * PI, dwell: 0.0 },
-            RotationScheme::Reciprocating { rate: RATE, accel: ACC, span: PI, dwell: 30.0 },
-            RotationScheme::Reciprocating { rate: RATE, accel: ACC, span: 0.01, dwell: 1.0 },
-            RotationScheme::Indexing { rate: RATE, accel: ACC, positions: vec![0.0, FRAC_PI_2, PI, 1.5 * PI], dwell: 300.0 },
-            RotationScheme::Indexing { rate: RATE, accel: ACC, positions: vec![0.5, -2.0], dwell: 10.0 },
+            RotationScheme::Continuous {
+                rate: -RATE,
+                accel: ACC,
+            },
+            RotationScheme::Reciprocating {
+                rate: RATE,
+                accel: ACC,
+                span: 2.0 * PI,
+                dwell: 0.0,
+            },
+            RotationScheme::Reciprocating {
+                rate: RATE,
+                accel: ACC,
+                span: PI,
+                dwell: 30.0,
+            },
+            RotationScheme::Reciprocating {
+                rate: RATE,
+                accel: ACC,
+                span: 0.01,
+                dwell: 1.0,
+            },
+            RotationScheme::Indexing {
+                rate: RATE,
+                accel: ACC,
+                positions: vec![0.0, FRAC_PI_2, PI, 1.5 * PI],
+                dwell: 300.0,
+            },
+            RotationScheme::Indexing {
+                rate: RATE,
+                accel: ACC,
+                positions: vec![0.5, -2.0],
+                dwell: 10.0,
+            },
         ]
     }
 
@@ -451,7 +626,11 @@ mod tests {
     fn angle_rate_accel_are_continuous_consistent_and_bounded() {
         for sch in schemes() {
             let tt = Turntable::new(sch.clone()).unwrap();
-            let horizon = if tt.period() > 0.0 { 3.0 * tt.period() + 100.0 } else { 600.0 };
+            let horizon = if tt.period() > 0.0 {
+                3.0 * tt.period() + 100.0
+            } else {
+                600.0
+            };
             let dt = 1e-3;
             let w_min = tt
                 .segments
@@ -469,14 +648,29 @@ mod tests {
             while t < horizon {
                 let s = tt.state(t);
                 // Continuity: no jumps larger than what the bounds allow over dt.
-                assert!((s.angle - prev.angle).abs() <= RATE * dt * (1.0 + 1e-9) + 1e-12, "{sch:?} angle jump at {t}");
-                assert!((s.rate - prev.rate).abs() <= ACC * dt * (1.0 + 1e-9) + 1e-12, "{sch:?} rate jump at {t}");
+                assert!(
+                    (s.angle - prev.angle).abs() <= RATE * dt * (1.0 + 1e-9) + 1e-12,
+                    "{sch:?} angle jump at {t}"
+                );
+                assert!(
+                    (s.rate - prev.rate).abs() <= ACC * dt * (1.0 + 1e-9) + 1e-12,
+                    "{sch:?} rate jump at {t}"
+                );
                 // Jerk of a cycloidal ramp peaks at pi accel^2 / (2 w_peak).
-                assert!((s.accel - prev.accel).abs() <= PI * ACC * ACC / (2.0 * w_min) * dt * 1.01 + 1e-12, "{sch:?} accel jump at {t}");
+                assert!(
+                    (s.accel - prev.accel).abs() <= PI * ACC * ACC / (2.0 * w_min) * dt * 1.01 + 1e-12,
+                    "{sch:?} accel jump at {t}"
+                );
                 // Consistency: finite differences of angle and rate match rate and accel (central, O(dt^2)).
                 let (a, b) = (tt.state(t - 1e-4), tt.state(t + 1e-4));
-                assert!(((b.angle - a.angle) / 2e-4 - s.rate).abs() < 1e-7, "{sch:?} rate at {t}");
-                assert!(((b.rate - a.rate) / 2e-4 - s.accel).abs() < 1e-6, "{sch:?} accel at {t}");
+                assert!(
+                    ((b.angle - a.angle) / 2e-4 - s.rate).abs() < 1e-7,
+                    "{sch:?} rate at {t}"
+                );
+                assert!(
+                    ((b.rate - a.rate) / 2e-4 - s.accel).abs() < 1e-6,
+                    "{sch:?} accel at {t}"
+                );
                 assert!(s.accel.abs() <= ACC * (1.0 + 1e-12));
                 max_rate = max_rate.max(s.rate.abs());
                 prev = s;
@@ -488,7 +682,10 @@ mod tests {
             let mut t = 0.0;
             while t < horizon {
                 let (a, b) = (tt.state(t), tt.state_at(&mut cur, t));
-                assert!((a.angle - b.angle).abs() < 1e-9 && (a.rate - b.rate).abs() < 1e-12, "{sch:?} cursor at {t}");
+                assert!(
+                    (a.angle - b.angle).abs() < 1e-9 && (a.rate - b.rate).abs() < 1e-12,
+                    "{sch:?} cursor at {t}"
+                );
                 t += 0.0137;
             }
             // Segment ends in closed form agree with evaluation.
@@ -516,7 +713,13 @@ mod tests {
     #[test]
     fn reciprocating_turns_span_and_back() {
         let span = 2.0 * PI;
-        let tt = Turntable::new(RotationScheme::Reciprocating { rate: RATE, accel: ACC, span, dwell: 20.0 }).unwrap();
+        let tt = Turntable::new(RotationScheme::Reciprocating {
+            rate: RATE,
+            accel: ACC,
+            span,
+            dwell: 20.0,
+        })
+        .unwrap();
         let tr = 2.0 * RATE / ACC;
         let move_t = (span - RATE * tr) / RATE + 2.0 * tr;
         assert!((tt.period() - 2.0 * (move_t + 20.0)).abs() < 1e-9);
@@ -534,13 +737,23 @@ mod tests {
     fn indexing_dwells_at_each_position() {
         let pos = vec![0.0, FRAC_PI_2, PI, 1.5 * PI];
         let dwell = 300.0;
-        let tt = Turntable::new(RotationScheme::Indexing { rate: RATE, accel: ACC, positions: pos.clone(), dwell }).unwrap();
+        let tt = Turntable::new(RotationScheme::Indexing {
+            rate: RATE,
+            accel: ACC,
+            positions: pos.clone(),
+            dwell,
+        })
+        .unwrap();
         // Walk through two periods and check the middle of each dwell.
         let mut t = 0.0;
         let slew = |d: f64| {
             let tr = 2.0 * RATE / ACC;
             let d = d.abs();
-            if d >= RATE * tr { (d - RATE * tr) / RATE + 2.0 * tr } else { 2.0 * (2.0 * (ACC * d / 2.0).sqrt() / ACC) }
+            if d >= RATE * tr {
+                (d - RATE * tr) / RATE + 2.0 * tr
+            } else {
+                2.0 * (2.0 * (ACC * d / 2.0).sqrt() / ACC)
+            }
         };
         for _ in 0..2 {
             for i in 0..4 {
@@ -558,23 +771,50 @@ mod tests {
         let r = Turntable::new(RotationScheme::None).unwrap().modulation_residual();
         assert_eq!(r, (1.0, 0.0));
         // Reciprocating 2 pi reversing at heading 0: about 2 T_r / period left along heading 0.
-        let tt = Turntable::new(RotationScheme::Reciprocating { rate: RATE, accel: ACC, span: 2.0 * PI, dwell: 0.0 }).unwrap();
+        let tt = Turntable::new(RotationScheme::Reciprocating {
+            rate: RATE,
+            accel: ACC,
+            span: 2.0 * PI,
+            dwell: 0.0,
+        })
+        .unwrap();
         let (c, s) = tt.modulation_residual();
         let tr = 2.0 * RATE / ACC;
         assert!(s.abs() < 1e-9);
-        assert!(c > 0.5 * 2.0 * tr / tt.period() && c < 1.5 * 2.0 * tr / tt.period(), "{c}");
+        assert!(
+            c > 0.5 * 2.0 * tr / tt.period() && c < 1.5 * 2.0 * tr / tt.period(),
+            "{c}"
+        );
         // The balanced span removes it.
         let span = balanced_reciprocating_span(RATE, ACC, 0.0, 1).unwrap();
         assert!(span < 2.0 * PI && span > PI);
-        let tb = Turntable::new(RotationScheme::Reciprocating { rate: RATE, accel: ACC, span, dwell: 0.0 }).unwrap();
+        let tb = Turntable::new(RotationScheme::Reciprocating {
+            rate: RATE,
+            accel: ACC,
+            span,
+            dwell: 0.0,
+        })
+        .unwrap();
         let (c, s) = tb.modulation_residual();
         assert!(c.hypot(s) < 1e-9, "{c} {s}");
         // 8-step indexing through four positions and back is balanced; [0, 90, 180, 270] with a -270 return is not.
         let d = PI / 2.0;
-        let eight = Turntable::new(RotationScheme::Indexing { rate: RATE, accel: ACC, positions: vec![0.0, d, 2.0 * d, 3.0 * d, 4.0 * d, 3.0 * d, 2.0 * d, d], dwell: 300.0 }).unwrap();
+        let eight = Turntable::new(RotationScheme::Indexing {
+            rate: RATE,
+            accel: ACC,
+            positions: vec![0.0, d, 2.0 * d, 3.0 * d, 4.0 * d, 3.0 * d, 2.0 * d, d],
+            dwell: 300.0,
+        })
+        .unwrap();
         let (c, s) = eight.modulation_residual();
         assert!(c.hypot(s) < 1e-9, "{c} {s}");
-        let four = Turntable::new(RotationScheme::Indexing { rate: RATE, accel: ACC, positions: vec![0.0, d, 2.0 * d, 3.0 * d], dwell: 300.0 }).unwrap();
+        let four = Turntable::new(RotationScheme::Indexing {
+            rate: RATE,
+            accel: ACC,
+            positions: vec![0.0, d, 2.0 * d, 3.0 * d],
+            dwell: 300.0,
+        })
+        .unwrap();
         let (c, s) = four.modulation_residual();
         assert!(c.hypot(s) > 1e-3);
     }
@@ -583,11 +823,27 @@ mod tests {
     fn bad_parameters_name_the_key() {
         let e = Turntable::new(RotationScheme::Continuous { rate: 0.0, accel: ACC }).unwrap_err();
         assert_eq!(e.key, "rotation_rate_rad_s");
-        let e = Turntable::new(RotationScheme::Continuous { rate: RATE, accel: -1.0 }).unwrap_err();
+        let e = Turntable::new(RotationScheme::Continuous {
+            rate: RATE,
+            accel: -1.0,
+        })
+        .unwrap_err();
         assert_eq!(e.key, "rotation_accel_rad_s2");
-        let e = Turntable::new(RotationScheme::Indexing { rate: RATE, accel: ACC, positions: vec![], dwell: 1.0 }).unwrap_err();
+        let e = Turntable::new(RotationScheme::Indexing {
+            rate: RATE,
+            accel: ACC,
+            positions: vec![],
+            dwell: 1.0,
+        })
+        .unwrap_err();
         assert_eq!(e.key, "positions_rad");
-        let e = Turntable::new(RotationScheme::Reciprocating { rate: RATE, accel: ACC, span: f64::NAN, dwell: 0.0 }).unwrap_err();
+        let e = Turntable::new(RotationScheme::Reciprocating {
+            rate: RATE,
+            accel: ACC,
+            span: f64::NAN,
+            dwell: 0.0,
+        })
+        .unwrap_err();
         assert_eq!(e.key, "reciprocating_span_rad");
     }
 }

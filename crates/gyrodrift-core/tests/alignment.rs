@@ -1,6 +1,6 @@
 //! Alignment with the simulator and reciprocating rotation against closed forms and the filter's own stds.
 
-use gyrodrift_core::alignment::{attitude_error, Aligner, AlignerConfig, AlignmentResult, MICRO_G, DEG_PER_HOUR};
+use gyrodrift_core::alignment::{attitude_error, Aligner, AlignerConfig, AlignmentResult, DEG_PER_HOUR, MICRO_G};
 use gyrodrift_core::attitude::{euler_to_dcm, mat_vec, Euler};
 use gyrodrift_core::earth;
 use gyrodrift_core::imu_error::ImuErrorParams;
@@ -19,7 +19,12 @@ fn lat0() -> f64 {
 }
 
 fn reciprocating() -> RotationScheme {
-    RotationScheme::Reciprocating { rate: 6.0 * DEG, accel: 10.0 * DEG, span: 2.0 * PI, dwell: 0.0 }
+    RotationScheme::Reciprocating {
+        rate: 6.0 * DEG,
+        accel: 10.0 * DEG,
+        span: 2.0 * PI,
+        dwell: 0.0,
+    }
 }
 
 fn biased(seed: u64, noise: bool) -> ImuSimulatorConfig {
@@ -35,7 +40,11 @@ fn biased(seed: u64, noise: bool) -> ImuSimulatorConfig {
         rate_hz: RATE_HZ,
         duration_s: 14_400.0,
         seed,
-        attitude: Euler { pitch: 0.3 * DEG, roll: -0.2 * DEG, yaw: 40.0 * DEG },
+        attitude: Euler {
+            pitch: 0.3 * DEG,
+            roll: -0.2 * DEG,
+            yaw: 40.0 * DEG,
+        },
         scheme: reciprocating(),
         errors,
         ..Default::default()
@@ -59,7 +68,11 @@ fn run(sim_cfg: ImuSimulatorConfig, cfg: AlignerConfig) -> Run {
     let mut seen = 0usize;
     while !al.done() && sim.next_chunk(7_777, &mut ch) > 0 {
         let used = al.process(&ch.dtheta, &ch.dv);
-        let at = |i: usize| Euler { pitch: ch.pitch[i], roll: ch.roll[i], yaw: ch.yaw[i] };
+        let at = |i: usize| Euler {
+            pitch: ch.pitch[i],
+            roll: ch.roll[i],
+            yaw: ch.yaw[i],
+        };
         if seen < n_coarse && n_coarse <= seen + used {
             true_coarse = Some(at(n_coarse - seen - 1));
         }
@@ -68,7 +81,12 @@ fn run(sim_cfg: ImuSimulatorConfig, cfg: AlignerConfig) -> Run {
         }
         seen += used;
     }
-    Run { res: al.result().unwrap(), true_coarse: true_coarse.unwrap(), true_end: true_end.unwrap(), aligner: al }
+    Run {
+        res: al.result().unwrap(),
+        true_coarse: true_coarse.unwrap(),
+        true_end: true_end.unwrap(),
+        aligner: al,
+    }
 }
 
 fn cfg_4h() -> AlignerConfig {
@@ -79,7 +97,10 @@ fn cfg_4h() -> AlignerConfig {
 fn coarse_alignment_without_sensor_errors_is_exact() {
     let mut sim = biased(1, false);
     sim.errors = ImuErrorParams::default();
-    let cfg = AlignerConfig { fine_s: 0.0, ..cfg_4h() };
+    let cfg = AlignerConfig {
+        fine_s: 0.0,
+        ..cfg_4h()
+    };
     let r = run(sim, cfg);
     let e = attitude_error(r.res.coarse_attitude, r.true_coarse);
     println!("coarse, no errors: phi = {:.3?} arcsec", e.map(|x| x / ARCSEC));
@@ -98,7 +119,13 @@ fn coarse_alignment_without_rotation_has_the_closed_form_bias_errors() {
     let c_bn = euler_to_dcm(sim.attitude);
     let eps_n = mat_vec(&c_bn, sim.errors.gyro_bias);
     let nabla_n = mat_vec(&c_bn, sim.errors.accel_bias);
-    let r = run(sim, AlignerConfig { fine_s: 0.0, ..cfg_4h() });
+    let r = run(
+        sim,
+        AlignerConfig {
+            fine_s: 0.0,
+            ..cfg_4h()
+        },
+    );
     let e = attitude_error(r.res.coarse_attitude, r.true_coarse);
     let g = earth::normal_gravity(lat0(), 0.0);
     let expected = [
@@ -106,7 +133,11 @@ fn coarse_alignment_without_rotation_has_the_closed_form_bias_errors() {
         nabla_n[0] / g,
         nabla_n[0] * lat0().tan() / g - eps_n[0] / (earth::OMEGA_IE * lat0().cos()),
     ];
-    println!("coarse, still table: phi = {:.3?}, closed form {:.3?} arcsec", e.map(|x| x / ARCSEC), expected.map(|x| x / ARCSEC));
+    println!(
+        "coarse, still table: phi = {:.3?}, closed form {:.3?} arcsec",
+        e.map(|x| x / ARCSEC),
+        expected.map(|x| x / ARCSEC)
+    );
     for i in 0..3 {
         assert!((e[i] - expected[i]).abs() < 0.2 * ARCSEC, "{i}: {e:?} vs {expected:?}");
     }
@@ -116,9 +147,18 @@ fn coarse_alignment_without_rotation_has_the_closed_form_bias_errors() {
 fn coarse_alignment_on_the_turning_table_removes_the_horizontal_biases() {
     // Reciprocating rotation modulates the horizontal gyro biases away and lets the fit find the accelerometer
     // ones; what is left of 0.003 deg/h on z over 300 s is below eps_z T / 2 = 0.45 arcsec.
-    let r = run(biased(2, false), AlignerConfig { fine_s: 0.0, ..cfg_4h() });
+    let r = run(
+        biased(2, false),
+        AlignerConfig {
+            fine_s: 0.0,
+            ..cfg_4h()
+        },
+    );
     let e = attitude_error(r.res.coarse_attitude, r.true_coarse);
-    println!("coarse, turning table, biases: phi = {:.3?} arcsec", e.map(|x| x / ARCSEC));
+    println!(
+        "coarse, turning table, biases: phi = {:.3?} arcsec",
+        e.map(|x| x / ARCSEC)
+    );
     assert!(e.iter().all(|x| x.abs() < 3.0 * ARCSEC), "{e:?}");
 }
 
@@ -126,9 +166,18 @@ fn coarse_alignment_on_the_turning_table_removes_the_horizontal_biases() {
 fn coarse_alignment_with_noise_is_within_a_few_arcmin() {
     // With ARW 0.001 deg/sqrt(h) the heading is noise-limited: ARW / (w_ie cos lat sqrt(300 s)) = 54 arcsec.
     for seed in [21, 22, 23] {
-        let r = run(biased(seed, true), AlignerConfig { fine_s: 0.0, ..cfg_4h() });
+        let r = run(
+            biased(seed, true),
+            AlignerConfig {
+                fine_s: 0.0,
+                ..cfg_4h()
+            },
+        );
         let e = attitude_error(r.res.coarse_attitude, r.true_coarse);
-        println!("coarse, seed {seed}, biases + noise: phi = {:.2?} arcsec", e.map(|x| x / ARCSEC));
+        println!(
+            "coarse, seed {seed}, biases + noise: phi = {:.2?} arcsec",
+            e.map(|x| x / ARCSEC)
+        );
         assert!(e[0].hypot(e[1]) < 3.0 * ARCSEC, "{e:?}");
         assert!(e[2].abs() < 3.0 * ARCMIN, "{e:?}");
     }
@@ -143,10 +192,23 @@ fn fine_alignment_4h_estimates_the_horizontal_biases() {
     let gerr: Vec<f64> = (0..3).map(|i| res.gyro_bias[i] / DEG_PER_HOUR - gb[i]).collect();
     let aerr: Vec<f64> = (0..3).map(|i| res.accel_bias[i] / MICRO_G - ab[i]).collect();
     let phi = attitude_error(res.attitude, r.true_end);
-    println!("fine 4 h, no noise: gyro err {gerr:.5?} deg/h, std {:.5?}", res.gyro_bias_std.map(|x| x / DEG_PER_HOUR));
-    println!("  accel err {aerr:.3?} ug, std {:.3?}", res.accel_bias_std.map(|x| x / MICRO_G));
-    println!("  att err {:.3?} arcsec, std {:.3?}", phi.map(|x| x / ARCSEC), res.att_std.map(|x| x / ARCSEC));
-    println!("  coarse err {:.3?} arcsec", attitude_error(res.coarse_attitude, r.true_coarse).map(|x| x / ARCSEC));
+    println!(
+        "fine 4 h, no noise: gyro err {gerr:.5?} deg/h, std {:.5?}",
+        res.gyro_bias_std.map(|x| x / DEG_PER_HOUR)
+    );
+    println!(
+        "  accel err {aerr:.3?} ug, std {:.3?}",
+        res.accel_bias_std.map(|x| x / MICRO_G)
+    );
+    println!(
+        "  att err {:.3?} arcsec, std {:.3?}",
+        phi.map(|x| x / ARCSEC),
+        res.att_std.map(|x| x / ARCSEC)
+    );
+    println!(
+        "  coarse err {:.3?} arcsec",
+        attitude_error(res.coarse_attitude, r.true_coarse).map(|x| x / ARCSEC)
+    );
     assert!((res.t_s - 14_400.0).abs() < 1e-9);
     assert!(gerr[0].abs() < 0.001 && gerr[1].abs() < 0.001, "{gerr:?}");
     assert!(aerr[0].abs() < 5.0 && aerr[1].abs() < 5.0, "{aerr:?}");
@@ -163,7 +225,13 @@ fn fine_alignment_4h_estimates_the_horizontal_biases() {
 
 #[test]
 fn covariance_stays_symmetric_and_positive_definite() {
-    let r = run(biased(4, true), AlignerConfig { fine_s: 3600.0, ..cfg_4h() });
+    let r = run(
+        biased(4, true),
+        AlignerConfig {
+            fine_s: 3600.0,
+            ..cfg_4h()
+        },
+    );
     let p = r.aligner.covariance().unwrap();
     let asym = (p - p.transpose()).abs().max();
     assert!(asym == 0.0, "{asym}");
@@ -174,7 +242,10 @@ fn covariance_stays_symmetric_and_positive_definite() {
     let h = &r.res;
     assert_eq!(h.hist_t.len(), 61);
     assert!((h.hist_t[0] - 300.0).abs() < 1e-9 && (h.hist_t[60] - 3900.0).abs() < 1e-9);
-    assert!(h.hist_std.iter().all(|s| s.len() == N_STATES && s.iter().all(|x| x.is_finite() && *x > 0.0)));
+    assert!(h
+        .hist_std
+        .iter()
+        .all(|s| s.len() == N_STATES && s.iter().all(|x| x.is_finite() && *x > 0.0)));
     assert!(h.hist_std.windows(2).all(|w| w[1][6] <= w[0][6] * (1.0 + 1e-12)));
 }
 
@@ -186,13 +257,19 @@ fn filter_stds_are_consistent_with_the_errors_over_seeds() {
         let r = run(biased(seed, true), cfg_4h());
         let res = &r.res;
         let phi = attitude_error(res.attitude, r.true_end);
-        let gz: Vec<f64> = (0..3).map(|i| (res.gyro_bias[i] / DEG_PER_HOUR - gb[i]) / (res.gyro_bias_std[i] / DEG_PER_HOUR)).collect();
-        let az: Vec<f64> = (0..2).map(|i| (res.accel_bias[i] / MICRO_G - ab[i]) / (res.accel_bias_std[i] / MICRO_G)).collect();
+        let gz: Vec<f64> = (0..3)
+            .map(|i| (res.gyro_bias[i] / DEG_PER_HOUR - gb[i]) / (res.gyro_bias_std[i] / DEG_PER_HOUR))
+            .collect();
+        let az: Vec<f64> = (0..2)
+            .map(|i| (res.accel_bias[i] / MICRO_G - ab[i]) / (res.accel_bias_std[i] / MICRO_G))
+            .collect();
         let pz: Vec<f64> = (0..3).map(|i| phi[i] / res.att_std[i]).collect();
         println!("seed {seed}: gyro z-scores {gz:.2?}, accel {az:.2?}, attitude {pz:.2?}");
         println!(
             "  gyro err {:.5?} deg/h, accel err {:.2?} ug, att err {:.2?} arcsec",
-            (0..3).map(|i| res.gyro_bias[i] / DEG_PER_HOUR - gb[i]).collect::<Vec<_>>(),
+            (0..3)
+                .map(|i| res.gyro_bias[i] / DEG_PER_HOUR - gb[i])
+                .collect::<Vec<_>>(),
             (0..3).map(|i| res.accel_bias[i] / MICRO_G - ab[i]).collect::<Vec<_>>(),
             phi.map(|x| x / ARCSEC)
         );
@@ -202,8 +279,16 @@ fn filter_stds_are_consistent_with_the_errors_over_seeds() {
 
 #[test]
 fn streaming_in_any_chunks_gives_the_same_result_and_stops_at_the_span() {
-    let cfg = AlignerConfig { coarse_s: 60.0, fine_s: 120.0, ..cfg_4h() };
-    let mut sim = ImuSimulator::new(ImuSimulatorConfig { duration_s: 200.0, ..biased(5, true) }).unwrap();
+    let cfg = AlignerConfig {
+        coarse_s: 60.0,
+        fine_s: 120.0,
+        ..cfg_4h()
+    };
+    let mut sim = ImuSimulator::new(ImuSimulatorConfig {
+        duration_s: 200.0,
+        ..biased(5, true)
+    })
+    .unwrap();
     let mut ch = ImuChunk::default();
     sim.next_chunk(4000, &mut ch);
     let mut a = Aligner::new(cfg.clone()).unwrap();
@@ -216,31 +301,115 @@ fn streaming_in_any_chunks_gives_the_same_result_and_stops_at_the_span() {
     }
     assert_eq!(used, 3600);
     assert_eq!(a.result(), b.result());
-    assert!(Aligner::new(AlignerConfig { coarse_s: 60.0, ..cfg_4h() }).unwrap().result().is_none());
+    assert!(Aligner::new(AlignerConfig {
+        coarse_s: 60.0,
+        ..cfg_4h()
+    })
+    .unwrap()
+    .result()
+    .is_none());
 }
 
 #[test]
 fn bad_settings_name_their_key() {
     let bad = |c: AlignerConfig| Aligner::new(c).unwrap_err().key;
-    assert_eq!(bad(AlignerConfig { coarse_s: 1.0, ..cfg_4h() }), "coarse_s");
-    assert_eq!(bad(AlignerConfig { fine_s: -1.0, ..cfg_4h() }), "fine_s");
-    assert_eq!(bad(AlignerConfig { update_s: 0.0, ..cfg_4h() }), "update_s");
-    assert_eq!(bad(AlignerConfig { att_sigma: Some([0.0, 1e-4, 1e-3]), ..cfg_4h() }), "att_sigma_rad");
-    assert_eq!(bad(AlignerConfig { gyro_bias_sigma: [f64::NAN; 3], ..cfg_4h() }), "gyro_bias_sigma_rad_s");
-    assert_eq!(bad(AlignerConfig { accel_bias_sigma: [0.0; 3], ..cfg_4h() }), "accel_bias_sigma_m_s2");
-    assert_eq!(bad(AlignerConfig { gyro_arw: -1.0, ..cfg_4h() }), "gyro_arw_rad_rts");
-    assert_eq!(bad(AlignerConfig { accel_vrw: 2.0, ..cfg_4h() }), "accel_vrw_m_s_rts");
-    assert_eq!(bad(AlignerConfig { zupt_sigma: 0.0, ..cfg_4h() }), "zupt_sigma_m_s");
-    assert_eq!(bad(AlignerConfig { history_s: 0.0, ..cfg_4h() }), "history_s");
-    assert_eq!(bad(AlignerConfig { rate_hz: 0.0, ..cfg_4h() }), "rate_hz");
+    assert_eq!(
+        bad(AlignerConfig {
+            coarse_s: 1.0,
+            ..cfg_4h()
+        }),
+        "coarse_s"
+    );
+    assert_eq!(
+        bad(AlignerConfig {
+            fine_s: -1.0,
+            ..cfg_4h()
+        }),
+        "fine_s"
+    );
+    assert_eq!(
+        bad(AlignerConfig {
+            update_s: 0.0,
+            ..cfg_4h()
+        }),
+        "update_s"
+    );
+    assert_eq!(
+        bad(AlignerConfig {
+            att_sigma: Some([0.0, 1e-4, 1e-3]),
+            ..cfg_4h()
+        }),
+        "att_sigma_rad"
+    );
+    assert_eq!(
+        bad(AlignerConfig {
+            gyro_bias_sigma: [f64::NAN; 3],
+            ..cfg_4h()
+        }),
+        "gyro_bias_sigma_rad_s"
+    );
+    assert_eq!(
+        bad(AlignerConfig {
+            accel_bias_sigma: [0.0; 3],
+            ..cfg_4h()
+        }),
+        "accel_bias_sigma_m_s2"
+    );
+    assert_eq!(
+        bad(AlignerConfig {
+            gyro_arw: -1.0,
+            ..cfg_4h()
+        }),
+        "gyro_arw_rad_rts"
+    );
+    assert_eq!(
+        bad(AlignerConfig {
+            accel_vrw: 2.0,
+            ..cfg_4h()
+        }),
+        "accel_vrw_m_s_rts"
+    );
+    assert_eq!(
+        bad(AlignerConfig {
+            zupt_sigma: 0.0,
+            ..cfg_4h()
+        }),
+        "zupt_sigma_m_s"
+    );
+    assert_eq!(
+        bad(AlignerConfig {
+            history_s: 0.0,
+            ..cfg_4h()
+        }),
+        "history_s"
+    );
+    assert_eq!(
+        bad(AlignerConfig {
+            rate_hz: 0.0,
+            ..cfg_4h()
+        }),
+        "rate_hz"
+    );
     assert_eq!(bad(AlignerConfig { lat: 2.0, ..cfg_4h() }), "lat_rad");
 }
 
 #[test]
 fn a_partial_last_update_interval_still_ends_the_alignment() {
     // 100 s of fine alignment with 7 s updates: 14 whole intervals and a last one of 2 s; history every 21 s.
-    let cfg = AlignerConfig { coarse_s: 60.0, fine_s: 100.0, update_s: 7.0, history_s: 21.0, ..cfg_4h() };
-    let r = run(ImuSimulatorConfig { duration_s: 200.0, ..biased(6, true) }, cfg);
+    let cfg = AlignerConfig {
+        coarse_s: 60.0,
+        fine_s: 100.0,
+        update_s: 7.0,
+        history_s: 21.0,
+        ..cfg_4h()
+    };
+    let r = run(
+        ImuSimulatorConfig {
+            duration_s: 200.0,
+            ..biased(6, true)
+        },
+        cfg,
+    );
     let t: Vec<f64> = r.res.hist_t.clone();
     assert_eq!(t, vec![60.0, 81.0, 102.0, 123.0, 144.0, 160.0]);
     assert!((r.res.t_s - 160.0).abs() < 1e-12);
@@ -249,7 +418,13 @@ fn a_partial_last_update_interval_still_ends_the_alignment() {
 
 /// Sensor biases and noise, 4 h, on another rotation scheme.
 fn run_scheme(scheme: RotationScheme, seed: u64) -> Run {
-    run(ImuSimulatorConfig { scheme, ..biased(seed, true) }, cfg_4h())
+    run(
+        ImuSimulatorConfig {
+            scheme,
+            ..biased(seed, true)
+        },
+        cfg_4h(),
+    )
 }
 
 #[test]
@@ -257,20 +432,34 @@ fn continuous_rotation_cannot_tell_horizontal_gyro_from_accelerometer_biases() {
     // Unidirectional rotation at w: a horizontal gyro bias tilts the platform by a vector of length eps / w turning
     // with the table, whose g x phi is exactly what a rotated accelerometer bias of g eps / w does: the filter
     // keeps the horizontal gyro std at its prior (0.01 deg/h) and the accelerometer std near g 0.01 deg/h / w.
-    let r = run_scheme(RotationScheme::Continuous { rate: 6.0 * DEG, accel: 10.0 * DEG }, 7);
+    let r = run_scheme(
+        RotationScheme::Continuous {
+            rate: 6.0 * DEG,
+            accel: 10.0 * DEG,
+        },
+        7,
+    );
     let prior = 0.01;
     for i in 0..2 {
         let std = r.res.gyro_bias_std[i] / DEG_PER_HOUR;
         assert!((std / prior - 1.0).abs() < 0.01, "{i}: {std}");
     }
     let confounded = earth::normal_gravity(lat0(), 0.0) * prior * DEG_PER_HOUR / (6.0 * DEG) / MICRO_G;
-    println!("continuous: accel std {:.3?} ug, g eps / w = {confounded:.3} ug", r.res.accel_bias_std.map(|x| x / MICRO_G));
+    println!(
+        "continuous: accel std {:.3?} ug, g eps / w = {confounded:.3} ug",
+        r.res.accel_bias_std.map(|x| x / MICRO_G)
+    );
     assert!(r.res.accel_bias_std[0] / MICRO_G < 1.5 * confounded);
 }
 
 #[test]
 fn four_position_indexing_observes_the_horizontal_gyro_biases() {
-    let scheme = RotationScheme::Indexing { rate: 6.0 * DEG, accel: 10.0 * DEG, positions: vec![0.0, 0.5 * PI, PI, 1.5 * PI], dwell: 300.0 };
+    let scheme = RotationScheme::Indexing {
+        rate: 6.0 * DEG,
+        accel: 10.0 * DEG,
+        positions: vec![0.0, 0.5 * PI, PI, 1.5 * PI],
+        dwell: 300.0,
+    };
     let r = run_scheme(scheme, 8);
     let res = &r.res;
     let gb = [0.01, -0.008, 0.003];
@@ -278,7 +467,11 @@ fn four_position_indexing_observes_the_horizontal_gyro_biases() {
     for i in 0..3 {
         let err = res.gyro_bias[i] / DEG_PER_HOUR - gb[i];
         let std = res.gyro_bias_std[i] / DEG_PER_HOUR;
-        println!("indexing: gyro {i} err {err:.5} std {std:.5} deg/h; phi {:.2} std {:.2} arcsec", phi[i] / ARCSEC, res.att_std[i] / ARCSEC);
+        println!(
+            "indexing: gyro {i} err {err:.5} std {std:.5} deg/h; phi {:.2} std {:.2} arcsec",
+            phi[i] / ARCSEC,
+            res.att_std[i] / ARCSEC
+        );
         assert!(err.abs() < 3.0 * std && phi[i].abs() < 3.0 * res.att_std[i]);
     }
     assert!(res.gyro_bias_std[0] / DEG_PER_HOUR < 0.001 && res.gyro_bias_std[1] / DEG_PER_HOUR < 0.001);

@@ -17,23 +17,46 @@ fn lat0() -> f64 {
 }
 
 fn continuous() -> RotationScheme {
-    RotationScheme::Continuous { rate: 6.0 * DEG, accel: 1.0 * DEG }
+    RotationScheme::Continuous {
+        rate: 6.0 * DEG,
+        accel: 1.0 * DEG,
+    }
 }
 fn reciprocating() -> RotationScheme {
-    RotationScheme::Reciprocating { rate: 6.0 * DEG, accel: 1.0 * DEG, span: 2.0 * PI, dwell: 0.0 }
+    RotationScheme::Reciprocating {
+        rate: 6.0 * DEG,
+        accel: 1.0 * DEG,
+        span: 2.0 * PI,
+        dwell: 0.0,
+    }
 }
 /// Reciprocating with the span that balances the reversal ramps (see `turntable::balanced_reciprocating_span`).
 fn reciprocating_balanced() -> RotationScheme {
     let span = balanced_reciprocating_span(6.0 * DEG, 1.0 * DEG, 0.0, 1).unwrap();
-    RotationScheme::Reciprocating { rate: 6.0 * DEG, accel: 1.0 * DEG, span, dwell: 0.0 }
+    RotationScheme::Reciprocating {
+        rate: 6.0 * DEG,
+        accel: 1.0 * DEG,
+        span,
+        dwell: 0.0,
+    }
 }
 /// Four positions visited in the balanced 8-step order 0, 90, 180, 270, 360, 270, 180, 90 (no net turns).
 fn indexing_8_step() -> RotationScheme {
     let d = 90.0 * DEG;
-    RotationScheme::Indexing { rate: 6.0 * DEG, accel: 1.0 * DEG, positions: vec![0.0, d, 2.0 * d, 3.0 * d, 4.0 * d, 3.0 * d, 2.0 * d, d], dwell: 300.0 }
+    RotationScheme::Indexing {
+        rate: 6.0 * DEG,
+        accel: 1.0 * DEG,
+        positions: vec![0.0, d, 2.0 * d, 3.0 * d, 4.0 * d, 3.0 * d, 2.0 * d, d],
+        dwell: 300.0,
+    }
 }
 fn indexing() -> RotationScheme {
-    RotationScheme::Indexing { rate: 6.0 * DEG, accel: 1.0 * DEG, positions: vec![0.0, 90.0 * DEG, 180.0 * DEG, 270.0 * DEG], dwell: 300.0 }
+    RotationScheme::Indexing {
+        rate: 6.0 * DEG,
+        accel: 1.0 * DEG,
+        positions: vec![0.0, 90.0 * DEG, 180.0 * DEG, 270.0 * DEG],
+        dwell: 300.0,
+    }
 }
 
 /// Simulate and navigate; returns the navigation states every `every_s` seconds.
@@ -73,7 +96,11 @@ fn base(scheme: RotationScheme, rate_hz: f64, hours: f64) -> ImuSimulatorConfig 
         rate_hz,
         duration_s: hours * HOUR,
         seed: 1,
-        attitude: Euler { pitch: 0.0, roll: 0.0, yaw: 30.0 * DEG },
+        attitude: Euler {
+            pitch: 0.0,
+            roll: 0.0,
+            yaw: 30.0 * DEG,
+        },
         scheme,
         ..Default::default()
     }
@@ -81,16 +108,29 @@ fn base(scheme: RotationScheme, rate_hz: f64, hours: f64) -> ImuSimulatorConfig 
 
 #[test]
 fn error_free_imu_navigates_72_h_within_0_01_nmi_with_every_scheme() {
-    for (name, scheme) in [("none", RotationScheme::None), ("continuous", continuous()), ("reciprocating", reciprocating()), ("indexing", indexing())] {
+    for (name, scheme) in [
+        ("none", RotationScheme::None),
+        ("continuous", continuous()),
+        ("reciprocating", reciprocating()),
+        ("indexing", indexing()),
+    ] {
         let mut cfg = base(scheme, 100.0, 72.0);
         if name == "reciprocating" {
             // A tilted base exercises the full truth model (the level ones take the fast path).
-            cfg.attitude = Euler { pitch: 0.5 * DEG, roll: -0.3 * DEG, yaw: 30.0 * DEG };
+            cfg.attitude = Euler {
+                pitch: 0.5 * DEG,
+                roll: -0.3 * DEG,
+                yaw: 30.0 * DEG,
+            };
         }
         let (lat, lon) = (cfg.lat, cfg.lon);
         let out = run(cfg, 600.0);
         let worst = out.iter().map(|s| pos_err_m(s, lat, lon)).fold(0.0, f64::max);
-        eprintln!("error-free {name}: max position error over 72 h = {:.3e} nmi ({:.3} m)", worst / NMI, worst);
+        eprintln!(
+            "error-free {name}: max position error over 72 h = {:.3e} nmi ({:.3} m)",
+            worst / NMI,
+            worst
+        );
         assert!(worst < 0.01 * NMI, "{name}: {worst} m");
     }
 }
@@ -99,11 +139,16 @@ fn error_free_imu_navigates_72_h_within_0_01_nmi_with_every_scheme() {
 /// dL(t) = (eps cos L / w_ie)(1 - cos w_ie t), dlon(t) = eps sin L (t - sin(w_ie t) / w_ie).
 fn axial_closed_form(eps: f64, lat: f64, t: f64) -> (f64, f64) {
     let w = earth::OMEGA_IE;
-    (eps * lat.cos() / w * (1.0 - (w * t).cos()), eps * lat.sin() * (t - (w * t).sin() / w))
+    (
+        eps * lat.cos() / w * (1.0 - (w * t).cos()),
+        eps * lat.sin() * (t - (w * t).sin() / w),
+    )
 }
 
 fn at_hour(out: &[NavState], h: f64) -> &NavState {
-    out.iter().find(|s| (s.t - h * HOUR).abs() < 1e-6).expect("output at that hour")
+    out.iter()
+        .find(|s| (s.t - h * HOUR).abs() < 1e-6)
+        .expect("output at that hour")
 }
 
 #[test]
@@ -118,15 +163,26 @@ fn constant_axial_drift_gives_the_closed_form_latitude_and_position_errors() {
         let dlat = at_hour(&out, 12.0).lat - lat;
         let expect = 2.0 * eps * lat.cos() / earth::OMEGA_IE;
         let dlat_as = dlat.to_degrees() * 3600.0;
-        eprintln!("axial {name}: latitude error at 12 h {dlat_as:.3} arcsec, closed form {:.3} arcsec ({:+.3} %)", expect.to_degrees() * 3600.0, (dlat / expect - 1.0) * 100.0);
+        eprintln!(
+            "axial {name}: latitude error at 12 h {dlat_as:.3} arcsec, closed form {:.3} arcsec ({:+.3} %)",
+            expect.to_degrees() * 3600.0,
+            (dlat / expect - 1.0) * 100.0
+        );
         assert!((dlat / expect - 1.0).abs() < 0.01, "{name}: {dlat_as} arcsec");
         assert!((expect.to_degrees() * 3600.0 - 72.5).abs() < 0.1);
         // Position error at 72 h against the closed form (5.40 nmi).
         let s72 = at_hour(&out, 72.0);
         let err = pos_err_m(s72, lat, lon);
         let (dl, dlon) = axial_closed_form(eps, lat, 72.0 * HOUR);
-        let cf = ((dl * (earth::meridian_radius(lat) + h)).powi(2) + (dlon * (earth::transverse_radius(lat) + h) * lat.cos()).powi(2)).sqrt();
-        eprintln!("axial {name}: position error at 72 h {:.4} nmi, closed form {:.4} nmi ({:+.3} %)", err / NMI, cf / NMI, (err / cf - 1.0) * 100.0);
+        let cf = ((dl * (earth::meridian_radius(lat) + h)).powi(2)
+            + (dlon * (earth::transverse_radius(lat) + h) * lat.cos()).powi(2))
+        .sqrt();
+        eprintln!(
+            "axial {name}: position error at 72 h {:.4} nmi, closed form {:.4} nmi ({:+.3} %)",
+            err / NMI,
+            cf / NMI,
+            (err / cf - 1.0) * 100.0
+        );
         assert!((err / cf - 1.0).abs() < 0.02, "{name}: {} nmi", err / NMI);
         assert!((cf / NMI - 5.40).abs() < 0.01);
     }
@@ -148,7 +204,9 @@ fn horizontal_errors(scheme: RotationScheme) -> (f64, f64) {
 #[test]
 fn horizontal_errors_without_rotation_grow_to_tens_of_nmi() {
     let (e, e72) = horizontal_errors(RotationScheme::None);
-    eprintln!("horizontal 0.01 deg/h + 50 ug, no rotation: max position error over 72 h {e:.3} nmi, at 72 h {e72:.3} nmi");
+    eprintln!(
+        "horizontal 0.01 deg/h + 50 ug, no rotation: max position error over 72 h {e:.3} nmi, at 72 h {e72:.3} nmi"
+    );
     assert!(e > 25.0 && e < 45.0, "{e}");
 }
 
@@ -163,13 +221,21 @@ fn reciprocating_rotation_cancels_horizontal_errors() {
 fn continuous_and_fast_reversing_rotation_cancel_horizontal_errors() {
     // Unidirectional rotation modulates completely; a 2 pi reciprocating span with fast reversals (100 deg/s^2,
     // the facade's default) leaves the ramp residual 2 T_r / period ~ 0.2 % of the unmodulated error.
-    let fast = RotationScheme::Reciprocating { rate: 6.0 * DEG, accel: 100.0 * DEG, span: 2.0 * PI, dwell: 0.0 };
+    let fast = RotationScheme::Reciprocating {
+        rate: 6.0 * DEG,
+        accel: 100.0 * DEG,
+        span: 2.0 * PI,
+        dwell: 0.0,
+    };
     let residual = {
         let t = gyrodrift_core::turntable::Turntable::new(fast.clone()).unwrap();
         let (c, s) = t.modulation_residual();
         c.hypot(s)
     };
-    for (name, scheme, limit) in [("continuous", continuous(), 0.1), ("reciprocating 2 pi at 100 deg/s^2", fast, 0.1)] {
+    for (name, scheme, limit) in [
+        ("continuous", continuous(), 0.1),
+        ("reciprocating 2 pi at 100 deg/s^2", fast, 0.1),
+    ] {
         let (e, e72) = horizontal_errors(scheme);
         eprintln!("horizontal 0.01 deg/h + 50 ug, {name}: max position error over 72 h {e:.4} nmi, at 72 h {e72:.4} nmi (modulation residual of the fast reciprocating scheme {residual:.2e})");
         assert!(e < limit, "{name}: {e}");
@@ -244,7 +310,15 @@ fn bias_compensation_hook_subtracts_the_estimates() {
     cfg.errors.gyro_bias = bg;
     cfg.errors.accel_bias = ba;
     let (lat, lon) = (cfg.lat, cfg.lon);
-    let nav_cfg = NavigatorConfig { lat, lon, height: cfg.height, vel: [0.0; 3], attitude: cfg.attitude, rate_hz: cfg.rate_hz, vertical: Vertical::Fixed };
+    let nav_cfg = NavigatorConfig {
+        lat,
+        lon,
+        height: cfg.height,
+        vel: [0.0; 3],
+        attitude: cfg.attitude,
+        rate_hz: cfg.rate_hz,
+        vertical: Vertical::Fixed,
+    };
     let mut sim = ImuSimulator::new(cfg).unwrap();
     let mut nav = Navigator::new(nav_cfg).unwrap();
     let mut ch = ImuChunk::default();
@@ -263,7 +337,15 @@ fn bias_compensation_hook_subtracts_the_estimates() {
     let mut cfg = base(reciprocating(), 100.0, 6.0);
     cfg.errors.gyro_bias = bg;
     cfg.errors.accel_bias = ba;
-    let nav_cfg = NavigatorConfig { lat, lon, height: cfg.height, vel: [0.0; 3], attitude: cfg.attitude, rate_hz: cfg.rate_hz, vertical: Vertical::Fixed };
+    let nav_cfg = NavigatorConfig {
+        lat,
+        lon,
+        height: cfg.height,
+        vel: [0.0; 3],
+        attitude: cfg.attitude,
+        rate_hz: cfg.rate_hz,
+        vertical: Vertical::Fixed,
+    };
     let mut sim = ImuSimulator::new(cfg).unwrap();
     let mut nav2 = Navigator::new(nav_cfg).unwrap();
     nav2.set_gyro_bias(bg).unwrap();
@@ -271,7 +353,11 @@ fn bias_compensation_hook_subtracts_the_estimates() {
     while sim.next_chunk(100_000, &mut ch) > 0 {
         nav2.process(&ch.dtheta, &ch.dv, 6000, |s| worst = worst.max(pos_err_m(s, lat, lon)));
     }
-    eprintln!("bias hook: exact estimates, max position error over 6 h {:.2e} m; late-compensated run ends {:.1} m off", worst, pos_err_m(&nav.state(), lat, lon));
+    eprintln!(
+        "bias hook: exact estimates, max position error over 6 h {:.2e} m; late-compensated run ends {:.1} m off",
+        worst,
+        pos_err_m(&nav.state(), lat, lon)
+    );
     assert!(worst < 0.05, "{worst}");
     // Without compensation for the first 1000 s the error is clearly larger.
     assert!(pos_err_m(&nav.state(), lat, lon) > 100.0 * worst.max(1e-3));
@@ -284,7 +370,15 @@ fn vertical_channel_fixed_and_damped() {
     cfg.errors.accel_bias = [0.0, 0.0, ba_up];
     let h0 = cfg.height;
     for vertical in [Vertical::Fixed, Vertical::Damped] {
-        let nav_cfg = NavigatorConfig { lat: cfg.lat, lon: cfg.lon, height: h0, vel: [0.0; 3], attitude: cfg.attitude, rate_hz: cfg.rate_hz, vertical };
+        let nav_cfg = NavigatorConfig {
+            lat: cfg.lat,
+            lon: cfg.lon,
+            height: h0,
+            vel: [0.0; 3],
+            attitude: cfg.attitude,
+            rate_hz: cfg.rate_hz,
+            vertical,
+        };
         let mut sim = ImuSimulator::new(cfg.clone()).unwrap();
         let mut nav = Navigator::new(nav_cfg).unwrap();
         let mut ch = ImuChunk::default();
@@ -317,7 +411,11 @@ fn temperature_drift_enters_gyro_z_as_k1_k2_k3() {
     let (k1, k2, k3) = (1e-4 * DEG_H, 2e-6 * DEG_H, 0.5 * DEG_H);
     // No rotation keeps the summed z increments small, so the difference of the sums is not lost to rounding.
     let mut with = base(RotationScheme::None, 100.0, 2.0);
-    with.temperature = gyrodrift_core::temperature::TemperatureProfile::WarmUp { start_c: start, end_c: end, tau_s: tau };
+    with.temperature = gyrodrift_core::temperature::TemperatureProfile::WarmUp {
+        start_c: start,
+        end_c: end,
+        tau_s: tau,
+    };
     let mut without = with.clone();
     with.errors.drift_t0_c = t0c;
     with.errors.drift_k1 = k1;
@@ -343,6 +441,10 @@ fn temperature_drift_enters_gyro_z_as_k1_k2_k3() {
     let int_rate = -d * (1.0 - e); // T(t) - T(0)
     let expect = k1 * int_lin + k2 * int_sq + k3 * int_rate;
     assert!((temp_end - (end + d * e)).abs() < 1e-9);
-    eprintln!("temperature drift: integral {:.6e} rad vs closed form {:.6e} rad", zw - zo, expect);
+    eprintln!(
+        "temperature drift: integral {:.6e} rad vs closed form {:.6e} rad",
+        zw - zo,
+        expect
+    );
     assert!(((zw - zo) / expect - 1.0).abs() < 1e-6);
 }

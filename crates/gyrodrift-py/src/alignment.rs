@@ -10,16 +10,36 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 const ALIGN_KEYS: &[&str] = &[
-    "lat_rad", "lon_rad", "height_m", "rate_hz", "coarse_s", "fine_s", "update_s", "att_sigma_rad",
-    "gyro_bias_sigma_rad_s", "accel_bias_sigma_m_s2", "gyro_arw_rad_rts", "accel_vrw_m_s_rts", "zupt_sigma_m_s",
+    "lat_rad",
+    "lon_rad",
+    "height_m",
+    "rate_hz",
+    "coarse_s",
+    "fine_s",
+    "update_s",
+    "att_sigma_rad",
+    "gyro_bias_sigma_rad_s",
+    "accel_bias_sigma_m_s2",
+    "gyro_arw_rad_rts",
+    "accel_vrw_m_s_rts",
+    "zupt_sigma_m_s",
     "history_s",
 ];
 
 fn align_config(d: &Bound<'_, PyDict>) -> PyResult<AlignerConfig> {
     let c = Config::new(d, ALIGN_KEYS, "Aligner")?;
-    let base = AlignerConfig::new(c.f64_req("lat_rad")?, c.f64_req("lon_rad")?, c.f64_req("height_m")?, c.f64_req("rate_hz")?);
+    let base = AlignerConfig::new(
+        c.f64_req("lat_rad")?,
+        c.f64_req("lon_rad")?,
+        c.f64_req("height_m")?,
+        c.f64_req("rate_hz")?,
+    );
     let coarse_s = c.f64_or("coarse_s", base.coarse_s)?;
-    let att_sigma = if c.map.contains_key("att_sigma_rad") { Some(c.array_or("att_sigma_rad", [0.0; 3])?) } else { None };
+    let att_sigma = if c.map.contains_key("att_sigma_rad") {
+        Some(c.array_or("att_sigma_rad", [0.0; 3])?)
+    } else {
+        None
+    };
     Ok(AlignerConfig {
         coarse_s,
         fine_s: c.f64_or("fine_s", (DEFAULT_TOTAL_S - coarse_s).max(0.0))?,
@@ -47,7 +67,9 @@ pub struct Aligner {
 impl Aligner {
     #[new]
     fn new(config: &Bound<'_, PyDict>) -> PyResult<Self> {
-        Ok(Aligner { inner: CoreAligner::new(align_config(config)?).map_err(param_err)? })
+        Ok(Aligner {
+            inner: CoreAligner::new(align_config(config)?).map_err(param_err)?,
+        })
     }
 
     /// State order of `hist_std`: phi E N U [rad], dv E N U [m/s], gyro bias x y z [rad/s],
@@ -78,10 +100,18 @@ impl Aligner {
 
     /// Consume raw increments (dtheta [rad], dv [m/s], (n, 3), body frame); returns how many samples were used
     /// (fewer than n once the alignment span is complete: the caller passes the rest to the Navigator).
-    fn process<'py>(&mut self, py: Python<'py>, dtheta_rad: PyReadonlyArray2<'py, f64>, dv_m_s: PyReadonlyArray2<'py, f64>) -> PyResult<usize> {
+    fn process<'py>(
+        &mut self,
+        py: Python<'py>,
+        dtheta_rad: PyReadonlyArray2<'py, f64>,
+        dv_m_s: PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<usize> {
         let n = dtheta_rad.shape()[0];
         if dv_m_s.shape()[0] != n {
-            return Err(PyValueError::new_err(format!("dv_m_s: has {} rows but dtheta_rad has {n}", dv_m_s.shape()[0])));
+            return Err(PyValueError::new_err(format!(
+                "dv_m_s: has {} rows but dtheta_rad has {n}",
+                dv_m_s.shape()[0]
+            )));
         }
         let dth = flat_n3(&dtheta_rad, "dtheta_rad")?;
         let dv = flat_n3(&dv_m_s, "dv_m_s")?;

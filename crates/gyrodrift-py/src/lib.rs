@@ -34,9 +34,7 @@ fn normal_gravity<'py>(
             h.len()
         )));
     }
-    let out: Vec<f64> = py.detach(|| {
-        lat.iter().zip(h).map(|(&l, &z)| earth::normal_gravity(l, z)).collect()
-    });
+    let out: Vec<f64> = py.detach(|| lat.iter().zip(h).map(|(&l, &z)| earth::normal_gravity(l, z)).collect());
     Ok(PyArray1::from_vec(py, out))
 }
 
@@ -82,7 +80,8 @@ impl<'py> Config<'py> {
     }
 
     fn f64_req(&self, key: &str) -> PyResult<f64> {
-        self.f64_opt(key)?.ok_or_else(|| PyValueError::new_err(format!("{key}: required key is missing")))
+        self.f64_opt(key)?
+            .ok_or_else(|| PyValueError::new_err(format!("{key}: required key is missing")))
     }
 
     fn list_opt(&self, key: &str) -> PyResult<Option<Vec<f64>>> {
@@ -107,26 +106,59 @@ impl<'py> Config<'py> {
     fn bool_or(&self, key: &str, default: bool) -> PyResult<bool> {
         match self.map.get(key) {
             None => Ok(default),
-            Some(v) => v.cast::<pyo3::types::PyBool>().map(|b| b.is_true()).map_err(|_| PyValueError::new_err(format!("{key}: must be a bool, got {v}"))),
+            Some(v) => v
+                .cast::<pyo3::types::PyBool>()
+                .map(|b| b.is_true())
+                .map_err(|_| PyValueError::new_err(format!("{key}: must be a bool, got {v}"))),
         }
     }
 
     fn str_or(&self, key: &str, default: &str) -> PyResult<String> {
         match self.map.get(key) {
             None => Ok(default.to_string()),
-            Some(v) => v.extract::<String>().map_err(|_| PyValueError::new_err(format!("{key}: must be a string, got {v}"))),
+            Some(v) => v
+                .extract::<String>()
+                .map_err(|_| PyValueError::new_err(format!("{key}: must be a string, got {v}"))),
         }
     }
 }
 
 const SIM_KEYS: &[&str] = &[
-    "lat_rad", "lon_rad", "height_m", "rate_hz", "duration_s", "seed", "pitch_rad", "roll_rad", "yaw_rad",
-    "rotation_scheme", "rotation_rate_rad_s", "rotation_accel_rad_s2", "reciprocating_span_rad",
-    "reciprocating_balanced", "positions_rad",
-    "dwell_s", "gyro_bias_rad_s", "gyro_arw_rad_rts", "gyro_bias_instability_rad_s", "gyro_correlation_s",
-    "gyro_rrw_rad_s_rts", "gyro_scale", "gyro_misalignment_rad", "accel_bias_m_s2", "accel_vrw_m_s_rts",
-    "accel_scale", "temp_start_c", "temp_end_c", "temp_tau_s", "temp_series_t_s", "temp_series_c", "drift_t0_c",
-    "drift_k1_rad_s_per_c", "drift_k2_rad_s_per_c2", "drift_k3_rad_s_per_c_per_s",
+    "lat_rad",
+    "lon_rad",
+    "height_m",
+    "rate_hz",
+    "duration_s",
+    "seed",
+    "pitch_rad",
+    "roll_rad",
+    "yaw_rad",
+    "rotation_scheme",
+    "rotation_rate_rad_s",
+    "rotation_accel_rad_s2",
+    "reciprocating_span_rad",
+    "reciprocating_balanced",
+    "positions_rad",
+    "dwell_s",
+    "gyro_bias_rad_s",
+    "gyro_arw_rad_rts",
+    "gyro_bias_instability_rad_s",
+    "gyro_correlation_s",
+    "gyro_rrw_rad_s_rts",
+    "gyro_scale",
+    "gyro_misalignment_rad",
+    "accel_bias_m_s2",
+    "accel_vrw_m_s_rts",
+    "accel_scale",
+    "temp_start_c",
+    "temp_end_c",
+    "temp_tau_s",
+    "temp_series_t_s",
+    "temp_series_c",
+    "drift_t0_c",
+    "drift_k1_rad_s_per_c",
+    "drift_k2_rad_s_per_c2",
+    "drift_k3_rad_s_per_c_per_s",
 ];
 
 /// Defaults of optional keys (SI). Documented in docs/ins-binding-contract.md.
@@ -153,27 +185,34 @@ fn sim_config(d: &Bound<'_, PyDict>) -> PyResult<ImuSimulatorConfig> {
             let span = c.f64_or("reciprocating_span_rad", 2.0 * PI)?;
             let span = if c.bool_or("reciprocating_balanced", false)? {
                 if !(span.is_finite() && span > 0.0 && span <= 1000.0) {
-                    return Err(PyValueError::new_err(format!("reciprocating_span_rad: must be positive and finite, got {span}")));
+                    return Err(PyValueError::new_err(format!(
+                        "reciprocating_span_rad: must be positive and finite, got {span}"
+                    )));
                 }
                 let turns = (span / (2.0 * PI)).round().max(1.0) as u32;
                 balanced_reciprocating_span(rate, accel, dwell, turns).map_err(param_err)?
             } else {
                 span
             };
-            RotationScheme::Reciprocating { rate, accel, span, dwell }
+            RotationScheme::Reciprocating {
+                rate,
+                accel,
+                span,
+                dwell,
+            }
         }
         "indexing" => RotationScheme::Indexing {
             rate,
             accel,
             // The 8-step order cancels exactly (see the contract's modulation residual).
-            positions: c.list_opt("positions_rad")?.unwrap_or_else(|| vec![0.0, 0.5 * PI, PI, 1.5 * PI, 2.0 * PI, 1.5 * PI, PI, 0.5 * PI]),
+            positions: c
+                .list_opt("positions_rad")?
+                .unwrap_or_else(|| vec![0.0, 0.5 * PI, PI, 1.5 * PI, 2.0 * PI, 1.5 * PI, PI, 0.5 * PI]),
             dwell,
         },
-        other => {
-            return Err(PyValueError::new_err(format!(
-                "rotation_scheme: must be one of \"none\", \"continuous\", \"reciprocating\", \"indexing\", got {other:?}"
-            )))
-        }
+        other => return Err(PyValueError::new_err(format!(
+            "rotation_scheme: must be one of \"none\", \"continuous\", \"reciprocating\", \"indexing\", got {other:?}"
+        ))),
     };
     let d0 = ImuErrorParams::default();
     let errors = ImuErrorParams {
@@ -279,23 +318,31 @@ impl ChunkArrays {
     fn reusable(&self, py: Python<'_>, m: usize) -> bool {
         let ones = [&self.t_s, &self.temp_c, &self.table, &self.pitch, &self.roll, &self.yaw];
         let twos = [&self.dtheta, &self.dv];
-        ones.iter().all(|a| sole_owner(a) && a.bind(py).shape() == [m] && a.bind(py).is_c_contiguous())
-            && twos.iter().all(|a| sole_owner(a) && a.bind(py).shape() == [m, 3] && a.bind(py).is_c_contiguous())
+        ones.iter()
+            .all(|a| sole_owner(a) && a.bind(py).shape() == [m] && a.bind(py).is_c_contiguous())
+            && twos
+                .iter()
+                .all(|a| sole_owner(a) && a.bind(py).shape() == [m, 3] && a.bind(py).is_c_contiguous())
             && ones.iter().all(|a| a.bind(py).try_readwrite().is_ok())
             && twos.iter().all(|a| a.bind(py).try_readwrite().is_ok())
     }
 
     /// Fill the arrays with the next samples of `sim` (GIL released while simulating).
     fn fill(&self, py: Python<'_>, sim: &mut CoreSimulator) -> PyResult<usize> {
-        let ones = [&self.t_s, &self.temp_c, &self.table, &self.pitch, &self.roll, &self.yaw].map(|a| a.bind(py).clone());
+        let ones =
+            [&self.t_s, &self.temp_c, &self.table, &self.pitch, &self.roll, &self.yaw].map(|a| a.bind(py).clone());
         let mut w1 = Vec::with_capacity(6);
         for a in &ones {
             w1.push(a.try_readwrite().map_err(|e| PyValueError::new_err(e.to_string()))?);
         }
         let (dtheta, dv) = (self.dtheta.bind(py), self.dv.bind(py));
-        let mut w_dtheta = dtheta.try_readwrite().map_err(|e| PyValueError::new_err(e.to_string()))?;
+        let mut w_dtheta = dtheta
+            .try_readwrite()
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
         let mut w_dv = dv.try_readwrite().map_err(|e| PyValueError::new_err(e.to_string()))?;
-        let [b_t, b_temp, b_table, b_pitch, b_roll, b_yaw] = &mut w1[..] else { unreachable!() };
+        let [b_t, b_temp, b_table, b_pitch, b_roll, b_yaw] = &mut w1[..] else {
+            unreachable!()
+        };
         let out = ImuChunkSlices {
             t_s: b_t.as_slice_mut()?,
             dtheta: w_dtheta.as_slice_mut()?,
@@ -328,7 +375,10 @@ impl ImuSimulator {
     #[new]
     fn new(config: &Bound<'_, PyDict>) -> PyResult<Self> {
         let cfg = sim_config(config)?;
-        Ok(ImuSimulator { inner: CoreSimulator::new(cfg).map_err(param_err)?, pool: Vec::new() })
+        Ok(ImuSimulator {
+            inner: CoreSimulator::new(cfg).map_err(param_err)?,
+            pool: Vec::new(),
+        })
     }
 
     /// Total number of samples of the run (round(duration_s * rate_hz)).
@@ -398,22 +448,39 @@ impl ImuSimulator {
     }
 }
 
-const NAV_KEYS: &[&str] =
-    &["lat_rad", "lon_rad", "height_m", "vel_enu_m_s", "pitch_rad", "roll_rad", "yaw_rad", "rate_hz", "vertical"];
+const NAV_KEYS: &[&str] = &[
+    "lat_rad",
+    "lon_rad",
+    "height_m",
+    "vel_enu_m_s",
+    "pitch_rad",
+    "roll_rad",
+    "yaw_rad",
+    "rate_hz",
+    "vertical",
+];
 
 fn nav_config(d: &Bound<'_, PyDict>) -> PyResult<NavigatorConfig> {
     let c = Config::new(d, NAV_KEYS, "Navigator")?;
     let vertical = match c.str_or("vertical", "fixed")?.as_str() {
         "fixed" => Vertical::Fixed,
         "damped" => Vertical::Damped,
-        other => return Err(PyValueError::new_err(format!("vertical: must be \"fixed\" or \"damped\", got {other:?}"))),
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "vertical: must be \"fixed\" or \"damped\", got {other:?}"
+            )))
+        }
     };
     Ok(NavigatorConfig {
         lat: c.f64_req("lat_rad")?,
         lon: c.f64_req("lon_rad")?,
         height: c.f64_req("height_m")?,
         vel: c.array_or("vel_enu_m_s", [0.0; 3])?,
-        attitude: Euler { pitch: c.f64_req("pitch_rad")?, roll: c.f64_req("roll_rad")?, yaw: c.f64_req("yaw_rad")? },
+        attitude: Euler {
+            pitch: c.f64_req("pitch_rad")?,
+            roll: c.f64_req("roll_rad")?,
+            yaw: c.f64_req("yaw_rad")?,
+        },
         rate_hz: c.f64_req("rate_hz")?,
         vertical,
     })
@@ -459,14 +526,18 @@ impl NavColumns {
 }
 
 fn vec3(v: Vec<f64>, key: &str) -> PyResult<[f64; 3]> {
-    v.try_into().map_err(|v: Vec<f64>| PyValueError::new_err(format!("{key}: must hold 3 values, got {}", v.len())))
+    v.try_into()
+        .map_err(|v: Vec<f64>| PyValueError::new_err(format!("{key}: must hold 3 values, got {}", v.len())))
 }
 
 /// Borrow an (n, 3) float64 array as a flat slice, copying only if it is not C-contiguous.
 fn flat_n3<'a>(a: &'a PyReadonlyArray2<'_, f64>, name: &str) -> PyResult<std::borrow::Cow<'a, [f64]>> {
     let shape = a.shape();
     if shape[1] != 3 {
-        return Err(PyValueError::new_err(format!("{name}: must have shape (n, 3), got ({}, {})", shape[0], shape[1])));
+        return Err(PyValueError::new_err(format!(
+            "{name}: must have shape (n, 3), got ({}, {})",
+            shape[0], shape[1]
+        )));
     }
     Ok(match a.as_slice() {
         Ok(s) => std::borrow::Cow::Borrowed(s),
@@ -484,7 +555,9 @@ struct Navigator {
 impl Navigator {
     #[new]
     fn new(config: &Bound<'_, PyDict>) -> PyResult<Self> {
-        Ok(Navigator { inner: CoreNavigator::new(nav_config(config)?).map_err(param_err)? })
+        Ok(Navigator {
+            inner: CoreNavigator::new(nav_config(config)?).map_err(param_err)?,
+        })
     }
 
     /// Estimated gyro bias [rad/s, body x y z], subtracted from every following sample (measured - estimate).
@@ -567,7 +640,12 @@ impl Navigator {
 /// dwell [s]. ValueError naming the key when no such span lies within half a turn below.
 #[pyfunction]
 #[pyo3(signature = (rotation_rate_rad_s, rotation_accel_rad_s2, dwell_s = 0.0, turns = 1))]
-fn balanced_reciprocating_span_rad(rotation_rate_rad_s: f64, rotation_accel_rad_s2: f64, dwell_s: f64, turns: u32) -> PyResult<f64> {
+fn balanced_reciprocating_span_rad(
+    rotation_rate_rad_s: f64,
+    rotation_accel_rad_s2: f64,
+    dwell_s: f64,
+    turns: u32,
+) -> PyResult<f64> {
     balanced_reciprocating_span(rotation_rate_rad_s, rotation_accel_rad_s2, dwell_s, turns).map_err(param_err)
 }
 

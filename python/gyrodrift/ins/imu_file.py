@@ -16,14 +16,16 @@ from __future__ import annotations
 
 import json
 import os
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any
 
 import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from gyrodrift.errors import InputError
 from gyrodrift.ins.scenario import Scenario
 
 __all__ = [
@@ -54,7 +56,7 @@ IMU_COLUMNS = SENSOR_COLUMNS + ("temp_c", "table_angle_deg") + TRUTH_COLUMNS
 """All columns of imu.parquet, in file order (all float64)."""
 
 
-class ImuFileError(ValueError):
+class ImuFileError(InputError):
     """An IMU file is missing, unreadable or not in the imu.parquet format; the message names the file."""
 
 
@@ -83,7 +85,7 @@ class ImuChunk:
     def __len__(self) -> int:
         return len(self.t_s)
 
-    def slice(self, a: int, b: int) -> "ImuChunk":
+    def slice(self, a: int, b: int) -> ImuChunk:
         return ImuChunk(
             self.t_s[a:b],
             self.dtheta_rad[a:b],
@@ -227,5 +229,7 @@ class ImuFileReader:
         back = np.flatnonzero(np.diff(t) <= 0.0)
         if back.size:
             i = int(back[0]) + (0 if prev_t is not None else 1)
-            raise ImuFileError(f"{where(i, 't_s')}: time must be strictly increasing "
-                               f"({float(t[back[0] + 1])!r} s after {float(t[back[0]])!r} s)")
+            raise ImuFileError(
+                f"{where(i, 't_s')}: time must be strictly increasing "
+                f"({float(t[back[0] + 1])!r} s after {float(t[back[0]])!r} s)"
+            )

@@ -5,9 +5,10 @@ from __future__ import annotations
 import json
 import math
 import os
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterator, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 import pyarrow as pa
@@ -102,13 +103,23 @@ def _open_source(imu: Any, chunk_samples: int) -> _Source:
     if isinstance(imu, Scenario):
         s = imu
         truth = ImuTruth(
-            s.site.lat_deg, s.site.lon_deg, s.site.height_m, s.attitude.pitch_deg, s.attitude.roll_deg, s.attitude.yaw_deg
+            s.site.lat_deg,
+            s.site.lon_deg,
+            s.site.height_m,
+            s.attitude.pitch_deg,
+            s.attitude.roll_deg,
+            s.attitude.yaw_deg,
         )
         return _Source(_core_source(s, chunk_samples), s.n_samples, s.run.rate_hz, truth, "<scenario>")
     if isinstance(imu, ImuData):
         s = imu.scenario
         truth = ImuTruth(
-            s.site.lat_deg, s.site.lon_deg, s.site.height_m, s.attitude.pitch_deg, s.attitude.roll_deg, s.attitude.yaw_deg
+            s.site.lat_deg,
+            s.site.lon_deg,
+            s.site.height_m,
+            s.attitude.pitch_deg,
+            s.attitude.roll_deg,
+            s.attitude.yaw_deg,
         )
         return _Source(imu.chunks(chunk_samples), len(imu), s.run.rate_hz, truth, "<memory>")
     if isinstance(imu, (str, os.PathLike)):
@@ -272,16 +283,48 @@ def navigate(
                 a = b
             bar.update(len(chunk))
     final = nav.state()
-    return _finish(parts, true_parts, hourly, final, src, init, rate, dec, n_total, done,
-                   compensate_drift_deg_h, gyro_est, accel_est, out_dir)
+    return _finish(
+        parts,
+        true_parts,
+        hourly,
+        final,
+        src,
+        init,
+        rate,
+        dec,
+        n_total,
+        done,
+        compensate_drift_deg_h,
+        gyro_est,
+        accel_est,
+        out_dir,
+    )
 
 
-def _finish(parts, true_parts, hourly, final, src, init, rate, dec, n_total, done,
-            compensate_drift_deg_h, gyro_est, accel_est, out_dir) -> NavResult:
+def _finish(
+    parts,
+    true_parts,
+    hourly,
+    final,
+    src,
+    init,
+    rate,
+    dec,
+    n_total,
+    done,
+    compensate_drift_deg_h,
+    gyro_est,
+    accel_est,
+    out_dir,
+) -> NavResult:
     def cat(key: str) -> np.ndarray:
         return np.concatenate([np.asarray(p[key], dtype=float) for p in parts]) if parts else np.zeros(0)
 
-    vel = np.concatenate([np.asarray(p["vel_enu_m_s"], dtype=float).reshape(-1, 3) for p in parts]) if parts else np.zeros((0, 3))
+    vel = (
+        np.concatenate([np.asarray(p["vel_enu_m_s"], dtype=float).reshape(-1, 3) for p in parts])
+        if parts
+        else np.zeros((0, 3))
+    )
     cols: dict[str, np.ndarray] = {
         "t_s": cat("t_s"),
         "lat_deg": np.rad2deg(cat("lat_rad")),

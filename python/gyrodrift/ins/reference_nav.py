@@ -32,7 +32,8 @@ Per-sample update (k-1 -> k), Earth quantities evaluated at the start of the int
 from __future__ import annotations
 
 import math
-from typing import Any, Mapping
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 

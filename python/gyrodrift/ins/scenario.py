@@ -17,10 +17,12 @@ import dataclasses
 import math
 import os
 import tomllib
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
+from gyrodrift.errors import InputError
 from gyrodrift.units import ARCSEC, DEG, DEG_PER_H, DEG_PER_SQRT_H, HOUR, MICRO_G
 
 __all__ = [
@@ -49,7 +51,7 @@ DEG_PER_H_PER_SQRT_H = DEG_PER_H / math.sqrt(HOUR)
 """One deg/h/sqrt(h) (rate random walk) [rad/s/sqrt(s)]."""
 
 
-class ScenarioError(ValueError):
+class ScenarioError(InputError):
     """A scenario file (or dict) is invalid; the message names the file and the key."""
 
 
@@ -186,7 +188,7 @@ class Scenario:
     @classmethod
     def from_dict(
         cls, data: Mapping[str, Any], source: str = "<scenario>", base_dir: str | os.PathLike[str] | None = None
-    ) -> "Scenario":
+    ) -> Scenario:
         """Validate a mapping shaped like the TOML file.
 
         Parameters
@@ -434,9 +436,7 @@ class _Validator:
             raise self.fail(None, None, f"expected a table of sections, got {_type_name(data)}")
         for name in data:
             if name not in self.SECTIONS:
-                raise self.fail(
-                    None, None, f"unknown section [{name}] (expected one of: {', '.join(self.SECTIONS)})"
-                )
+                raise self.fail(None, None, f"unknown section [{name}] (expected one of: {', '.join(self.SECTIONS)})")
         return Scenario(
             site=self.site(data),
             run=self.run(data),
@@ -490,9 +490,11 @@ class _Validator:
                 _core.balanced_reciprocating_span_rad(rot.rate_deg_s * DEG, rot.accel_deg_s2 * DEG, rot.dwell_s)
             except ValueError:
                 raise self.fail(
-                    "rotation", "span_deg", f"no balanced span within half a turn at accel_deg_s2 = "
+                    "rotation",
+                    "span_deg",
+                    f"no balanced span within half a turn at accel_deg_s2 = "
                     f"{_fmt(rot.accel_deg_s2)} and rate_deg_s = {_fmt(rot.rate_deg_s)} (the ramps are too "
-                    "slow); raise accel_deg_s2 or give a number"
+                    "slow); raise accel_deg_s2 or give a number",
                 ) from None
         return rot
 
@@ -512,9 +514,7 @@ class _Validator:
         return Gyro(
             bias_deg_h=self.vector("gyro", t, "bias_deg_h", d.bias_deg_h, 3),
             arw_deg_rth=self.non_negative("gyro", t, "arw_deg_rth", d.arw_deg_rth),
-            bias_instability_deg_h=self.non_negative(
-                "gyro", t, "bias_instability_deg_h", d.bias_instability_deg_h
-            ),
+            bias_instability_deg_h=self.non_negative("gyro", t, "bias_instability_deg_h", d.bias_instability_deg_h),
             correlation_s=self.positive("gyro", t, "correlation_s", d.correlation_s),
             rrw_deg_h_rth=self.non_negative("gyro", t, "rrw_deg_h_rth", d.rrw_deg_h_rth),
             scale_ppm=self.vector("gyro", t, "scale_ppm", d.scale_ppm, 3),
@@ -553,7 +553,7 @@ class _Validator:
             key = "series_csv" if "series_csv" in t else "series_t_h"
             if len(series_t) < 2:
                 raise self.fail(sec, key, f"expected at least 2 samples, got {len(series_t)}")
-            if any(b <= a for a, b in zip(series_t, series_t[1:])):
+            if any(b <= a for a, b in zip(series_t, series_t[1:], strict=False)):
                 raise self.fail(sec, key, "times must be strictly increasing")
         return Temperature(
             start_c=self.in_range(sec, t, "start_c", d.start_c, -100.0, 200.0),

@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Iterator
 
 import numpy as np
 import pyarrow as pa
@@ -68,7 +68,10 @@ def rotation_summary(scenario: Scenario) -> dict:
 
     sim = _core.ImuSimulator(scenario.to_core_config())
     span = sim.reciprocating_span_rad
-    return {"modulation_residual": sim.modulation_residual, "span_deg": None if span is None else float(np.degrees(span))}
+    return {
+        "modulation_residual": sim.modulation_residual,
+        "span_deg": None if span is None else float(np.degrees(span)),
+    }
 
 
 def iter_core_chunks(scenario: Scenario, chunk_samples: int) -> Iterator[dict]:

@@ -24,8 +24,9 @@ def thermal_drift_deg_h(end_c: float) -> float:
     return 0.0015 + 0.0002 * (end_c - 28.0)
 
 
-def simulate_fleet(out_dir, n_runs: int, *, rate_hz: float = 10.0, duration_h: float = 16.0,
-                   scatter_deg_h: float = 1e-4, rng=5) -> tuple[list[Path], np.ndarray]:
+def simulate_fleet(
+    out_dir, n_runs: int, *, rate_hz: float = 10.0, duration_h: float = 16.0, scatter_deg_h: float = 1e-4, rng=5
+) -> tuple[list[Path], np.ndarray]:
     """Simulate ``n_runs`` runs into ``out_dir/runNN/imu.parquet``; returns (paths, true drifts [deg/h]).
 
     ``rng`` (int seed or numpy Generator) draws every run's temperature, drift scatter and heading; run ``i``
@@ -37,13 +38,15 @@ def simulate_fleet(out_dir, n_runs: int, *, rate_hz: float = 10.0, duration_h: f
     for i in range(n_runs):
         start, end, tau = rng.uniform(15, 25), rng.uniform(28, 40), rng.uniform(0.5, 3)
         drift = thermal_drift_deg_h(end) + rng.normal(0, scatter_deg_h)
-        scn = Scenario.from_dict({
-            "run": {"duration_h": duration_h, "rate_hz": rate_hz, "seed": i},
-            "gyro": {"bias_deg_h": [0.005, -0.004, drift], "arw_deg_rth": 0.0005},
-            "accel": {"bias_ug": [30.0, -20.0, 10.0], "vrw_ug_rthz": 5.0},
-            "temperature": {"start_c": start, "end_c": end, "tau_h": tau},
-            "attitude": {"yaw_deg": float(rng.uniform(0, 360))},
-        })
+        scn = Scenario.from_dict(
+            {
+                "run": {"duration_h": duration_h, "rate_hz": rate_hz, "seed": i},
+                "gyro": {"bias_deg_h": [0.005, -0.004, drift], "arw_deg_rth": 0.0005},
+                "accel": {"bias_ug": [30.0, -20.0, 10.0], "vrw_ug_rthz": 5.0},
+                "temperature": {"start_c": start, "end_c": end, "tau_h": tau},
+                "attitude": {"yaw_deg": float(rng.uniform(0, 360))},
+            }
+        )
         paths.append(simulate(scn, out_dir=base / f"run{i:02d}"))
         drifts.append(drift)
     return paths, np.array(drifts)

@@ -8,7 +8,8 @@ from __future__ import annotations
 import json
 import math
 import os
-from typing import Any, Mapping
+from collections.abc import Mapping
+from typing import Any
 
 from gyrodrift.atomic import atomic_write
 

@@ -3,7 +3,7 @@
 Time line (`Timeline`): alignment over log hours 0-4; every navigation pass starts at the end of alignment;
 the features use navigation hours 0-12, the true drift and the evaluation hours 0-72 (logs >= 76 h).
 
-Public API (plain functions returning dataclasses; the CLI in `gyrodrift.procedure_commands` wraps them)
+Public API (plain functions returning dataclasses; the CLI in `gyrodrift.cli.procedure` wraps them)
 --------------------------------------------------------------------------------------------------------
 align_log(log, ...) -> Alignment; write_alignment(alignment, out_dir)
 navigate_after_alignment(log, alignment, drifts_deg_h, hours, ...) -> PassResult

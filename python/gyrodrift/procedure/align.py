@@ -12,8 +12,9 @@ Signs: a bias estimate is subtracted from the measurement (corrected = measured 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field
-from typing import Any, Mapping
+from typing import Any
 
 import numpy as np
 

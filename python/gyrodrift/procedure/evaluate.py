@@ -97,14 +97,31 @@ def evaluate_compensation(
     Evaluation
     """
     hours = float(timeline.truth_h if hours is None else hours)
-    log.require_duration(timeline.log_hours_for(hours) * HOUR,
-                         f"the evaluation ({timeline.align_h:g} h alignment + {hours:g} h navigation)")
+    log.require_duration(
+        timeline.log_hours_for(hours) * HOUR,
+        f"the evaluation ({timeline.align_h:g} h alignment + {hours:g} h navigation)",
+    )
     if alignment is None:
         alignment = align_log(log, timeline=timeline, chunk_samples=chunk_samples, quiet=quiet)
-    res = navigate_after_alignment(log, alignment, [0.0, float(drift_deg_h)], hours, decimation_s=decimation_s,
-                                   chunk_samples=chunk_samples, quiet=quiet, desc="evaluate")
-    return Evaluation(run=log.name, drift_deg_h=float(drift_deg_h), hours=hours, before=res.curves[0],
-                      after=res.curves[1], alignment=alignment, source=source)
+    res = navigate_after_alignment(
+        log,
+        alignment,
+        [0.0, float(drift_deg_h)],
+        hours,
+        decimation_s=decimation_s,
+        chunk_samples=chunk_samples,
+        quiet=quiet,
+        desc="evaluate",
+    )
+    return Evaluation(
+        run=log.name,
+        drift_deg_h=float(drift_deg_h),
+        hours=hours,
+        before=res.curves[0],
+        after=res.curves[1],
+        alignment=alignment,
+        source=source,
+    )
 
 
 def write_evaluation(ev: Evaluation, out_dir: str | os.PathLike[str]) -> dict[str, Path]:

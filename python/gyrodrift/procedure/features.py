@@ -91,8 +91,15 @@ class RunFeatures:
         return r
 
 
-def _from_curve(log: ImuLog, curve: NavCurve, temp: TemperatureStats, hours: float, alignment: Alignment,
-                truth: TrueDrift | None, lat0_deg: float | None) -> RunFeatures:
+def _from_curve(
+    log: ImuLog,
+    curve: NavCurve,
+    temp: TemperatureStats,
+    hours: float,
+    alignment: Alignment,
+    truth: TrueDrift | None,
+    lat0_deg: float | None,
+) -> RunFeatures:
     k = int(round(hours))
     if abs(hours - k) > 1e-9 or len(curve.hourly_lat_deg) <= k:
         raise ValueError(f"{log.path}: the features need whole hours of navigation, got {hours!r}")
@@ -150,15 +157,25 @@ def extract_features(
     """
     hours = timeline.features_h
     if with_truth:
-        truth = find_true_drift(log, criterion=criterion, timeline=timeline, alignment=alignment,
-                                temperature_hours=hours, chunk_samples=chunk_samples, quiet=quiet)
+        truth = find_true_drift(
+            log,
+            criterion=criterion,
+            timeline=timeline,
+            alignment=alignment,
+            temperature_hours=hours,
+            chunk_samples=chunk_samples,
+            quiet=quiet,
+        )
         return _from_curve(log, truth.base, truth.temperature, hours, truth.alignment, truth, lat0_deg)
-    log.require_duration(timeline.log_hours_for(hours) * HOUR,
-                         f"extracting the features ({timeline.align_h:g} h alignment + {hours:g} h navigation)")
+    log.require_duration(
+        timeline.log_hours_for(hours) * HOUR,
+        f"extracting the features ({timeline.align_h:g} h alignment + {hours:g} h navigation)",
+    )
     if alignment is None:
         alignment = align_log(log, timeline=timeline, chunk_samples=chunk_samples, quiet=quiet)
-    res = navigate_after_alignment(log, alignment, [0.0], hours, temperature_hours=hours,
-                                   chunk_samples=chunk_samples, quiet=quiet, desc="features")
+    res = navigate_after_alignment(
+        log, alignment, [0.0], hours, temperature_hours=hours, chunk_samples=chunk_samples, quiet=quiet, desc="features"
+    )
     return _from_curve(log, res.curves[0], res.temperature, hours, alignment, None, lat0_deg)
 
 

@@ -30,21 +30,22 @@ def _save(fig, path: str | os.PathLike[str]) -> None:
         fig.savefig(tmp, format="png", dpi=110)
 
 
-def plot_alignment_sigma(alignment: "Alignment", path: str | os.PathLike[str]) -> None:
+def plot_alignment_sigma(alignment: Alignment, path: str | os.PathLike[str]) -> None:
     """1-sigma of the axial (z) gyro bias over the alignment [deg/h] vs log time [h], log scale."""
     fig, (ax,) = _figure()
     ax.semilogy(alignment.hist_t_h, alignment.hist_gyro_z_std_deg_h, color="C0", label="z gyro bias 1-sigma")
     ax.axhline(0.0005, color="C3", ls="--", lw=1, label="0.0005 deg/h (1 nmi / 72 h)")
     ax.set_xlabel("time since start of log [h]")
     ax.set_ylabel("sigma [deg/h]")
-    ax.set_title(f"{alignment.run}: axial gyro bias uncertainty during alignment "
-                 f"(end: {alignment.z_drift_std_deg_h:.2g} deg/h)")
+    ax.set_title(
+        f"{alignment.run}: axial gyro bias uncertainty during alignment (end: {alignment.z_drift_std_deg_h:.2g} deg/h)"
+    )
     ax.grid(True, which="both", alpha=0.3)
     ax.legend()
     _save(fig, path)
 
 
-def plot_criterion(truth: "TrueDrift", path: str | os.PathLike[str]) -> None:
+def plot_criterion(truth: TrueDrift, path: str | os.PathLike[str]) -> None:
     """The criterion [nmi] vs the z drift [deg/h]: linear-model curve and the navigated verification points."""
     fig, (ax,) = _figure()
     ax.plot(truth.grid_drift_deg_h, truth.grid_nmi, color="C0", label="linear model")
@@ -58,13 +59,14 @@ def plot_criterion(truth: "TrueDrift", path: str | os.PathLike[str]) -> None:
     _save(fig, path)
 
 
-def plot_position_errors(ev: "Evaluation", path: str | os.PathLike[str]) -> None:
+def plot_position_errors(ev: Evaluation, path: str | os.PathLike[str]) -> None:
     """Position error [nmi] and latitude/longitude errors [arcsec] vs navigation time [h], before/after."""
     fig, (ax1, ax2) = _figure(2)
     b, a = ev.before, ev.after
     ax1.plot(b.t_h, b.pos_err_nmi, color="C3", label=f"before (final {ev.before_final_nmi:.2f} nmi)")
-    ax1.plot(a.t_h, a.pos_err_nmi, color="C0",
-             label=f"after {ev.drift_deg_h:.5f} deg/h (final {ev.after_final_nmi:.2f} nmi)")
+    ax1.plot(
+        a.t_h, a.pos_err_nmi, color="C0", label=f"after {ev.drift_deg_h:.5f} deg/h (final {ev.after_final_nmi:.2f} nmi)"
+    )
     ax1.axhline(1.0, color="k", ls="--", lw=0.8)
     ax1.set_ylabel("position error [nmi]")
     ax1.set_title(f"{ev.run}: {ev.hours:g} h of navigation after alignment")

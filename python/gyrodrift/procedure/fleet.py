@@ -12,10 +12,11 @@ import csv
 import io
 import math
 import os
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Mapping, Sequence
 
 from gyrodrift.atomic import atomic_write
+from gyrodrift.errors import GyrodriftError
 from gyrodrift.logs import LogError, Site, open_log
 from gyrodrift.procedure.features import RUN_TABLE_COLUMNS, RunFeatures, extract_features
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
@@ -24,15 +25,29 @@ from gyrodrift.progress import progress
 __all__ = ["features_table", "write_features_csv", "write_curves_csv", "DaskMissingError"]
 
 
-class DaskMissingError(ImportError):
+class DaskMissingError(GyrodriftError, ImportError):
     """dask.distributed is needed for --workers / --scheduler but is not installed."""
 
 
-def _features_task(path: str, site: Site | Mapping[str, float] | None, timeline: Timeline, with_truth: bool,
-                   criterion: str, lat0_deg: float | None, chunk_samples: int) -> RunFeatures:
+def _features_task(
+    path: str,
+    site: Site | Mapping[str, float] | None,
+    timeline: Timeline,
+    with_truth: bool,
+    criterion: str,
+    lat0_deg: float | None,
+    chunk_samples: int,
+) -> RunFeatures:
     log = open_log(path, site=site)
-    return extract_features(log, timeline=timeline, with_truth=with_truth, criterion=criterion,
-                            lat0_deg=lat0_deg, chunk_samples=chunk_samples, quiet=True)
+    return extract_features(
+        log,
+        timeline=timeline,
+        with_truth=with_truth,
+        criterion=criterion,
+        lat0_deg=lat0_deg,
+        chunk_samples=chunk_samples,
+        quiet=True,
+    )
 
 
 def _import_dask():
@@ -40,8 +55,7 @@ def _import_dask():
         from dask.distributed import Client, LocalCluster
     except ImportError as exc:
         raise DaskMissingError(
-            "distributed processing (--workers / --scheduler) needs dask.distributed: "
-            "pip install 'gyrodrift[dask]'"
+            "distributed processing (--workers / --scheduler) needs dask.distributed: pip install 'gyrodrift[dask]'"
         ) from exc
     return Client, LocalCluster
 
@@ -120,14 +134,15 @@ def features_table(
     Client, LocalCluster = _import_dask()
     cluster = None
     if scheduler is None:
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=processes,
-                               dashboard_address=None)
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=processes, dashboard_address=None)
         client = Client(cluster)
     else:
         client = Client(scheduler)
     try:
-        futures = [client.submit(_features_task, p, *args, pure=False, key=f"features-{i}-{Path(p).name}")
-                   for i, p in enumerate(paths)]
+        futures = [
+            client.submit(_features_task, p, *args, pure=False, key=f"features-{i}-{Path(p).name}")
+            for i, p in enumerate(paths)
+        ]
         results: list[RunFeatures] = []
         with progress(len(paths), "features", quiet, unit="log") as bar:
             for f in futures:

@@ -91,8 +91,11 @@ class Identification:
             "uncertainty_note": self.uncertainty_note,
             "training_error_deg_h": self.training_error_deg_h,
             "training_error_kind": self.training_error_kind,
-            "features": {**f.row(), "lat_err_arcsec": f.lat_err_arcsec,
-                         "lat_err_curve_arcsec": [float(x) for x in f.lat_err_curve_arcsec]},
+            "features": {
+                **f.row(),
+                "lat_err_arcsec": f.lat_err_arcsec,
+                "lat_err_curve_arcsec": [float(x) for x in f.lat_err_curve_arcsec],
+            },
         }
 
 
@@ -141,8 +144,7 @@ def identify(
 
         model = load_model(model)
     if features is None:
-        features = extract_features(log, timeline=timeline, lat0_deg=lat0_deg, chunk_samples=chunk_samples,
-                                    quiet=quiet)
+        features = extract_features(log, timeline=timeline, lat0_deg=lat0_deg, chunk_samples=chunk_samples, quiet=quiet)
     table = features_run_table([features], source=str(log.path))
     drift = float(model.predict(table)[0])
     interval, note = None, NO_UNCERTAINTY_NOTE
@@ -152,8 +154,10 @@ def identify(
         if math.isfinite(lo[0]) and math.isfinite(hi[0]):
             interval, note = (float(lo[0]), float(hi[0])), INTERVAL_NOTE.format(n=n)
         else:
-            note = (f"{NO_UNCERTAINTY_NOTE}; its {n} training runs are too few for a {100 * coverage:g} % "
-                    f"jackknife interval (needs at least {min_runs_for_coverage(coverage)})")
+            note = (
+                f"{NO_UNCERTAINTY_NOTE}; its {n} training runs are too few for a {100 * coverage:g} % "
+                f"jackknife interval (needs at least {min_runs_for_coverage(coverage)})"
+            )
     physics = float(physics_inversion(table, t_h=features.hours)[0])
     err, kind = _training_error(model)
     al = features.alignment

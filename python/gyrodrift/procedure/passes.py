@@ -13,9 +13,9 @@ from __future__ import annotations
 
 import contextlib
 import os
+from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
-from typing import Sequence
 
 import numpy as np
 
@@ -163,7 +163,7 @@ def navigate_after_alignment(
     done = 0
     n_threads = min(len(navs), os.cpu_count() or 1) if threads is None else max(1, min(int(threads), len(navs)))
     pool = ThreadPoolExecutor(max_workers=n_threads) if n_threads > 1 else None
-    with progress(n_nav, f"{desc} {log.name}", quiet) as bar, (pool or contextlib.nullcontext()):
+    with progress(n_nav, f"{desc} {log.name}", quiet) as bar, pool or contextlib.nullcontext():
         for chunk in log.chunks(chunk_samples, stop=stop):
             end_idx = chunk.first_index + len(chunk)
             if end_idx <= start:
@@ -185,7 +185,7 @@ def navigate_after_alignment(
                 if pool is None:
                     outs = [nav.process(dth, dv, dec) for nav in navs]
                 else:  # the core releases the GIL: the navigators of one segment run side by side
-                    outs = list(pool.map(lambda nav: nav.process(dth, dv, dec), navs))
+                    outs = list(pool.map(lambda nav, dth=dth, dv=dv: nav.process(dth, dv, dec), navs))
                 for i, out in enumerate(outs):
                     if len(out["lat_rad"]):
                         lat_parts[i].append(np.asarray(out["lat_rad"], dtype=float))

@@ -49,7 +49,6 @@ CRITERIA = ("final", "rms", "max")
 """Position-error criteria over the navigation: at its end, root mean square, maximum."""
 
 
-
 def criterion_value(north_m: np.ndarray, east_m: np.ndarray, criterion: str) -> np.ndarray:
     """Criterion [nmi] of error curves; the last axis is time (any leading axes are kept)."""
     p2 = np.asarray(north_m) ** 2 + np.asarray(east_m) ** 2
@@ -81,8 +80,9 @@ def minimise_linear_criterion(n0, e0, gn, ge, criterion: str) -> float:
     # Convex in d: bracket generously around the rms optimum (the max optimum is never far from it).
     d_rms = minimise_linear_criterion(n0, e0, gn, ge, "rms")
     half = 0.01 + abs(d_rms)
-    res = minimize_scalar(f, bounds=(d_rms - half, d_rms + half), method="bounded",
-                          options={"xatol": 1e-12, "maxiter": 500})
+    res = minimize_scalar(
+        f, bounds=(d_rms - half, d_rms + half), method="bounded", options={"xatol": 1e-12, "maxiter": 500}
+    )
     return float(res.x)
 
 
@@ -158,16 +158,20 @@ class TrueDrift:
             "trial_deg_h": self.trial_deg_h,
             "predicted_nmi": self.predicted_nmi,
             "uncompensated_nmi": self.uncompensated_nmi,
-            "verify": [{"drift_deg_h": float(d), "criterion_nmi": float(v)}
-                       for d, v in zip(self.verify_drift_deg_h, self.verify_nmi)],
+            "verify": [
+                {"drift_deg_h": float(d), "criterion_nmi": float(v)}
+                for d, v in zip(self.verify_drift_deg_h, self.verify_nmi, strict=False)
+            ],
             "verified": bool(self.verified),
             "sensitivity_nmi_per_deg_h": self.sensitivity_nmi_per_deg_h,
             "refinements": self.refinements,
             "last_step_deg_h": self.last_step_deg_h,
             "alignment_z_drift_deg_h": None if self.alignment is None else self.alignment.z_drift_deg_h,
             "alignment_z_drift_std_deg_h": None if self.alignment is None else self.alignment.z_drift_std_deg_h,
-            "grid": {"drift_deg_h": [float(x) for x in self.grid_drift_deg_h],
-                     "criterion_nmi": [float(x) for x in self.grid_nmi]},
+            "grid": {
+                "drift_deg_h": [float(x) for x in self.grid_drift_deg_h],
+                "criterion_nmi": [float(x) for x in self.grid_nmi],
+            },
         }
 
 
@@ -229,13 +233,22 @@ def find_true_drift(
     if not trial_deg_h:
         raise ValueError("trial_deg_h must be non-zero")
     hours = float(timeline.truth_h if hours is None else hours)
-    log.require_duration(timeline.log_hours_for(hours) * HOUR,
-                         f"the true drift ({timeline.align_h:g} h alignment + {hours:g} h navigation)")
+    log.require_duration(
+        timeline.log_hours_for(hours) * HOUR,
+        f"the true drift ({timeline.align_h:g} h alignment + {hours:g} h navigation)",
+    )
     if alignment is None:
         alignment = align_log(log, timeline=timeline, chunk_samples=chunk_samples, quiet=quiet)
     first: PassResult = navigate_after_alignment(
-        log, alignment, [0.0, trial_deg_h], hours, decimation_s=decimation_s,
-        temperature_hours=temperature_hours, chunk_samples=chunk_samples, quiet=quiet, desc="truth pass 1",
+        log,
+        alignment,
+        [0.0, trial_deg_h],
+        hours,
+        decimation_s=decimation_s,
+        temperature_hours=temperature_hours,
+        chunk_samples=chunk_samples,
+        quiet=quiet,
+        desc="truth pass 1",
     )
     c0, c1 = first.curves
     gn = (c1.north_m - c0.north_m) / trial_deg_h
@@ -247,8 +260,14 @@ def find_true_drift(
     while True:
         verify_d = np.array([d_star - step_deg_h, d_star, d_star + step_deg_h])
         second = navigate_after_alignment(
-            log, alignment, list(verify_d), hours, decimation_s=decimation_s, chunk_samples=chunk_samples,
-            quiet=quiet, desc="truth verify",
+            log,
+            alignment,
+            list(verify_d),
+            hours,
+            decimation_s=decimation_s,
+            chunk_samples=chunk_samples,
+            quiet=quiet,
+            desc="truth verify",
         )
         lo, mid, hi = second.curves
         # Re-linearise at d* with the central difference of the verification passes (a secant step).

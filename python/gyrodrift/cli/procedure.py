@@ -1,9 +1,4 @@
-"""Click commands `features`, `truth`, `evaluate`, `identify`: thin wrappers over `gyrodrift.procedure`.
-
-`gyrodrift.cli` registers `features_command`, `truth_command`, `evaluate_command` and `identify_command` in
-the `gyrodrift` CLI group. Every problem with a log, a model or the options is a `click.ClickException`
-(exit status 1) whose message names the file.
-"""
+"""Commands from an IMU log to a compensation: `features`, `truth`, `evaluate`, `identify` (`gyrodrift.procedure`)."""
 
 from __future__ import annotations
 
@@ -28,12 +23,18 @@ def _site(lat0_deg, lon0_deg, height_m):
 
 
 def _site_options(f):
-    f = click.option("--height-m", type=float, default=None,
-                     help="Site height above the ellipsoid [m] (default: the log's, else 0).")(f)
-    f = click.option("--lon0-deg", type=float, default=None,
-                     help="Site longitude [deg] (default: the log's, else 0).")(f)
-    f = click.option("--lat0-deg", type=float, default=None,
-                     help="True site latitude [deg]; required for logs that carry no site (CSV).")(f)
+    f = click.option(
+        "--height-m", type=float, default=None, help="Site height above the ellipsoid [m] (default: the log's, else 0)."
+    )(f)
+    f = click.option("--lon0-deg", type=float, default=None, help="Site longitude [deg] (default: the log's, else 0).")(
+        f
+    )
+    f = click.option(
+        "--lat0-deg",
+        type=float,
+        default=None,
+        help="True site latitude [deg]; required for logs that carry no site (CSV).",
+    )(f)
     return f
 
 
@@ -69,36 +70,60 @@ def _num(x):
 
 @click.command("features")
 @click.argument("logs", nargs=-1, required=True, type=click.Path(path_type=Path))
-@click.option("--out", "out", required=True, type=click.Path(dir_okay=False, path_type=Path),
-              help="Run table to write (CSV, atomically).")
+@click.option(
+    "--out",
+    "out",
+    required=True,
+    type=click.Path(dir_okay=False, path_type=Path),
+    help="Run table to write (CSV, atomically).",
+)
 @_site_options
 @click.option("--with-truth", is_flag=True, help="Also find the true drift (logs >= 76 h) -> drift_deg_h column.")
-@click.option("--criterion", type=click.Choice(["final", "rms", "max"]), default="final", show_default=True,
-              help="Criterion of the true drift.")
-@click.option("--workers", type=click.IntRange(min=1), default=None,
-              help="Process the logs on a local dask cluster with N workers (needs the 'dask' extra).")
+@click.option(
+    "--criterion",
+    type=click.Choice(["final", "rms", "max"]),
+    default="final",
+    show_default=True,
+    help="Criterion of the true drift.",
+)
+@click.option(
+    "--workers",
+    type=click.IntRange(min=1),
+    default=None,
+    help="Process the logs on a local dask cluster with N workers (needs the 'dask' extra).",
+)
 @click.option("--scheduler", default=None, help="Address of a running dask scheduler (tcp://host:8786).")
-@click.option("--curves", type=click.Path(dir_okay=False, path_type=Path), default=None,
-              help="Also write the hourly latitude-error curves (run, t_h, lat_err_arcsec) to this CSV.")
+@click.option(
+    "--curves",
+    type=click.Path(dir_okay=False, path_type=Path),
+    default=None,
+    help="Also write the hourly latitude-error curves (run, t_h, lat_err_arcsec) to this CSV.",
+)
 @click.option("--quiet", is_flag=True, help="No progress bar and no summary line.")
-def features_command(logs, out, lat0_deg, lon0_deg, height_m, with_truth, criterion, workers, scheduler, curves,
-                     quiet):
+def features_command(logs, out, lat0_deg, lon0_deg, height_m, with_truth, criterion, workers, scheduler, curves, quiet):
     """Align each LOG, navigate 12 h and write one run-table row per log to --out.
 
     Columns: run (the log's stem), lat_deg (latitude at navigation hour 12), lat0_deg, temp_min_c,
     temp_max_c, temp_start_c, temp_end_c (over those 12 h), and drift_deg_h with --with-truth.
     """
-    from gyrodrift.procedure.fleet import features_table, write_curves_csv, write_features_csv
-
     from gyrodrift.atomic import missing_folder_message
+    from gyrodrift.procedure.fleet import features_table, write_curves_csv, write_features_csv
 
     if workers is not None and scheduler is not None:
         raise click.UsageError("give --workers or --scheduler, not both")
     for target in (out, curves):
         if target is not None and (message := missing_folder_message(target)):
             raise click.ClickException(message)
-    rows = _guard(features_table, [str(p) for p in logs], site=_site(lat0_deg, lon0_deg, height_m),
-                  with_truth=with_truth, criterion=criterion, workers=workers, scheduler=scheduler, quiet=quiet)
+    rows = _guard(
+        features_table,
+        [str(p) for p in logs],
+        site=_site(lat0_deg, lon0_deg, height_m),
+        with_truth=with_truth,
+        criterion=criterion,
+        workers=workers,
+        scheduler=scheduler,
+        quiet=quiet,
+    )
     write_features_csv(rows, out)
     if curves is not None:
         write_curves_csv(rows, curves)
@@ -108,13 +133,28 @@ def features_command(logs, out, lat0_deg, lon0_deg, height_m, with_truth, criter
 
 @click.command("truth")
 @click.argument("log", type=click.Path(path_type=Path))
-@click.option("--criterion", type=click.Choice(["final", "rms", "max"]), default="final", show_default=True,
-              help="Position-error criterion over the navigation: at its end, RMS, or maximum.")
-@click.option("--hours", type=click.FloatRange(min=0.0, min_open=True), default=72.0, show_default=True,
-              help="Navigation hours after the 4 h alignment.")
+@click.option(
+    "--criterion",
+    type=click.Choice(["final", "rms", "max"]),
+    default="final",
+    show_default=True,
+    help="Position-error criterion over the navigation: at its end, RMS, or maximum.",
+)
+@click.option(
+    "--hours",
+    type=click.FloatRange(min=0.0, min_open=True),
+    default=72.0,
+    show_default=True,
+    help="Navigation hours after the 4 h alignment.",
+)
 @_site_options
-@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=None,
-              help="Folder for true_drift.json, criterion.png, alignment.json and alignment_z_sigma.png.")
+@click.option(
+    "--out",
+    "out_dir",
+    type=click.Path(file_okay=False, path_type=Path),
+    default=None,
+    help="Folder for true_drift.json, criterion.png, alignment.json and alignment_z_sigma.png.",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
 def truth_command(log, criterion, hours, lat0_deg, lon0_deg, height_m, out_dir, as_json, quiet):
@@ -132,23 +172,42 @@ def truth_command(log, criterion, hours, lat0_deg, lon0_deg, height_m, out_dir, 
         return
     v = res.verify_nmi
     click.echo(f"{res.run}: true drift {res.drift_deg_h:.7f} deg/h ({criterion} criterion over {hours:g} h)")
-    click.echo(f"  criterion: {res.uncompensated_nmi:.4f} nmi uncompensated, {v[1]:.4f} nmi at the optimum "
-               f"(navigated), {v[0]:.4f} / {v[2]:.4f} nmi at -/+ "
-               f"{res.verify_drift_deg_h[2] - res.drift_deg_h:.4g} deg/h"
-               f" -> {'verified' if res.verified else 'NOT verified'}")
-    click.echo(f"  alignment z estimate {res.alignment.z_drift_deg_h:.5f} +- {res.alignment.z_drift_std_deg_h:.5f} "
-               f"deg/h (1-sigma, not used)")
+    click.echo(
+        f"  criterion: {res.uncompensated_nmi:.4f} nmi uncompensated, {v[1]:.4f} nmi at the optimum "
+        f"(navigated), {v[0]:.4f} / {v[2]:.4f} nmi at -/+ "
+        f"{res.verify_drift_deg_h[2] - res.drift_deg_h:.4g} deg/h"
+        f" -> {'verified' if res.verified else 'NOT verified'}"
+    )
+    click.echo(
+        f"  alignment z estimate {res.alignment.z_drift_deg_h:.5f} +- {res.alignment.z_drift_std_deg_h:.5f} "
+        f"deg/h (1-sigma, not used)"
+    )
 
 
 @click.command("evaluate")
 @click.argument("log", type=click.Path(path_type=Path))
 @click.option("--drift-deg-h", type=float, default=None, help="Axial drift [deg/h] to compensate.")
-@click.option("--model", "model_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
-              help="Identify the drift with this model (JSON) instead.")
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
-              help="Folder for evaluation.json and position_error.png (created if needed).")
-@click.option("--hours", type=click.FloatRange(min=0.0, min_open=True), default=72.0, show_default=True,
-              help="Navigation hours after the 4 h alignment.")
+@click.option(
+    "--model",
+    "model_path",
+    type=click.Path(dir_okay=False, path_type=Path),
+    default=None,
+    help="Identify the drift with this model (JSON) instead.",
+)
+@click.option(
+    "--out",
+    "out_dir",
+    required=True,
+    type=click.Path(file_okay=False, path_type=Path),
+    help="Folder for evaluation.json and position_error.png (created if needed).",
+)
+@click.option(
+    "--hours",
+    type=click.FloatRange(min=0.0, min_open=True),
+    default=72.0,
+    show_default=True,
+    help="Navigation hours after the 4 h alignment.",
+)
 @_site_options
 @click.option("--quiet", is_flag=True, help="No progress bar and no summary line.")
 def evaluate_command(log, drift_deg_h, model_path, out_dir, hours, lat0_deg, lon0_deg, height_m, quiet):
@@ -164,22 +223,33 @@ def evaluate_command(log, drift_deg_h, model_path, out_dir, hours, lat0_deg, lon
     if model_path is not None:
         ident = _guard(identify, imu, model_path, quiet=quiet)
         drift_deg_h, alignment, source = ident.drift_deg_h, ident.features.alignment, str(model_path)
-    ev = _guard(evaluate_compensation, imu, drift_deg_h, hours=hours, alignment=alignment, source=source,
-                quiet=quiet)
+    ev = _guard(evaluate_compensation, imu, drift_deg_h, hours=hours, alignment=alignment, source=source, quiet=quiet)
     write_evaluation(ev, out_dir)
     if not quiet:
-        click.echo(f"{ev.run}: compensating {ev.drift_deg_h:.6f} deg/h: {hours:g} h position error "
-                   f"{ev.before.final_nmi:.3f} -> {ev.after.final_nmi:.3f} nmi (final), "
-                   f"{ev.before.max_nmi:.3f} -> {ev.after.max_nmi:.3f} nmi (max); wrote {out_dir}")
+        click.echo(
+            f"{ev.run}: compensating {ev.drift_deg_h:.6f} deg/h: {hours:g} h position error "
+            f"{ev.before.final_nmi:.3f} -> {ev.after.final_nmi:.3f} nmi (final), "
+            f"{ev.before.max_nmi:.3f} -> {ev.after.max_nmi:.3f} nmi (max); wrote {out_dir}"
+        )
 
 
 @click.command("identify")
 @click.argument("log", type=click.Path(path_type=Path))
-@click.option("--model", "model_path", required=True, type=click.Path(dir_okay=False, path_type=Path),
-              help="Drift model (JSON, from `gyrodrift fit`).")
+@click.option(
+    "--model",
+    "model_path",
+    required=True,
+    type=click.Path(dir_okay=False, path_type=Path),
+    help="Drift model (JSON, from `gyrodrift fit`).",
+)
 @_site_options
-@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=None,
-              help="Folder for identification.json, alignment.json and alignment_z_sigma.png.")
+@click.option(
+    "--out",
+    "out_dir",
+    type=click.Path(file_okay=False, path_type=Path),
+    default=None,
+    help="Folder for identification.json, alignment.json and alignment_z_sigma.png.",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
 def identify_command(log, model_path, lat0_deg, lon0_deg, height_m, out_dir, as_json, quiet):
@@ -207,9 +277,18 @@ def identify_command(log, model_path, lat0_deg, lon0_deg, height_m, out_dir, as_
         click.echo(f"  model uncertainty: none ({res.uncertainty_note})")
     if res.training_error_deg_h is not None:
         click.echo(f"  error on its training runs ({res.training_error_kind}) {res.training_error_deg_h:.2e} deg/h")
-    click.echo(f"  physics inversion of the 12 h latitude error ({f.lat_err_arcsec:.3f} arcsec): "
-               f"{res.physics_drift_deg_h:.6f} deg/h")
-    click.echo(f"  alignment z estimate: {res.alignment_z_drift_deg_h:.6f} +- {res.alignment_z_drift_std_deg_h:.6f} "
-               f"deg/h (1-sigma)")
-    click.echo(f"  temperature over 12 h: {f.temp_min_c:.2f} ~ {f.temp_max_c:.2f} deg C "
-               f"(start {f.temp_start_c:.2f}, end {f.temp_end_c:.2f})")
+    click.echo(
+        f"  physics inversion of the 12 h latitude error ({f.lat_err_arcsec:.3f} arcsec): "
+        f"{res.physics_drift_deg_h:.6f} deg/h"
+    )
+    click.echo(
+        f"  alignment z estimate: {res.alignment_z_drift_deg_h:.6f} +- {res.alignment_z_drift_std_deg_h:.6f} "
+        f"deg/h (1-sigma)"
+    )
+    click.echo(
+        f"  temperature over 12 h: {f.temp_min_c:.2f} ~ {f.temp_max_c:.2f} deg C "
+        f"(start {f.temp_start_c:.2f}, end {f.temp_end_c:.2f})"
+    )
+
+
+COMMANDS = (features_command, truth_command, evaluate_command, identify_command)

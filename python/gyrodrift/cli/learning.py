@@ -1,4 +1,4 @@
-"""Command-line interface: a thin layer over the same functions a notebook calls."""
+"""Commands on run tables and drift models: `fit`, `predict`, `reproduce`."""
 
 from __future__ import annotations
 
@@ -8,17 +8,8 @@ import json
 import sys
 
 import click
-import numpy as np
 
-from gyrodrift import __version__
-from gyrodrift.choices import METHODS, OBJECTIVES, SCALINGS
-from gyrodrift.features import ENCODINGS
-
-
-@click.group()
-@click.version_option(__version__, prog_name="gyrodrift")
-def main() -> None:
-    """Identify the axial gyro drift of single-axis rotation RLG inertial navigation systems."""
+from gyrodrift.choices import ENCODINGS, METHODS, OBJECTIVES, SCALINGS
 
 
 def _check_out(path) -> None:
@@ -50,7 +41,7 @@ _split_option = click.option(
 )
 
 
-@main.command()
+@click.command()
 @click.argument("data", type=click.Path(dir_okay=False))
 @click.option("--out", "out", required=True, type=click.Path(dir_okay=False), help="Model file to write (JSON).")
 @click.option("--encoding", type=click.Choice(list(ENCODINGS)), default="temp_range", show_default=True)
@@ -71,12 +62,22 @@ def fit(data, out, encoding, scaling, objective, method, gamma, sigma, seed, lat
     _check_out(out)
     runs = _read_runs(data, lat0_deg, True, split)
     if split is None and any(runs.split):
-        click.echo(f"note: {data} has a split column; training on all {len(runs)} rows "
-                   "(--split train uses the training rows only)", err=True)
+        click.echo(
+            f"note: {data} has a split column; training on all {len(runs)} rows "
+            "(--split train uses the training rows only)",
+            err=True,
+        )
     try:
         model = fit_drift_model(
-            runs, encoding=encoding, scaling=scaling, objective=objective, method=method,
-            gamma=gamma, sigma=sigma, rng=seed, quiet=quiet,
+            runs,
+            encoding=encoding,
+            scaling=scaling,
+            objective=objective,
+            method=method,
+            gamma=gamma,
+            sigma=sigma,
+            rng=seed,
+            quiet=quiet,
         )
     except ValueError as exc:
         raise click.ClickException(str(exc)) from None
@@ -89,17 +90,23 @@ def fit(data, out, encoding, scaling, objective, method, gamma, sigma, seed, lat
     )
 
 
-@main.command()
+@click.command()
 @click.argument("model_file", type=click.Path(dir_okay=False))
 @click.argument("data", type=click.Path(dir_okay=False))
 @click.option("--format", "fmt", type=click.Choice(["csv", "jsonl"]), default="csv", show_default=True)
 @click.option("--out", type=click.Path(dir_okay=False), default=None, help="Write here (atomically) instead of stdout.")
-@click.option("--coverage", type=click.FloatRange(0.0, 1.0, min_open=True, max_open=True), default=None,
-              help="Add a jackknife interval of this coverage (e.g. 0.9) from the model's leave-one-out residuals.")
+@click.option(
+    "--coverage",
+    type=click.FloatRange(0.0, 1.0, min_open=True, max_open=True),
+    default=None,
+    help="Add a jackknife interval of this coverage (e.g. 0.9) from the model's leave-one-out residuals.",
+)
 @_lat0_option
 @_split_option
 def predict(model_file, data, fmt, out, coverage, lat0_deg, split):
     """Identify the axial drift [deg/h] of each run in DATA.csv with MODEL_FILE."""
+    import numpy as np
+
     from gyrodrift.atomic import atomic_write
     from gyrodrift.model import min_runs_for_coverage
     from gyrodrift.model_io import ModelFileError, load_model
@@ -118,7 +125,8 @@ def predict(model_file, data, fmt, out, coverage, lat0_deg, split):
             n = len(model.loo_residuals_deg_h)
             raise click.ClickException(
                 f"{model_file}: {n} training runs are too few for a {100 * coverage:g} % jackknife interval "
-                f"(needs at least {min_runs_for_coverage(coverage)}); lower --coverage")
+                f"(needs at least {min_runs_for_coverage(coverage)}); lower --coverage"
+            )
     else:
         pred = model.predict(runs)
     rows = []
@@ -147,9 +155,15 @@ def predict(model_file, data, fmt, out, coverage, lat0_deg, split):
             handle.write(buf.getvalue())
 
 
-@main.command()
-@click.option("--out", "out_dir", type=click.Path(file_okay=False), default="gyrodrift-reproduce", show_default=True,
-              help="Folder for results.json, report.md, report.html and the figures (replaced as a whole).")
+@click.command()
+@click.option(
+    "--out",
+    "out_dir",
+    type=click.Path(file_okay=False),
+    default="gyrodrift-reproduce",
+    show_default=True,
+    help="Folder for results.json, report.md, report.html and the figures (replaced as a whole).",
+)
 @click.option("--seed", type=int, default=0, show_default=True, help="Seeds every swarm; same seed, same results.")
 @click.option("--quiet", is_flag=True, help="No progress bar and no summary.")
 def reproduce(out_dir, seed, quiet):
@@ -164,14 +178,4 @@ def reproduce(out_dir, seed, quiet):
         click.echo(f"report: {out_dir}/report.html ({results['elapsed_s']:.1f} s)")
 
 
-def _register_subcommands() -> None:
-    """Commands defined next to the functions they wrap (gyrodrift.ins, gyrodrift.procedure)."""
-    from gyrodrift.ins.commands import navigate_command, simulate_command
-    from gyrodrift.procedure_commands import evaluate_command, features_command, identify_command, truth_command
-
-    for command in (simulate_command, navigate_command, features_command, truth_command, evaluate_command,
-                    identify_command):
-        main.add_command(command)
-
-
-_register_subcommands()
+COMMANDS = (fit, predict, reproduce)

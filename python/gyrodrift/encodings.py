@@ -12,15 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from gyrodrift.choices import ENCODINGS
 from gyrodrift.runs import RunTable
-
-ENCODINGS: dict[str, tuple[str, ...]] = {
-    "temp_range": ("lat_err_arcsec", "temp_min_c", "temp_max_c"),
-    "temp_mean": ("lat_err_arcsec", "temp_mean_c"),
-    "temp_span": ("lat_err_arcsec", "temp_span_c"),
-    "lat_only": ("lat_err_arcsec",),
-}
-"""Encoding name -> feature names (units in the names)."""
 
 ENCODING_DESCRIPTIONS = {
     "temp_range": "latitude error and the temperature range as two inputs (min, max)",
