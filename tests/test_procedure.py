@@ -370,3 +370,26 @@ def test_a_csv_log_of_rates_gives_the_features_of_its_parquet(fleet, fleet_featu
     assert (f.temp_min_c, f.temp_max_c) == (ref.temp_min_c, ref.temp_max_c)
     r = CliRunner().invoke(features_command, [str(path), "--quiet", "--out", str(tmp_path / "x.csv")])
     assert r.exit_code == 1 and "the log carries no site; give its latitude" in r.output
+
+
+def test_unreachable_scheduler_is_a_clear_error_within_the_timeout(fleet, tmp_path):
+    import socket
+    import time
+
+    from gyrodrift.cli import main
+    from gyrodrift.procedure.fleet import SchedulerUnreachableError
+
+    with socket.socket() as s:  # a port on loopback with nothing listening once the socket is closed
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    address = f"tcp://127.0.0.1:{port}"
+    t0 = time.monotonic()
+    with pytest.raises(SchedulerUnreachableError, match=r"--scheduler tcp://127\.0\.0\.1:\d+: no dask scheduler"):
+        features_table(fleet[0][:1], scheduler=address, connect_timeout_s=1.0)
+    assert time.monotonic() - t0 < 20.0
+    out = tmp_path / "x.csv"
+    r = CliRunner().invoke(
+        main, ["features", str(fleet[0][0]), "--scheduler", address, "--connect-timeout-s", "1", "--out", str(out)]
+    )
+    assert r.exit_code == 1 and "no dask scheduler answered within 1 s" in r.output
+    assert "Traceback" not in r.output and len(r.output.strip().splitlines()) == 1 and not out.exists()

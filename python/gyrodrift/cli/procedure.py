@@ -94,13 +94,22 @@ def _num(x):
 )
 @click.option("--scheduler", default=None, help="Address of a running dask scheduler (tcp://host:8786).")
 @click.option(
+    "--connect-timeout-s",
+    type=click.FloatRange(min=0.0, min_open=True, max=3600.0),
+    default=10.0,
+    show_default=True,
+    help="Seconds to wait for --scheduler to answer before giving up.",
+)
+@click.option(
     "--curves",
     type=click.Path(dir_okay=False, path_type=Path),
     default=None,
     help="Also write the hourly latitude-error curves (run, t_h, lat_err_arcsec) to this CSV.",
 )
 @click.option("--quiet", is_flag=True, help="No progress bar and no summary line.")
-def features_command(logs, out, lat0_deg, lon0_deg, height_m, with_truth, criterion, workers, scheduler, curves, quiet):
+def features_command(
+    logs, out, lat0_deg, lon0_deg, height_m, with_truth, criterion, workers, scheduler, connect_timeout_s, curves, quiet
+):
     """Align each LOG, navigate 12 h and write one run-table row per log to --out.
 
     Columns: run (the log's stem), lat_deg (latitude at navigation hour 12), lat0_deg, temp_min_c,
@@ -122,6 +131,7 @@ def features_command(logs, out, lat0_deg, lon0_deg, height_m, with_truth, criter
         criterion=criterion,
         workers=workers,
         scheduler=scheduler,
+        connect_timeout_s=connect_timeout_s,
         quiet=quiet,
     )
     write_features_csv(rows, out)

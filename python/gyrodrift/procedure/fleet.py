@@ -16,17 +16,19 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 from gyrodrift.atomic import atomic_write
-from gyrodrift.errors import GyrodriftError
+from gyrodrift.cluster import DEFAULT_CONNECT_TIMEOUT_S, DaskMissingError, SchedulerUnreachableError, dask_client
 from gyrodrift.logs import LogError, Site, open_log
 from gyrodrift.procedure.features import RUN_TABLE_COLUMNS, RunFeatures, extract_features
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 from gyrodrift.progress import progress
 
-__all__ = ["features_table", "write_features_csv", "write_curves_csv", "DaskMissingError"]
-
-
-class DaskMissingError(GyrodriftError, ImportError):
-    """dask.distributed is needed for --workers / --scheduler but is not installed."""
+__all__ = [
+    "features_table",
+    "write_features_csv",
+    "write_curves_csv",
+    "DaskMissingError",
+    "SchedulerUnreachableError",
+]
 
 
 def _features_task(
@@ -50,16 +52,6 @@ def _features_task(
     )
 
 
-def _import_dask():
-    try:
-        from dask.distributed import Client, LocalCluster
-    except ImportError as exc:
-        raise DaskMissingError(
-            "distributed processing (--workers / --scheduler) needs dask.distributed: pip install 'gyrodrift[dask]'"
-        ) from exc
-    return Client, LocalCluster
-
-
 def features_table(
     paths: Sequence[str | os.PathLike[str]],
     *,
@@ -71,6 +63,7 @@ def features_table(
     workers: int | None = None,
     scheduler: str | None = None,
     processes: bool = True,
+    connect_timeout_s: float = DEFAULT_CONNECT_TIMEOUT_S,
     chunk_samples: int = 100_000,
     quiet: bool = True,
 ) -> list[RunFeatures]:
@@ -93,6 +86,8 @@ def features_table(
         Address of a running dask scheduler (``tcp://host:8786``); exclusive with `workers`.
     processes : bool
         LocalCluster workers as processes (default) or threads (the core releases the GIL).
+    connect_timeout_s : float
+        Seconds to wait for `scheduler` to answer before `SchedulerUnreachableError`.
     quiet : bool
         True hides the progress bar (one tick per finished log).
 
@@ -107,6 +102,8 @@ def features_table(
         The first bad log (in the order of `paths`), from whichever worker met it.
     DaskMissingError
         `workers` or `scheduler` without dask installed.
+    SchedulerUnreachableError
+        Nothing answered at `scheduler` within `connect_timeout_s`.
     """
     if workers is not None and scheduler is not None:
         raise ValueError("give workers or scheduler, not both")
@@ -129,16 +126,9 @@ def features_table(
                 out.append(_features_task(p, *args))
                 bar.update(1)
         return out
-    if workers is not None and workers < 1:
-        raise ValueError(f"workers must be >= 1, got {workers}")
-    Client, LocalCluster = _import_dask()
-    cluster = None
-    if scheduler is None:
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=processes, dashboard_address=None)
-        client = Client(cluster)
-    else:
-        client = Client(scheduler)
-    try:
+    with dask_client(
+        workers=workers, scheduler=scheduler, processes=processes, connect_timeout_s=connect_timeout_s
+    ) as client:
         futures = [
             client.submit(_features_task, p, *args, pure=False, key=f"features-{i}-{Path(p).name}")
             for i, p in enumerate(paths)
@@ -149,10 +139,6 @@ def features_table(
                 results.append(f.result())
                 bar.update(1)
         return results
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
 
 
 def write_features_csv(features: Sequence[RunFeatures], path: str | os.PathLike[str]) -> None:
