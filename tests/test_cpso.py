@@ -11,7 +11,15 @@ from hypothesis import strategies as st
 from scipy.optimize import Bounds, OptimizeResult
 
 from gyrodrift.benchmark_functions import ackley, griewank, rastrigin, rosenbrock, sphere
-from gyrodrift.cpso import _reseed_chaos, minimize_cpso
+from gyrodrift.cpso import (
+    CPSOSolver,
+    Swarm,
+    _reseed_chaos,
+    chaos_region,
+    logistic_chaos_points,
+    minimize_cpso,
+    pso_move,
+)
 
 # (name, function, dimension, bounds, argmin)
 PROBLEMS = [
@@ -128,12 +136,12 @@ def test_vectorized_matches_scalar_and_counts_rows(name, f, d, bounds, argmin):
     assert set(counted.batch_shapes) == {(30, d), (10, d)}
 
 
-@pytest.mark.parametrize("workers", [2, 4])
-def test_workers_give_the_identical_result(workers):
+@pytest.mark.parametrize("threads", [2, 4])
+def test_threads_give_the_identical_result(threads):
     _, f, d, bounds, _ = PROBLEMS[IDS.index("rastrigin")]
     serial = minimize_cpso(f, bounds, rng=5, max_iter=25)
     counted = Counted(f)
-    parallel = minimize_cpso(counted, bounds, rng=5, max_iter=25, workers=workers)
+    parallel = minimize_cpso(counted, bounds, rng=5, max_iter=25, threads=threads)
     assert_identical(serial, parallel)
     assert parallel.nfev == counted.calls
 
@@ -404,8 +412,14 @@ GOOD = [(-1.0, 1.0), (-1.0, 1.0)]
         (dict(chaos_radius=0.0), "chaos_radius must be in (0, 1], got 0.0"),
         (dict(chaos_radius_end=0.5), "chaos_radius_end must be in (0, chaos_radius=0.1], got 0.5"),
         (dict(patience=0), "patience must be an int >= 1, got 0"),
-        (dict(workers=0), "workers must be a positive int, -1 or a map-like callable, got 0"),
-        (dict(vectorized=True, workers=2), "workers must be 1 when vectorized=True, got 2"),
+        (dict(workers=0), "workers must be 1 or a map-like callable, got 0"),
+        (dict(workers=2), "workers must be 1 or a map-like callable, got 2 (scipy reads an integer as a number of"),
+        (dict(threads=0), "threads must be a positive int or -1, got 0"),
+        (dict(workers=map, threads=2), "give workers (a map-like callable) or threads, not both"),
+        (
+            dict(vectorized=True, threads=2),
+            "workers and threads must be 1 when vectorized=True, got workers=1, threads=2",
+        ),
     ],
 )
 def test_bad_inputs_raise_naming_argument_and_value(kwargs, message):
@@ -427,3 +441,72 @@ def test_vectorized_output_shape_is_validated(returned, shape):
 def test_scalar_fun_returning_an_array_is_rejected():
     with pytest.raises(ValueError, match=re.escape("fun must return a scalar, got an array of shape (2,)")):
         minimize_cpso(lambda x: x, GOOD, max_iter=2)
+
+
+# --- the solver class and its steps, each on its own -------------------------------------------------
+def test_pso_move_follows_eq_13_14_then_clamps_and_absorbs():
+    one = np.ones((1, 2))
+    pos, vel = np.zeros((1, 2)), np.array([[1.0, -1.0]])
+    pbest, gbest = np.array([[1.0, 1.0]]), np.array([[2.0, -3.0]])
+    kw = dict(w=0.5, c1=2.0, c2=2.0, lo=np.array([-2.0, -2.0]), hi=np.array([0.5, 2.0]))
+    # v = 0.5 v + 2 * 0.5 (pbest - x) + 2 * 0.5 (gbest - x) = (3.5, -2.5), unclamped
+    new_pos, new_vel = pso_move(pos, vel, pbest, gbest, 0.5 * one, 0.5 * one, vmax=None, **kw)
+    # x = (3.5, -2.5) leaves the box on both sides: clipped onto the bounds, velocity zeroed
+    np.testing.assert_array_equal(new_pos, [[0.5, -2.0]])
+    np.testing.assert_array_equal(new_vel, [[0.0, 0.0]])
+    new_pos, new_vel = pso_move(pos, vel, pbest, gbest, 0.5 * one, 0.5 * one, vmax=np.array([0.25, 1.0]), **kw)
+    np.testing.assert_array_equal(new_vel, [[0.25, -1.0]])  # clamped, inside: kept
+    np.testing.assert_array_equal(new_pos, [[0.25, -1.0]])
+    np.testing.assert_array_equal(pos, [[0.0, 0.0]])  # inputs untouched
+    np.testing.assert_array_equal(vel, [[1.0, -1.0]])
+
+
+def test_chaos_region_is_clipped_to_the_box_never_shifted():
+    a, b = chaos_region(np.array([0.95, 0.5]), 0.1, np.array([1.0, 2.0]), np.zeros(2), np.ones(2))
+    np.testing.assert_allclose(a, [0.85, 0.3])
+    np.testing.assert_allclose(b, [1.0, 0.7])
+
+
+def test_logistic_chaos_points_iterate_eq_15_onto_the_region():
+    gen = np.random.default_rng(0)
+    pts, z = logistic_chaos_points(np.array([0.3]), np.array([10.0]), np.array([20.0]), 2, 4.0, gen)
+    z1 = 4.0 * 0.3 * 0.7
+    z2 = 4.0 * z1 * (1.0 - z1)
+    np.testing.assert_allclose(pts[:, 0], [10.0 + 10.0 * z1, 10.0 + 10.0 * z2])
+    assert z[0] == pytest.approx(z2)
+
+
+def test_swarm_bests_move_on_strict_improvement_only_and_chaos_replaces_the_worst():
+    pos = np.array([[0.0], [1.0], [2.0]])
+    s = Swarm.start(pos.copy(), pos.copy(), np.array([3.0, 1.0, 3.0]))
+    assert s.gbest_fit == 1.0 and s.gbest[0] == 1.0
+    s.pos = np.array([[5.0], [6.0], [7.0]])
+    s.pos_nat, s.fit = s.pos.copy(), np.array([3.0, 0.5, 4.0])  # particle 0 ties: keeps its old best
+    s.update_bests()
+    np.testing.assert_array_equal(s.pbest[:, 0], [0.0, 6.0, 2.0])
+    assert s.gbest_fit == 0.5 and s.gbest[0] == 6.0
+    cand = np.array([[9.0], [8.0]])
+    assert not s.accept_chaos(cand, cand, np.array([0.5, 0.7]))  # equal to gbest: rejected
+    assert s.accept_chaos(cand, cand, np.array([0.6, 0.1]))
+    assert s.pos[2, 0] == 8.0 and s.fit[2] == 0.1 and s.pbest[2, 0] == 8.0  # worst (fit 4.0) replaced
+    assert s.gbest_fit == 0.1 and s.gbest[0] == 8.0
+
+
+def test_solver_iterates_one_generation_at_a_time_like_minimize_cpso():
+    bounds = [(-5.12, 5.12)] * 2
+    whole = minimize_cpso(rastrigin, bounds, rng=3, max_iter=12)
+    with CPSOSolver(rastrigin, bounds, rng=3, max_iter=12) as solver:
+        steps = [(x.copy(), f) for x, f in solver]
+        assert len(steps) == 12 == solver.nit
+        assert [f for _, f in steps] == list(whole.history)
+        assert_identical(solver.result(), whole)
+    # Phases called by hand give the same swarm as the iteration.
+    manual = CPSOSolver(rastrigin, bounds, rng=3, max_iter=12)
+    manual.init_population()
+    manual.pso_move(1)
+    manual.update_bests()
+    manual.chaos_feedback(*manual.chaos_search(1))
+    first = CPSOSolver(rastrigin, bounds, rng=3, max_iter=12)
+    next(first)
+    assert manual.swarm.pos.tobytes() == first.swarm.pos.tobytes()
+    assert manual.swarm.gbest_fit == first.swarm.gbest_fit == whole.history[0]

@@ -1,58 +1,194 @@
 """Chaos particle swarm optimisation (CPSO), the hyperparameter tuner of Yu et al. (2013).
 
-One public function, :func:`minimize_cpso`, with the calling conventions of
-:func:`scipy.optimize.differential_evolution` (``bounds``, ``rng``, ``callback``, ``workers``,
-``vectorized``) and an :class:`scipy.optimize.OptimizeResult` as its answer.
+:class:`CPSOSolver` runs the optimisation one generation at a time, with the PSO move, the chaos search and
+its feedback as separate steps (as scipy's ``DifferentialEvolutionSolver``); :func:`minimize_cpso` is the
+one-call form, with the calling conventions of :func:`scipy.optimize.differential_evolution` (``bounds``,
+``rng``, ``callback``, ``workers`` as a map-like callable, ``vectorized``) and an
+:class:`scipy.optimize.OptimizeResult` as its answer. Integer parallelism is ``threads`` (a thread pool), not
+``workers``: scipy reads an integer ``workers`` as a number of processes.
 
 The paper gives the global-best PSO update (eq. 13-14) and the logistic map (eq. 15) and the settings
 (30 particles, initial inertia 0.75, c1 = c2 = 2, at most 10 chaos iterations, at most 100 PSO
 iterations); everything else (bounds handling, velocity clamp, the chaos search region and how its
-result rejoins the swarm) is left open and is chosen and documented in :func:`minimize_cpso`.
+result rejoins the swarm) is left open and is chosen and documented in :class:`CPSOSolver`.
 """
 
 from __future__ import annotations
 
 import math
 import operator
-from collections.abc import Callable, Sequence
+import os
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import ExitStack
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.optimize import Bounds, OptimizeResult
 
-__all__ = ["minimize_cpso"]
+from gyrodrift.errors import OptionError
+
+__all__ = [
+    "CPSOSolver",
+    "Swarm",
+    "chaos_region",
+    "logistic_chaos_points",
+    "minimize_cpso",
+    "pso_move",
+]
 
 # |z - p| below this counts as having landed on a fixed/absorbing point p of the logistic map.
 _CHAOS_GUARD_ATOL = 1e-10
 
+Mapper = Callable[[Callable[[np.ndarray], float], Iterable[np.ndarray]], Iterable[float]]
 
-def minimize_cpso(
-    fun: Callable[..., float],
-    bounds,
+
+def minimize_cpso(fun: Callable[..., Any], bounds, **options: Any) -> OptimizeResult:
+    """Minimise ``fun`` over a box with chaos particle swarm optimisation (Yu et al. 2013, eq. 13-15).
+
+    ``minimize_cpso(fun, bounds, **options)`` is ``CPSOSolver(fun, bounds, **options).solve()``; see
+    :class:`CPSOSolver` for the algorithm, every keyword option and the result.
+    """
+    with CPSOSolver(fun, bounds, **options) as solver:
+        return solver.solve()
+
+
+# --------------------------------------------------------------------------------------------------
+# The steps, as pure functions (each tested on its own)
+# --------------------------------------------------------------------------------------------------
+
+
+def pso_move(
+    pos: np.ndarray,
+    vel: np.ndarray,
+    pbest: np.ndarray,
+    gbest: np.ndarray,
+    r1: np.ndarray,
+    r2: np.ndarray,
     *,
-    args: tuple = (),
-    n_particles: int = 30,
-    max_iter: int = 100,
-    w: float = 0.75,
-    inertia: str = "constant",
-    w_end: float = 0.4,
-    c1: float = 2.0,
-    c2: float = 2.0,
-    chaos_steps: int = 10,
-    mu: float = 4.0,
-    chaos_radius: float = 0.1,
-    chaos_radius_end: float = 1e-6,
-    vmax_frac: float | None = 0.2,
-    log_scale: bool | Sequence[bool] | None = None,
-    vectorized: bool = False,
-    workers: int | Callable = 1,
-    rng: int | np.random.Generator | None = None,
-    callback: Callable[[OptimizeResult], bool | None] | None = None,
-    tol: float = 0.0,
-    patience: int | None = None,
-) -> OptimizeResult:
-    r"""Minimise ``fun`` over a box with chaos particle swarm optimisation (Yu et al. 2013, eq. 13-15).
+    w: float,
+    c1: float,
+    c2: float,
+    vmax: np.ndarray | None,
+    lo: np.ndarray,
+    hi: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """One PSO move (eq. 13-14) in the search space, with the velocity clamp and absorbing walls.
+
+    ``v <- w v + c1 r1 (pbest - x) + c2 r2 (gbest - x)``, each component clamped to ``|v_i| <= vmax_i``
+    (unless ``vmax`` is None), ``x <- x + v``; a coordinate that leaves ``[lo, hi]`` is clipped onto the
+    bound and its velocity set to zero. Returns new ``(pos, vel)`` arrays; the inputs are not modified.
+    """
+    vel = w * vel + c1 * r1 * (pbest - pos) + c2 * r2 * (gbest - pos)
+    if vmax is not None:
+        vel = np.clip(vel, -vmax, vmax)
+    pos = pos + vel
+    outside = (pos < lo) | (pos > hi)
+    pos = np.clip(pos, lo, hi)
+    vel[outside] = 0.0
+    return pos, vel
+
+
+def chaos_region(
+    gbest: np.ndarray, rho: float, width: np.ndarray, lo: np.ndarray, hi: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The chaos search box ``[max(lo, g - rho w), min(hi, g + rho w)]`` around ``gbest`` (clipped, never shifted)."""
+    return np.maximum(lo, gbest - rho * width), np.minimum(hi, gbest + rho * width)
+
+
+def logistic_chaos_points(
+    z: np.ndarray, a: np.ndarray, b: np.ndarray, steps: int, mu: float, gen: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray]:
+    """``steps`` iterates of the guarded logistic map (eq. 15) mapped onto ``[a, b]``: ``(points, z)``.
+
+    ``z <- mu z (1 - z)``, reseeded from ``gen`` when it lands on a trap (see :class:`CPSOSolver`); each
+    iterate gives the point ``a + z (b - a)``. Returns the ``(steps, n_dim)`` points and the last ``z``
+    (carried over to the next iteration).
+    """
+    points = np.empty((steps, z.size))
+    for j in range(steps):
+        z = _reseed_chaos(mu * z * (1.0 - z), gen, mu)  # eq. (15)
+        points[j] = a + z * (b - a)
+    return points, z
+
+
+@dataclass
+class Swarm:
+    """The state of a particle swarm: positions in the search space (``pos``) and in natural units
+    (``pos_nat``), velocities, fitness, personal bests and the global best."""
+
+    pos: np.ndarray
+    pos_nat: np.ndarray
+    vel: np.ndarray
+    fit: np.ndarray
+    pbest: np.ndarray
+    pbest_nat: np.ndarray
+    pbest_fit: np.ndarray
+    gbest: np.ndarray
+    gbest_nat: np.ndarray
+    gbest_fit: float
+
+    @classmethod
+    def start(cls, pos: np.ndarray, pos_nat: np.ndarray, fit: np.ndarray) -> Swarm:
+        """A swarm at rest (zero velocity) whose personal bests are its positions."""
+        g = int(np.argmin(fit))
+        return cls(
+            pos=pos,
+            pos_nat=pos_nat,
+            vel=np.zeros_like(pos),
+            fit=fit,
+            pbest=pos.copy(),
+            pbest_nat=pos_nat.copy(),
+            pbest_fit=fit.copy(),
+            gbest=pos[g].copy(),
+            gbest_nat=pos_nat[g].copy(),
+            gbest_fit=float(fit[g]),
+        )
+
+    def update_bests(self) -> None:
+        """Personal and global bests from the current fitness, on strict improvement only (ties keep the old)."""
+        better = self.fit < self.pbest_fit
+        self.pbest[better], self.pbest_nat[better], self.pbest_fit[better] = (
+            self.pos[better],
+            self.pos_nat[better],
+            self.fit[better],
+        )
+        g = int(np.argmin(self.pbest_fit))
+        if self.pbest_fit[g] < self.gbest_fit:
+            self.gbest, self.gbest_nat, self.gbest_fit = (
+                self.pbest[g].copy(),
+                self.pbest_nat[g].copy(),
+                float(self.pbest_fit[g]),
+            )
+
+    def accept_chaos(self, cand: np.ndarray, cand_nat: np.ndarray, cand_fit: np.ndarray) -> bool:
+        """Feedback of the chaos search: the best candidate, if strictly better than ``gbest``, becomes
+        ``gbest`` and replaces the worst particle (highest current fitness, lowest index on ties: position,
+        fitness and personal best; its velocity is kept). Returns whether it did."""
+        j = int(np.argmin(cand_fit))
+        if not cand_fit[j] < self.gbest_fit:
+            return False
+        worst = int(np.argmax(self.fit))
+        self.pos[worst], self.pos_nat[worst], self.fit[worst] = cand[j], cand_nat[j], cand_fit[j]
+        self.pbest[worst], self.pbest_nat[worst], self.pbest_fit[worst] = cand[j], cand_nat[j], cand_fit[j]
+        self.gbest, self.gbest_nat, self.gbest_fit = cand[j].copy(), cand_nat[j].copy(), float(cand_fit[j])
+        return True
+
+
+# --------------------------------------------------------------------------------------------------
+# The solver
+# --------------------------------------------------------------------------------------------------
+
+
+class CPSOSolver:
+    r"""Chaos particle swarm optimisation of ``fun`` over a box (Yu et al. 2013, eq. 13-15), one generation at a time.
+
+    Used as ``with CPSOSolver(fun, bounds, ...) as solver: result = solver.solve()``, or iterated
+    (``for x, f in solver: ...``, one PSO iteration per item, as scipy's ``DifferentialEvolutionSolver``).
+    Each phase is a method of its own (:meth:`init_population`, :meth:`pso_move`, :meth:`update_bests`,
+    :meth:`chaos_search`, :meth:`chaos_feedback`), built on pure step functions (:func:`pso_move`,
+    :func:`chaos_region`, :func:`logistic_chaos_points`) and the :class:`Swarm` state, each tested alone.
 
     Each iteration ``k = 1 .. max_iter`` does, in this order:
 
@@ -77,7 +213,7 @@ def minimize_cpso(
        iteration to ``chaos_radius_end`` at iteration ``max_iter``. The region is *clipped* to the box,
        never shifted, so a best point on a bound is searched on its inside only. All ``chaos_steps``
        candidates are generated first and evaluated as one batch (the map does not depend on the
-       objective), so ``vectorized`` and ``workers`` apply to them as well; all count in ``nfev``.
+       objective), so ``vectorized``, ``workers`` and ``threads`` apply to them as well; all count in ``nfev``.
        **Feedback:** if the best candidate is strictly better than ``gbest``, it becomes ``gbest`` and
        replaces the *worst* particle of the current swarm (highest current fitness, lowest index on
        ties): that particle's position, fitness and personal best become the candidate's, its velocity
@@ -149,13 +285,17 @@ def minimize_cpso(
         Call ``fun`` once per batch with a 2-D array (see ``fun``). The returned array must have shape
         ``(S,)``; anything else raises ``ValueError``. Gives the same result as ``vectorized=False`` for
         the same seed when ``fun`` computes each row as the scalar version would.
-    workers : int or map-like callable, default 1
-        ``1``: evaluate in the calling thread. ``n > 1``: evaluate each batch on a thread pool of ``n``
-        threads (useful when ``fun`` releases the GIL, as NumPy/LAPACK-heavy objectives do); ``-1``: one
-        thread per CPU. A map-like callable (e.g. ``multiprocessing.Pool(4).map`` for a picklable
-        ``fun``) is used as ``workers(fun, points)`` and must return results in order. Evaluation order
-        never changes the result: all random numbers are drawn in the calling thread and results are
-        gathered in point order. Incompatible with ``vectorized=True``.
+    workers : 1 or map-like callable, default 1
+        ``1``: evaluate in the calling thread. A map-like callable (e.g. ``multiprocessing.Pool(4).map`` or
+        ``ProcessPoolExecutor(4).map`` for a picklable ``fun``) is used as ``workers(fun, points)`` and must
+        return results in order. Unlike :func:`scipy.optimize.differential_evolution`, an integer
+        ``workers > 1`` is refused rather than read as a number of *processes*: threads are asked for
+        with ``threads``, processes by passing a pool's ``map``.
+    threads : int, default 1
+        Evaluate each batch on a thread pool of this many threads (useful when ``fun`` releases the GIL,
+        as NumPy/LAPACK-heavy objectives do); ``-1``: one thread per CPU; ``1``: no pool. Not together
+        with ``workers`` or ``vectorized=True``. Evaluation order never changes the result: all random
+        numbers are drawn in the calling thread and results are gathered in point order.
     rng : int, numpy.random.Generator or None
         Seed or generator; the same seed gives a bitwise identical result. No global state is used.
     callback : callable, optional
@@ -168,16 +308,22 @@ def minimize_cpso(
     patience : int or None, default None
         Number of iterations for the ``tol`` rule; ``None`` always runs ``max_iter`` iterations.
 
-    Returns
-    -------
-    OptimizeResult
-        ``x`` (best point, natural units), ``fun`` (its fitness, ``fun(x)`` exactly), ``nit``, ``nfev``
-        (every call of ``fun``, chaos ones included; each row counts once when vectorized), ``success``
-        (``False`` only if no finite fitness was ever found), ``message``, ``history`` (best fitness after
-        each iteration, shape ``(nit,)``, non-increasing, ``history[-1] == fun``), ``x_history`` (best
-        point after each iteration, ``(nit, n_dim)``), ``population`` and ``population_fun`` (final swarm
-        positions in natural units and their fitness), ``n_chaos_improvements`` (iterations in which the
-        chaos search improved ``gbest``).
+    Attributes
+    ----------
+    swarm : Swarm
+        The current swarm (search-space and natural positions, velocities, fitness, personal and global
+        bests); ``None`` before :meth:`init_population`.
+    nit : int
+        Iterations done. ``history``, ``x_history``, ``n_chaos_improvements`` and ``message`` as in the
+        result.
+
+    The result (:meth:`result`, :meth:`solve`) is an ``OptimizeResult`` holding ``x`` (best point, natural
+    units), ``fun`` (its fitness, ``fun(x)`` exactly), ``nit``, ``nfev`` (every call of ``fun``, chaos ones
+    included; each row counts once when vectorized), ``success`` (``False`` only if no finite fitness was
+    ever found), ``message``, ``history`` (best fitness after each iteration, shape ``(nit,)``,
+    non-increasing, ``history[-1] == fun``), ``x_history`` (best point after each iteration,
+    ``(nit, n_dim)``), ``population`` and ``population_fun`` (final swarm positions in natural units and
+    their fitness), ``n_chaos_improvements`` (iterations in which the chaos search improved ``gbest``).
 
     Notes
     -----
@@ -192,148 +338,268 @@ def minimize_cpso(
     Liu B., Wang L., Jin Y.-H., Tang F., Huang D.-X., "Improved particle swarm optimization combined
     with chaos", Chaos, Solitons & Fractals 25(5), 1261-1271, 2005.
     """
-    lo_nat, hi_nat = _validate_bounds(bounds)
-    n_dim = lo_nat.size
-    log_mask = _validate_log_scale(log_scale, lo_nat, hi_nat)
-    n_particles = _validate_int("n_particles", n_particles, minimum=2)
-    max_iter = _validate_int("max_iter", max_iter, minimum=1)
-    chaos_steps = _validate_int("chaos_steps", chaos_steps, minimum=0)
-    for name, value in (("w", w), ("w_end", w_end), ("c1", c1), ("c2", c2), ("tol", tol)):
-        _validate_nonnegative(name, value)
-    mu = float(mu)
-    if not (2.0 < mu <= 4.0):
-        raise ValueError(f"mu must be in (2, 4], got {mu!r}")
-    if inertia not in ("constant", "linear"):
-        raise ValueError(f"inertia must be 'constant' or 'linear', got {inertia!r}")
-    if not (0.0 < chaos_radius <= 1.0):
-        raise ValueError(f"chaos_radius must be in (0, 1], got {chaos_radius!r}")
-    if not (0.0 < chaos_radius_end <= chaos_radius):
-        raise ValueError(f"chaos_radius_end must be in (0, chaos_radius={chaos_radius!r}], got {chaos_radius_end!r}")
-    if vmax_frac is not None and not (math.isfinite(vmax_frac) and vmax_frac > 0):
-        raise ValueError(f"vmax_frac must be a positive finite number or None, got {vmax_frac!r}")
-    if patience is not None:
-        patience = _validate_int("patience", patience, minimum=1)
-    if callback is not None and not callable(callback):
-        raise ValueError(f"callback must be callable or None, got {callback!r}")
-    if not callable(fun):
-        raise ValueError(f"fun must be callable, got {fun!r}")
-    vectorized = bool(vectorized)
-    if vectorized and workers != 1:
-        raise ValueError(f"workers must be 1 when vectorized=True, got {workers!r}")
 
-    gen = np.random.default_rng(rng)
+    def __init__(
+        self,
+        fun: Callable[..., Any],
+        bounds,
+        *,
+        args: tuple = (),
+        n_particles: int = 30,
+        max_iter: int = 100,
+        w: float = 0.75,
+        inertia: str = "constant",
+        w_end: float = 0.4,
+        c1: float = 2.0,
+        c2: float = 2.0,
+        chaos_steps: int = 10,
+        mu: float = 4.0,
+        chaos_radius: float = 0.1,
+        chaos_radius_end: float = 1e-6,
+        vmax_frac: float | None = 0.2,
+        log_scale: bool | Sequence[bool] | None = None,
+        vectorized: bool = False,
+        workers: int | Mapper = 1,
+        threads: int = 1,
+        rng: int | np.random.Generator | None = None,
+        callback: Callable[[OptimizeResult], bool | None] | None = None,
+        tol: float = 0.0,
+        patience: int | None = None,
+    ) -> None:
+        self.lo_nat, self.hi_nat = _validate_bounds(bounds)
+        self.n_dim = self.lo_nat.size
+        self.log_mask = _validate_log_scale(log_scale, self.lo_nat, self.hi_nat)
+        self.n_particles = _validate_int("n_particles", n_particles, minimum=2)
+        self.max_iter = _validate_int("max_iter", max_iter, minimum=1)
+        self.chaos_steps = _validate_int("chaos_steps", chaos_steps, minimum=0)
+        for name, value in (("w", w), ("w_end", w_end), ("c1", c1), ("c2", c2), ("tol", tol)):
+            _validate_nonnegative(name, value)
+        self.w, self.w_end, self.c1, self.c2, self.tol = w, w_end, c1, c2, tol
+        self.mu = float(mu)
+        if not (2.0 < self.mu <= 4.0):
+            raise OptionError(f"mu must be in (2, 4], got {self.mu!r}")
+        if inertia not in ("constant", "linear"):
+            raise OptionError(f"inertia must be 'constant' or 'linear', got {inertia!r}")
+        self.inertia = inertia
+        if not (0.0 < chaos_radius <= 1.0):
+            raise OptionError(f"chaos_radius must be in (0, 1], got {chaos_radius!r}")
+        if not (0.0 < chaos_radius_end <= chaos_radius):
+            raise OptionError(
+                f"chaos_radius_end must be in (0, chaos_radius={chaos_radius!r}], got {chaos_radius_end!r}"
+            )
+        self.chaos_radius, self.chaos_radius_end = chaos_radius, chaos_radius_end
+        if vmax_frac is not None and not (math.isfinite(vmax_frac) and vmax_frac > 0):
+            raise OptionError(f"vmax_frac must be a positive finite number or None, got {vmax_frac!r}")
+        self.patience = None if patience is None else _validate_int("patience", patience, minimum=1)
+        if callback is not None and not callable(callback):
+            raise OptionError(f"callback must be callable or None, got {callback!r}")
+        self.callback = callback
+        if not callable(fun):
+            raise OptionError(f"fun must be callable, got {fun!r}")
+        self.vectorized = bool(vectorized)
+        n_threads = _validate_threads(threads)
+        if not callable(workers) and (isinstance(workers, bool) or workers != 1):
+            raise OptionError(
+                f"workers must be 1 or a map-like callable, got {workers!r} (scipy reads an integer as a number "
+                "of processes: pass threads=n for a thread pool, or workers=pool.map for a process pool)"
+            )
+        if self.vectorized and (workers != 1 or n_threads != 1):
+            raise OptionError(
+                f"workers and threads must be 1 when vectorized=True, got workers={workers!r}, threads={threads!r}"
+            )
+        if callable(workers) and n_threads != 1:
+            raise OptionError(f"give workers (a map-like callable) or threads, not both (threads={threads!r})")
 
-    # Search space: log10 in the log-scaled dimensions, natural elsewhere.
-    lo = np.where(log_mask, np.log10(lo_nat, where=log_mask, out=lo_nat.copy()), lo_nat)
-    hi = np.where(log_mask, np.log10(hi_nat, where=log_mask, out=hi_nat.copy()), hi_nat)
-    width = hi - lo
-    vmax = None if vmax_frac is None else vmax_frac * width
+        self._gen = np.random.default_rng(rng)
+        # Search space: log10 in the log-scaled dimensions, natural elsewhere.
+        lo_nat, hi_nat, log_mask = self.lo_nat, self.hi_nat, self.log_mask
+        self.lo = np.where(log_mask, np.log10(lo_nat, where=log_mask, out=lo_nat.copy()), lo_nat)
+        self.hi = np.where(log_mask, np.log10(hi_nat, where=log_mask, out=hi_nat.copy()), hi_nat)
+        self.width = self.hi - self.lo
+        self.vmax = None if vmax_frac is None else vmax_frac * self.width
 
-    def to_natural(s: np.ndarray) -> np.ndarray:
+        self._stack = ExitStack()
+        mapper: Mapper = workers if callable(workers) else map
+        if n_threads > 1:
+            mapper = self._stack.enter_context(ThreadPoolExecutor(max_workers=n_threads)).map
+        self._evaluate = _Evaluator(fun, args, self.vectorized, mapper)
+
+        self.swarm: Swarm | None = None
+        self._chaos_gen: np.random.Generator | None = None
+        self._z: np.ndarray | None = None
+        self.nit = 0
+        self.history: list[float] = []
+        self.x_history: list[np.ndarray] = []
+        self.n_chaos_improvements = 0
+        self.message = "Maximum number of iterations reached."
+        self._stopped = False
+
+    # -- context management (the thread pool, if any) ---------------------------------------------
+    def __enter__(self) -> CPSOSolver:
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Shut down the thread pool (if any); the solver can still report its result."""
+        self._stack.close()
+
+    # -- phases --------------------------------------------------------------------------------------
+    @property
+    def nfev(self) -> int:
+        """Objective evaluations so far (each row counts once when vectorized)."""
+        return self._evaluate.nfev
+
+    def to_natural(self, s: np.ndarray) -> np.ndarray:
+        """Search-space points to natural units (``10**s`` in log dimensions), clipped to the bounds."""
         x = s.copy()
-        x[..., log_mask] = 10.0 ** s[..., log_mask]
-        return np.clip(x, lo_nat, hi_nat)
+        x[..., self.log_mask] = 10.0 ** s[..., self.log_mask]
+        return np.clip(x, self.lo_nat, self.hi_nat)
 
-    with ExitStack() as stack:
-        mapper = _make_mapper(workers, stack)
-        evaluate = _Evaluator(fun, args, vectorized, mapper)
-
-        # Initial swarm: uniform in the search box, zero velocity.
-        pos = lo + gen.random((n_particles, n_dim)) * width
-        vel = np.zeros((n_particles, n_dim))
-        pos_nat = to_natural(pos)
-        fit = evaluate(pos_nat)
-        pbest, pbest_nat, pbest_fit = pos.copy(), pos_nat.copy(), fit.copy()
-        g = int(np.argmin(pbest_fit))
-        gbest, gbest_nat, gbest_fit = pbest[g].copy(), pbest_nat[g].copy(), float(pbest_fit[g])
-
+    def init_population(self) -> Swarm:
+        """Phase 0: a swarm uniform in the search box at rest, evaluated; the chaos map's own stream."""
+        pos = self.lo + self._gen.random((self.n_particles, self.n_dim)) * self.width
+        pos_nat = self.to_natural(pos)
+        self.swarm = Swarm.start(pos, pos_nat, self._evaluate(pos_nat))
         # The chaos map gets its own stream, drawn whether or not it is used, so that a run with
         # chaos_steps=0 moves its swarm with exactly the random numbers of the chaos run (paired runs).
-        chaos_gen = np.random.default_rng(gen.integers(0, 2**63))
-        z = _reseed_chaos(chaos_gen.random(n_dim), chaos_gen, mu) if chaos_steps else None
-        history: list[float] = []
-        x_history: list[np.ndarray] = []
-        n_chaos_improvements = 0
-        message = "Maximum number of iterations reached."
-        nit = 0
+        self._chaos_gen = np.random.default_rng(self._gen.integers(0, 2**63))
+        if self.chaos_steps:
+            self._z = _reseed_chaos(self._chaos_gen.random(self.n_dim), self._chaos_gen, self.mu)
+        return self.swarm
 
-        for k in range(1, max_iter + 1):
-            frac = (k - 1) / (max_iter - 1) if max_iter > 1 else 0.0
-            w_k = w if inertia == "constant" else w - (w - w_end) * frac
+    def schedule_fraction(self, k: int) -> float:
+        """``(k - 1) / (max_iter - 1)``: where iteration ``k`` lies between the first and the last (0 to 1)."""
+        return (k - 1) / (self.max_iter - 1) if self.max_iter > 1 else 0.0
 
-            # Eq. (13)-(14), then velocity clamp and absorbing walls.
-            r1 = gen.random((n_particles, n_dim))
-            r2 = gen.random((n_particles, n_dim))
-            vel = w_k * vel + c1 * r1 * (pbest - pos) + c2 * r2 * (gbest - pos)
-            if vmax is not None:
-                vel = np.clip(vel, -vmax, vmax)
-            pos = pos + vel
-            outside = (pos < lo) | (pos > hi)
-            pos = np.clip(pos, lo, hi)
-            vel[outside] = 0.0
+    def inertia_weight(self, k: int) -> float:
+        """Inertia ``w_k`` of iteration ``k`` (constant, or linear from ``w`` to ``w_end``)."""
+        return self.w if self.inertia == "constant" else self.w - (self.w - self.w_end) * self.schedule_fraction(k)
 
-            pos_nat = to_natural(pos)
-            fit = evaluate(pos_nat)
-            better = fit < pbest_fit
-            pbest[better], pbest_nat[better], pbest_fit[better] = pos[better], pos_nat[better], fit[better]
-            g = int(np.argmin(pbest_fit))
-            if pbest_fit[g] < gbest_fit:
-                gbest, gbest_nat, gbest_fit = pbest[g].copy(), pbest_nat[g].copy(), float(pbest_fit[g])
+    def chaos_radius_at(self, k: int) -> float:
+        """``rho_k``: the chaos region's half-width as a fraction of the search width, geometric in ``k``."""
+        return self.chaos_radius * (self.chaos_radius_end / self.chaos_radius) ** self.schedule_fraction(k)
 
-            if chaos_steps:
-                rho = chaos_radius * (chaos_radius_end / chaos_radius) ** frac
-                a = np.maximum(lo, gbest - rho * width)
-                b = np.minimum(hi, gbest + rho * width)
-                cand = np.empty((chaos_steps, n_dim))
-                for j in range(chaos_steps):
-                    z = _reseed_chaos(mu * z * (1.0 - z), chaos_gen, mu)  # eq. (15)
-                    cand[j] = a + z * (b - a)
-                cand = np.clip(cand, lo, hi)
-                cand_nat = to_natural(cand)
-                cand_fit = evaluate(cand_nat)
-                j = int(np.argmin(cand_fit))
-                if cand_fit[j] < gbest_fit:
-                    worst = int(np.argmax(fit))
-                    pos[worst], pos_nat[worst], fit[worst] = cand[j], cand_nat[j], cand_fit[j]
-                    pbest[worst], pbest_nat[worst], pbest_fit[worst] = cand[j], cand_nat[j], cand_fit[j]
-                    gbest, gbest_nat, gbest_fit = cand[j].copy(), cand_nat[j].copy(), float(cand_fit[j])
-                    n_chaos_improvements += 1
+    def pso_move(self, k: int) -> None:
+        """Phase 1 of iteration ``k``: draw ``r1``, ``r2`` and move the swarm (:func:`pso_move`)."""
+        s = self._require_swarm()
+        r1 = self._gen.random((self.n_particles, self.n_dim))
+        r2 = self._gen.random((self.n_particles, self.n_dim))
+        s.pos, s.vel = pso_move(
+            s.pos,
+            s.vel,
+            s.pbest,
+            s.gbest,
+            r1,
+            r2,
+            w=self.inertia_weight(k),
+            c1=self.c1,
+            c2=self.c2,
+            vmax=self.vmax,
+            lo=self.lo,
+            hi=self.hi,
+        )
 
-            nit = k
-            history.append(gbest_fit)
-            x_history.append(gbest_nat.copy())
+    def update_bests(self) -> None:
+        """Phase 2: evaluate the moved swarm and update personal and global bests."""
+        s = self._require_swarm()
+        s.pos_nat = self.to_natural(s.pos)
+        s.fit = self._evaluate(s.pos_nat)
+        s.update_bests()
 
-            if callback is not None:
-                interim = OptimizeResult(x=gbest_nat.copy(), fun=gbest_fit, nit=nit, nfev=evaluate.nfev)
-                try:
-                    stop = callback(interim)
-                except StopIteration:
-                    stop = True
-                if stop:
-                    message = "Stopped by the callback."
-                    break
-            if patience is not None and nit > patience and history[-1 - patience] - gbest_fit <= tol:
-                message = (
-                    f"Converged: best fitness improved by no more than tol={tol!r} over the last {patience} iterations."
-                )
-                break
+    def chaos_search(self, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Phase 3 of iteration ``k``: the ``chaos_steps`` chaos candidates around ``gbest``, evaluated as one
+        batch: ``(search-space points, natural points, fitness)``."""
+        s = self._require_swarm()
+        assert self._z is not None and self._chaos_gen is not None, "chaos search needs chaos_steps > 0"
+        a, b = chaos_region(s.gbest, self.chaos_radius_at(k), self.width, self.lo, self.hi)
+        cand, self._z = logistic_chaos_points(self._z, a, b, self.chaos_steps, self.mu, self._chaos_gen)
+        cand = np.clip(cand, self.lo, self.hi)
+        cand_nat = self.to_natural(cand)
+        return cand, cand_nat, self._evaluate(cand_nat)
 
-    success = math.isfinite(gbest_fit)
-    if not success:
-        message = "No finite objective value found. " + message
-    return OptimizeResult(
-        x=gbest_nat,
-        fun=gbest_fit,
-        nit=nit,
-        nfev=evaluate.nfev,
-        success=success,
-        message=message,
-        history=np.array(history),
-        x_history=np.array(x_history).reshape(nit, n_dim),
-        population=pos_nat,
-        population_fun=fit,
-        n_chaos_improvements=n_chaos_improvements,
-    )
+    def chaos_feedback(self, cand: np.ndarray, cand_nat: np.ndarray, cand_fit: np.ndarray) -> bool:
+        """Phase 4: let an improving chaos candidate into the swarm (:meth:`Swarm.accept_chaos`)."""
+        accepted = self._require_swarm().accept_chaos(cand, cand_nat, cand_fit)
+        self.n_chaos_improvements += int(accepted)
+        return accepted
+
+    # -- iteration -----------------------------------------------------------------------------------
+    def __iter__(self) -> Iterator[tuple[np.ndarray, float]]:
+        return self
+
+    def __next__(self) -> tuple[np.ndarray, float]:
+        """One generation (move, bests, chaos search and feedback, record, callback, stopping rules).
+
+        Returns the best point (natural units) and its fitness; ``StopIteration`` after ``max_iter``
+        iterations or once the callback or the ``tol``/``patience`` rule stopped the run.
+        """
+        if self.swarm is None:
+            self.init_population()
+        if self._stopped or self.nit >= self.max_iter:
+            self.close()
+            raise StopIteration
+        k = self.nit + 1
+        self.pso_move(k)
+        self.update_bests()
+        if self.chaos_steps:
+            self.chaos_feedback(*self.chaos_search(k))
+        s = self._require_swarm()
+        self.nit = k
+        self.history.append(s.gbest_fit)
+        self.x_history.append(s.gbest_nat.copy())
+        if self.callback is not None:
+            interim = OptimizeResult(x=s.gbest_nat.copy(), fun=s.gbest_fit, nit=self.nit, nfev=self.nfev)
+            try:
+                stop = self.callback(interim)
+            except StopIteration:
+                stop = True
+            if stop:
+                self.message = "Stopped by the callback."
+                self._stopped = True
+        if (
+            not self._stopped
+            and self.patience is not None
+            and self.nit > self.patience
+            and self.history[-1 - self.patience] - s.gbest_fit <= self.tol
+        ):
+            self.message = (
+                f"Converged: best fitness improved by no more than tol={self.tol!r} over the last "
+                f"{self.patience} iterations."
+            )
+            self._stopped = True
+        return s.gbest_nat.copy(), s.gbest_fit
+
+    def solve(self) -> OptimizeResult:
+        """Run the remaining generations and return :meth:`result`."""
+        for _ in self:
+            pass
+        return self.result()
+
+    def result(self) -> OptimizeResult:
+        """The ``OptimizeResult`` of the generations run so far (see the class docstring)."""
+        s = self._require_swarm()
+        success = math.isfinite(s.gbest_fit)
+        message = self.message if success else "No finite objective value found. " + self.message
+        return OptimizeResult(
+            x=s.gbest_nat,
+            fun=s.gbest_fit,
+            nit=self.nit,
+            nfev=self.nfev,
+            success=success,
+            message=message,
+            history=np.array(self.history),
+            x_history=np.array(self.x_history).reshape(self.nit, self.n_dim),
+            population=s.pos_nat,
+            population_fun=s.fit,
+            n_chaos_improvements=self.n_chaos_improvements,
+        )
+
+    def _require_swarm(self) -> Swarm:
+        if self.swarm is None:
+            raise RuntimeError("call init_population() first")
+        return self.swarm
 
 
 class _Evaluator:
@@ -350,7 +616,7 @@ class _Evaluator:
             out = np.asarray(self.fun(points.copy(), *self.args), dtype=float)
             self.nfev += n
             if out.shape != (n,):
-                raise ValueError(
+                raise OptionError(
                     f"vectorized fun must return an array of shape ({n},) for input of shape "
                     f"{points.shape}, got shape {out.shape}"
                 )
@@ -369,28 +635,23 @@ class _ScalarCall:
     def __call__(self, x: np.ndarray) -> float:
         value = np.asarray(self.fun(x, *self.args), dtype=float)
         if value.size != 1:
-            raise ValueError(f"fun must return a scalar, got an array of shape {value.shape}")
+            raise OptionError(f"fun must return a scalar, got an array of shape {value.shape}")
         return float(value.reshape(()))
 
 
-def _make_mapper(workers, stack: ExitStack):
-    if callable(workers):
-        return workers
-    if isinstance(workers, bool):
-        raise ValueError(f"workers must be a positive int, -1 or a map-like callable, got {workers!r}")
+def _validate_threads(threads) -> int:
+    message = f"threads must be a positive int or -1, got {threads!r}"
+    if isinstance(threads, bool):
+        raise OptionError(message)
     try:
-        n = operator.index(workers)
+        n = operator.index(threads)
     except TypeError:
-        raise ValueError(f"workers must be a positive int, -1 or a map-like callable, got {workers!r}") from None
+        raise OptionError(message) from None
     if n == -1:
-        import os
-
-        n = os.cpu_count() or 1
+        return os.cpu_count() or 1
     if n < 1:
-        raise ValueError(f"workers must be a positive int, -1 or a map-like callable, got {workers!r}")
-    if n == 1:
-        return map
-    return stack.enter_context(ThreadPoolExecutor(max_workers=n)).map
+        raise OptionError(message)
+    return n
 
 
 def _reseed_chaos(z: np.ndarray, gen: np.random.Generator, mu: float) -> np.ndarray:
@@ -419,17 +680,17 @@ def _validate_bounds(bounds) -> tuple[np.ndarray, np.ndarray]:
         try:
             arr = np.asarray(bounds, dtype=float)
         except (TypeError, ValueError):
-            raise ValueError(f"bounds must be a sequence of (low, high) pairs, got {bounds!r}") from None
+            raise OptionError(f"bounds must be a sequence of (low, high) pairs, got {bounds!r}") from None
         if arr.ndim != 2 or arr.shape[1] != 2 or arr.shape[0] < 1:
-            raise ValueError(f"bounds must be a sequence of (low, high) pairs, got {bounds!r}")
+            raise OptionError(f"bounds must be a sequence of (low, high) pairs, got {bounds!r}")
         lo, hi = arr[:, 0].copy(), arr[:, 1].copy()
     if lo.ndim != 1 or lo.size < 1:
-        raise ValueError(f"bounds must describe at least one dimension, got {bounds!r}")
+        raise OptionError(f"bounds must describe at least one dimension, got {bounds!r}")
     for i, (a, b) in enumerate(zip(lo.tolist(), hi.tolist(), strict=False)):
         if not (math.isfinite(a) and math.isfinite(b)):
-            raise ValueError(f"bounds must be finite, got ({a!r}, {b!r}) in dimension {i}")
+            raise OptionError(f"bounds must be finite, got ({a!r}, {b!r}) in dimension {i}")
         if not a < b:
-            raise ValueError(f"bounds must have low < high, got ({a!r}, {b!r}) in dimension {i}")
+            raise OptionError(f"bounds must have low < high, got ({a!r}, {b!r}) in dimension {i}")
     return lo, hi
 
 
@@ -440,10 +701,10 @@ def _validate_log_scale(log_scale, lo: np.ndarray, hi: np.ndarray) -> np.ndarray
     else:
         mask = np.asarray(log_scale)
         if mask.shape != (n_dim,) or mask.dtype != bool:
-            raise ValueError(f"log_scale must be a bool or a sequence of {n_dim} bools, got {log_scale!r}")
+            raise OptionError(f"log_scale must be a bool or a sequence of {n_dim} bools, got {log_scale!r}")
     for i in np.flatnonzero(mask):
         if lo[i] <= 0:
-            raise ValueError(
+            raise OptionError(
                 f"log_scale requires positive bounds, got ({float(lo[i])!r}, {float(hi[i])!r}) in dimension {i}"
             )
     return mask
@@ -451,13 +712,13 @@ def _validate_log_scale(log_scale, lo: np.ndarray, hi: np.ndarray) -> np.ndarray
 
 def _validate_int(name: str, value, *, minimum: int) -> int:
     if isinstance(value, (bool, np.bool_)):
-        raise ValueError(f"{name} must be an int >= {minimum}, got {value!r}")
+        raise OptionError(f"{name} must be an int >= {minimum}, got {value!r}")
     try:
         n = operator.index(value)
     except TypeError:
-        raise ValueError(f"{name} must be an int >= {minimum}, got {value!r}") from None
+        raise OptionError(f"{name} must be an int >= {minimum}, got {value!r}") from None
     if n < minimum:
-        raise ValueError(f"{name} must be an int >= {minimum}, got {value!r}")
+        raise OptionError(f"{name} must be an int >= {minimum}, got {value!r}")
     return n
 
 
@@ -465,6 +726,6 @@ def _validate_nonnegative(name: str, value) -> None:
     try:
         v = float(value)
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a non-negative number, got {value!r}") from None
+        raise OptionError(f"{name} must be a non-negative number, got {value!r}") from None
     if not (math.isfinite(v) and v >= 0):
-        raise ValueError(f"{name} must be a non-negative number, got {value!r}")
+        raise OptionError(f"{name} must be a non-negative number, got {value!r}")
