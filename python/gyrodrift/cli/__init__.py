@@ -4,7 +4,8 @@ One module per family of commands, each registering its commands in the one grou
 
 - `gyrodrift.cli.learning`: `fit`, `predict`, `reproduce` (run tables and drift models);
 - `gyrodrift.cli.navigation`: `simulate`, `navigate` (the Rust core on scenarios and IMU logs);
-- `gyrodrift.cli.procedure`: `features`, `truth`, `evaluate`, `identify` (from an IMU log to a compensation).
+- `gyrodrift.cli.procedure`: `features`, `truth`, `evaluate`, `identify` (from an IMU log to a compensation);
+- `gyrodrift.cli.sensors`: `allan` (noise of a static log).
 
 Heavy imports (numpy, pyarrow, scikit-learn, the Rust extension) happen inside the commands, so that
 ``gyrodrift --help`` starts at once. Errors have one handler, `_OneLineErrors`: every expected failure
@@ -40,9 +41,9 @@ def main() -> None:
 
 
 def _register_commands() -> None:
-    from gyrodrift.cli import learning, navigation, procedure
+    from gyrodrift.cli import learning, navigation, procedure, sensors
 
-    for module in (learning, navigation, procedure):
+    for module in (learning, navigation, procedure, sensors):
         for command in module.COMMANDS:
             main.add_command(command)
 
