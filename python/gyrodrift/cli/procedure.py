@@ -8,6 +8,8 @@ from pathlib import Path
 
 import click
 
+from gyrodrift.cli.types import FiniteFloat
+
 __all__ = ["features_command", "truth_command", "evaluate_command", "identify_command"]
 
 
@@ -95,7 +97,7 @@ def _num(x):
 @click.option("--scheduler", default=None, help="Address of a running dask scheduler (tcp://host:8786).")
 @click.option(
     "--connect-timeout-s",
-    type=click.FloatRange(min=0.0, min_open=True, max=3600.0),
+    type=FiniteFloat(min=0.0, max=3600.0, min_open=True),
     default=10.0,
     show_default=True,
     help="Seconds to wait for --scheduler to answer before giving up.",
