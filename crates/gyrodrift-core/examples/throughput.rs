@@ -85,7 +85,7 @@ fn main() {
             break;
         }
         let b = Instant::now();
-        nav.process(&ch.dtheta, &ch.dv, 6000, |_| n_out += 1);
+        nav.process(&ch.dtheta, &ch.dv, 6000, |_| n_out += 1).unwrap();
         t_sim += (b - a).as_secs_f64();
         t_nav += b.elapsed().as_secs_f64();
     }

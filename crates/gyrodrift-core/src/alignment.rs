@@ -19,10 +19,10 @@
 use crate::attitude::{dcm_to_euler, quat_mul, quat_to_dcm, Euler, Mat3, Vec3};
 use crate::coarse_alignment::InertialCoarseAlignment;
 use crate::earth;
+use crate::error::{check, CoreError};
 use crate::kalman::{self, ErrorModel, ErrorStateFilter, StateMatrix, DV, EPS, NABLA, N_STATES, PHI};
-use crate::simulator::check_site;
+use crate::limits::{check_increments, check_site};
 use crate::strapdown::{Navigator, NavigatorConfig, Vertical};
-use crate::turntable::{check, ParamError};
 
 /// One micro-g [m/s^2] (1 ug = 9.80665e-6 m/s^2, the conventions' value).
 pub const MICRO_G: f64 = 9.806_65e-6;
@@ -85,7 +85,7 @@ impl AlignerConfig {
     }
 
     /// Range checks; errors name the contract key.
-    pub fn validate(&self) -> Result<(), ParamError> {
+    pub fn validate(&self) -> Result<(), CoreError> {
         check_site(self.lat, self.lon, self.height, self.rate_hz)?;
         let in_range = |x: f64, lo: f64, hi: f64| x.is_finite() && x >= lo && x <= hi;
         check(
@@ -227,16 +227,18 @@ pub struct Aligner {
     fine: Option<FineAlignment>,
     hist_t: Vec<f64>,
     hist_std: Vec<[f64; N_STATES]>,
+    /// The error that stopped the alignment (returned again by every later call).
+    failed: Option<CoreError>,
 }
 
 impl Aligner {
     /// A validated aligner.
-    pub fn new(cfg: AlignerConfig) -> Result<Self, ParamError> {
+    pub fn new(cfg: AlignerConfig) -> Result<Self, CoreError> {
         cfg.validate()?;
         let (n_coarse, n_fine, n_update) = cfg.sample_counts();
         check(n_coarse >= 2, "coarse_s", "gives fewer than 2 samples at this rate")?;
         Ok(Aligner {
-            coarse: InertialCoarseAlignment::new(cfg.lat, cfg.height, cfg.rate_hz, n_coarse),
+            coarse: InertialCoarseAlignment::new(cfg.lat, cfg.height, cfg.rate_hz, n_coarse)?,
             cfg,
             n_coarse,
             n_fine,
@@ -246,6 +248,7 @@ impl Aligner {
             fine: None,
             hist_t: Vec::new(),
             hist_std: Vec::new(),
+            failed: None,
         })
     }
 
@@ -276,31 +279,37 @@ impl Aligner {
 
     /// Consume samples given as flat row-major (n x 3) slices of raw increments (dtheta [rad], dv [m/s], body
     /// frame); stops at the end of the alignment span. Returns how many samples were used.
-    pub fn process(&mut self, dtheta: &[f64], dv: &[f64]) -> usize {
-        assert_eq!(dtheta.len(), dv.len());
-        assert_eq!(dtheta.len() % 3, 0);
-        let mut used = 0;
-        for (a, b) in dtheta.chunks_exact(3).zip(dv.chunks_exact(3)) {
-            if self.done() {
-                break;
-            }
-            self.step([a[0], a[1], a[2]], [b[0], b[1], b[2]]);
-            used += 1;
+    ///
+    /// The samples are checked first (`limits::check_increments`); a refused chunk changes nothing. An
+    /// estimate that leaves its physical range ([`CoreError::Diverged`]: the log is not a static base at the
+    /// configured site and rate) stops the alignment: this and every later call return that error.
+    pub fn process(&mut self, dtheta: &[f64], dv: &[f64]) -> Result<usize, CoreError> {
+        if let Some(e) = &self.failed {
+            return Err(e.clone());
         }
-        used
+        check_increments(dtheta, dv, 1.0 / self.cfg.rate_hz)?;
+        let n = (dtheta.len() / 3).min(usize::try_from(self.n_samples() - self.k).unwrap_or(usize::MAX));
+        for (a, b) in dtheta.chunks_exact(3).zip(dv.chunks_exact(3)).take(n) {
+            if let Err(e) = self.step([a[0], a[1], a[2]], [b[0], b[1], b[2]]) {
+                self.failed = Some(e.clone());
+                return Err(e);
+            }
+        }
+        Ok(n)
     }
 
     /// One sample.
-    fn step(&mut self, dtheta: Vec3, dv: Vec3) {
+    fn step(&mut self, dtheta: Vec3, dv: Vec3) -> Result<(), CoreError> {
         self.k += 1;
         if self.k <= self.n_coarse {
             self.coarse.step(dtheta, dv);
             if self.k == self.n_coarse {
-                self.start_fine();
+                self.start_fine()?;
             }
-            return;
+            return Ok(());
         }
         let last = self.k == self.n_samples();
+        // Invariant: `start_fine` ran at sample n_coarse (it either set `fine` or failed, which stops `process`).
         let fine = self.fine.as_mut().expect("fine alignment starts after the coarse span");
         fine.nav.step(dtheta, dv);
         let c = quat_to_dcm(fine.nav.quaternion());
@@ -311,13 +320,25 @@ impl Aligner {
         }
         fine.n_interval += 1;
         if fine.n_interval == self.n_update || last {
-            self.update();
+            self.update()?;
         }
+        Ok(())
     }
 
     /// End of the coarse span: start the navigator and the filter.
-    fn start_fine(&mut self) {
+    fn start_fine(&mut self) -> Result<(), CoreError> {
+        let t_s = self.k as f64 / self.cfg.rate_hz;
+        // Invariant: called at sample n_coarse, when the coarse span is complete.
         let c_bn = self.coarse.attitude().expect("coarse span complete");
+        if !c_bn.iter().flatten().all(|x| x.is_finite()) {
+            return Err(CoreError::Diverged {
+                key: "dv_m_s",
+                t_s,
+                message: "the coarse alignment found no attitude: the specific force and the Earth rate give \
+                          no two independent directions (no gravity in the log?)"
+                    .to_string(),
+            });
+        }
         let attitude = dcm_to_euler(&c_bn);
         self.coarse_attitude = Some(attitude);
         let cfg = &self.cfg;
@@ -330,6 +351,13 @@ impl Aligner {
             rate_hz: cfg.rate_hz,
             vertical: Vertical::Fixed,
         };
+        // The site was validated with the aligner; only the coarse attitude can be out of range (a pitch of
+        // +-90 deg: the body y axis vertical).
+        let nav = Navigator::new(nav_cfg).map_err(|e| CoreError::Diverged {
+            key: "dv_m_s",
+            t_s,
+            message: format!("the coarse attitude is outside the navigator's range: {e}"),
+        })?;
         let att = cfg.att_sigma.unwrap_or_else(|| coarse_attitude_sigma(cfg));
         let mut sigma = [0.0; N_STATES];
         sigma[PHI..PHI + 3].copy_from_slice(&att);
@@ -338,7 +366,7 @@ impl Aligner {
         sigma[NABLA..NABLA + 3].copy_from_slice(&cfg.accel_bias_sigma);
         let update_t = self.n_update as f64 / cfg.rate_hz;
         let fine = FineAlignment {
-            nav: Navigator::new(nav_cfg).expect("validated site and attitude"),
+            nav,
             model: ErrorModel::new(cfg.lat, cfg.height),
             filter: ErrorStateFilter::new(&sigma),
             gyro_bias: [0.0; 3],
@@ -350,12 +378,15 @@ impl Aligner {
         };
         self.record_history(&fine.filter);
         self.fine = Some(fine);
+        Ok(())
     }
 
     /// Predict over the interval just ended, update with the zero velocity, feed back, reset.
-    fn update(&mut self) {
+    fn update(&mut self) -> Result<(), CoreError> {
         let at_end = self.k == self.n_samples();
+        let t_s = self.k as f64 / self.cfg.rate_hz;
         let cfg = &self.cfg;
+        // Invariant: `update` is called from the fine span only, after `start_fine` set `fine`.
         let fine = self.fine.as_mut().expect("fine alignment running");
         let n = fine.n_interval as f64;
         let t = n / cfg.rate_hz;
@@ -364,8 +395,14 @@ impl Aligner {
         let q = kalman::process_noise(&phi, cfg.gyro_arw, cfg.accel_vrw, t);
         fine.filter.predict(&phi, &q);
         let state = fine.nav.state();
-        fine.filter.update_zero_velocity(state.vel, cfg.zupt_sigma);
-        fine.feed_back();
+        fine.filter
+            .update_zero_velocity(state.vel, cfg.zupt_sigma)
+            .map_err(|message| CoreError::Diverged {
+                key: "dv_m_s",
+                t_s,
+                message,
+            })?;
+        fine.feed_back(t_s)?;
         fine.c_sum = [[0.0; 3]; 3];
         fine.n_interval = 0;
         fine.updates += 1;
@@ -374,6 +411,7 @@ impl Aligner {
             let filter = fine.filter.clone();
             self.record_history(&filter);
         }
+        Ok(())
     }
 
     fn record_history(&mut self, filter: &ErrorStateFilter) {
@@ -384,20 +422,29 @@ impl Aligner {
         }
     }
 
-    /// The result (None until the alignment span is complete).
-    pub fn result(&self) -> Option<AlignmentResult> {
-        if !self.done() {
-            return None;
+    /// The result: [`CoreError::Incomplete`] until the alignment span is complete, or the error that stopped
+    /// the alignment.
+    pub fn result(&self) -> Result<AlignmentResult, CoreError> {
+        if let Some(e) = &self.failed {
+            return Err(e.clone());
         }
+        if !self.done() {
+            return Err(CoreError::Incomplete {
+                done: self.k,
+                needed: self.n_samples(),
+            });
+        }
+        // Invariants: done means sample n_coarse (>= 2, checked in `new`) was processed without error, so
+        // `start_fine` set both the coarse attitude and the fine alignment.
         let coarse_attitude = self.coarse_attitude.expect("coarse span complete");
+        let fine = self
+            .fine
+            .as_ref()
+            .expect("the fine alignment starts with the last coarse sample");
         let t_s = self.k as f64 / self.cfg.rate_hz;
-        let fine = match &self.fine {
-            Some(f) => f,
-            None => unreachable!("the fine alignment starts with the last coarse sample"),
-        };
         let s = fine.filter.std();
         let state = fine.nav.state();
-        Some(AlignmentResult {
+        Ok(AlignmentResult {
             t_s,
             attitude: state.attitude,
             vel: state.vel,
@@ -414,8 +461,10 @@ impl Aligner {
 }
 
 impl FineAlignment {
-    /// Closed-loop feedback of the filter's estimate (module docs), then reset of the error state.
-    fn feed_back(&mut self) {
+    /// Closed-loop feedback of the filter's estimate (module docs), then reset of the error state. An estimate
+    /// beyond the navigator's ranges (attitude correction 0.5 rad, velocity 1000 m/s, gyro bias 0.1 rad/s,
+    /// accelerometer bias 10 m/s^2) means the log does not fit a static base: [`CoreError::Diverged`] at `t_s`.
+    fn feed_back(&mut self, t_s: f64) -> Result<(), CoreError> {
         let x = self.filter.take_correction();
         let phi = [x[PHI], x[PHI + 1], x[PHI + 2]];
         let dv = [x[DV], x[DV + 1], x[DV + 2]];
@@ -423,16 +472,24 @@ impl FineAlignment {
             self.gyro_bias[i] += x[EPS + i];
             self.accel_bias[i] += x[NABLA + i];
         }
+        let diverged = |what: &str, e: CoreError| CoreError::Diverged {
+            key: e.key(),
+            t_s,
+            message: format!(
+                "the fine alignment's {what} left its range ({e}): the log does not look like a static base at \
+                 the given site and sample rate"
+            ),
+        };
         // C_b^n(true) = (I + [phi x]) C_b^n(computed): q <- q(phi) o q; v <- v - dv.
         self.nav
             .correct(phi, dv)
-            .expect("correction within the navigator's ranges");
+            .map_err(|e| diverged("attitude or velocity correction", e))?;
         self.nav
             .set_gyro_bias(self.gyro_bias)
-            .expect("gyro bias estimate within range");
+            .map_err(|e| diverged("gyro bias estimate", e))?;
         self.nav
             .set_accel_bias(self.accel_bias)
-            .expect("accelerometer bias estimate within range");
+            .map_err(|e| diverged("accelerometer bias estimate", e))
     }
 }
 

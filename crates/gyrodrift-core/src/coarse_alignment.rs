@@ -47,6 +47,7 @@ use crate::attitude::{
     scale, sub, transpose, Mat3, Quat, Vec3, QUAT_IDENTITY,
 };
 use crate::earth;
+use crate::error::{check, CoreError};
 use crate::strapdown::coning_sculling;
 
 /// What the coarse alignment finds at the end of its span.
@@ -160,9 +161,13 @@ impl BiasFitSums {
 
 impl InertialCoarseAlignment {
     /// A span of `n_samples` (at least 2) samples at `rate_hz` [Hz] at latitude `lat` [rad], height `height` [m].
-    pub fn new(lat: f64, height: f64, rate_hz: f64, n_samples: u64) -> Self {
-        assert!(n_samples >= 2, "the coarse span needs at least 2 samples");
-        InertialCoarseAlignment {
+    pub fn new(lat: f64, height: f64, rate_hz: f64, n_samples: u64) -> Result<Self, CoreError> {
+        check(
+            n_samples >= 2,
+            "coarse_s",
+            format!("the coarse span holds {n_samples} samples, at least 2 are needed"),
+        )?;
+        Ok(InertialCoarseAlignment {
             lat,
             g: earth::normal_gravity(lat, height),
             dt: 1.0 / rate_hz,
@@ -176,7 +181,7 @@ impl InertialCoarseAlignment {
             sums: BiasFitSums::default(),
             dtheta_prev: [0.0; 3],
             dv_prev: [0.0; 3],
-        }
+        })
     }
 
     /// True when all samples of the span have been processed.

@@ -27,7 +27,7 @@
 //! (x, y, z) then rate random walk (x, y, z). A term whose magnitude is zero draws nothing.
 
 use crate::attitude::Vec3;
-use crate::turntable::{check, ParamError};
+use crate::error::{check, CoreError, Unit};
 use rand_core::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_pcg::Pcg64Mcg;
@@ -89,12 +89,16 @@ impl Default for ImuErrorParams {
 
 impl ImuErrorParams {
     /// Range checks; errors name the contract key. Limits reject nonsense, not unusual sensors.
-    pub fn validate(&self) -> Result<(), ParamError> {
+    pub fn validate(&self) -> Result<(), CoreError> {
         let fin = |v: &[f64]| v.iter().all(|x| x.is_finite());
         check(
             fin(&self.gyro_bias) && self.gyro_bias.iter().all(|b| b.abs() <= 0.1),
             "gyro_bias_rad_s",
-            "must be finite with |b| <= 0.1 rad/s",
+            format!(
+                "gyro bias {} must be finite and within +-{}",
+                crate::error::show_all(&self.gyro_bias, Unit::DegPerH),
+                Unit::DegPerH.show(0.1)
+            ),
         )?;
         check(
             self.gyro_arw.is_finite() && self.gyro_arw >= 0.0 && self.gyro_arw <= 0.1,
@@ -215,7 +219,7 @@ pub fn slow_step_samples(p: &ImuErrorParams, dt: f64) -> u32 {
 
 impl ImuErrorModel {
     /// A model for sample interval `dt` [s], noise seeded by `seed`.
-    pub fn new(p: ImuErrorParams, dt: f64, seed: u64) -> Result<Self, ParamError> {
+    pub fn new(p: ImuErrorParams, dt: f64, seed: u64) -> Result<Self, CoreError> {
         p.validate()?;
         let m = p.gyro_misalignment;
         let s = p.gyro_scale;
@@ -572,12 +576,12 @@ mod tests {
             gyro_correlation: 1.0,
             ..Default::default()
         };
-        assert_eq!(p.validate().unwrap_err().key, "gyro_arw_rad_rts");
+        assert_eq!(p.validate().unwrap_err().key(), "gyro_arw_rad_rts");
         let p = ImuErrorParams {
             gyro_correlation: 0.0,
             ..Default::default()
         };
-        assert_eq!(p.validate().unwrap_err().key, "gyro_correlation_s");
+        assert_eq!(p.validate().unwrap_err().key(), "gyro_correlation_s");
         ImuErrorParams::default().validate().unwrap();
     }
 }

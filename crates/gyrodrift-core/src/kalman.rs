@@ -169,8 +169,10 @@ impl ErrorStateFilter {
     }
 
     /// Zero-velocity measurement update with the computed velocity `v` [m/s] (true velocity zero) and
-    /// measurement noise 1-sigma `sigma` [m/s] per axis; Joseph-form covariance update.
-    pub fn update_zero_velocity(&mut self, v: Vec3, sigma: f64) {
+    /// measurement noise 1-sigma `sigma` [m/s] per axis; Joseph-form covariance update. With sigma > 0 the
+    /// innovation covariance H P H' + R is positive definite as long as P is finite; an error (the message)
+    /// if P or v is no longer finite, and then the filter is left unchanged.
+    pub fn update_zero_velocity(&mut self, v: Vec3, sigma: f64) -> Result<(), String> {
         let mut h = SMatrix::<f64, 3, N_STATES>::zeros();
         for i in 0..3 {
             h[(i, DV + i)] = 1.0;
@@ -178,13 +180,21 @@ impl ErrorStateFilter {
         let r = SMatrix::<f64, 3, 3>::identity() * (sigma * sigma);
         let z = SVector::<f64, 3>::from_column_slice(&v);
         let s = h * self.p * h.transpose() + r;
-        let s_inv = s
-            .try_inverse()
-            .expect("innovation covariance H P H' + R is positive definite");
+        let s_inv = match s.try_inverse() {
+            Some(m) if m.iter().all(|x| x.is_finite()) && v.iter().all(|x| x.is_finite()) => m,
+            _ => {
+                return Err(format!(
+                    "the zero-velocity update has no finite solution (velocity {:?} m/s, innovation \
+                     covariance not invertible or not finite)",
+                    v
+                ))
+            }
+        };
         let k = self.p * h.transpose() * s_inv;
         self.x += k * (z - h * self.x);
         let i_kh = StateMatrix::identity() - k * h;
         self.p = symmetrise(i_kh * self.p * i_kh.transpose() + k * r * k.transpose());
+        Ok(())
     }
 
     /// Hand over the estimate for feedback correction and reset the error state to zero (closed loop).
@@ -242,7 +252,7 @@ mod tests {
     #[test]
     fn joseph_update_shrinks_the_measured_states() {
         let mut kf = ErrorStateFilter::new(&[1.0; N_STATES]);
-        kf.update_zero_velocity([0.5, 0.0, 0.0], 1.0);
+        kf.update_zero_velocity([0.5, 0.0, 0.0], 1.0).unwrap();
         assert!((kf.state()[DV] - 0.25).abs() < 1e-15);
         assert!((kf.covariance()[(DV, DV)] - 0.5).abs() < 1e-15);
         assert_eq!(kf.covariance()[(PHI, PHI)], 1.0);

@@ -9,6 +9,9 @@
 //!   temperature-dependent axial drift).
 //! - [`simulator`]: exact IMU increments of a static base with a turntable, plus the error model.
 //! - [`strapdown`]: the strapdown navigator (coning/sculling, velocity, position, attitude).
+//! - [`coarse_alignment`], [`kalman`], [`alignment`]: the static-base alignment (coarse, 12-state filter, driver).
+//! - [`limits`]: the ranges of the shared quantities (site, rate, attitude, samples), checked in one place.
+//! - [`error`]: [`error::CoreError`], the one error type; library code does not panic on data.
 //!
 //! Frames: navigation frame local-level East-North-Up (ENU); body frame Right-Forward-Up.
 //! Units: SI everywhere inside the crate (rad, rad/s, m, m/s, s).
@@ -17,8 +20,10 @@ pub mod alignment;
 pub mod attitude;
 pub mod coarse_alignment;
 pub mod earth;
+pub mod error;
 pub mod imu_error;
 pub mod kalman;
+pub mod limits;
 pub mod simulator;
 pub mod strapdown;
 pub mod temperature;

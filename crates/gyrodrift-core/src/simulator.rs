@@ -22,9 +22,11 @@
 
 use crate::attitude::{dcm_to_euler, euler_to_dcm, mat_mul, mat_t_vec, Euler, Mat3, Vec3};
 use crate::earth;
+use crate::error::{check, CoreError};
 use crate::imu_error::{ImuErrorModel, ImuErrorParams};
+use crate::limits::{check_attitude, check_duration, check_site};
 use crate::temperature::TemperatureProfile;
-use crate::turntable::{check, ParamError, RotationScheme, TableCursor, Turntable};
+use crate::turntable::{RotationScheme, TableCursor, Turntable};
 
 /// Everything that defines a simulated static run (SI units).
 #[derive(Clone, Debug, PartialEq)]
@@ -67,67 +69,46 @@ impl Default for ImuSimulatorConfig {
     }
 }
 
-/// Checks of the site, rate, duration and attitude shared by the simulator and the navigator.
-pub(crate) fn check_site(lat: f64, lon: f64, height: f64, rate_hz: f64) -> Result<(), ParamError> {
-    check(
-        lat.is_finite() && lat.abs() <= 89.0f64.to_radians(),
-        "lat_rad",
-        format!("must be within +-89 deg (+-1.5533 rad), got {lat}"),
-    )?;
-    check(
-        lon.is_finite() && lon.abs() <= 2.0 * std::f64::consts::PI,
-        "lon_rad",
-        format!("must be within +-2 pi, got {lon}"),
-    )?;
-    check(
-        height.is_finite() && (-1000.0..=20000.0).contains(&height),
-        "height_m",
-        format!("must be in [-1000, 20000] m, got {height}"),
-    )?;
-    check(
-        rate_hz.is_finite() && (1.0..=100_000.0).contains(&rate_hz),
-        "rate_hz",
-        format!("must be in [1, 100000] Hz, got {rate_hz}"),
-    )
-}
-
-pub(crate) fn check_attitude(e: Euler) -> Result<(), ParamError> {
-    use std::f64::consts::{FRAC_PI_2, PI};
-    check(
-        e.pitch.is_finite() && e.pitch.abs() < FRAC_PI_2,
-        "pitch_rad",
-        format!("must be within (-pi/2, pi/2), got {}", e.pitch),
-    )?;
-    check(
-        e.roll.is_finite() && e.roll.abs() <= PI,
-        "roll_rad",
-        format!("must be within [-pi, pi], got {}", e.roll),
-    )?;
-    check(
-        e.yaw.is_finite() && e.yaw.abs() <= 2.0 * PI,
-        "yaw_rad",
-        format!("must be within [-2 pi, 2 pi], got {}", e.yaw),
-    )
-}
-
 impl ImuSimulatorConfig {
     /// Range checks; errors name the contract key.
-    pub fn validate(&self) -> Result<(), ParamError> {
+    pub fn validate(&self) -> Result<(), CoreError> {
         check_site(self.lat, self.lon, self.height, self.rate_hz)?;
-        check(
-            self.duration_s.is_finite() && self.duration_s > 0.0 && self.duration_s <= 1e7,
-            "duration_s",
-            format!("must be in (0, 1e7] s, got {}", self.duration_s),
-        )?;
-        check(
-            (self.duration_s * self.rate_hz).round() >= 1.0,
-            "duration_s",
-            "gives no sample at this rate",
-        )?;
+        check_duration(self.duration_s, self.rate_hz)?;
         check_attitude(self.attitude)?;
         self.errors.validate()?;
         self.temperature.validate()
     }
+}
+
+/// Most samples of one chunk handed to a caller (2^24: 1.5 GiB of output arrays).
+pub const MAX_CHUNK_SAMPLES: u64 = 1 << 24;
+
+/// Fewest samples per period of a periodic table profile.
+pub const MIN_SAMPLES_PER_PERIOD: f64 = 10.0;
+
+/// A periodic table profile must last at least `MIN_SAMPLES_PER_PERIOD` samples: a table that reverses
+/// faster than the IMU samples is no turntable (and its profile would be walked segment by segment for
+/// every sample, e.g. a 1e-300 deg span would run for hours).
+fn check_period(table: &Turntable, dt: f64) -> Result<(), CoreError> {
+    let period = table.period();
+    if period == 0.0 || period >= MIN_SAMPLES_PER_PERIOD * dt {
+        return Ok(());
+    }
+    let (key, what) = match table.scheme() {
+        RotationScheme::Indexing { .. } => ("positions_rad", "indexing cycle"),
+        _ => ("reciprocating_span_rad", "reciprocating period"),
+    };
+    check(
+        false,
+        key,
+        format!(
+            "the {what} of {} s is shorter than {MIN_SAMPLES_PER_PERIOD} samples ({} s at {} Hz): \
+             the moves are too small",
+            crate::error::sig(period),
+            crate::error::sig(MIN_SAMPLES_PER_PERIOD * dt),
+            crate::error::sig(1.0 / dt)
+        ),
+    )
 }
 
 /// A chunk of simulated samples (flat buffers, reused between calls).
@@ -272,10 +253,11 @@ pub struct ImuSimulator {
 }
 
 impl ImuSimulator {
-    pub fn new(cfg: ImuSimulatorConfig) -> Result<Self, ParamError> {
+    pub fn new(cfg: ImuSimulatorConfig) -> Result<Self, CoreError> {
         cfg.validate()?;
         let table = Turntable::new(cfg.scheme.clone())?;
         let dt = 1.0 / cfg.rate_hz;
+        check_period(&table, dt)?;
         let errors = ImuErrorModel::new(cfg.errors.clone(), dt, cfg.seed)?;
         let c_b0n = euler_to_dcm(cfg.attitude);
         let g = earth::normal_gravity(cfg.lat, cfg.height);
@@ -492,7 +474,20 @@ impl ImuSimulator {
             roll: &mut out.roll,
             yaw: &mut out.yaw,
         };
-        self.fill(slices)
+        // Invariant: `resize` gave every buffer m samples (3 m values for dtheta and dv).
+        self.fill(slices).expect("buffers sized by resize")
+    }
+
+    /// The number of samples the next chunk of at most `n` samples holds (the samples remaining, if fewer),
+    /// after checking `n` against [`MAX_CHUNK_SAMPLES`] so that a caller never allocates more than that.
+    pub fn chunk_len(&self, n: u64) -> Result<usize, CoreError> {
+        check(
+            (1..=MAX_CHUNK_SAMPLES).contains(&n),
+            "n",
+            format!("a chunk of {n} samples is outside [1, {MAX_CHUNK_SAMPLES}] samples (12 float64 values each)"),
+        )?;
+        // Bounded by MAX_CHUNK_SAMPLES, which fits usize on every supported platform (>= 32 bits).
+        Ok(self.remaining().min(n) as usize)
     }
 
     /// Samples not produced yet.
@@ -503,24 +498,25 @@ impl ImuSimulator {
     /// Produce the next samples into caller-provided buffers (e.g. numpy arrays): as many as `out.t_s.len()`
     /// or the samples remaining, whichever is smaller. Returns the number produced. Every slice must hold at
     /// least that many samples (x 3 for `dtheta` and `dv`).
-    pub fn fill(&mut self, out: ImuChunkSlices<'_>) -> usize {
+    pub fn fill(&mut self, out: ImuChunkSlices<'_>) -> Result<usize, CoreError> {
         let m = self.remaining().min(out.t_s.len() as u64) as usize;
-        assert!(
-            out.dtheta.len() >= 3 * m && out.dv.len() >= 3 * m,
-            "dtheta/dv buffers too short"
-        );
-        assert!(
-            [
-                out.temp_c.len(),
-                out.table_angle.len(),
-                out.pitch.len(),
-                out.roll.len(),
-                out.yaw.len()
-            ]
-            .iter()
-            .all(|&l| l >= m),
-            "buffers too short"
-        );
+        let short = [
+            ("dtheta", out.dtheta.len(), 3 * m),
+            ("dv", out.dv.len(), 3 * m),
+            ("temp_c", out.temp_c.len(), m),
+            ("table_angle", out.table_angle.len(), m),
+            ("pitch", out.pitch.len(), m),
+            ("roll", out.roll.len(), m),
+            ("yaw", out.yaw.len(), m),
+        ]
+        .into_iter()
+        .find(|(_, len, need)| len < need);
+        if let Some((key, len, need)) = short {
+            return Err(CoreError::Shape {
+                key,
+                message: format!("output buffer holds {len} values, {need} needed for {m} samples"),
+            });
+        }
         let temp_drift = self.errors.params().has_temperature_drift();
         let rate = self.cfg.rate_hz;
         let mut t0 = self.k as f64 / rate;
@@ -560,7 +556,7 @@ impl ImuSimulator {
                 &mut out.yaw[start..end],
             );
         }
-        m
+        Ok(m)
     }
 
     /// Second pass of `fill`: on entry `pitch`, `roll` hold sin and cos of the table angle; on exit the

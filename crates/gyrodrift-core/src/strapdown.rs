@@ -40,8 +40,9 @@ use crate::attitude::{
     scale, sub, Euler, Quat, Vec3,
 };
 use crate::earth;
-use crate::simulator::{check_attitude, check_site};
-use crate::turntable::{check, ParamError};
+use crate::error::{check, CoreError};
+use crate::error::{show_all, Unit};
+use crate::limits::{check_attitude, check_increments, check_site};
 
 /// Samples between refreshes of the position-dependent Earth terms.
 pub const EARTH_REFRESH: u64 = 8;
@@ -85,12 +86,15 @@ impl Default for NavigatorConfig {
 }
 
 impl NavigatorConfig {
-    pub fn validate(&self) -> Result<(), ParamError> {
+    pub fn validate(&self) -> Result<(), CoreError> {
         check_site(self.lat, self.lon, self.height, self.rate_hz)?;
         check(
             self.vel.iter().all(|v| v.is_finite() && v.abs() <= 1000.0),
             "vel_enu_m_s",
-            "must be finite with |v| <= 1000 m/s",
+            format!(
+                "velocity {} must be finite and within +-1000 m/s",
+                show_all(&self.vel, Unit::Si("m/s"))
+            ),
         )?;
         check_attitude(self.attitude)
     }
@@ -188,7 +192,7 @@ pub struct Navigator {
 }
 
 impl Navigator {
-    pub fn new(cfg: NavigatorConfig) -> Result<Self, ParamError> {
+    pub fn new(cfg: NavigatorConfig) -> Result<Self, CoreError> {
         cfg.validate()?;
         let earth = EarthTerms::at(cfg.lat, cfg.height);
         let mut vel = cfg.vel;
@@ -217,11 +221,15 @@ impl Navigator {
     }
 
     /// Set the estimated gyro bias [rad/s], subtracted from every following sample (measured - estimate).
-    pub fn set_gyro_bias(&mut self, b: Vec3) -> Result<(), ParamError> {
+    pub fn set_gyro_bias(&mut self, b: Vec3) -> Result<(), CoreError> {
         check(
             b.iter().all(|x| x.is_finite() && x.abs() <= 0.1),
-            "gyro_bias",
-            "must be finite with |b| <= 0.1 rad/s",
+            "gyro_bias_rad_s",
+            format!(
+                "gyro bias {} must be finite and within +-{}",
+                show_all(&b, Unit::DegPerH),
+                Unit::DegPerH.show(0.1)
+            ),
         )?;
         self.gyro_bias = b;
         self.gyro_bias_dt = scale(b, self.dt);
@@ -229,11 +237,15 @@ impl Navigator {
     }
 
     /// Set the estimated accelerometer bias [m/s^2], subtracted from every following sample.
-    pub fn set_accel_bias(&mut self, b: Vec3) -> Result<(), ParamError> {
+    pub fn set_accel_bias(&mut self, b: Vec3) -> Result<(), CoreError> {
         check(
             b.iter().all(|x| x.is_finite() && x.abs() <= 10.0),
-            "accel_bias",
-            "must be finite with |b| <= 10 m/s^2",
+            "accel_bias_m_s2",
+            format!(
+                "accelerometer bias {} must be finite and within +-10 m/s^2 ({})",
+                show_all(&b, Unit::Si("m/s^2")),
+                Unit::G.show(10.0)
+            ),
         )?;
         self.accel_bias = b;
         self.accel_bias_dt = scale(b, self.dt);
@@ -267,16 +279,23 @@ impl Navigator {
     /// (with the `Fixed` vertical channel v_U stays zero). Position, time, the previous sample's increments
     /// (the coning/sculling memory), the Earth terms and the bias estimates are kept, so a corrected run goes on
     /// exactly as a run started from the corrected state with the same history.
-    pub fn correct(&mut self, phi: Vec3, dv: Vec3) -> Result<(), ParamError> {
+    pub fn correct(&mut self, phi: Vec3, dv: Vec3) -> Result<(), CoreError> {
         check(
             phi.iter().all(|x| x.is_finite() && x.abs() <= 0.5),
             "phi",
-            "must be finite with |phi| <= 0.5 rad",
+            format!(
+                "attitude correction {} must be finite and within +-{}",
+                show_all(&phi, Unit::Deg),
+                Unit::Deg.show(0.5)
+            ),
         )?;
         check(
             dv.iter().all(|x| x.is_finite() && x.abs() <= 1000.0),
             "dv",
-            "must be finite with |dv| <= 1000 m/s",
+            format!(
+                "velocity correction {} must be finite and within +-1000 m/s",
+                show_all(&dv, Unit::Si("m/s"))
+            ),
         )?;
         self.q = quat_normalize(quat_mul(rotvec_to_quat(phi), self.q));
         self.vel = sub(self.vel, dv);
@@ -372,10 +391,19 @@ impl Navigator {
 
     /// Navigate `n` samples given as flat row-major (n x 3) slices; after every sample whose 1-based index
     /// from the start of the run is a multiple of `decimation`, `sink` receives the state.
-    pub fn process<F: FnMut(&NavState)>(&mut self, dtheta: &[f64], dv: &[f64], decimation: u64, mut sink: F) {
-        assert_eq!(dtheta.len(), dv.len());
-        assert_eq!(dtheta.len() % 3, 0);
-        assert!(decimation >= 1);
+    ///
+    /// Every sample is checked first (`limits::check_increments`: equal lengths, finite, within the sensor
+    /// limits), so a refused chunk leaves the navigator unchanged. If the navigated state is no longer finite
+    /// or the latitude reaches a pole, the error is [`CoreError::Diverged`] and the navigator is unusable.
+    pub fn process<F: FnMut(&NavState)>(
+        &mut self,
+        dtheta: &[f64],
+        dv: &[f64],
+        decimation: u64,
+        mut sink: F,
+    ) -> Result<(), CoreError> {
+        check(decimation >= 1, "decimation", "must be a positive number of samples")?;
+        check_increments(dtheta, dv, self.dt)?;
         let mut rest = (dtheta, dv);
         // Samples left until the next output; the samples in between run in `run`, whose code does not depend
         // on the caller's sink.
@@ -392,6 +420,29 @@ impl Navigator {
                 left = decimation;
             }
         }
+        self.check_state()
+    }
+
+    /// The navigated state is finite and off the poles.
+    fn check_state(&self) -> Result<(), CoreError> {
+        let finite = self.lat.is_finite()
+            && self.lon.is_finite()
+            && self.height.is_finite()
+            && self.vel.iter().all(|v| v.is_finite())
+            && self.q.iter().all(|v| v.is_finite());
+        if finite && self.lat.abs() < std::f64::consts::FRAC_PI_2 {
+            return Ok(());
+        }
+        Err(CoreError::Diverged {
+            key: "dtheta_rad",
+            t_s: self.k as f64 / self.cfg.rate_hz,
+            message: format!(
+                "the navigated state left the Earth (latitude {}, velocity {}): \
+                 the increments do not describe a navigable motion",
+                Unit::Deg.show(self.lat),
+                show_all(&self.vel, Unit::Si("m/s"))
+            ),
+        })
     }
 
     /// Navigate all samples of the slices (no output).
@@ -447,7 +498,7 @@ mod tests {
         let (dth, dv) = tumbling(600);
         let (head, tail) = (3 * 300, 3 * 300..);
         let mut truth = Navigator::new(cfg.clone()).unwrap();
-        truth.process(&dth[..head], &dv[..head], 1000, |_| {});
+        truth.process(&dth[..head], &dv[..head], 1000, |_| {}).unwrap();
 
         // The same navigator with a known error: computed C_b^n' = (I - [phi x]) C_b^n, i.e. q' = q(-phi) o q,
         // and v' = v + dv (computed minus true).
@@ -476,9 +527,13 @@ mod tests {
         })
         .unwrap();
         let (mut out_t, mut out_c) = (Vec::new(), Vec::new());
-        truth.process(&dth[tail.clone()], &dv[tail.clone()], 1, |s| out_t.push(*s));
-        corrected.process(&dth[tail.clone()], &dv[tail.clone()], 1, |s| out_c.push(*s));
-        restarted.process(&dth[tail.clone()], &dv[tail], 1, |_| {});
+        truth
+            .process(&dth[tail.clone()], &dv[tail.clone()], 1, |s| out_t.push(*s))
+            .unwrap();
+        corrected
+            .process(&dth[tail.clone()], &dv[tail.clone()], 1, |s| out_c.push(*s))
+            .unwrap();
+        restarted.process(&dth[tail.clone()], &dv[tail], 1, |_| {}).unwrap();
 
         // The corrected run is the uninterrupted one to rounding, sample after sample.
         for (a, b) in out_t.iter().zip(&out_c) {
@@ -501,8 +556,8 @@ mod tests {
         let mut nav = Navigator::new(NavigatorConfig::default()).unwrap();
         nav.correct([0.0; 3], [0.1, 0.2, 0.3]).unwrap();
         assert_eq!(nav.state().vel, [-0.1, -0.2, 0.0]);
-        assert_eq!(nav.correct([f64::NAN, 0.0, 0.0], [0.0; 3]).unwrap_err().key, "phi");
-        assert_eq!(nav.correct([0.0; 3], [0.0, 2000.0, 0.0]).unwrap_err().key, "dv");
+        assert_eq!(nav.correct([f64::NAN, 0.0, 0.0], [0.0; 3]).unwrap_err().key(), "phi");
+        assert_eq!(nav.correct([0.0; 3], [0.0, 2000.0, 0.0]).unwrap_err().key(), "dv");
         let mut damped = Navigator::new(NavigatorConfig {
             vertical: Vertical::Damped,
             ..Default::default()
@@ -630,7 +685,7 @@ mod tests {
             nav.set_accel_bias([1e-3, 2e-3, -3e-3]).unwrap();
         }
         let mut out_a = Vec::new();
-        a.process(&dth, &dv, 37, |s| out_a.push(*s));
+        a.process(&dth, &dv, 37, |s| out_a.push(*s)).unwrap();
         let mut out_b = Vec::new();
         for (k, (x, y)) in dth.chunks_exact(3).zip(dv.chunks_exact(3)).enumerate() {
             b.step([x[0], x[1], x[2]], [y[0], y[1], y[2]]);
@@ -667,10 +722,10 @@ mod tests {
             })
             .collect();
         let mut out_a = Vec::new();
-        a.process(&dth, &dv, 7, |s| out_a.push(*s));
+        a.process(&dth, &dv, 7, |s| out_a.push(*s)).unwrap();
         let mut out_b = Vec::new();
         for (x, y) in dth.chunks(3 * 13).zip(dv.chunks(3 * 13)) {
-            b.process(x, y, 7, |s| out_b.push(*s));
+            b.process(x, y, 7, |s| out_b.push(*s)).unwrap();
         }
         assert_eq!(out_a, out_b);
         assert_eq!(out_a.len(), 1000 / 7);

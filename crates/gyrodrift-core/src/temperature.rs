@@ -1,7 +1,7 @@
 //! Temperature of the IMU [deg C] as a function of time [s]: the input of the temperature-dependent
 //! axial drift (see `imu_error`).
 
-use crate::turntable::{check, ParamError};
+use crate::error::{check, CoreError};
 
 /// A temperature profile T(t) [deg C], t in s from the start of the run.
 #[derive(Clone, Debug, PartialEq)]
@@ -15,7 +15,7 @@ pub enum TemperatureProfile {
 
 impl TemperatureProfile {
     /// Validate; errors name the contract key.
-    pub fn validate(&self) -> Result<(), ParamError> {
+    pub fn validate(&self) -> Result<(), CoreError> {
         match self {
             TemperatureProfile::WarmUp { start_c, end_c, tau_s } => {
                 check(
@@ -114,6 +114,6 @@ mod tests {
             t_s: vec![0.0, 0.0],
             temp_c: vec![1.0, 2.0],
         };
-        assert_eq!(bad.validate().unwrap_err().key, "temp_series_t_s");
+        assert_eq!(bad.validate().unwrap_err().key(), "temp_series_t_s");
     }
 }

@@ -23,6 +23,7 @@
 //!   positions, so the table never accumulates net turns: e.g. [0, 90, 180, 270] deg slews +90, +90, +90 and
 //!   then -270 back. The cruise rate's magnitude is used for every slew.
 
+use crate::error::{check, CoreError, Unit};
 use std::f64::consts::TAU;
 
 /// A rotation scheme about body Up (SI: rad, rad/s, rad/s^2, s).
@@ -144,9 +145,9 @@ impl Segment {
 /// residual ([`Turntable::modulation_residual`] = 0): the extra time spent near the reversal headings is
 /// balanced by shortening the span below 2 pi `turns`. Bisection on the residual's component along the
 /// symmetry direction e^{i S / 2} (the residual of a symmetric move is parallel to it).
-pub fn balanced_reciprocating_span(rate: f64, accel: f64, dwell: f64, turns: u32) -> Result<f64, ParamError> {
+pub fn balanced_reciprocating_span(rate: f64, accel: f64, dwell: f64, turns: u32) -> Result<f64, CoreError> {
     check(turns >= 1, "turns", "must be at least 1")?;
-    let component = |span: f64| -> Result<f64, ParamError> {
+    let component = |span: f64| -> Result<f64, CoreError> {
         let t = Turntable::new(RotationScheme::Reciprocating {
             rate,
             accel,
@@ -208,32 +209,6 @@ pub struct Turntable {
     n_prefix: usize,
 }
 
-/// Validation error naming the offending parameter.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ParamError {
-    pub key: &'static str,
-    pub message: String,
-}
-
-impl std::fmt::Display for ParamError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}: {}", self.key, self.message)
-    }
-}
-
-impl std::error::Error for ParamError {}
-
-pub(crate) fn check(ok: bool, key: &'static str, message: impl Into<String>) -> Result<(), ParamError> {
-    if ok {
-        Ok(())
-    } else {
-        Err(ParamError {
-            key,
-            message: message.into(),
-        })
-    }
-}
-
 /// Build a move of signed angle `d` into `segs`, starting at (`t`, `angle`); returns the end time.
 fn push_move(segs: &mut Vec<Segment>, t: f64, angle: f64, d: f64, rate: f64, accel: f64) -> f64 {
     if d == 0.0 {
@@ -290,22 +265,34 @@ fn push_dwell(segs: &mut Vec<Segment>, t: f64, angle: f64, dwell: f64) -> f64 {
     t + dwell
 }
 
-fn check_rate_accel(rate: f64, accel: f64) -> Result<(), ParamError> {
+/// Largest table rate [rad/s] (about 573 deg/s) and acceleration [rad/s^2] (about 5730 deg/s^2).
+pub const MAX_TABLE_RATE_RAD_S: f64 = 10.0;
+pub const MAX_TABLE_ACCEL_RAD_S2: f64 = 100.0;
+
+fn check_rate_accel(rate: f64, accel: f64) -> Result<(), CoreError> {
     check(
-        rate.is_finite() && rate != 0.0 && rate.abs() <= 10.0,
+        rate.is_finite() && rate != 0.0 && rate.abs() <= MAX_TABLE_RATE_RAD_S,
         "rotation_rate_rad_s",
-        format!("must be non-zero, finite and at most 10 rad/s in magnitude, got {rate}"),
+        format!(
+            "table rate {} must be non-zero and within +-{}",
+            Unit::DegPerS.show(rate),
+            Unit::DegPerS.show(MAX_TABLE_RATE_RAD_S)
+        ),
     )?;
     check(
-        accel.is_finite() && accel > 0.0 && accel <= 100.0,
+        accel.is_finite() && accel > 0.0 && accel <= MAX_TABLE_ACCEL_RAD_S2,
         "rotation_accel_rad_s2",
-        format!("must be positive, finite and at most 100 rad/s^2, got {accel}"),
+        format!(
+            "table acceleration {} is outside (0, {}]",
+            Unit::DegPerS2.show(accel),
+            Unit::DegPerS2.show(MAX_TABLE_ACCEL_RAD_S2)
+        ),
     )
 }
 
 impl Turntable {
     /// Build and validate a profile.
-    pub fn new(scheme: RotationScheme) -> Result<Self, ParamError> {
+    pub fn new(scheme: RotationScheme) -> Result<Self, CoreError> {
         let mut segs = Vec::new();
         let (period, period_start, n_prefix);
         match &scheme {
@@ -343,12 +330,16 @@ impl Turntable {
                 check(
                     span.is_finite() && *span > 0.0 && *span <= 1000.0,
                     "reciprocating_span_rad",
-                    format!("must be positive and finite, got {span}"),
+                    format!(
+                        "span {} is outside (0, {}]",
+                        Unit::Deg.show(*span),
+                        Unit::Deg.show(1000.0)
+                    ),
                 )?;
                 check(
                     dwell.is_finite() && *dwell >= 0.0,
                     "dwell_s",
-                    format!("must be >= 0 and finite, got {dwell}"),
+                    format!("dwell {} s must be >= 0 and finite", crate::error::sig(*dwell)),
                 )?;
                 let d = span * rate.signum();
                 let mut t = push_move(&mut segs, 0.0, 0.0, d, *rate, *accel);
@@ -374,12 +365,12 @@ impl Turntable {
                 check(
                     positions.iter().all(|p| p.is_finite() && p.abs() <= 1000.0),
                     "positions_rad",
-                    "positions must be finite (|p| <= 1000 rad)",
+                    format!("positions must be finite and within +-{}", Unit::Deg.show(1000.0)),
                 )?;
                 check(
                     dwell.is_finite() && *dwell >= 0.0,
                     "dwell_s",
-                    format!("must be >= 0 and finite, got {dwell}"),
+                    format!("dwell {} s must be >= 0 and finite", crate::error::sig(*dwell)),
                 )?;
                 // Prefix: move from 0 to positions[0].
                 let mut t = push_move(&mut segs, 0.0, 0.0, positions[0], *rate, *accel);
@@ -822,13 +813,13 @@ mod tests {
     #[test]
     fn bad_parameters_name_the_key() {
         let e = Turntable::new(RotationScheme::Continuous { rate: 0.0, accel: ACC }).unwrap_err();
-        assert_eq!(e.key, "rotation_rate_rad_s");
+        assert_eq!(e.key(), "rotation_rate_rad_s");
         let e = Turntable::new(RotationScheme::Continuous {
             rate: RATE,
             accel: -1.0,
         })
         .unwrap_err();
-        assert_eq!(e.key, "rotation_accel_rad_s2");
+        assert_eq!(e.key(), "rotation_accel_rad_s2");
         let e = Turntable::new(RotationScheme::Indexing {
             rate: RATE,
             accel: ACC,
@@ -836,7 +827,7 @@ mod tests {
             dwell: 1.0,
         })
         .unwrap_err();
-        assert_eq!(e.key, "positions_rad");
+        assert_eq!(e.key(), "positions_rad");
         let e = Turntable::new(RotationScheme::Reciprocating {
             rate: RATE,
             accel: ACC,
@@ -844,6 +835,6 @@ mod tests {
             dwell: 0.0,
         })
         .unwrap_err();
-        assert_eq!(e.key, "reciprocating_span_rad");
+        assert_eq!(e.key(), "reciprocating_span_rad");
     }
 }

@@ -76,7 +76,7 @@ fn run(cfg: ImuSimulatorConfig, every_s: f64) -> Vec<NavState> {
     let mut ch = ImuChunk::default();
     let mut out = Vec::new();
     while sim.next_chunk(65_536, &mut ch) > 0 {
-        nav.process(&ch.dtheta, &ch.dv, dec, |s| out.push(*s));
+        nav.process(&ch.dtheta, &ch.dv, dec, |s| out.push(*s)).unwrap();
     }
     out
 }
@@ -330,7 +330,7 @@ fn bias_compensation_hook_subtracts_the_estimates() {
             nav.set_gyro_bias(bg).unwrap();
             nav.set_accel_bias(ba).unwrap();
         }
-        nav.process(&ch.dtheta, &ch.dv, 100, |_| {});
+        nav.process(&ch.dtheta, &ch.dv, 100, |_| {}).unwrap();
         chunks += 1;
     }
     // Separate run fully compensated from the start.
@@ -351,7 +351,8 @@ fn bias_compensation_hook_subtracts_the_estimates() {
     nav2.set_gyro_bias(bg).unwrap();
     nav2.set_accel_bias(ba).unwrap();
     while sim.next_chunk(100_000, &mut ch) > 0 {
-        nav2.process(&ch.dtheta, &ch.dv, 6000, |s| worst = worst.max(pos_err_m(s, lat, lon)));
+        nav2.process(&ch.dtheta, &ch.dv, 6000, |s| worst = worst.max(pos_err_m(s, lat, lon)))
+            .unwrap();
     }
     eprintln!(
         "bias hook: exact estimates, max position error over 6 h {:.2e} m; late-compensated run ends {:.1} m off",
@@ -383,7 +384,7 @@ fn vertical_channel_fixed_and_damped() {
         let mut nav = Navigator::new(nav_cfg).unwrap();
         let mut ch = ImuChunk::default();
         while sim.next_chunk(100_000, &mut ch) > 0 {
-            nav.process(&ch.dtheta, &ch.dv, 1_000_000, |_| {});
+            nav.process(&ch.dtheta, &ch.dv, 1_000_000, |_| {}).unwrap();
         }
         let s = nav.state();
         match vertical {

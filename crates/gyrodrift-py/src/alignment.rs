@@ -1,11 +1,10 @@
 //! Binding of `gyrodrift_core::alignment::Aligner` as `_core.Aligner` (docs/alignment-contract.md).
 //! It converts types and releases the GIL, nothing else.
 
-use super::{flat_n3, param_err, Config};
+use super::{core_err, flat, increments, Config};
 use gyrodrift_core::alignment::{Aligner as CoreAligner, AlignerConfig, DEFAULT_TOTAL_S};
 use gyrodrift_core::kalman::{N_STATES, STATE_NAMES};
-use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
-use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -68,7 +67,7 @@ impl Aligner {
     #[new]
     fn new(config: &Bound<'_, PyDict>) -> PyResult<Self> {
         Ok(Aligner {
-            inner: CoreAligner::new(align_config(config)?).map_err(param_err)?,
+            inner: CoreAligner::new(align_config(config)?).map_err(core_err)?,
         })
     }
 
@@ -103,32 +102,18 @@ impl Aligner {
     fn process<'py>(
         &mut self,
         py: Python<'py>,
-        dtheta_rad: PyReadonlyArray2<'py, f64>,
-        dv_m_s: PyReadonlyArray2<'py, f64>,
+        dtheta_rad: &Bound<'py, PyAny>,
+        dv_m_s: &Bound<'py, PyAny>,
     ) -> PyResult<usize> {
-        let n = dtheta_rad.shape()[0];
-        if dv_m_s.shape()[0] != n {
-            return Err(PyValueError::new_err(format!(
-                "dv_m_s: has {} rows but dtheta_rad has {n}",
-                dv_m_s.shape()[0]
-            )));
-        }
-        let dth = flat_n3(&dtheta_rad, "dtheta_rad")?;
-        let dv = flat_n3(&dv_m_s, "dv_m_s")?;
-        let (dth, dv): (&[f64], &[f64]) = (&dth, &dv);
+        let (a, b) = increments(dtheta_rad, dv_m_s)?;
+        let (dth, dv) = (flat(&a, "dtheta_rad")?, flat(&b, "dv_m_s")?);
         let inner = &mut self.inner;
-        Ok(py.detach(|| inner.process(dth, dv)))
+        py.detach(|| inner.process(dth, dv)).map_err(core_err)
     }
 
-    /// The alignment result (SI; keys in docs/alignment-contract.md). RuntimeError before `done`.
+    /// The alignment result (SI; keys in docs/alignment-contract.md). `CoreError` before `done` or after a refused log.
     fn result<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let r = self.inner.result().ok_or_else(|| {
-            PyRuntimeError::new_err(format!(
-                "alignment not complete: {} of {} samples processed",
-                self.inner.samples_done(),
-                self.inner.n_samples()
-            ))
-        })?;
+        let r = self.inner.result().map_err(core_err)?;
         let d = PyDict::new(py);
         d.set_item("t_s", r.t_s)?;
         d.set_item("pitch_rad", r.attitude.pitch)?;

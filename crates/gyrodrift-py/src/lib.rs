@@ -6,13 +6,13 @@ mod alignment;
 
 use gyrodrift_core::attitude::Euler;
 use gyrodrift_core::earth;
+use gyrodrift_core::error::CoreError as CoreFailure;
 use gyrodrift_core::imu_error::ImuErrorParams;
 use gyrodrift_core::simulator::{ImuChunkSlices, ImuSimulator as CoreSimulator, ImuSimulatorConfig};
 use gyrodrift_core::strapdown::{NavState, Navigator as CoreNavigator, NavigatorConfig, Vertical};
 use gyrodrift_core::temperature::TemperatureProfile;
-use gyrodrift_core::turntable::{balanced_reciprocating_span, ParamError, RotationScheme};
+use gyrodrift_core::turntable::{balanced_reciprocating_span, RotationScheme};
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::collections::HashMap;
@@ -28,7 +28,7 @@ fn normal_gravity<'py>(
     let lat = lat_rad.as_slice()?;
     let h = height_m.as_slice()?;
     if lat.len() != h.len() {
-        return Err(PyValueError::new_err(format!(
+        return Err(value_err(format!(
             "lat_rad has {} values but height_m has {}",
             lat.len(),
             h.len()
@@ -38,8 +38,32 @@ fn normal_gravity<'py>(
     Ok(PyArray1::from_vec(py, out))
 }
 
-fn param_err(e: ParamError) -> PyErr {
-    PyValueError::new_err(e.to_string())
+pyo3::import_exception!(gyrodrift.errors, CoreError);
+
+/// The one mapping of the core's error to Python: `gyrodrift.errors.CoreError` with the message, and the
+/// offending setting or input in its `key` attribute (e.g. "lat_rad", "dtheta_rad").
+fn core_err(e: CoreFailure) -> PyErr {
+    let key = e.key();
+    let err = CoreError::new_err(e.to_string());
+    Python::attach(|py| {
+        // Setting an attribute on a fresh exception instance cannot fail short of memory exhaustion; the
+        // message alone is still a complete error then.
+        let _ = err.value(py).setattr("key", key);
+    });
+    err
+}
+
+/// A binding-side refusal (wrong argument type or shape) as a `gyrodrift.errors.CoreError` naming `key`.
+fn arg_err(key: &'static str, message: impl std::fmt::Display) -> PyErr {
+    core_err(CoreFailure::Shape {
+        key,
+        message: message.to_string(),
+    })
+}
+
+/// A refused config value as a `gyrodrift.errors.CoreError`.
+fn value_err(message: impl Into<String>) -> PyErr {
+    CoreError::new_err(message.into())
 }
 
 /// The config dict, checked against the allowed keys; values taken out by typed getters.
@@ -53,9 +77,9 @@ impl<'py> Config<'py> {
         for (k, v) in d.iter() {
             let key: String = k
                 .extract()
-                .map_err(|_| PyValueError::new_err(format!("{what} config keys must be strings, got {k}")))?;
+                .map_err(|_| value_err(format!("{what} config keys must be strings, got {k}")))?;
             if !allowed.contains(&key.as_str()) {
-                return Err(PyValueError::new_err(format!(
+                return Err(value_err(format!(
                     "{key}: unknown key in the {what} config (allowed: {})",
                     allowed.join(", ")
                 )));
@@ -71,7 +95,7 @@ impl<'py> Config<'py> {
             Some(v) => v
                 .extract::<f64>()
                 .map(Some)
-                .map_err(|_| PyValueError::new_err(format!("{key}: must be a float, got {v}"))),
+                .map_err(|_| value_err(format!("{key}: must be a float, got {v}"))),
         }
     }
 
@@ -81,7 +105,7 @@ impl<'py> Config<'py> {
 
     fn f64_req(&self, key: &str) -> PyResult<f64> {
         self.f64_opt(key)?
-            .ok_or_else(|| PyValueError::new_err(format!("{key}: required key is missing")))
+            .ok_or_else(|| value_err(format!("{key}: required key is missing")))
     }
 
     fn list_opt(&self, key: &str) -> PyResult<Option<Vec<f64>>> {
@@ -90,7 +114,7 @@ impl<'py> Config<'py> {
             Some(v) => v
                 .extract::<Vec<f64>>()
                 .map(Some)
-                .map_err(|_| PyValueError::new_err(format!("{key}: must be a sequence of floats, got {v}"))),
+                .map_err(|_| value_err(format!("{key}: must be a sequence of floats, got {v}"))),
         }
     }
 
@@ -99,7 +123,7 @@ impl<'py> Config<'py> {
             None => Ok(default),
             Some(v) => v
                 .try_into()
-                .map_err(|v: Vec<f64>| PyValueError::new_err(format!("{key}: must hold {N} values, got {}", v.len()))),
+                .map_err(|v: Vec<f64>| value_err(format!("{key}: must hold {N} values, got {}", v.len()))),
         }
     }
 
@@ -109,7 +133,7 @@ impl<'py> Config<'py> {
             Some(v) => v
                 .cast::<pyo3::types::PyBool>()
                 .map(|b| b.is_true())
-                .map_err(|_| PyValueError::new_err(format!("{key}: must be a bool, got {v}"))),
+                .map_err(|_| value_err(format!("{key}: must be a bool, got {v}"))),
         }
     }
 
@@ -118,7 +142,7 @@ impl<'py> Config<'py> {
             None => Ok(default.to_string()),
             Some(v) => v
                 .extract::<String>()
-                .map_err(|_| PyValueError::new_err(format!("{key}: must be a string, got {v}"))),
+                .map_err(|_| value_err(format!("{key}: must be a string, got {v}"))),
         }
     }
 }
@@ -172,7 +196,7 @@ fn sim_config(d: &Bound<'_, PyDict>) -> PyResult<ImuSimulatorConfig> {
         None => 0,
         Some(v) => v
             .extract::<u64>()
-            .map_err(|_| PyValueError::new_err(format!("seed: must be an integer in [0, 2**64), got {v}")))?,
+            .map_err(|_| value_err(format!("seed: must be an integer in [0, 2**64), got {v}")))?,
     };
     let rate = c.f64_or("rotation_rate_rad_s", DEFAULT_RATE)?;
     let accel = c.f64_or("rotation_accel_rad_s2", DEFAULT_ACCEL)?;
@@ -185,12 +209,12 @@ fn sim_config(d: &Bound<'_, PyDict>) -> PyResult<ImuSimulatorConfig> {
             let span = c.f64_or("reciprocating_span_rad", 2.0 * PI)?;
             let span = if c.bool_or("reciprocating_balanced", false)? {
                 if !(span.is_finite() && span > 0.0 && span <= 1000.0) {
-                    return Err(PyValueError::new_err(format!(
+                    return Err(value_err(format!(
                         "reciprocating_span_rad: must be positive and finite, got {span}"
                     )));
                 }
                 let turns = (span / (2.0 * PI)).round().max(1.0) as u32;
-                balanced_reciprocating_span(rate, accel, dwell, turns).map_err(param_err)?
+                balanced_reciprocating_span(rate, accel, dwell, turns).map_err(core_err)?
             } else {
                 span
             };
@@ -210,9 +234,11 @@ fn sim_config(d: &Bound<'_, PyDict>) -> PyResult<ImuSimulatorConfig> {
                 .unwrap_or_else(|| vec![0.0, 0.5 * PI, PI, 1.5 * PI, 2.0 * PI, 1.5 * PI, PI, 0.5 * PI]),
             dwell,
         },
-        other => return Err(PyValueError::new_err(format!(
+        other => {
+            return Err(value_err(format!(
             "rotation_scheme: must be one of \"none\", \"continuous\", \"reciprocating\", \"indexing\", got {other:?}"
-        ))),
+        )))
+        }
     };
     let d0 = ImuErrorParams::default();
     let errors = ImuErrorParams {
@@ -243,8 +269,8 @@ fn sim_config(d: &Bound<'_, PyDict>) -> PyResult<ImuSimulatorConfig> {
                 tau_s: c.f64_or("temp_tau_s", 3600.0)?,
             }
         }
-        (Some(_), None) => return Err(PyValueError::new_err("temp_series_c: required with temp_series_t_s")),
-        (None, Some(_)) => return Err(PyValueError::new_err("temp_series_t_s: required with temp_series_c")),
+        (Some(_), None) => return Err(value_err("temp_series_c: required with temp_series_t_s")),
+        (None, Some(_)) => return Err(value_err("temp_series_t_s: required with temp_series_c")),
     };
     Ok(ImuSimulatorConfig {
         lat: c.f64_req("lat_rad")?,
@@ -333,13 +359,11 @@ impl ChunkArrays {
             [&self.t_s, &self.temp_c, &self.table, &self.pitch, &self.roll, &self.yaw].map(|a| a.bind(py).clone());
         let mut w1 = Vec::with_capacity(6);
         for a in &ones {
-            w1.push(a.try_readwrite().map_err(|e| PyValueError::new_err(e.to_string()))?);
+            w1.push(a.try_readwrite().map_err(|e| value_err(e.to_string()))?);
         }
         let (dtheta, dv) = (self.dtheta.bind(py), self.dv.bind(py));
-        let mut w_dtheta = dtheta
-            .try_readwrite()
-            .map_err(|e| PyValueError::new_err(e.to_string()))?;
-        let mut w_dv = dv.try_readwrite().map_err(|e| PyValueError::new_err(e.to_string()))?;
+        let mut w_dtheta = dtheta.try_readwrite().map_err(|e| value_err(e.to_string()))?;
+        let mut w_dv = dv.try_readwrite().map_err(|e| value_err(e.to_string()))?;
         let [b_t, b_temp, b_table, b_pitch, b_roll, b_yaw] = &mut w1[..] else {
             unreachable!()
         };
@@ -353,7 +377,7 @@ impl ChunkArrays {
             roll: b_roll.as_slice_mut()?,
             yaw: b_yaw.as_slice_mut()?,
         };
-        Ok(py.detach(|| sim.fill(out)))
+        py.detach(|| sim.fill(out)).map_err(core_err)
     }
 }
 
@@ -376,7 +400,7 @@ impl ImuSimulator {
     fn new(config: &Bound<'_, PyDict>) -> PyResult<Self> {
         let cfg = sim_config(config)?;
         Ok(ImuSimulator {
-            inner: CoreSimulator::new(cfg).map_err(param_err)?,
+            inner: CoreSimulator::new(cfg).map_err(core_err)?,
             pool: Vec::new(),
         })
     }
@@ -413,11 +437,8 @@ impl ImuSimulator {
     }
 
     /// The next at most `n` samples as a dict of numpy arrays, or None when the run is over.
-    fn next_chunk<'py>(&mut self, py: Python<'py>, n: usize) -> PyResult<Option<Bound<'py, PyDict>>> {
-        if n == 0 {
-            return Err(PyValueError::new_err("n: must be a positive number of samples"));
-        }
-        let m = self.inner.remaining().min(n as u64) as usize;
+    fn next_chunk<'py>(&mut self, py: Python<'py>, n: i64) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let m = self.inner.chunk_len(n.max(0) as u64).map_err(core_err)?;
         if m == 0 {
             return Ok(None);
         }
@@ -466,7 +487,7 @@ fn nav_config(d: &Bound<'_, PyDict>) -> PyResult<NavigatorConfig> {
         "fixed" => Vertical::Fixed,
         "damped" => Vertical::Damped,
         other => {
-            return Err(PyValueError::new_err(format!(
+            return Err(value_err(format!(
                 "vertical: must be \"fixed\" or \"damped\", got {other:?}"
             )))
         }
@@ -525,24 +546,65 @@ impl NavColumns {
     }
 }
 
-fn vec3(v: Vec<f64>, key: &str) -> PyResult<[f64; 3]> {
+/// Three floats from a sequence or array (a bias vector, body x y z).
+fn vec3(v: &Bound<'_, PyAny>, key: &'static str) -> PyResult<[f64; 3]> {
+    let v: Vec<f64> = v
+        .extract()
+        .map_err(|_| arg_err(key, format!("expected 3 numbers, got {}", type_name(v))))?;
     v.try_into()
-        .map_err(|v: Vec<f64>| PyValueError::new_err(format!("{key}: must hold 3 values, got {}", v.len())))
+        .map_err(|v: Vec<f64>| arg_err(key, format!("expected 3 numbers, got {}", v.len())))
 }
 
-/// Borrow an (n, 3) float64 array as a flat slice, copying only if it is not C-contiguous.
-fn flat_n3<'a>(a: &'a PyReadonlyArray2<'_, f64>, name: &str) -> PyResult<std::borrow::Cow<'a, [f64]>> {
-    let shape = a.shape();
-    if shape[1] != 3 {
-        return Err(PyValueError::new_err(format!(
-            "{name}: must have shape (n, 3), got ({}, {})",
-            shape[0], shape[1]
-        )));
+/// The Python type name of `obj` for messages.
+fn type_name(obj: &Bound<'_, PyAny>) -> String {
+    obj.get_type()
+        .name()
+        .map(|n| n.to_string())
+        .unwrap_or_else(|_| "object".to_string())
+}
+
+/// An (n, 3) float64 C-contiguous array from any array-like of real numbers: a float64 C-contiguous array is
+/// borrowed as it is; other real dtypes (float32, integers) and non-contiguous arrays are converted (copied by
+/// numpy); anything else (complex, bool, strings, objects, another shape) is a `CoreError` naming `key` and
+/// what was expected (docs/ins-binding-contract.md).
+fn array_n3<'py>(obj: &Bound<'py, PyAny>, key: &'static str) -> PyResult<PyReadonlyArray2<'py, f64>> {
+    if let Ok(a) = obj.extract::<PyReadonlyArray2<'py, f64>>() {
+        if a.shape()[1] == 3 && a.is_c_contiguous() {
+            return Ok(a);
+        }
     }
-    Ok(match a.as_slice() {
-        Ok(s) => std::borrow::Cow::Borrowed(s),
-        Err(_) => std::borrow::Cow::Owned(a.as_array().iter().copied().collect()),
-    })
+    let expected = "expected an (n, 3) array of real numbers (float64; float32 and integers are converted)";
+    let np = obj.py().import("numpy")?;
+    let arr = np
+        .call_method1("asarray", (obj,))
+        .map_err(|_| arg_err(key, format!("{expected}, got {}", type_name(obj))))?;
+    let dtype = arr.getattr("dtype")?;
+    let kind: String = dtype.getattr("kind")?.extract()?;
+    if !matches!(kind.as_str(), "f" | "i" | "u") {
+        return Err(arg_err(key, format!("{expected}, got dtype {}", dtype.str()?)));
+    }
+    let shape: Vec<usize> = arr.getattr("shape")?.extract()?;
+    if shape.len() != 2 || shape[1] != 3 {
+        return Err(arg_err(key, format!("{expected}, got shape {shape:?}")));
+    }
+    let kwargs = pyo3::types::PyDict::new(obj.py());
+    kwargs.set_item("dtype", "float64")?;
+    np.call_method("ascontiguousarray", (arr,), Some(&kwargs))?
+        .extract::<PyReadonlyArray2<'py, f64>>()
+        .map_err(|_| arg_err(key, format!("{expected}, got {}", type_name(obj))))
+}
+
+/// Both increment arrays of a `process` call (see `array_n3`).
+fn increments<'py>(
+    dtheta: &Bound<'py, PyAny>,
+    dv: &Bound<'py, PyAny>,
+) -> PyResult<(PyReadonlyArray2<'py, f64>, PyReadonlyArray2<'py, f64>)> {
+    Ok((array_n3(dtheta, "dtheta_rad")?, array_n3(dv, "dv_m_s")?))
+}
+
+/// The flat row-major values of an array from `array_n3` (C-contiguous by construction).
+fn flat<'a>(a: &'a PyReadonlyArray2<'_, f64>, key: &'static str) -> PyResult<&'a [f64]> {
+    a.as_slice().map_err(|_| arg_err(key, "expected a C-contiguous array"))
 }
 
 /// Strapdown navigator (see gyrodrift-core `strapdown`). `Navigator(config: dict)` with SI floats.
@@ -556,18 +618,18 @@ impl Navigator {
     #[new]
     fn new(config: &Bound<'_, PyDict>) -> PyResult<Self> {
         Ok(Navigator {
-            inner: CoreNavigator::new(nav_config(config)?).map_err(param_err)?,
+            inner: CoreNavigator::new(nav_config(config)?).map_err(core_err)?,
         })
     }
 
     /// Estimated gyro bias [rad/s, body x y z], subtracted from every following sample (measured - estimate).
-    fn set_gyro_bias(&mut self, b_rad_s: Vec<f64>) -> PyResult<()> {
-        self.inner.set_gyro_bias(vec3(b_rad_s, "b_rad_s")?).map_err(param_err)
+    fn set_gyro_bias(&mut self, b_rad_s: &Bound<'_, PyAny>) -> PyResult<()> {
+        self.inner.set_gyro_bias(vec3(b_rad_s, "b_rad_s")?).map_err(core_err)
     }
 
     /// Estimated accelerometer bias [m/s^2, body x y z], subtracted from every following sample.
-    fn set_accel_bias(&mut self, b_m_s2: Vec<f64>) -> PyResult<()> {
-        self.inner.set_accel_bias(vec3(b_m_s2, "b_m_s2")?).map_err(param_err)
+    fn set_accel_bias(&mut self, b_m_s2: &Bound<'_, PyAny>) -> PyResult<()> {
+        self.inner.set_accel_bias(vec3(b_m_s2, "b_m_s2")?).map_err(core_err)
     }
 
     /// Samples processed since the start of the run.
@@ -581,31 +643,29 @@ impl Navigator {
     fn process<'py>(
         &mut self,
         py: Python<'py>,
-        dtheta_rad: PyReadonlyArray2<'py, f64>,
-        dv_m_s: PyReadonlyArray2<'py, f64>,
-        decimation: u64,
+        dtheta_rad: &Bound<'py, PyAny>,
+        dv_m_s: &Bound<'py, PyAny>,
+        decimation: i64,
     ) -> PyResult<Bound<'py, PyDict>> {
-        if decimation == 0 {
-            return Err(PyValueError::new_err("decimation: must be a positive integer"));
+        if decimation < 1 {
+            return Err(arg_err(
+                "decimation",
+                format!("expected a positive number of samples, got {decimation}"),
+            ));
         }
-        let n = dtheta_rad.shape()[0];
-        if dv_m_s.shape()[0] != n {
-            return Err(PyValueError::new_err(format!(
-                "dv_m_s: has {} rows but dtheta_rad has {n}",
-                dv_m_s.shape()[0]
-            )));
-        }
-        let dth = flat_n3(&dtheta_rad, "dtheta_rad")?;
-        let dv = flat_n3(&dv_m_s, "dv_m_s")?;
-        let (dth, dv): (&[f64], &[f64]) = (&dth, &dv);
+        let decimation = decimation as u64;
+        let (a, b) = increments(dtheta_rad, dv_m_s)?;
+        let (dth, dv) = (flat(&a, "dtheta_rad")?, flat(&b, "dv_m_s")?);
+        let n = dth.len() / 3;
         let inner = &mut self.inner;
-        let cols = py.detach(|| {
-            let done = inner.samples_done();
-            let n_out = ((done + n as u64) / decimation - done / decimation) as usize;
-            let mut cols = NavColumns::with_capacity(n_out);
-            inner.process(dth, dv, decimation, |s| cols.push(s));
-            cols
-        });
+        let cols = py
+            .detach(|| {
+                let done = inner.samples_done();
+                let n_out = ((done + n as u64) / decimation - done / decimation) as usize;
+                let mut cols = NavColumns::with_capacity(n_out);
+                inner.process(dth, dv, decimation, |s| cols.push(s)).map(|()| cols)
+            })
+            .map_err(core_err)?;
         let m = cols.t.len();
         let d = PyDict::new(py);
         d.set_item("t_s", PyArray1::from_vec(py, cols.t))?;
@@ -646,7 +706,7 @@ fn balanced_reciprocating_span_rad(
     dwell_s: f64,
     turns: u32,
 ) -> PyResult<f64> {
-    balanced_reciprocating_span(rotation_rate_rad_s, rotation_accel_rad_s2, dwell_s, turns).map_err(param_err)
+    balanced_reciprocating_span(rotation_rate_rad_s, rotation_accel_rad_s2, dwell_s, turns).map_err(core_err)
 }
 
 #[pymodule]

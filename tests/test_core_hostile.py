@@ -1,0 +1,184 @@
+"""Hostile arrays and configs into the Rust core give `gyrodrift.errors.CoreError`, never a PanicException or a hang.
+
+Each case asserts the exact package class (a PanicException derives from BaseException, not Exception, so
+``pytest.raises(CoreError)`` would let it through as a failure) and that the message names the input.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gyrodrift import _core
+from gyrodrift.errors import CoreError
+
+G = 9.80665
+RATE_HZ = 10.0
+DT = 1.0 / RATE_HZ
+
+
+def _aligner():
+    return _core.Aligner(dict(lat_rad=0.5, lon_rad=0.0, height_m=0.0, rate_hz=RATE_HZ, fine_s=320.0))
+
+
+def _navigator():
+    return _core.Navigator(
+        dict(lat_rad=0.5, lon_rad=0.0, height_m=0.0, pitch_rad=0.0, roll_rad=0.0, yaw_rad=0.0, rate_hz=RATE_HZ)
+    )
+
+
+def _static(n: int, force=(0.0, 0.0, G)) -> tuple[np.ndarray, np.ndarray]:
+    dth = np.zeros((n, 3))
+    dv = np.tile(np.asarray(force) * DT, (n, 1))
+    return dth, dv
+
+
+def test_five_g_horizontal_alignment_is_a_core_error():
+    # Issue 8: _core.Aligner panicked on a 5 g horizontal specific force for 620 s at 10 Hz.
+    al = _aligner()
+    dth, dv = _static(6200, (5 * G, 0.0, G))
+    with pytest.raises(CoreError, match="static base") as info:
+        al.process(dth, dv)
+    assert type(info.value) is CoreError
+    assert info.value.key == "accel_bias_m_s2"
+    with pytest.raises(CoreError, match="static base"):
+        al.result()
+
+
+def _bad_arrays():
+    """(label, dtheta, dv, expected key): arrays the core must refuse."""
+    dth, dv = _static(50)
+    nan = dth.copy()
+    nan[7, 1] = np.nan
+    inf = dv.copy()
+    inf[3, 0] = np.inf
+    huge = dv.copy()
+    huge[0, 2] = 1e300
+    return [
+        ("nan", nan, dv, "dtheta_rad"),
+        ("inf", dth, inf, "dv_m_s"),
+        ("1e300", dth, huge, "dv_m_s"),
+        ("wrong columns", np.zeros((50, 4)), dv, "dtheta_rad"),
+        ("one-dimensional", np.zeros(150), dv, "dtheta_rad"),
+        ("three-dimensional", np.zeros((50, 3, 1)), dv, "dtheta_rad"),
+        ("rows differ", dth, dv[:-1], "dv_m_s"),
+        ("complex", dth.astype(complex), dv, "dtheta_rad"),
+        ("strings", np.full((50, 3), "x"), dv, "dtheta_rad"),
+        ("boolean", np.zeros((50, 3), dtype=bool), dv, "dtheta_rad"),
+        ("not an array", "abc", dv, "dtheta_rad"),
+        ("None", None, dv, "dtheta_rad"),
+        ("ragged list", [[0.0, 0.0], [0.0]], dv, "dtheta_rad"),
+    ]
+
+
+@pytest.mark.parametrize("label,dth,dv,key", _bad_arrays(), ids=[c[0] for c in _bad_arrays()])
+@pytest.mark.parametrize("make", [_aligner, _navigator], ids=["aligner", "navigator"])
+def test_bad_arrays_are_core_errors(make, label, dth, dv, key):
+    obj = make()
+    with pytest.raises(CoreError) as info:
+        obj.process(dth, dv)
+    assert type(info.value) is CoreError
+    assert info.value.key == key, str(info.value)
+    assert key in str(info.value)
+    assert obj.samples_done == 0
+
+
+@pytest.mark.parametrize("make", [_aligner, _navigator], ids=["aligner", "navigator"])
+def test_convertible_arrays_give_the_same_answer(make):
+    # float32, integers (as float), non-contiguous and Fortran-ordered arrays are converted, not refused.
+    dth, dv = _static(40)
+    ref = make()
+    ref.process(dth, dv)
+    variants = [
+        (dth.astype(np.float32), dv.astype(np.float32)),
+        (np.zeros((40, 3), dtype=np.int64), dv),
+        (np.zeros((40, 6))[:, ::2], np.repeat(dv, 2, axis=0)[::2]),
+        (np.asfortranarray(dth), np.asfortranarray(dv)),
+        (dth.tolist(), dv.tolist()),
+    ]
+    for a, b in variants:
+        obj = make()
+        obj.process(a, b)
+        assert obj.samples_done == ref.samples_done == 40
+    nav_a, nav_b = _navigator(), _navigator()
+    out_a = nav_a.process(dth[:, :], dv, 10)
+    out_b = nav_b.process(np.zeros((40, 6))[:, 1::2], dv.astype(np.float32).astype(np.float64), 10)
+    np.testing.assert_array_equal(out_a["lat_rad"], out_b["lat_rad"])
+
+
+def test_zero_rows_are_no_samples():
+    # A zero-length chunk is legal when streaming: nothing happens, nothing is returned.
+    nav = _navigator()
+    out = nav.process(np.zeros((0, 3)), np.zeros((0, 3)), 1)
+    assert len(out["t_s"]) == 0 and nav.samples_done == 0
+    al = _aligner()
+    assert al.process(np.zeros((0, 3)), np.zeros((0, 3))) == 0
+
+
+def test_navigator_divergence_and_arguments():
+    nav = _navigator()
+    dth, dv = _static(36_000, (0.0, 90 * G, G))
+    with pytest.raises(CoreError, match="left the Earth"):
+        nav.process(dth, dv, 1000)
+    nav = _navigator()
+    for bad in (0, -3):
+        with pytest.raises(CoreError, match="decimation"):
+            nav.process(*_static(3), bad)
+    with pytest.raises(CoreError, match="b_rad_s"):
+        nav.set_gyro_bias([0.0, 0.0])
+    with pytest.raises(CoreError, match="gyro bias"):
+        nav.set_gyro_bias([np.nan, 0.0, 0.0])
+    with pytest.raises(CoreError, match="b_m_s2"):
+        nav.set_accel_bias("abc")
+
+
+def _sim_config(**kw):
+    base = dict(lat_rad=0.5, rate_hz=100.0, duration_s=10.0)
+    base.update(kw)
+    return base
+
+
+@pytest.mark.parametrize(
+    "kw,key",
+    [
+        (dict(lat_rad=float("nan")), "lat_rad"),
+        (dict(lat_rad=1e300), "lat_rad"),
+        (dict(height_m=float("inf")), "height_m"),
+        (dict(rate_hz=1e308), "rate_hz"),
+        (dict(duration_s=1e306), "duration_s"),
+        (dict(duration_s=0.0), "duration_s"),
+        (dict(gyro_bias_rad_s=[1e300, 0.0, 0.0]), "gyro_bias_rad_s"),
+        (dict(rotation_scheme="reciprocating", reciprocating_span_rad=1e-300), "reciprocating_span_rad"),
+        (dict(rotation_scheme="indexing", positions_rad=[0.0, 1e-300], dwell_s=0.0), "positions_rad"),
+        (dict(rotation_scheme="continuous", rotation_rate_rad_s=1e300), "rotation_rate_rad_s"),
+        (dict(temp_series_t_s=[0.0, 1.0], temp_series_c=[20.0]), "temp_series_c"),
+        (dict(temp_series_t_s=[1.0, 0.0], temp_series_c=[20.0, 21.0]), "temp_series_t_s"),
+    ],
+)
+def test_hostile_simulator_configs(kw, key):
+    with pytest.raises(CoreError) as info:
+        _core.ImuSimulator(_sim_config(**kw))
+    assert type(info.value) is CoreError
+    assert info.value.key == key, str(info.value)
+
+
+def test_simulator_chunk_sizes():
+    sim = _core.ImuSimulator(_sim_config())
+    for bad in (0, -1, 2**40):
+        with pytest.raises(CoreError, match="chunk"):
+            sim.next_chunk(bad)
+    assert len(sim.next_chunk(10**9 // 100)["t_s"]) == 1000
+    assert sim.next_chunk(5) is None
+
+
+def test_huge_aligner_and_navigator_configs():
+    with pytest.raises(CoreError, match="coarse_s"):
+        _core.Aligner(dict(lat_rad=0.5, lon_rad=0.0, height_m=0.0, rate_hz=RATE_HZ, coarse_s=1e300))
+    with pytest.raises(CoreError, match="latitude"):
+        _core.Navigator(
+            dict(lat_rad=1.6, lon_rad=0.0, height_m=0.0, pitch_rad=0.0, roll_rad=0.0, yaw_rad=0.0, rate_hz=RATE_HZ)
+        )
+    with pytest.raises(CoreError, match="rate_hz"):
+        _core.Navigator(
+            dict(lat_rad=0.5, lon_rad=0.0, height_m=0.0, pitch_rad=0.0, roll_rad=0.0, yaw_rad=0.0, rate_hz=1e308)
+        )
