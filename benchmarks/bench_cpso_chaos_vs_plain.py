@@ -18,8 +18,8 @@ import time
 import numpy as np
 from scipy import stats
 
-from gyrodrift.benchmark_functions import ackley, griewank, rastrigin, rosenbrock, sphere
 from gyrodrift.cpso import minimize_cpso
+from gyrodrift.testing import ackley, griewank, rastrigin, rosenbrock, sphere
 
 PROBLEMS = [  # (name, function, half-width of the symmetric box)
     ("sphere", sphere, 5.12),

@@ -60,7 +60,7 @@ def test_fit_with_fixed_parameters_needs_both(tmp_path, paper_csv):
     r = CliRunner().invoke(
         main, ["fit", str(paper_csv), "--out", str(tmp_path / "m.json"), "--lat0-deg", "28.222", "--gamma", "10"]
     )
-    assert r.exit_code != 0 and "give both gamma and sigma" in r.output
+    assert r.exit_code != 0 and "give both --gamma and --sigma" in r.output
 
 
 def test_bad_data_file_is_named(tmp_path):

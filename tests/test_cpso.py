@@ -10,7 +10,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import Bounds, OptimizeResult
 
-from gyrodrift.benchmark_functions import ackley, griewank, rastrigin, rosenbrock, sphere
 from gyrodrift.cpso import (
     CPSOSolver,
     Swarm,
@@ -20,6 +19,7 @@ from gyrodrift.cpso import (
     minimize_cpso,
     pso_move,
 )
+from gyrodrift.testing import ackley, griewank, rastrigin, rosenbrock, sphere
 
 # (name, function, dimension, bounds, argmin)
 PROBLEMS = [

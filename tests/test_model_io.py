@@ -24,9 +24,9 @@ def test_round_trip_reproduces_predictions_to_the_bit(tmp_path, paper, scaling, 
     again = load_model(path)
     np.testing.assert_array_equal(again.predict(paper.test), model.predict(paper.test))
     doc = json.loads(path.read_text())
-    assert doc["schema_version"] == 1 and doc["encoding"] == encoding
+    assert doc["schema_version"] == 2 and doc["encoding"] == encoding
     assert doc["training"]["sha256"] == training_digest(paper.train)
-    assert len(doc["lssvr"]["alpha"]) == 22
+    assert len(doc["training"]["runs"]) == 22
 
 
 def test_tuned_model_keeps_its_tuning_record(tmp_path, paper):
@@ -51,17 +51,19 @@ def good_doc(paper):
     [
         (lambda d: d.update(format="other"), "not a gyrodrift model file"),
         (lambda d: d.update(schema_version=99), "schema_version 99 is not supported"),
-        (lambda d: d.pop("lssvr"), "missing key 'lssvr'"),
+        (lambda d: d.pop("lssvr_params"), "missing key 'lssvr_params'"),
         (lambda d: d.update(encoding="weird"), "unknown encoding 'weird'"),
-        (lambda d: d["lssvr"].update(alpha=d["lssvr"]["alpha"][:-1]), "key 'alpha' has shape"),
-        (lambda d: d["lssvr"].update(sigma=-1.0), "sigma"),
-        (lambda d: d["lssvr"]["support_vectors"][0].append(1.0), "support_vectors"),
-        (lambda d: d["scaler"].update(kind="robust"), "unknown scaler kind 'robust'"),
-        (lambda d: d["lssvr"].update(intercept="zero"), "key 'intercept' has the wrong type"),
-        (lambda d: d.update(training=[1, 2]), "key 'training' must be an object"),
-        (lambda d: d["lssvr"].update(kernel="poly", degree=-3), "key 'degree' must be a whole number >= 1"),
-        (lambda d: d["lssvr"].update(kernel="sigmoid"), "unknown kernel 'sigmoid'"),
-        (lambda d: d["scaler"]["scale_"].__setitem__(0, 0.0), "key 'scale_' of the scaler holds a zero"),
+        (lambda d: d["training"]["runs"][0].pop("lat_deg"), "run 1: missing key 'lat_deg'"),
+        (lambda d: d["lssvr_params"].update(sigma=-1.0), "sigma"),
+        (lambda d: d["training"]["runs"][0].update(extra=1.0), "unknown key 'extra'"),
+        (lambda d: d.update(scaling="robust"), "unknown scaling 'robust'"),
+        (lambda d: d["training"]["runs"][0].update(lat_deg="zero"), "key lat_deg: expected a number"),
+        (lambda d: d.update(training=[1, 2]), "key 'training' has the wrong type"),
+        (lambda d: d["lssvr_params"].update(method="annealing"), "unknown method 'annealing'"),
+        (lambda d: d["lssvr_params"].update(objective="sigmoid"), "unknown objective 'sigmoid'"),
+        (lambda d: d["training"].update(sha256="0" * 64), "do not match their sha256"),
+        (lambda d: d["fitted"].update(intercept_deg_h=1.0), "key 'intercept_deg_h' differs"),
+        (lambda d: d["training"]["runs"][3].update(drift_deg_h=11.0), "run 4, key drift_deg_h"),
     ],
 )
 def test_bad_model_documents(tmp_path, good_doc, mutate, message):

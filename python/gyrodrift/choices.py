@@ -4,6 +4,13 @@ The CLI builds its choices from here at start-up without importing scikit-learn;
 the options (`gyrodrift.model`, `gyrodrift.tuning`) import the same tuples.
 """
 
+import sys
+
+SIGMA_RANGE = (sys.float_info.min**0.5, sys.float_info.max**0.5)
+"""Kernel widths whose square is a normal, finite float64: about (1.49e-154, 1.34e154) [scaled input units].
+
+Below, the RBF kernel's ``d / sigma^2`` is ``0/0`` on its diagonal; above, every distance is lost."""
+
 SCALINGS = ("standard", "minmax", "none")
 """Input scalings: zero mean / unit variance, [0, 1] per feature, or raw inputs."""
 

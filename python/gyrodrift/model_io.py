@@ -1,82 +1,138 @@
-"""Model files: versioned JSON holding everything a prediction needs. Never pickle.
+"""Model files: versioned JSON holding a drift model's parameters and its training runs. Never pickle.
 
-Layout (``schema_version`` 1)::
+Layout (``schema_version`` 2)::
 
-    {"format": "gyrodrift-drift-model", "schema_version": 1, "gyrodrift_version": "...",
-     "encoding": "temp_range", "feature_names": [...],
-     "scaler": {"kind": "standard", ...sklearn fitted attributes...},
-     "lssvr": {"kernel": "rbf", "gamma": ..., "sigma": ..., "degree": ..., "coef0": ...,
-               "support_vectors": [[...]], "alpha": [...], "intercept": ...},
-     "training": {"n_runs": ..., "sha256": ..., "source": ...},
-     "loo_residuals_deg_h": [...] (optional: leave-one-out residuals on the training runs, for intervals),
-     "tuning": {...} or null}
+    {"format": "gyrodrift-drift-model", "schema_version": 2, "gyrodrift_version": "...",
+     "encoding": "temp_range", "scaling": "standard", "feature_names": [...],
+     "lssvr_params": {"gamma": null, "sigma": null, "objective": "loo_mae", "method": "cpso", "bounds": [...],
+                      "n_particles": 30, "max_iter": 100, "w": 0.75, "c1": 2.0, "c2": 2.0, "chaos_steps": 10,
+                      "grid_size": 40, "n_folds": 5, "random_state": 0 or null},
+     "tuning": {...TuningResult...} or null,
+     "fitted": {"gamma": ..., "sigma": ..., "intercept_deg_h": ..., "condition_number": ...,
+                "on_search_bound": [...], "loo_residuals_deg_h": [...]},
+     "warnings": ["...", ...],
+     "training": {"n_runs": ..., "sha256": ..., "source": ..., "runs": [{"run": ..., "lat_deg": ..., ...}, ...]}}
 
-``support_vectors`` are the training inputs after scaling. Floats are written with ``repr`` precision, so a
-loaded model reproduces the saved model's predictions to the bit.
+Loading rebuilds the model with :func:`gyrodrift.model.make_drift_model` from the parameters and fits it on the
+training runs with the recorded tuning (no search is repeated); nothing is set into fitted scikit-learn
+internals. The same code and data give the same floats, so a loaded model reproduces the saved model's
+predictions to the bit (tested). ``fitted`` is a record for readers, checked against the refit. Floats are
+written with ``repr`` precision.
+
+Schema 1 files (gyrodrift before the pipeline model: fitted internals, no training runs) are refused with a
+message saying how to refit them.
 """
 
 from __future__ import annotations
 
 import json
+import math
+import warnings
 from pathlib import Path
+from typing import Any
 
 import numpy as np
-from sklearn.pipeline import Pipeline
-from sklearn.preprocessing import MinMaxScaler, StandardScaler
 
 from gyrodrift import __version__
 from gyrodrift.atomic import atomic_write_json
-from gyrodrift.choices import SCALINGS
-from gyrodrift.encodings import ENCODINGS, feature_names
-from gyrodrift.errors import InputError
-from gyrodrift.lssvr import LSSVR
-from gyrodrift.model import DriftModel
-from gyrodrift.tuning import TuningResult
+from gyrodrift.choices import ENCODINGS, METHODS, OBJECTIVES, SCALINGS
+from gyrodrift.errors import GyrodriftError, InputError
+from gyrodrift.lssvr import IllConditionedWarning
+from gyrodrift.model import DriftModel, make_drift_model, training_digest
+from gyrodrift.runs import RunTable, RunTableError
+from gyrodrift.tuning import SearchBoundWarning, TuningResult
 
 FORMAT = "gyrodrift-drift-model"
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
 
-_SCALER_ATTRS = {
-    "standard": ("mean_", "var_", "scale_"),
-    "minmax": ("min_", "scale_", "data_min_", "data_max_", "data_range_"),
-}
+#: The TunedLSSVR parameters a model file keeps (``callback`` is not data).
+_PARAMS = (
+    "gamma",
+    "sigma",
+    "objective",
+    "method",
+    "bounds",
+    "n_particles",
+    "max_iter",
+    "w",
+    "c1",
+    "c2",
+    "chaos_steps",
+    "grid_size",
+    "n_folds",
+    "random_state",
+)
+_INT_PARAMS = ("n_particles", "max_iter", "chaos_steps", "grid_size", "n_folds")
+_FLOAT_PARAMS = ("w", "c1", "c2")
+
+#: Digits beyond which an integer in a model file is refused before Python converts it (its limit is 4300).
+_MAX_INT_DIGITS = 400
 
 
 class ModelFileError(InputError):
-    """A model file that cannot be used; the message names the file and what is wrong."""
+    """A model file that cannot be used; the message names the file, the key and what is wrong."""
+
+
+class _HugeInt:
+    """Stands for an integer literal of more than ``_MAX_INT_DIGITS`` digits in a model file."""
+
+    def __init__(self, digits: int) -> None:
+        self.digits = digits
+
+
+def _parse_int(text: str) -> int | _HugeInt:
+    return _HugeInt(len(text.lstrip("-"))) if len(text) > _MAX_INT_DIGITS else int(text)
+
+
+def _refuse_huge_ints(doc: Any, where: str) -> None:
+    """Raise ModelFileError naming the key of the first integer of more than ``_MAX_INT_DIGITS`` digits.
+
+    Iterative (a deeply nested document must not exhaust the stack twice)."""
+    stack: list[tuple[str, Any]] = [("", doc)]
+    while stack:
+        path, value = stack.pop()
+        if isinstance(value, _HugeInt):
+            raise ModelFileError(f"{where}: key {path or '<top>'!r} holds an integer of {value.digits} digits")
+        if isinstance(value, dict):
+            stack.extend((f"{path}.{k}" if path else str(k), v) for k, v in value.items())
+        elif isinstance(value, list):
+            stack.extend((f"{path}[{i}]", v) for i, v in enumerate(value))
 
 
 def model_to_dict(model: DriftModel) -> dict:
     """The JSON-ready dict of a fitted model."""
-    scaler = model.pipeline.named_steps["scale"]
-    scaler_doc: dict = {"kind": model.scaling}
-    for attr in _SCALER_ATTRS.get(model.scaling, ()):
-        scaler_doc[attr] = np.asarray(getattr(scaler, attr), float).tolist()
-    if model.scaling != "none":
-        scaler_doc["n_samples_seen"] = int(scaler.n_samples_seen_)
-    est = model.lssvr
+    est = model.named_steps["lssvr"]
+    params = {k: v for k, v in est.get_params().items() if k in _PARAMS}
+    if not (params["random_state"] is None or isinstance(params["random_state"], int)):
+        params["random_state"] = None  # a Generator's state is not kept: the recorded tuning stands for it
+    params["bounds"] = [list(map(float, b)) for b in params["bounds"]]
+    training = model.training_
+    runs: RunTable = training["runs"]
+    lssvr = model.lssvr
     return {
         "format": FORMAT,
         "schema_version": SCHEMA_VERSION,
         "gyrodrift_version": __version__,
         "encoding": model.encoding,
+        "scaling": model.scaling,
         "feature_names": list(model.feature_names),
-        "scaler": scaler_doc,
-        "lssvr": {
-            "kernel": est.kernel,
-            "gamma": float(est.gamma),
-            "sigma": float(est.sigma),
-            "degree": est.degree,
-            "coef0": float(est.coef0),
-            "support_vectors": np.asarray(est.X_fit_, float).tolist(),
-            "alpha": np.asarray(est.alpha_, float).tolist(),
-            "intercept": float(est.intercept_),
-        },
-        "training": dict(model.training),
-        "loo_residuals_deg_h": (
-            None if model.loo_residuals_deg_h is None else np.asarray(model.loo_residuals_deg_h, float).tolist()
-        ),
+        "lssvr_params": params,
         "tuning": model.tuning.to_dict() if model.tuning is not None else None,
+        "fitted": {
+            "gamma": float(lssvr.gamma),
+            "sigma": float(lssvr.sigma),
+            "intercept_deg_h": float(lssvr.intercept_),
+            "condition_number": float(lssvr.condition_number_),
+            "on_search_bound": list(est.on_search_bound_),
+            "loo_residuals_deg_h": np.asarray(model.loo_residuals_deg_h, float).tolist(),
+        },
+        "warnings": model.fit_warnings(),
+        "training": {
+            "n_runs": int(training["n_runs"]),
+            "sha256": training["sha256"],
+            "source": training["source"],
+            "runs": runs.records(),
+        },
     }
 
 
@@ -89,28 +145,119 @@ def _need(doc: dict, key: str, kind, where: str):
     if key not in doc:
         raise ModelFileError(f"{where}: missing key {key!r}")
     value = doc[key]
+    if isinstance(value, _HugeInt):
+        raise ModelFileError(f"{where}: key {key!r} holds an integer of {value.digits} digits (out of range)")
     if not isinstance(value, kind) or isinstance(value, bool) and kind is not bool:
         raise ModelFileError(f"{where}: key {key!r} has the wrong type ({type(value).__name__})")
     return value
 
 
-def _floats(value, where: str, key: str, shape=None) -> np.ndarray:
+def _number(value, where: str, key: str) -> float:
+    """A finite float from a JSON number; the message names the key."""
+    if isinstance(value, _HugeInt):
+        raise ModelFileError(f"{where}: key {key!r} holds an integer of {value.digits} digits (out of range)")
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ModelFileError(f"{where}: key {key!r} must be a number, got {type(value).__name__}")
     try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise ModelFileError(f"{where}: key {key!r} must hold numbers") from None
-    if shape is not None and arr.shape != shape:
-        raise ModelFileError(f"{where}: key {key!r} has shape {arr.shape}, expected {shape}")
-    if not np.all(np.isfinite(arr)):
-        raise ModelFileError(f"{where}: key {key!r} holds non-finite values")
-    return arr
+        out = float(value)
+    except OverflowError:
+        raise ModelFileError(f"{where}: key {key!r} holds an integer too large for a float") from None
+    if not math.isfinite(out):
+        raise ModelFileError(f"{where}: key {key!r} must be a finite number, got {out}")
+    return out
+
+
+def _numbers(value, where: str, key: str, n: int | None = None) -> list[float]:
+    if not isinstance(value, list) or (n is not None and len(value) != n):
+        expected = "a list of numbers" if n is None else f"a list of {n} numbers"
+        raise ModelFileError(f"{where}: key {key!r} must be {expected}")
+    return [_number(v, where, key) for v in value]
+
+
+def _check_runs(value, where: str) -> list:
+    """The run records must be a list of objects whose numbers are JSON numbers (no huge integers)."""
+    if not isinstance(value, list):
+        raise ModelFileError(f"{where}: key 'runs' must be a list of runs")
+    for i, rec in enumerate(value, start=1):
+        if isinstance(rec, dict):
+            for key, v in rec.items():
+                if isinstance(v, (_HugeInt, int)) and not isinstance(v, bool):
+                    _number(v, f"{where} [run {i}]", key)
+    return value
+
+
+def _lssvr_params(doc: Any, where: str) -> dict:
+    if not isinstance(doc, dict):
+        raise ModelFileError(f"{where}: key 'lssvr_params' must be an object")
+    unknown = sorted(set(doc) - set(_PARAMS))
+    if unknown:
+        raise ModelFileError(f"{where}: unknown key {unknown[0]!r} in 'lssvr_params'")
+    pw = where + " [lssvr_params]"
+    out: dict[str, Any] = {}
+    for key in ("gamma", "sigma"):
+        value = doc.get(key)
+        out[key] = None if value is None else _number(value, pw, key)
+    for key, allowed in (("objective", OBJECTIVES), ("method", METHODS)):
+        out[key] = _need(doc, key, str, pw)
+        if out[key] not in allowed:
+            raise ModelFileError(f"{pw}: unknown {key} {out[key]!r}; expected one of {', '.join(allowed)}")
+    bounds = _need(doc, "bounds", list, pw)
+    if len(bounds) != 2:
+        raise ModelFileError(f"{pw}: key 'bounds' must hold two [low, high] pairs")
+    out["bounds"] = tuple(tuple(_numbers(b, pw, "bounds", 2)) for b in bounds)
+    for key in _INT_PARAMS:
+        out[key] = _need(doc, key, int, pw)
+    for key in _FLOAT_PARAMS:
+        out[key] = _number(_need(doc, key, (int, float), pw), pw, key)
+    seed = doc.get("random_state")
+    if seed is not None:
+        seed = _need(doc, "random_state", int, pw)
+    out["random_state"] = seed
+    return out
+
+
+def _tuning(doc: Any, where: str) -> TuningResult | None:
+    if doc is None:
+        return None
+    tw = where + " [tuning]"
+    if not isinstance(doc, dict):
+        raise ModelFileError(f"{where}: key 'tuning' must be an object or null")
+    try:
+        bounds = _need(doc, "bounds", list, tw)
+        if len(bounds) != 2:
+            raise ModelFileError(f"{tw}: key 'bounds' must hold two [low, high] pairs")
+        return TuningResult(
+            gamma=_number(_need(doc, "gamma", (int, float), tw), tw, "gamma"),
+            sigma=_number(_need(doc, "sigma", (int, float), tw), tw, "sigma"),
+            fitness=_number(_need(doc, "fitness", (int, float), tw), tw, "fitness"),
+            objective=_need(doc, "objective", str, tw),
+            method=_need(doc, "method", str, tw),
+            nfev=_need(doc, "nfev", int, tw),
+            nit=_need(doc, "nit", int, tw),
+            history=_numbers(_need(doc, "history", list, tw), tw, "history"),
+            bounds=tuple(tuple(_numbers(b, tw, "bounds", 2)) for b in bounds),
+            settings=_need(doc, "settings", dict, tw),
+        )
+    except ModelFileError:
+        raise
+    except (TypeError, ValueError) as exc:
+        raise ModelFileError(f"{where}: malformed tuning record ({exc})") from None
 
 
 def model_from_dict(doc: dict, where: str = "<model>") -> DriftModel:
-    """Rebuild a model from ``model_to_dict`` output; ``where`` names the source in errors."""
+    """Rebuild a model from ``model_to_dict`` output (refit on its training runs); ``where`` names the source."""
     if not isinstance(doc, dict) or doc.get("format") != FORMAT:
         raise ModelFileError(f"{where}: not a gyrodrift model file (format is not {FORMAT!r})")
+    _refuse_huge_ints(doc, where)
     version = doc.get("schema_version")
+    if version == 1:
+        training = doc.get("training") if isinstance(doc.get("training"), dict) else {}
+        source = training.get("source", "its training table")
+        raise ModelFileError(
+            f"{where}: a schema 1 model file (written by gyrodrift before 0.2: fitted internals, no training "
+            f"runs), which this version ({__version__}) no longer reads; refit it with `gyrodrift fit` on "
+            f"{source} (the same --encoding, --scaling and --seed give the same model)"
+        )
     if version != SCHEMA_VERSION:
         raise ModelFileError(
             f"{where}: schema_version {version!r} is not supported by gyrodrift {__version__} "
@@ -119,69 +266,76 @@ def model_from_dict(doc: dict, where: str = "<model>") -> DriftModel:
     encoding = _need(doc, "encoding", str, where)
     if encoding not in ENCODINGS:
         raise ModelFileError(f"{where}: unknown encoding {encoding!r}")
-    n_feat = len(feature_names(encoding))
-    sdoc = _need(doc, "scaler", dict, where)
-    kind = _need(sdoc, "kind", str, where + " [scaler]")
-    if kind not in SCALINGS:
-        raise ModelFileError(f"{where}: unknown scaler kind {kind!r}")
-    if kind == "none":
-        scaler = "passthrough"
-    else:
-        scaler = StandardScaler() if kind == "standard" else MinMaxScaler()
-        for attr in _SCALER_ATTRS[kind]:
-            setattr(scaler, attr, _floats(_need(sdoc, attr, list, where + " [scaler]"), where, attr, (n_feat,)))
-        if np.any(np.asarray(scaler.scale_) == 0.0):
-            raise ModelFileError(f"{where}: key 'scale_' of the scaler holds a zero")
-        scaler.n_features_in_ = n_feat
-        scaler.n_samples_seen_ = int(_need(sdoc, "n_samples_seen", int, where + " [scaler]"))
-    ldoc = _need(doc, "lssvr", dict, where)
-    lw = where + " [lssvr]"
-    sv = _floats(_need(ldoc, "support_vectors", list, lw), where, "support_vectors")
-    if sv.ndim != 2 or sv.shape[1] != n_feat or sv.shape[0] < 2:
-        raise ModelFileError(f"{where}: support_vectors has shape {sv.shape}, expected (n >= 2, {n_feat})")
-    alpha = _floats(_need(ldoc, "alpha", list, lw), where, "alpha", (sv.shape[0],))
-    intercept = float(_floats(_need(ldoc, "intercept", (int, float), lw), where, "intercept"))
+    scaling = _need(doc, "scaling", str, where)
+    if scaling not in SCALINGS:
+        raise ModelFileError(f"{where}: unknown scaling {scaling!r}")
+    params = _lssvr_params(_need(doc, "lssvr_params", dict, where), where)
+    tuning = _tuning(doc.get("tuning"), where)
+    if tuning is None and params["gamma"] is None:
+        raise ModelFileError(f"{where}: key 'tuning' is null but 'lssvr_params' fixes no gamma and sigma")
+    tdoc = _need(doc, "training", dict, where)
+    tw = where + " [training]"
+    sha = _need(tdoc, "sha256", str, tw)
+    source = _need(tdoc, "source", str, tw)
     try:
-        est = LSSVR(
-            gamma=float(_need(ldoc, "gamma", (int, float), lw)),
-            sigma=float(_need(ldoc, "sigma", (int, float), lw)),
-            kernel=_need(ldoc, "kernel", str, lw),
-            degree=_need(ldoc, "degree", int, lw),
-            coef0=float(_need(ldoc, "coef0", (int, float), lw)),
-        )
-    except ValueError as exc:
-        raise ModelFileError(f"{where}: {exc}") from None
-    if not (est.gamma > 0 and est.sigma > 0 and np.isfinite(est.gamma) and np.isfinite(est.sigma)):
-        raise ModelFileError(f"{where}: gamma and sigma must be positive, got {est.gamma} and {est.sigma}")
-    if est.kernel not in ("rbf", "linear", "poly", "polynomial"):
-        raise ModelFileError(f"{where}: unknown kernel {est.kernel!r}")
-    if est.degree < 1:
-        raise ModelFileError(f"{where}: key 'degree' must be a whole number >= 1, got {est.degree}")
-    est.X_fit_ = sv
-    est.alpha_ = alpha
-    est.intercept_ = intercept
-    est.n_features_in_ = n_feat
-    tdoc = doc.get("tuning")
-    tuning = None
-    if tdoc is not None:
-        try:
-            tuning = TuningResult(**{**tdoc, "bounds": tuple(tuple(b) for b in tdoc["bounds"])})
-        except (TypeError, KeyError) as exc:
-            raise ModelFileError(f"{where}: malformed tuning record ({exc})") from None
-    training = doc.get("training") or {}
-    if not isinstance(training, dict):
-        raise ModelFileError(f"{where}: key 'training' must be an object, got {type(training).__name__}")
-    loo = doc.get("loo_residuals_deg_h")
-    if loo is not None:
-        loo = _floats(loo, where, "loo_residuals_deg_h", (sv.shape[0],))
-    return DriftModel(
-        encoding=encoding,
-        scaling=kind,
-        pipeline=Pipeline([("scale", scaler), ("lssvr", est)]),
-        tuning=tuning,
-        training=training,
-        loo_residuals_deg_h=loo,
+        runs = RunTable.from_records(_check_runs(_need(tdoc, "runs", list, tw), tw), source=f"{where} [training.runs]")
+    except RunTableError as exc:
+        raise ModelFileError(str(exc)) from None
+    runs = RunTable(
+        run=runs.run,
+        lat_deg=runs.lat_deg,
+        lat0_deg=runs.lat0_deg,
+        temp_min_c=runs.temp_min_c,
+        temp_max_c=runs.temp_max_c,
+        drift_deg_h=runs.drift_deg_h,
+        split=runs.split,
+        source=source,
     )
+    if training_digest(runs) != sha:
+        raise ModelFileError(f"{where}: the training runs do not match their sha256 (key 'training.sha256'): edited?")
+    try:
+        model = make_drift_model(encoding=encoding, scaling=scaling, **params)
+        with warnings.catch_warnings():
+            # the file's "warnings" already say so; a loaded model does not repeat them
+            warnings.simplefilter("ignore", SearchBoundWarning)
+            warnings.simplefilter("ignore", IllConditionedWarning)
+            model.fit(runs, lssvr__tuning=tuning)
+    except GyrodriftError as exc:
+        raise ModelFileError(
+            f"{where}: the model cannot be rebuilt from its parameters and training runs: {exc}"
+        ) from None
+    except (ValueError, TypeError) as exc:  # scikit-learn's own parameter checks
+        raise ModelFileError(f"{where}: bad model parameters: {exc}") from None
+    _check_fitted(doc.get("fitted"), model, where)
+    return model
+
+
+def _check_fitted(fitted: Any, model: DriftModel, where: str) -> None:
+    """The file's ``fitted`` record must describe the rebuilt model: gamma and sigma exactly, the intercept and
+    the LOO residuals to 1e-9 relative (another BLAS may round differently); else the file was edited."""
+    if fitted is None:
+        return
+    fw = where + " [fitted]"
+    if not isinstance(fitted, dict):
+        raise ModelFileError(f"{where}: key 'fitted' must be an object")
+    lssvr = model.lssvr
+    for key, value in (("gamma", lssvr.gamma), ("sigma", lssvr.sigma)):
+        if key in fitted and _number(fitted[key], fw, key) != float(value):
+            raise ModelFileError(f"{fw}: key {key!r} ({fitted[key]!r}) differs from the model's {value!r}")
+    checks = (
+        ("intercept_deg_h", np.atleast_1d(float(lssvr.intercept_))),
+        ("loo_residuals_deg_h", np.asarray(model.loo_residuals_deg_h, float)),
+    )
+    for key, expected in checks:
+        if key not in fitted:
+            continue
+        raw = fitted[key]
+        got = np.atleast_1d(_numbers(raw, fw, key) if isinstance(raw, list) else _number(raw, fw, key))
+        if got.shape != expected.shape:
+            raise ModelFileError(f"{fw}: key {key!r} has {got.size} values, the model {expected.size}")
+        scale = float(np.max(np.abs(expected))) or 1.0
+        if not np.allclose(got, expected, rtol=1e-9, atol=1e-12 * scale):
+            raise ModelFileError(f"{fw}: key {key!r} differs from the model rebuilt from the file (edited?)")
 
 
 def load_model(path) -> DriftModel:
@@ -194,7 +348,11 @@ def load_model(path) -> DriftModel:
     except UnicodeDecodeError:
         raise ModelFileError(f"{path}: not a text file (expected JSON)") from None
     try:
-        doc = json.loads(text)
+        doc = json.loads(text, parse_int=_parse_int)
     except json.JSONDecodeError as exc:
         raise ModelFileError(f"{path}: corrupted JSON at line {exc.lineno}, column {exc.colno}: {exc.msg}") from None
+    except RecursionError:
+        raise ModelFileError(f"{path}: JSON nested too deeply (not a model file)") from None
+    except ValueError as exc:  # e.g. Python's limit on integer digits
+        raise ModelFileError(f"{path}: unreadable JSON: {exc}") from None
     return model_from_dict(doc, str(path))

@@ -31,6 +31,10 @@ from gyrodrift.errors import InputError
 PAPER_LAT0_DEG = 28.222
 """Site latitude of the paper's experiments [deg] (Yu et al. 2013, section 3)."""
 
+TEMPERATURE_LIMITS_C = (-100.0, 200.0)
+"""Plausible system temperatures [deg C], inclusive: every reader (run tables, IMU logs) refuses the rest (a
+kelvin value such as 303, or 1e6)."""
+
 KNOWN_COLUMNS = (
     "run",
     "split",
@@ -92,6 +96,82 @@ class RunTable:
         return len(self.run)
 
     @property
+    def shape(self) -> tuple[int]:
+        """``(n_runs,)``: a table is a 1-D sequence of runs to scikit-learn (``cross_val_score``, ``GridSearchCV``)."""
+        return (len(self),)
+
+    def __getitem__(self, key) -> RunTable:
+        """The runs selected by ``key`` (an index, a slice, an index array or a boolean mask) as a table.
+
+        ``table[key, ...]`` (how scikit-learn's splitters index arrays) is the same as ``table[key]``.
+        """
+        if isinstance(key, tuple) and len(key) == 2 and key[1] is Ellipsis:
+            key = key[0]
+        if isinstance(key, (int, np.integer)):
+            key = [int(key)]
+        if not isinstance(key, slice):
+            key = np.asarray(key)
+            if key.dtype != bool and not np.issubdtype(key.dtype, np.integer):
+                if key.size:
+                    raise IndexError(f"runs are selected by integers, slices or boolean masks, got {key.dtype}")
+                key = key.astype(int)
+        return self.select(key)
+
+    def to_structured(self) -> np.ndarray:
+        """The table as a 1-D numpy structured array (fields ``STRUCTURED_FIELDS``); see :func:`as_run_table`."""
+        out = np.empty(len(self), dtype=STRUCTURED_DTYPE)
+        for name in STRUCTURED_FIELDS:
+            out[name] = getattr(self, name)
+        return out
+
+    @classmethod
+    def from_records(cls, records, *, source: str = "<records>") -> RunTable:
+        """A table from ``records()``-style dicts, with the checks of :func:`read_runs_csv`.
+
+        Each record needs ``lat_deg``, ``lat0_deg``, ``temp_min_c``, ``temp_max_c`` (numbers) and may have
+        ``run`` (text), ``drift_deg_h`` (number) and ``split`` (``"train"``, ``"test"`` or ``""``). Raises
+        :class:`RunTableError` naming ``source``, the record (1-based) and the key.
+        """
+        if not isinstance(records, list) or not records:
+            raise RunTableError(f"{source}: expected a non-empty list of runs")
+        cols: dict[str, list] = {name: [] for name in STRUCTURED_FIELDS}
+        for i, rec in enumerate(records, start=1):
+            where = f"{source}, run {i}"
+            if not isinstance(rec, dict):
+                raise RunTableError(f"{where}: expected an object with the run's values, got {type(rec).__name__}")
+            unknown = sorted(set(rec) - set(STRUCTURED_FIELDS))
+            if unknown:
+                raise RunTableError(f"{where}: unknown key {unknown[0]!r}")
+            run = rec.get("run", str(i))
+            if not isinstance(run, str):
+                raise RunTableError(f"{where}, key run: expected text, got {type(run).__name__}")
+            values = {}
+            for key in ("lat_deg", "lat0_deg", "temp_min_c", "temp_max_c", "drift_deg_h"):
+                if key not in rec:
+                    if key == "drift_deg_h":
+                        values[key] = math.nan
+                        continue
+                    raise RunTableError(f"{where}: missing key {key!r}")
+                values[key] = _record_number(rec[key], where, key)
+            split = rec.get("split", "")
+            _check_run_values(where, split=split, **values)
+            cols["run"].append(run)
+            cols["split"].append(split)
+            for key, value in values.items():
+                cols[key].append(value)
+        _check_unique_runs(cols["run"], source)
+        return cls(
+            run=np.array(cols["run"], dtype=object),
+            lat_deg=np.array(cols["lat_deg"], dtype=float),
+            lat0_deg=np.array(cols["lat0_deg"], dtype=float),
+            temp_min_c=np.array(cols["temp_min_c"], dtype=float),
+            temp_max_c=np.array(cols["temp_max_c"], dtype=float),
+            drift_deg_h=np.array(cols["drift_deg_h"], dtype=float),
+            split=np.array(cols["split"], dtype=object),
+            source=source,
+        )
+
+    @property
     def lat_err_arcsec(self) -> np.ndarray:
         """Latitude error at 12 h, computed minus true [arcsec]."""
         return (self.lat_deg - self.lat0_deg) * 3600.0
@@ -131,6 +211,96 @@ class RunTable:
                 rec["split"] = str(self.split[i])
             out.append(rec)
         return out
+
+
+STRUCTURED_FIELDS = ("run", "lat_deg", "lat0_deg", "temp_min_c", "temp_max_c", "drift_deg_h", "split")
+"""Fields of a run table as a structured array (:meth:`RunTable.to_structured`); units as the columns."""
+
+STRUCTURED_DTYPE = np.dtype([("run", object), *((name, float) for name in STRUCTURED_FIELDS[1:-1]), ("split", object)])
+
+
+def as_run_table(X, *, source: str = "<array>") -> RunTable:
+    """``X`` as a :class:`RunTable`: a table as it is, or a 1-D structured array with the fields
+    ``lat_deg``, ``lat0_deg``, ``temp_min_c``, ``temp_max_c`` (and optionally ``run``, ``drift_deg_h``,
+    ``split``), checked as :meth:`RunTable.from_records` checks records. Anything else is a
+    :class:`RunTableError` saying what is expected."""
+    if isinstance(X, RunTable):
+        return X
+    names = getattr(getattr(X, "dtype", None), "names", None)
+    if not isinstance(X, np.ndarray) or names is None or X.ndim != 1:
+        raise RunTableError(
+            f"expected a RunTable or a 1-D structured array with fields {', '.join(STRUCTURED_FIELDS[1:5])}, "
+            f"got {type(X).__name__}"
+        )
+    records = []
+    for row in X:
+        rec = {}
+        for name in names:
+            value = row[name]
+            if name in ("run", "split"):
+                rec[name] = "" if value is None else str(value)
+            else:
+                rec[name] = value.item() if isinstance(value, np.generic) else value
+        records.append(rec)
+    return RunTable.from_records(records, source=source)
+
+
+def _record_number(value, where: str, key: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise RunTableError(f"{where}, key {key}: expected a number, got {type(value).__name__}")
+    try:
+        as_float = float(value)
+    except OverflowError:
+        raise RunTableError(
+            f"{where}, key {key}: expected a finite number, got an integer too large for a float"
+        ) from None
+    if not math.isfinite(as_float):
+        raise RunTableError(f"{where}, key {key}: expected a finite number, got {as_float}")
+    return as_float
+
+
+def _check_run_values(
+    where: str, *, lat_deg: float, lat0_deg: float, temp_min_c: float, temp_max_c: float, drift_deg_h: float, split
+) -> None:
+    """The value checks of one run (latitudes, temperatures, drift, split); ``where`` names it in messages."""
+    for key, lat in (("lat_deg", lat_deg), ("lat0_deg", lat0_deg)):
+        if not -90.0 <= lat <= 90.0:
+            raise RunTableError(f"{where}, key {key}: expected a latitude within [-90, 90] deg, got {lat}")
+    if temp_max_c < temp_min_c:
+        raise RunTableError(
+            f"{where}, key temp_max_c: maximum temperature {temp_max_c} is below the minimum {temp_min_c}"
+        )
+    t_low, t_high = TEMPERATURE_LIMITS_C
+    for key, t in (("temp_min_c", temp_min_c), ("temp_max_c", temp_max_c)):
+        if not t_low <= t <= t_high:
+            raise RunTableError(f"{where}, key {key}: temperature {t} outside [{t_low:g}, {t_high:g}] deg C")
+    if math.isfinite(drift_deg_h) and abs(drift_deg_h) > 10.0:
+        raise RunTableError(
+            f"{where}, key drift_deg_h: |{drift_deg_h}| deg/h is not an RLG drift (expected |drift| <= 10 deg/h)"
+        )
+    if split not in ("", "train", "test"):
+        raise RunTableError(f"{where}, key split: expected 'train', 'test' or '', got {split!r}")
+
+
+def _check_unique_runs(runs: list[str], source: str) -> None:
+    seen: dict[str, int] = {}
+    for i, r in enumerate(runs, start=1):
+        if r in seen:
+            raise RunTableError(f"{source}, run {i}: run {r!r} appears more than once (first as run {seen[r]})")
+        seen[r] = i
+
+
+def _csv_rows(handle, name: str):
+    """``csv.reader`` rows; a malformed CSV (``csv.Error``, e.g. a field over the size limit) is a RunTableError."""
+    reader = csv.reader(handle)
+    while True:
+        try:
+            row = next(reader)
+        except StopIteration:
+            return
+        except csv.Error as exc:
+            raise RunTableError(f"{name}, row {reader.line_num}: malformed CSV ({exc})") from None
+        yield row
 
 
 def _parse_float(text: str, where: str, column: str, what: str) -> float:
@@ -185,7 +355,7 @@ def read_runs_csv(path, *, lat0_deg: float | None = None, require_truth: bool = 
         line = raw[: exc.start].count(b"\n") + 1
         raise RunTableError(f"{name}, row {line}: not UTF-8 text (byte {exc.start}); expected a CSV table") from None
     with io.StringIO(text, newline="") as handle:
-        reader = csv.reader(handle)
+        reader = _csv_rows(handle, name)
         try:
             header = next(reader)
         except StopIteration:
@@ -242,8 +412,9 @@ def read_runs_csv(path, *, lat0_deg: float | None = None, require_truth: bool = 
                 bad_col = "temp_range_c"
             if hi < lo:
                 raise RunTableError(f"{where}, column {bad_col}: maximum temperature {hi} is below the minimum {lo}")
-            if not (-100.0 <= lo <= 200.0 and -100.0 <= hi <= 200.0):
-                raise RunTableError(f"{where}, column {bad_col}: temperature outside [-100, 200] deg C")
+            t_low, t_high = TEMPERATURE_LIMITS_C
+            if not (t_low <= lo <= t_high and t_low <= hi <= t_high):
+                raise RunTableError(f"{where}, column {bad_col}: temperature outside [{t_low:g}, {t_high:g}] deg C")
             tmin.append(lo)
             tmax.append(hi)
             if "drift_deg_h" in col and cell["drift_deg_h"] != "":

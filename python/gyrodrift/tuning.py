@@ -20,11 +20,42 @@ from sklearn.model_selection import KFold
 
 from gyrodrift.choices import METHODS, OBJECTIVES
 from gyrodrift.cpso import minimize_cpso
-from gyrodrift.kernels import squared_distances
+from gyrodrift.errors import OptionError
+from gyrodrift.kernels import SIGMA_MAX, SIGMA_MIN, check_matrix_memory, squared_distances
 from gyrodrift.lssvr import lssvr_solve, rbf_batch_errors
 
 DEFAULT_BOUNDS = ((1e-2, 1e5), (1e-3, 1e2))
 """Default search box ((gamma_lo, gamma_hi), (sigma_lo, sigma_hi)); sigma in the scaled input units."""
+
+BOUND_RTOL = 1e-6
+"""A tuned value within this relative distance of a bound of its search box counts as on the edge."""
+
+
+class SearchBoundWarning(UserWarning):
+    """A tuned hyperparameter lies on the edge of its search box: the optimum may lie outside it."""
+
+
+def on_search_bound(gamma: float, sigma: float, bounds) -> list[str]:
+    """Names of the tuned values (``"gamma"``, ``"sigma"``) within ``BOUND_RTOL`` of a bound of ``bounds``."""
+    values = {"gamma": float(gamma), "sigma": float(sigma)}
+    return [
+        name
+        for name, (low, high) in zip(values, bounds, strict=False)
+        if np.isclose(values[name], low, rtol=BOUND_RTOL) or np.isclose(values[name], high, rtol=BOUND_RTOL)
+    ]
+
+
+def search_bound_message(names: list[str], gamma: float, sigma: float, bounds) -> str:
+    """The warning for tuned values on the edge of their search box (empty ``names``: no warning, "")."""
+    if not names:
+        return ""
+    values = {"gamma": gamma, "sigma": sigma}
+    boxes = dict(zip(("gamma", "sigma"), bounds, strict=False))
+    parts = [f"{n} = {values[n]:.6g} in [{boxes[n][0]:g}, {boxes[n][1]:g}]" for n in names]
+    return (
+        f"tuned value on the edge of its search box: {'; '.join(parts)}; the optimum may lie outside the box, "
+        "and the LOO error understates the error on new runs"
+    )
 
 
 @dataclass
@@ -53,6 +84,26 @@ class TuningResult:
         return d
 
 
+def check_bounds(bounds) -> tuple[tuple[float, float], tuple[float, float]]:
+    """``((gamma_lo, gamma_hi), (sigma_lo, sigma_hi))`` as floats with ``0 < lo < hi``, finite, and sigma within
+    ``[SIGMA_MIN, SIGMA_MAX]`` of :mod:`gyrodrift.kernels`; else :class:`OptionError`."""
+    try:
+        pairs = tuple(tuple(float(v) for v in b) for b in bounds)
+    except (TypeError, ValueError, OverflowError):
+        raise OptionError(f"bounds must be ((gamma_lo, gamma_hi), (sigma_lo, sigma_hi)), got {bounds!r}") from None
+    if (
+        len(pairs) != 2
+        or any(len(p) != 2 for p in pairs)
+        or any(not (0 < lo < hi < np.inf) for lo, hi in pairs)
+        or not (SIGMA_MIN <= pairs[1][0] and pairs[1][1] <= SIGMA_MAX)
+    ):
+        raise OptionError(
+            "bounds must be ((gamma_lo, gamma_hi), (sigma_lo, sigma_hi)) with 0 < lo < hi finite and sigma within "
+            f"[{SIGMA_MIN:.3g}, {SIGMA_MAX:.3g}], got {pairs}"
+        )
+    return (pairs[0], pairs[1])  # type: ignore[return-value]
+
+
 def _kfold_errors(sqdist: np.ndarray, y: np.ndarray, gammas, sigmas, n_folds: int) -> np.ndarray:
     """Held-out errors y - f(x) of contiguous k-fold CV for each (gamma, sigma): shape (m, n)."""
     m, n = len(gammas), len(y)
@@ -75,11 +126,13 @@ def make_objective(X, y, objective: str = "loo_mae", *, n_folds: int = 5):
     ``X`` is the scaled input matrix (n, d), ``y`` the targets (n,). Failed factorisations give +inf.
     """
     if objective not in OBJECTIVES:
-        raise ValueError(f"unknown objective {objective!r}; expected one of {', '.join(OBJECTIVES)}")
+        raise OptionError(f"unknown objective {objective!r}; expected one of {', '.join(OBJECTIVES)}")
     X = np.asarray(X, float)
     y = np.asarray(y, float)
     if objective == "kfold_mae" and not 2 <= n_folds <= len(y):
-        raise ValueError(f"n_folds must be within [2, {len(y)}] for {len(y)} samples, got {n_folds}")
+        raise OptionError(f"n_folds must be within [2, {len(y)}] for {len(y)} samples, got {n_folds}")
+    # distances, one candidate's H, its factor and inverse factor; the stacked path (n <= 32) is small
+    check_matrix_memory(len(y), len(y), 4, "tuning the LSSVR", unit="samples")
     sqdist = squared_distances(X)
 
     def fitness(params: np.ndarray) -> np.ndarray:
@@ -121,14 +174,12 @@ def tune_lssvr(
     (called once per iteration); ``rng`` seeds the swarm.
     """
     if method not in METHODS:
-        raise ValueError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
-    bounds = tuple(tuple(float(v) for v in b) for b in bounds)
-    if len(bounds) != 2 or any(lo <= 0 or hi <= lo for lo, hi in bounds):
-        raise ValueError(f"bounds must be ((gamma_lo, gamma_hi), (sigma_lo, sigma_hi)) with 0 < lo < hi, got {bounds}")
+        raise OptionError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
+    bounds = check_bounds(bounds)
     fun = make_objective(X, y, objective, n_folds=n_folds)
     if method == "grid":
         if grid_size < 2:
-            raise ValueError(f"grid_size must be at least 2, got {grid_size}")
+            raise OptionError(f"grid_size must be at least 2, got {grid_size}")
         g = np.logspace(np.log10(bounds[0][0]), np.log10(bounds[0][1]), grid_size)
         s = np.logspace(np.log10(bounds[1][0]), np.log10(bounds[1][1]), grid_size)
         gg, ss = np.meshgrid(g, s, indexing="ij")

@@ -1,7 +1,9 @@
-"""Standard optimisation test functions (global minimum 0), for checking and benchmarking optimisers.
+"""Test helpers shipped with the package (as ``numpy.testing``): nothing in the library imports this module.
 
-Each takes a 1-D point ``x`` and returns a float. Minima: sphere, rastrigin, ackley, griewank at 0;
-rosenbrock at (1, ..., 1). Used by the CPSO tests and by benchmarks/bench_cpso_chaos_vs_plain.py.
+Standard optimisation test functions (global minimum 0), for checking and benchmarking optimisers such as
+:func:`gyrodrift.cpso.minimize_cpso`. Each takes a 1-D point ``x`` and returns a float. Minima: sphere,
+rastrigin, ackley, griewank at 0; rosenbrock at (1, ..., 1). Used by tests/test_cpso.py and by
+benchmarks/bench_cpso_chaos_vs_plain.py.
 """
 
 from __future__ import annotations
