@@ -10,8 +10,8 @@ import pyarrow.parquet as pq
 import pytest
 from click.testing import CliRunner
 
-from gyrodrift.cli.navigation import navigate_command, simulate_command
-from gyrodrift.ins import ImuData, ImuFileError, Scenario, load_scenario, navigate, simulate
+from gyrodrift.cli import main
+from gyrodrift.ins import ImuData, LogError, Scenario, load_scenario, navigate, simulate
 from gyrodrift.ins.imu_file import IMU_COLUMNS, IMU_FORMAT
 from gyrodrift.ins.navigate import NAV_COLUMNS, NAV_ERROR_COLUMNS
 
@@ -63,7 +63,11 @@ def test_simulate_writes_streamed_parquet_with_units_truth_and_resolved_scenario
     assert load_scenario(resolved) == scn
     assert tomllib.loads(resolved.read_text())["rotation"]["span_deg"] == 360.0  # defaults written out
     # No temporary files left behind.
-    assert sorted(p.name for p in (tmp_path / "run").iterdir()) == ["imu.parquet", "scenario.resolved.toml"]
+    assert sorted(p.name for p in (tmp_path / "run").iterdir()) == [
+        ".gyrodrift-manifest.json",
+        "imu.parquet",
+        "scenario.resolved.toml",
+    ]
 
     table = pq.read_table(out)
     t = table.column("t_s").to_numpy()
@@ -128,18 +132,18 @@ def test_errors_are_computed_minus_true():
 
 
 def test_navigate_refuses_missing_and_foreign_files(tmp_path):
-    with pytest.raises(ImuFileError) as info:
+    with pytest.raises(LogError) as info:
         navigate(tmp_path / "none.parquet")
     assert str(info.value) == f"{tmp_path / 'none.parquet'}: no such file"
     junk = tmp_path / "junk.parquet"
     junk.write_text("not parquet")
-    with pytest.raises(ImuFileError, match=r"junk.parquet: not a Parquet file"):
+    with pytest.raises(LogError, match=r"junk.parquet: not a Parquet file"):
         navigate(junk)
     import pyarrow as pa
 
     other = tmp_path / "other.parquet"
     pq.write_table(pa.table({"t_s": [0.1, 0.2], "x": [1.0, 2.0]}), other)
-    with pytest.raises(ImuFileError) as info:
+    with pytest.raises(LogError) as info:
         navigate(other)
     assert "missing column(s) dtheta_x_rad" in str(info.value) and str(other) in str(info.value)
 
@@ -152,12 +156,12 @@ def test_navigate_refuses_missing_and_foreign_files(tmp_path):
 def test_cli_simulate_then_navigate(tmp_path, small_toml):
     runner = CliRunner()
     out = tmp_path / "cli"
-    r = runner.invoke(simulate_command, [str(small_toml), "--out", str(out), "--quiet"])
+    r = runner.invoke(main, ["simulate", str(small_toml), "--out", str(out), "--quiet"])
     assert r.exit_code == 0, r.output
     assert (out / "imu.parquet").exists() and (out / "scenario.resolved.toml").exists()
     r = runner.invoke(
-        navigate_command,
-        [str(out / "imu.parquet"), "--hours", "1", "--compensate-drift-deg-h", "0.003", "--out", str(out)],
+        main,
+        ["navigate", str(out / "imu.parquet"), "--hours", "1", "--compensate-drift-deg-h", "0.003", "--out", str(out)],
     )
     assert r.exit_code == 0, r.output
     assert "final position error" in r.output
@@ -170,21 +174,21 @@ def test_cli_simulate_then_navigate(tmp_path, small_toml):
 def test_cli_errors_name_the_file(tmp_path):
     runner = CliRunner()
     missing = tmp_path / "missing.toml"
-    r = runner.invoke(simulate_command, [str(missing), "--out", str(tmp_path / "o")])
+    r = runner.invoke(main, ["simulate", str(missing), "--out", str(tmp_path / "o")])
     assert r.exit_code == 1
     assert f"Error: {missing}: no such file" in r.output
     bad = tmp_path / "bad.toml"
     bad.write_text("[gyro]\nbias_deg_h = [1, 2]\n")
-    r = runner.invoke(simulate_command, [str(bad), "--out", str(tmp_path / "o")])
+    r = runner.invoke(main, ["simulate", str(bad), "--out", str(tmp_path / "o")])
     assert r.exit_code == 1
     assert f"Error: {bad}: [gyro] bias_deg_h: expected 3 numbers, got 2" in r.output
     assert not (tmp_path / "o").exists()
-    r = runner.invoke(navigate_command, [str(tmp_path / "imu.parquet"), "--out", str(tmp_path / "o")])
+    r = runner.invoke(main, ["navigate", str(tmp_path / "imu.parquet"), "--out", str(tmp_path / "o")])
     assert r.exit_code == 1
     assert f"Error: {tmp_path / 'imu.parquet'}: no such file" in r.output
-    r = runner.invoke(navigate_command, [str(bad), "--out", str(tmp_path / "o")])
-    assert r.exit_code == 1 and f"{bad}: not a Parquet file" in r.output
-    r = runner.invoke(navigate_command, [str(bad), "--hours", "-1", "--out", str(tmp_path / "o")])
+    r = runner.invoke(main, ["navigate", str(bad), "--out", str(tmp_path / "o")])
+    assert r.exit_code == 1 and f"{bad}: unknown log format '.toml' (expected .parquet, .pq or .csv)" in r.output
+    r = runner.invoke(main, ["navigate", str(bad), "--hours", "-1", "--out", str(tmp_path / "o")])
     assert r.exit_code == 2 and "--hours" in r.output
 
 
@@ -223,11 +227,16 @@ def test_foreign_imu_file_without_metadata_needs_an_initial_state(tmp_path):
     bare = bare.replace_schema_metadata(None)
     path = tmp_path / "foreign.parquet"
     pq.write_table(bare, path)
+    with pytest.raises(LogError) as info:
+        navigate(path)  # no truth: an alignment would be needed, and it needs the site
+    assert str(info.value) == f"{path}: the log carries no site; give its latitude (--lat0-deg / site=)"
+    with pytest.raises(LogError, match=r"foreign.parquet: the log carries no true initial state"):
+        navigate(path, initial="truth", site={"lat_deg": 28.0})
     with pytest.raises(ValueError) as info:
-        navigate(path)
-    assert str(info.value) == f"navigate: {path} carries no truth; initial must give lat_deg"
-    r = CliRunner().invoke(navigate_command, [str(path), "--out", str(tmp_path / "o")])
-    assert r.exit_code == 1 and f"Error: {path}: navigate: {path} carries no truth" in r.output
+        navigate(path, initial={"lat_deg": 28.0})
+    assert str(info.value) == f"navigate: {path} carries no truth; initial must give lon_deg"
+    r = CliRunner().invoke(main, ["navigate", str(path), "--out", str(tmp_path / "o")])
+    assert r.exit_code == 1 and f"Error: {path}: the log carries no site; give its latitude" in r.output
 
     init = {
         "lat_deg": scn.site.lat_deg,
@@ -255,5 +264,7 @@ def test_navigate_argument_checks():
         navigate(scn, gyro_bias_deg_h=[0.0, 0.0])
     with pytest.raises(ValueError, match=r"navigate: unknown initial key\(s\) \['lat'\]"):
         navigate(scn, initial={"lat": 1.0})
-    with pytest.raises(TypeError, match="imu must be a path to imu.parquet, an ImuData or a Scenario, got int"):
+    with pytest.raises(
+        TypeError, match="imu must be a path to an IMU log, an ImuLog, an ImuData or a Scenario, got int"
+    ):
         navigate(3)

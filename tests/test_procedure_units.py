@@ -10,9 +10,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from gyrodrift.procedure.features import RunFeatures
-from gyrodrift.procedure.fleet import write_features_csv
 from gyrodrift.procedure.timeline import Timeline
 from gyrodrift.procedure.truth import CRITERIA, criterion_value, minimise_linear_criterion
+from gyrodrift.procedure.writers import write_features_csv
 from gyrodrift.runs import read_runs_csv
 
 

@@ -110,19 +110,30 @@ def test_deterministic_for_a_seed(run, tmp_path):
     assert strip(again) == strip(first)
 
 
-def test_failed_run_leaves_previous_results(tmp_path, monkeypatch):
-    out = tmp_path / "out"
-    out.mkdir()
-    (out / "results.json").write_text('{"old": true}')
+def test_failed_run_leaves_previous_results(run, tmp_path, monkeypatch):
+    out, _ = run
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
 
-    def boom(results, folder):
+    def boom(results, stage):
+        stage.file("report.md").write_text("half")
         raise RuntimeError("disk full")
 
     monkeypatch.setattr("gyrodrift.report.write_report", boom)
     with pytest.raises(RuntimeError, match="disk full"):
         reproduce(out, seed=0, quiet=True)
-    assert json.loads((out / "results.json").read_text()) == {"old": True}
-    assert [p.name for p in tmp_path.iterdir()] == ["out"]
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before  # no temporary, nothing replaced
+
+
+def test_a_folder_with_the_users_files_is_refused_before_the_work(tmp_path, monkeypatch):
+    out = tmp_path / "d"
+    out.mkdir()
+    (out / "notes.txt").write_text("x")
+    monkeypatch.setattr("gyrodrift.reproduce.run_reproduction", lambda **kw: pytest.fail("work started"))
+    r = CliRunner().invoke(main, ["reproduce", "--out", str(out), "--quiet"])
+    assert r.exit_code == 1 and "holds files gyrodrift did not write (notes.txt)" in r.output.replace(
+        " or that changed since", ""
+    )
+    assert [p.name for p in out.iterdir()] == ["notes.txt"]
 
 
 def test_cli_prints_a_summary(tmp_path):

@@ -8,10 +8,13 @@ from pathlib import Path
 import numpy as np
 
 from gyrodrift.allan import AllanResult, scenario_noise_block
-from gyrodrift.atomic import atomic_write_json, temporary_path
+from gyrodrift.atomic import OutputFolder, Stage, staged, write_json
 from gyrodrift.ins.toml_writer import dumps_toml
 
-__all__ = ["plot_allan", "allan_files"]
+__all__ = ["plot_allan", "allan_files", "ALLAN_FILES"]
+
+ALLAN_FILES = ("allan.json", "allan.png", "noise.toml")
+"""The files of `gyrodrift allan`, published together."""
 
 _UG = 9.80665e-6
 _RAD_S_TO_DEG_H = 3600.0 * 180.0 / np.pi
@@ -63,24 +66,20 @@ def plot_allan(result: AllanResult, path: str | os.PathLike[str]) -> None:
     )
     panels[1][0].set_title(f"VRW {a['vrw_ug_rthz']:.3g} ug/sqrt(Hz)", fontsize=8)
     fig.tight_layout()
-    with temporary_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=110)
+    fig.savefig(path, format="png", dpi=110)
 
 
-def allan_files(result: AllanResult, out_dir: str | os.PathLike[str]) -> list[Path]:
+def allan_files(result: AllanResult, out_dir: str | os.PathLike[str] | OutputFolder | Stage) -> list[Path]:
     """Write ``allan.json``, ``allan.png`` and ``noise.toml`` (the ``[gyro]``/``[accel]`` keys a scenario or
-    campaign file accepts) into `out_dir`; returns the paths written."""
-    out = Path(out_dir)
-    paths = [out / "allan.json", out / "allan.png", out / "noise.toml"]
-    atomic_write_json(result.to_dict(), paths[0])
-    plot_allan(result, paths[1])
+    campaign file accepts) into `out_dir`, published together (`gyrodrift.atomic.staged`, docs/outputs.md);
+    returns the paths written."""
     header = (
         f"Noise of {Path(result.log).name} from its Allan deviation (gyrodrift allan).\n"
         "Paste into a scenario file; one value for all three axes (the mean; per-axis values in allan.json)."
     )
     text = dumps_toml(scenario_noise_block(result), header)
-    from gyrodrift.atomic import atomic_write
-
-    with atomic_write(paths[2]) as fh:
-        fh.write(text)
-    return paths
+    with staged(out_dir, "allan", ALLAN_FILES) as stage:
+        write_json(result.to_dict(), stage.file("allan.json"))
+        plot_allan(result, stage.file("allan.png"))
+        stage.file("noise.toml").write_text(text, encoding="utf-8")
+    return [stage.folder / name for name in ALLAN_FILES]

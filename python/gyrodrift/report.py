@@ -8,11 +8,12 @@ from __future__ import annotations
 
 import base64
 import html
+import io
 from pathlib import Path
 
 import numpy as np
 
-from gyrodrift.atomic import atomic_write
+from gyrodrift.atomic import Stage
 
 
 def _fmt(x, digits: int = 5) -> str:
@@ -64,8 +65,20 @@ def short_name(m: dict) -> str:
     return f"{label} ({m['encoding']})" if m.get("encoding") else label
 
 
-def make_figures(results: dict, folder: Path) -> dict[str, Path]:
-    """Write the report's PNG figures into ``folder``; returns {name: path}."""
+REPORT_FIGURES = ("fitness_curve", "pred_vs_true", "error_per_run")
+"""The report's figures, written as ``<name>.png``."""
+REPORT_FILES = ("results.json", "report.md", "report.html") + tuple(f"{name}.png" for name in REPORT_FIGURES)
+"""The files of a reproduction output, published together (`gyrodrift.reproduce.reproduce`)."""
+
+
+def _png(fig) -> bytes:
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=110)
+    return buffer.getvalue()
+
+
+def make_figures(results: dict) -> dict[str, bytes]:
+    """The report's PNG figures, {name: PNG bytes} for the names in `REPORT_FIGURES`."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -93,8 +106,7 @@ def make_figures(results: dict, folder: Path) -> dict[str, Path]:
     axes[1].set(xlabel="objective evaluations", ylabel="LOO MAE [deg/h]", title="chaos vs plain PSO, equal budget")
     axes[1].legend(fontsize=7)
     fig.tight_layout()
-    out["fitness_curve"] = folder / "fitness_curve.png"
-    fig.savefig(out["fitness_curve"], dpi=110)
+    out["fitness_curve"] = _png(fig)
     plt.close(fig)
 
     shown = key_methods(results)
@@ -113,8 +125,7 @@ def make_figures(results: dict, folder: Path) -> dict[str, Path]:
     )
     ax.legend(fontsize=7)
     fig.tight_layout()
-    out["pred_vs_true"] = folder / "pred_vs_true.png"
-    fig.savefig(out["pred_vs_true"], dpi=110)
+    out["pred_vs_true"] = _png(fig)
     plt.close(fig)
 
     fig, ax = plt.subplots(figsize=(10, 4))
@@ -130,8 +141,7 @@ def make_figures(results: dict, folder: Path) -> dict[str, Path]:
     ax.set(xlabel="test run", ylabel="error, true - identified [deg/h]", title="identification error per test run")
     ax.legend(fontsize=7, ncol=2)
     fig.tight_layout()
-    out["error_per_run"] = folder / "error_per_run.png"
-    fig.savefig(out["error_per_run"], dpi=110)
+    out["error_per_run"] = _png(fig)
     plt.close(fig)
     return out
 
@@ -299,8 +309,8 @@ def render_markdown(blocks: list[tuple]) -> str:
     return "\n".join(lines)
 
 
-def render_html(blocks: list[tuple]) -> str:
-    """A self-contained page: the figures are embedded as base64 PNG."""
+def render_html(blocks: list[tuple], images: dict[str, bytes]) -> str:
+    """A self-contained page: the figures (`images`, PNG bytes by file name) are embedded as base64 PNG."""
     parts = [
         "<!DOCTYPE html><html><head><meta charset='utf-8'><title>gyrodrift reproduce</title>",
         "<style>body{font-family:sans-serif;max-width:1100px;margin:2em auto;line-height:1.4}"
@@ -318,7 +328,7 @@ def render_html(blocks: list[tuple]) -> str:
                 parts.append("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in row) + "</tr>")
             parts.append("</table>")
         elif b[0] == "img":
-            data = base64.b64encode(Path(b[1]).read_bytes()).decode()
+            data = base64.b64encode(images[Path(b[1]).name]).decode()
             parts.append(
                 f"<figure><img src='data:image/png;base64,{data}' alt='{html.escape(b[2])}'>"
                 f"<figcaption>{html.escape(b[2])}</figcaption></figure>"
@@ -327,15 +337,16 @@ def render_html(blocks: list[tuple]) -> str:
     return "\n".join(parts)
 
 
-def write_report(results: dict, folder) -> None:
-    """Write figures, ``report.md`` and ``report.html`` into ``folder``."""
-    folder = Path(folder)
-    figures = make_figures(results, folder)
-    blocks = report_blocks(results, figures)
-    with atomic_write(folder / "report.md") as fh:
-        fh.write(render_markdown(blocks))
-    with atomic_write(folder / "report.html") as fh:
-        fh.write(render_html(blocks))
+def write_report(results: dict, stage: Stage) -> None:
+    """Write the figures, ``report.md`` and ``report.html`` into `stage` (a `gyrodrift.atomic.Stage`; the
+    caller publishes them with ``results.json``)."""
+    pngs = make_figures(results)
+    images = {f"{name}.png": data for name, data in pngs.items()}
+    for filename, data in images.items():
+        stage.file(filename).write_bytes(data)
+    blocks = report_blocks(results, {name: Path(f"{name}.png") for name in pngs})
+    stage.file("report.md").write_text(render_markdown(blocks), encoding="utf-8")
+    stage.file("report.html").write_text(render_html(blocks, images), encoding="utf-8")
 
 
 def summary_lines(results: dict) -> list[str]:

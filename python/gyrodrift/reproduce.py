@@ -21,8 +21,8 @@ from __future__ import annotations
 import csv
 import math
 import time
+import warnings
 from importlib import resources
-from pathlib import Path
 
 import numpy as np
 
@@ -33,6 +33,7 @@ from gyrodrift.encodings import ENCODING_DESCRIPTIONS
 from gyrodrift.model import DriftModel, fit_drift_model
 from gyrodrift.progress import progress
 from gyrodrift.runs import RunTable
+from gyrodrift.tuning import SearchBoundWarning, on_search_bound
 
 PAPER_SETTINGS = {"n_particles": 30, "max_iter": 100, "w": 0.75, "c1": 2.0, "c2": 2.0, "chaos_steps": 10}
 """The paper's CPSO settings (section 3)."""
@@ -86,13 +87,8 @@ def _model_entry(name: str, family: str, model: DriftModel, data, **extra) -> di
     loo = model.loo_residuals()
     tuning = model.tuning
     if tuning is not None:
-        values = {"gamma": float(est.gamma), "sigma": float(est.sigma)}
         extra["search_bounds"] = [list(b) for b in tuning.bounds]
-        extra["on_search_bound"] = [
-            name
-            for name, (low, high) in zip(values, tuning.bounds, strict=False)
-            if np.isclose(values[name], low, rtol=1e-6) or np.isclose(values[name], high, rtol=1e-6)
-        ]
+        extra["on_search_bound"] = on_search_bound(est.gamma, est.sigma, tuning.bounds)
     if np.all(np.isfinite(loo)):
         _, lo, hi = model.predict_interval(data.test, 0.9)
         true = data.test.drift_deg_h
@@ -123,8 +119,15 @@ def _model_entry(name: str, family: str, model: DriftModel, data, **extra) -> di
 def run_reproduction(seed: int = 0, quiet: bool = True) -> dict:
     """Run every method on the paper's data; the JSON-ready results (see the module docstring).
 
-    Deterministic for a given ``seed`` (each tuned method derives its own generator from it).
+    Deterministic for a given ``seed`` (each tuned method derives its own generator from it). Tuned values on
+    the edge of their search box are recorded per method (``on_search_bound``) instead of warned about.
     """
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SearchBoundWarning)
+        return _run_reproduction(seed, quiet)
+
+
+def _run_reproduction(seed: int, quiet: bool) -> dict:
     data = load_paper()
     started = time.perf_counter()
     methods: list[dict] = []
@@ -236,13 +239,16 @@ def run_reproduction(seed: int = 0, quiet: bool = True) -> dict:
 def reproduce(out_dir="gyrodrift-reproduce", seed: int = 0, quiet: bool = False) -> dict:
     """Run the reproduction and write ``results.json``, ``report.md``, ``report.html`` and figures to ``out_dir``.
 
-    The folder is filled aside and swapped in whole, so a failed run leaves the previous results intact.
+    ``out_dir`` (a path, or a `gyrodrift.atomic.OutputFolder`) is checked before the work: it must be new, empty
+    or hold only gyrodrift's outputs (docs/outputs.md). The files are published together at the end, so a
+    failed or killed run leaves the previous results intact.
     """
-    from gyrodrift.atomic import atomic_directory, atomic_write_json
-    from gyrodrift.report import write_report
+    from gyrodrift import report
+    from gyrodrift.atomic import output_folder, write_json
 
+    out = output_folder(out_dir, "reproduce", report.REPORT_FILES)
     results = run_reproduction(seed=seed, quiet=quiet)
-    with atomic_directory(Path(out_dir)) as tmp:
-        atomic_write_json(results, tmp / "results.json")
-        write_report(results, tmp)
+    with out.publish() as stage:
+        write_json(results, stage.file("results.json"))
+        report.write_report(results, stage)
     return results

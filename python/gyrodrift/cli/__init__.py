@@ -15,10 +15,12 @@ exit status 1; anything else is a bug and keeps its traceback.
 
 from __future__ import annotations
 
+import errno
+
 import click
 
 from gyrodrift import __version__
-from gyrodrift.cli.errors import one_line_message
+from gyrodrift.cli.errors import STDOUT_NAME, one_line_message, stdout_failure
 from gyrodrift.errors import GyrodriftError
 
 __all__ = ["main"]
@@ -29,8 +31,15 @@ class _OneLineErrors(click.Group):
 
     def invoke(self, ctx: click.Context):
         try:
-            return super().invoke(ctx)
+            result = super().invoke(ctx)
+            if failure := stdout_failure():  # stdout's last buffered bytes, while errors are still ours
+                raise failure
+            return result
         except (GyrodriftError, OSError) as exc:
+            if isinstance(exc, OSError) and exc.filename is None and not isinstance(exc, GyrodriftError):
+                exc = stdout_failure(exc) or exc  # a write to stdout failed (full device, closed pipe)
+            if isinstance(exc, OSError) and exc.errno == errno.EPIPE and exc.filename == STDOUT_NAME:
+                ctx.exit(1)  # the reader went away (| head): nothing to say, nobody to say it to
             raise click.ClickException(one_line_message(exc)) from None
 
 
@@ -41,9 +50,9 @@ def main() -> None:
 
 
 def _register_commands() -> None:
-    from gyrodrift.cli import learning, navigation, procedure, sensors
+    from gyrodrift.cli import export, learning, navigation, procedure, sensors
 
-    for module in (learning, navigation, procedure, sensors):
+    for module in (learning, navigation, procedure, sensors, export):
         for command in module.COMMANDS:
             main.add_command(command)
 

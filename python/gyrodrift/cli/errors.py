@@ -1,26 +1,19 @@
-"""One line for every expected failure: the message the CLI prints before exiting with status 1."""
+"""One line for every expected failure: the message the CLI prints before exiting with status 1.
+
+Also the CLI's standard output: a failure to write it (a full device, ``> /dev/full``) is one line naming
+standard output, and a reader that went away (``| head -0``) ends the command quietly with status 1; after
+either, stdout is pointed at the null device so that the interpreter's final flush cannot fail again.
+"""
 
 from __future__ import annotations
 
 import errno
 import os
+import sys
 
-__all__ = ["one_line_message"]
+__all__ = ["one_line_message", "write_stdout", "stdout_failure", "STDOUT_NAME"]
 
-_REASONS = {
-    errno.EROFS: "read-only file system",
-    errno.ENOSPC: "no space left on the device",
-    errno.EDQUOT: "disk quota exceeded",
-    errno.EISDIR: "is a directory (a file was expected)",
-    errno.ENOTDIR: "a path component is not a directory",
-    errno.EACCES: "permission denied",
-    errno.EPERM: "operation not permitted",
-    errno.ENOENT: "no such file or directory",
-    errno.EEXIST: "already exists",
-    errno.EBUSY: "device or resource busy",
-    errno.ENAMETOOLONG: "file name too long",
-    errno.EIO: "input/output error",
-}
+STDOUT_NAME = "standard output"
 
 
 def one_line_message(exc: BaseException) -> str:
@@ -29,13 +22,15 @@ def one_line_message(exc: BaseException) -> str:
     A `GyrodriftError` already carries its message (file, row, column, option). An `OSError` is described
     by its path(s) and a plain reason, e.g. ``out/model.json: read-only file system``.
     """
-    if isinstance(exc, OSError) and exc.errno is not None and not _has_own_message(exc):
-        reason = _REASONS.get(exc.errno) or exc.strerror or os.strerror(exc.errno)
+    from gyrodrift.atomic import os_error_reason
+
+    if isinstance(exc, OSError) and not _has_own_message(exc) and (exc.errno is not None or exc.filename):
+        reason = os_error_reason(exc)
         paths = [p for p in (exc.filename, exc.filename2) if p is not None]
         where = " -> ".join(os.fsdecode(p) for p in paths)
         return f"{where}: {reason}" if where else reason
     text = str(exc).strip()
-    return " ".join(text.split("\n")) if text else type(exc).__name__
+    return " ".join(text.split()) if text else type(exc).__name__
 
 
 def _has_own_message(exc: OSError) -> bool:
@@ -43,3 +38,39 @@ def _has_own_message(exc: OSError) -> bool:
     from gyrodrift.errors import GyrodriftError
 
     return isinstance(exc, GyrodriftError)
+
+
+def _silence_stdout() -> None:
+    try:
+        fd = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(fd, sys.stdout.fileno())
+        os.close(fd)
+    except (OSError, ValueError, AttributeError):  # pragma: no cover - stdout without a descriptor
+        pass
+
+
+def stdout_failure(exc: OSError | None = None) -> OSError | None:
+    """If standard output cannot be written (flushing it fails now, or `exc` is a broken pipe), silence it and
+    return the error to report: an `OSError` naming standard output, with ``errno`` EPIPE when the reader
+    went away. None if stdout is fine."""
+    failure = exc if exc is not None and exc.errno == errno.EPIPE else None
+    if failure is None:
+        try:
+            sys.stdout.flush()
+        except OSError as flush_error:
+            failure = flush_error
+        except ValueError:  # pragma: no cover - stdout closed
+            return None
+    if failure is None:
+        return None
+    _silence_stdout()
+    return OSError(failure.errno, failure.strerror or str(failure), STDOUT_NAME)
+
+
+def write_stdout(text: str) -> None:
+    """Write `text` to standard output and flush it, so that a failure happens here, inside the command."""
+    try:
+        sys.stdout.write(text)
+        sys.stdout.flush()
+    except OSError as exc:
+        raise (stdout_failure(exc) or OSError(exc.errno, exc.strerror, STDOUT_NAME)) from None

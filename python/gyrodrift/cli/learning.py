@@ -5,36 +5,58 @@ from __future__ import annotations
 import csv
 import io
 import json
-import sys
 
 import click
 
-from gyrodrift.choices import ENCODINGS, METHODS, OBJECTIVES, SCALINGS
+from gyrodrift.choices import ENCODINGS, METHODS, OBJECTIVES, SCALINGS, SIGMA_RANGE
+from gyrodrift.cli.errors import write_stdout
+from gyrodrift.cli.types import FiniteFloat
 
-
-def _check_out(path) -> None:
-    from gyrodrift.atomic import missing_folder_message
-
-    if path is not None and (message := missing_folder_message(path)):
-        raise click.ClickException(message)
+PREDICTIONS_HEADERS = ("run,drift_identified_deg_h", '{"run": ')
+"""How a predictions file written by `predict --out` starts (CSV header, JSON line): the only existing files
+`predict --out` replaces (docs/outputs.md)."""
 
 
 def _read_runs(path, lat0_deg, require_truth, split=None):
-    from gyrodrift.runs import RunTableError, read_runs_csv
+    from gyrodrift.errors import OptionError
+    from gyrodrift.runs import read_runs_csv
 
-    try:
-        runs = read_runs_csv(path, lat0_deg=lat0_deg, require_truth=require_truth)
-    except RunTableError as exc:
-        raise click.ClickException(str(exc)) from None
+    runs = read_runs_csv(path, lat0_deg=lat0_deg, require_truth=require_truth)
     if split:
         runs = runs.select(runs.split == split)
         if len(runs) == 0:
-            raise click.ClickException(f"{path}: no rows with split = {split!r}")
+            raise OptionError(f"{path}: no rows with split = {split!r} (--split)")
     return runs
 
 
+class _ShowWarnings:
+    """Collect the warnings raised inside (e.g. a tuned value on its search bound, ill-conditioning) and print
+    each as one ``warning: ...`` line on stderr, instead of Python's two-line format with a source line."""
+
+    def __enter__(self):
+        import warnings
+
+        self._catcher = warnings.catch_warnings(record=True)
+        self._caught = self._catcher.__enter__()
+        warnings.simplefilter("always")
+        return self
+
+    def __exit__(self, *exc_info):
+        self._catcher.__exit__(*exc_info)
+        seen = set()
+        for w in self._caught:
+            text = str(w.message)
+            if text not in seen:
+                seen.add(text)
+                click.echo(f"warning: {text}", err=True)
+        return False
+
+
 _lat0_option = click.option(
-    "--lat0-deg", type=float, default=None, help="Site latitude [deg] for tables without a lat0_deg column."
+    "--lat0-deg",
+    type=FiniteFloat(-90.0, 90.0),
+    default=None,
+    help="Site latitude [deg] for tables without a lat0_deg column.",
 )
 _split_option = click.option(
     "--split", type=click.Choice(["train", "test"]), default=None, help="Use only rows with this split value."
@@ -48,18 +70,35 @@ _split_option = click.option(
 @click.option("--scaling", type=click.Choice(list(SCALINGS)), default="standard", show_default=True)
 @click.option("--objective", type=click.Choice(list(OBJECTIVES)), default="loo_mae", show_default=True)
 @click.option("--method", type=click.Choice(list(METHODS)), default="cpso", show_default=True)
-@click.option("--gamma", type=float, default=None, help="Fix gamma (with --sigma) instead of tuning.")
-@click.option("--sigma", type=float, default=None, help="Fix sigma (scaled input units) instead of tuning.")
+@click.option(
+    "--gamma", type=FiniteFloat(0.0, min_open=True), default=None, help="Fix gamma (with --sigma) instead of tuning."
+)
+@click.option(
+    "--sigma",
+    type=FiniteFloat(*SIGMA_RANGE),
+    default=None,
+    help="Fix sigma (scaled input units; its square must be a normal float64) instead of tuning.",
+)
 @click.option("--seed", type=int, default=0, show_default=True)
 @_lat0_option
 @_split_option
 @click.option("--quiet", is_flag=True, help="No progress bar.")
 def fit(data, out, encoding, scaling, objective, method, gamma, sigma, seed, lat0_deg, split, quiet):
-    """Fit a drift model on DATA.csv (runs with drift_deg_h) and write it to --out."""
-    from gyrodrift.model import fit_drift_model
-    from gyrodrift.model_io import save_model
+    """Fit a drift model on DATA.csv (runs with drift_deg_h) and write it to --out.
 
-    _check_out(out)
+    Warnings (a tuned value on the edge of its search box, an ill-conditioned solve) go to stderr and into the
+    model file's "warnings".
+    """
+    from gyrodrift.atomic import check_output_file, recognise_json_format
+    from gyrodrift.errors import OptionError
+    from gyrodrift.lssvr import IllConditionedError
+    from gyrodrift.model import fit_drift_model
+    from gyrodrift.model_io import FORMAT, save_model
+
+    if (gamma is None) != (sigma is None):
+        raise OptionError("give both --gamma and --sigma, or neither (then both are tuned)")
+
+    check_output_file(out, inputs=[data], recognise=recognise_json_format(FORMAT), what="model file")
     runs = _read_runs(data, lat0_deg, True, split)
     if split is None and any(runs.split):
         click.echo(
@@ -68,19 +107,22 @@ def fit(data, out, encoding, scaling, objective, method, gamma, sigma, seed, lat
             err=True,
         )
     try:
-        model = fit_drift_model(
-            runs,
-            encoding=encoding,
-            scaling=scaling,
-            objective=objective,
-            method=method,
-            gamma=gamma,
-            sigma=sigma,
-            rng=seed,
-            quiet=quiet,
-        )
-    except ValueError as exc:
-        raise click.ClickException(str(exc)) from None
+        with _ShowWarnings():
+            model = fit_drift_model(
+                runs,
+                encoding=encoding,
+                scaling=scaling,
+                objective=objective,
+                method=method,
+                gamma=gamma,
+                sigma=sigma,
+                rng=seed,
+                quiet=quiet,
+            )
+    except IllConditionedError as exc:
+        if gamma is None:
+            raise
+        raise OptionError(f"--gamma {gamma:g} --sigma {sigma:g}: {exc}") from None
     save_model(model, out)
     est = model.lssvr
     loo = model.loo_residuals()
@@ -97,7 +139,7 @@ def fit(data, out, encoding, scaling, objective, method, gamma, sigma, seed, lat
 @click.option("--out", type=click.Path(dir_okay=False), default=None, help="Write here (atomically) instead of stdout.")
 @click.option(
     "--coverage",
-    type=click.FloatRange(0.0, 1.0, min_open=True, max_open=True),
+    type=FiniteFloat(0.0, 1.0, min_open=True, max_open=True),
     default=None,
     help="Add a jackknife interval of this coverage (e.g. 0.9) from the model's leave-one-out residuals.",
 )
@@ -107,23 +149,25 @@ def predict(model_file, data, fmt, out, coverage, lat0_deg, split):
     """Identify the axial drift [deg/h] of each run in DATA.csv with MODEL_FILE."""
     import numpy as np
 
-    from gyrodrift.atomic import atomic_write
+    from gyrodrift.atomic import atomic_write, check_output_file, recognise_header
+    from gyrodrift.errors import OptionError
     from gyrodrift.model import min_runs_for_coverage
-    from gyrodrift.model_io import ModelFileError, load_model
+    from gyrodrift.model_io import load_model
 
-    _check_out(out)
-    try:
-        model = load_model(model_file)
-    except ModelFileError as exc:
-        raise click.ClickException(str(exc)) from None
+    target = {
+        "inputs": [model_file, data],
+        "recognise": recognise_header(*PREDICTIONS_HEADERS),
+        "what": "predictions file",
+    }
+    if out is not None:
+        check_output_file(out, **target)
+    model = load_model(model_file)
     runs = _read_runs(data, lat0_deg, False, split)
     if coverage is not None:
-        if model.loo_residuals_deg_h is None:
-            raise click.ClickException(f"{model_file}: the model file has no leave-one-out residuals for an interval")
         pred, lo, hi = model.predict_interval(runs, coverage)
         if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
             n = len(model.loo_residuals_deg_h)
-            raise click.ClickException(
+            raise OptionError(
                 f"{model_file}: {n} training runs are too few for a {100 * coverage:g} % jackknife interval "
                 f"(needs at least {min_runs_for_coverage(coverage)}); lower --coverage"
             )
@@ -149,9 +193,9 @@ def predict(model_file, data, fmt, out, coverage, lat0_deg, split):
         for row in rows:
             writer.writerow({k: (repr(v) if isinstance(v, float) else v) for k, v in row.items()})
     if out is None:
-        sys.stdout.write(buf.getvalue())
+        write_stdout(buf.getvalue())
     else:
-        with atomic_write(out) as handle:
+        with atomic_write(out, **target) as handle:
             handle.write(buf.getvalue())
 
 
@@ -162,7 +206,8 @@ def predict(model_file, data, fmt, out, coverage, lat0_deg, split):
     type=click.Path(file_okay=False),
     default="gyrodrift-reproduce",
     show_default=True,
-    help="Folder for results.json, report.md, report.html and the figures (replaced as a whole).",
+    help="Folder for results.json, report.md, report.html and the figures: new, empty, or holding only "
+    "gyrodrift's outputs (published together; docs/outputs.md).",
 )
 @click.option("--seed", type=int, default=0, show_default=True, help="Seeds every swarm; same seed, same results.")
 @click.option("--quiet", is_flag=True, help="No progress bar and no summary.")
@@ -171,7 +216,7 @@ def reproduce(out_dir, seed, quiet):
     from gyrodrift.report import summary_lines
     from gyrodrift.reproduce import reproduce as run
 
-    results = run(out_dir, seed=seed, quiet=quiet)
+    results = run(out_dir, seed=seed, quiet=quiet)  # checks out_dir before the work
     if not quiet:
         for line in summary_lines(results):
             click.echo(line)

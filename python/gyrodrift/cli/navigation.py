@@ -6,6 +6,9 @@ from pathlib import Path
 
 import click
 
+from gyrodrift.cli.options import site_from_options, site_options
+from gyrodrift.cli.types import FiniteFloat
+
 __all__ = ["simulate_command", "navigate_command"]
 
 
@@ -16,20 +19,23 @@ __all__ = ["simulate_command", "navigate_command"]
     "out_dir",
     required=True,
     type=click.Path(file_okay=False, path_type=Path),
-    help="Folder receiving imu.parquet and scenario.resolved.toml (created if needed).",
+    help="Folder receiving imu.parquet and scenario.resolved.toml: new, empty, or holding only gyrodrift's "
+    "outputs (docs/outputs.md).",
 )
 @click.option("--quiet", is_flag=True, help="No progress bar.")
 def simulate_command(scenario_toml: Path, out_dir: Path, quiet: bool) -> None:
     """Simulate the IMU of a static-base rotation INS described by SCENARIO.toml."""
+    from gyrodrift.atomic import OutputFolder
     from gyrodrift.ins.scenario import ScenarioError, load_scenario
-    from gyrodrift.ins.simulate import rotation_summary, simulate
+    from gyrodrift.ins.simulate import SIMULATION_FILES, rotation_summary, simulate
 
+    out = OutputFolder(out_dir, "simulate", SIMULATION_FILES, inputs=[scenario_toml])
     try:
         scenario = load_scenario(scenario_toml)
     except ScenarioError as exc:
         raise click.ClickException(str(exc)) from None
     try:
-        path = simulate(scenario, out_dir=out_dir, quiet=quiet)
+        path = simulate(scenario, out_dir=out, quiet=quiet)
     except ValueError as exc:  # the core refused the configuration
         raise click.ClickException(f"{scenario_toml}: {exc}") from None
     if not quiet:
@@ -42,53 +48,86 @@ def simulate_command(scenario_toml: Path, out_dir: Path, quiet: bool) -> None:
         )
 
 
+_INITIAL_WORDS = {
+    "truth": "the true initial state in the log's scenario metadata",
+    "alignment": "an alignment of the log's first hours (navigation starts at its end)",
+    "given": "the given values",
+}
+
+
 @click.command("navigate")
-@click.argument("imu_parquet", metavar="IMU.parquet", type=click.Path(path_type=Path))
+@click.argument("log", metavar="LOG", type=click.Path(path_type=Path))
 @click.option(
     "--hours",
-    type=click.FloatRange(min=0.0, min_open=True),
+    type=FiniteFloat(min=0.0, min_open=True),
     default=None,
-    help="Navigate only the first H hours [h] (default: the whole file).",
+    help="Navigate only H hours [h] from the start of navigation (default: to the end of the log).",
 )
 @click.option(
     "--compensate-drift-deg-h",
-    type=float,
+    type=FiniteFloat(),
     default=0.0,
     show_default=True,
     help="Axial drift estimate [deg/h] subtracted from the z gyro (measured - estimate).",
 )
 @click.option(
+    "--initial",
+    type=click.Choice(["auto", "truth", "alignment"]),
+    default="auto",
+    show_default=True,
+    help="Initial state: the log's truth (simulated logs), an alignment of its first 4 h (navigation starts at "
+    "the end of it), or auto (truth when the log carries it, else alignment).",
+)
+@site_options
+@click.option(
     "--out",
     "out_dir",
     required=True,
     type=click.Path(file_okay=False, path_type=Path),
-    help="Folder receiving nav.parquet and summary.json (created if needed).",
+    help="Folder receiving nav.parquet and summary.json: new, empty, or holding only gyrodrift's outputs, "
+    "e.g. the simulation's own folder (docs/outputs.md).",
 )
 @click.option("--quiet", is_flag=True, help="No progress bar and no summary line.")
 def navigate_command(
-    imu_parquet: Path, hours: float | None, compensate_drift_deg_h: float, out_dir: Path, quiet: bool
+    log: Path,
+    hours: float | None,
+    compensate_drift_deg_h: float,
+    initial: str,
+    lat0_deg: float | None,
+    lon0_deg: float | None,
+    height_m: float | None,
+    out_dir: Path,
+    quiet: bool,
 ) -> None:
-    """Navigate IMU.parquet (written by `simulate`) and report the position error against the truth."""
-    from gyrodrift.ins.imu_file import ImuFileError
+    """Navigate LOG (any IMU log: Parquet or CSV) and report the position error against the static site.
+
+    The initial state comes from the log's truth (simulated logs), else from an alignment of the log; the
+    summary line and summary.json (initial_source) say which.
+    """
     from gyrodrift.ins.navigate import navigate
 
-    try:
-        result = navigate(
-            imu_parquet, hours=hours, compensate_drift_deg_h=compensate_drift_deg_h, out_dir=out_dir, quiet=quiet
-        )
-    except ImuFileError as exc:
-        raise click.ClickException(str(exc)) from None
-    except ValueError as exc:  # e.g. no truth in the file, or the core refused the data
-        raise click.ClickException(f"{imu_parquet}: {exc}") from None
+    result = navigate(
+        log,
+        hours=hours,
+        compensate_drift_deg_h=compensate_drift_deg_h,
+        initial=initial,
+        site=site_from_options(lat0_deg, lon0_deg, height_m),
+        out_dir=out_dir,
+        quiet=quiet,
+    )
     if not quiet:
         s = result.summary
+        source = f"initial state from {_INITIAL_WORDS[s['initial_source']]}"
         if s["final_pos_err_nmi"] is not None:
             click.echo(
-                f"{s['hours_navigated']:.3f} h: final position error {s['final_pos_err_nmi']:.4f} nmi, "
+                f"{s['hours_navigated']:.3f} h ({source}): final position error {s['final_pos_err_nmi']:.4f} nmi, "
                 f"max {s['max_pos_err_nmi']:.4f} nmi; wrote {out_dir / 'nav.parquet'}, {out_dir / 'summary.json'}"
             )
         else:
-            click.echo(f"wrote {out_dir / 'nav.parquet'}, {out_dir / 'summary.json'} (no truth in the file)")
+            click.echo(
+                f"{s['hours_navigated']:.3f} h ({source}); wrote {out_dir / 'nav.parquet'}, "
+                f"{out_dir / 'summary.json'} (no site known: no position errors)"
+            )
 
 
 COMMANDS = (simulate_command, navigate_command)

@@ -3,71 +3,23 @@
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 
 import click
 
+from gyrodrift.cli.options import site_from_options, site_options
 from gyrodrift.cli.types import FiniteFloat
 
 __all__ = ["features_command", "truth_command", "evaluate_command", "identify_command"]
 
 
-def _site(lat0_deg, lon0_deg, height_m):
-    site = {}
-    if lat0_deg is not None:
-        site["lat_deg"] = lat0_deg
-    if lon0_deg is not None:
-        site["lon_deg"] = lon0_deg
-    if height_m is not None:
-        site["height_m"] = height_m
-    return site or None
-
-
-def _site_options(f):
-    f = click.option(
-        "--height-m", type=float, default=None, help="Site height above the ellipsoid [m] (default: the log's, else 0)."
-    )(f)
-    f = click.option("--lon0-deg", type=float, default=None, help="Site longitude [deg] (default: the log's, else 0).")(
-        f
-    )
-    f = click.option(
-        "--lat0-deg",
-        type=float,
-        default=None,
-        help="True site latitude [deg]; required for logs that carry no site (CSV).",
-    )(f)
-    return f
-
-
 def _open(path, site):
     from gyrodrift.logs import LogError, open_log
 
-    try:
-        log = open_log(path, site=site)
-    except LogError as exc:
-        raise click.ClickException(str(exc)) from None
+    log = open_log(path, site=site)
     if log.site is None:
-        raise click.ClickException(f"{path}: the log carries no site; give its latitude (--lat0-deg)")
+        raise LogError(f"{path}: the log carries no site; give its latitude (--lat0-deg)")
     return log
-
-
-def _guard(fn, *args, **kwargs):
-    """Call fn, turning the procedure's expected errors into ClickExceptions."""
-    from gyrodrift.logs import LogError
-    from gyrodrift.model_io import ModelFileError
-    from gyrodrift.procedure.fleet import DaskMissingError
-
-    try:
-        return fn(*args, **kwargs)
-    except (LogError, ModelFileError, DaskMissingError) as exc:
-        raise click.ClickException(str(exc)) from None
-    except ValueError as exc:
-        raise click.ClickException(str(exc)) from None
-
-
-def _num(x):
-    return None if x is None or (isinstance(x, float) and not math.isfinite(x)) else x
 
 
 @click.command("features")
@@ -79,7 +31,7 @@ def _num(x):
     type=click.Path(dir_okay=False, path_type=Path),
     help="Run table to write (CSV, atomically).",
 )
-@_site_options
+@site_options
 @click.option("--with-truth", is_flag=True, help="Also find the true drift (logs >= 76 h) -> drift_deg_h column.")
 @click.option(
     "--criterion",
@@ -117,18 +69,23 @@ def features_command(
     Columns: run (the log's stem), lat_deg (latitude at navigation hour 12), lat0_deg, temp_min_c,
     temp_max_c, temp_start_c, temp_end_c (over those 12 h), and drift_deg_h with --with-truth.
     """
-    from gyrodrift.atomic import missing_folder_message
-    from gyrodrift.procedure.fleet import features_table, write_curves_csv, write_features_csv
+    from gyrodrift.atomic import check_output_file
+    from gyrodrift.procedure.fleet import features_table
+    from gyrodrift.procedure.writers import (
+        CURVES_RECOGNISER,
+        RUN_TABLE_RECOGNISER,
+        write_curves_csv,
+        write_features_csv,
+    )
 
     if workers is not None and scheduler is not None:
         raise click.UsageError("give --workers or --scheduler, not both")
-    for target in (out, curves):
-        if target is not None and (message := missing_folder_message(target)):
-            raise click.ClickException(message)
-    rows = _guard(
-        features_table,
+    check_output_file(out, inputs=logs, recognise=RUN_TABLE_RECOGNISER, what="run table")
+    if curves is not None:
+        check_output_file(curves, inputs=(*logs, out), recognise=CURVES_RECOGNISER, what="curves table")
+    rows = features_table(
         [str(p) for p in logs],
-        site=_site(lat0_deg, lon0_deg, height_m),
+        site=site_from_options(lat0_deg, lon0_deg, height_m),
         with_truth=with_truth,
         criterion=criterion,
         workers=workers,
@@ -136,9 +93,9 @@ def features_command(
         connect_timeout_s=connect_timeout_s,
         quiet=quiet,
     )
-    write_features_csv(rows, out)
+    write_features_csv(rows, out, inputs=logs)
     if curves is not None:
-        write_curves_csv(rows, curves)
+        write_curves_csv(rows, curves, inputs=(*logs, out))
     if not quiet:
         click.echo(f"wrote {len(rows)} run(s) to {out}")
 
@@ -154,31 +111,35 @@ def features_command(
 )
 @click.option(
     "--hours",
-    type=click.FloatRange(min=0.0, min_open=True),
+    type=FiniteFloat(min=0.0, min_open=True),
     default=72.0,
     show_default=True,
     help="Navigation hours after the 4 h alignment.",
 )
-@_site_options
+@site_options
 @click.option(
     "--out",
     "out_dir",
     type=click.Path(file_okay=False, path_type=Path),
     default=None,
-    help="Folder for true_drift.json, criterion.png, alignment.json and alignment_z_sigma.png.",
+    help="Folder for true_drift.json, criterion.png, alignment.json and alignment_z_sigma.png: new, empty, or "
+    "holding only gyrodrift's outputs (docs/outputs.md).",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
 def truth_command(log, criterion, hours, lat0_deg, lon0_deg, height_m, out_dir, as_json, quiet):
     """Find the z-gyro drift [deg/h] minimising the position error of the navigation after alignment."""
-    from gyrodrift.procedure.align import write_alignment
-    from gyrodrift.procedure.truth import find_true_drift, write_truth
+    from gyrodrift.atomic import OutputFolder
+    from gyrodrift.procedure.truth import find_true_drift
+    from gyrodrift.procedure.writers import ALIGNMENT_FILES, TRUTH_FILES, write_alignment, write_truth
 
-    imu = _open(log, _site(lat0_deg, lon0_deg, height_m))
-    res = _guard(find_true_drift, imu, criterion=criterion, hours=hours, quiet=quiet)
-    if out_dir is not None:
-        write_truth(res, out_dir)
-        write_alignment(res.alignment, out_dir)
+    out = None if out_dir is None else OutputFolder(out_dir, "truth", TRUTH_FILES + ALIGNMENT_FILES, inputs=[log])
+    imu = _open(log, site_from_options(lat0_deg, lon0_deg, height_m))
+    res = find_true_drift(imu, criterion=criterion, hours=hours, quiet=quiet)
+    if out is not None:
+        with out.publish() as stage:
+            write_truth(res, stage)
+            write_alignment(res.alignment, stage)
     if as_json:
         click.echo(json.dumps(res.to_dict(), indent=2))
         return
@@ -198,7 +159,7 @@ def truth_command(log, criterion, hours, lat0_deg, lon0_deg, height_m, out_dir, 
 
 @click.command("evaluate")
 @click.argument("log", type=click.Path(path_type=Path))
-@click.option("--drift-deg-h", type=float, default=None, help="Axial drift [deg/h] to compensate.")
+@click.option("--drift-deg-h", type=FiniteFloat(), default=None, help="Axial drift [deg/h] to compensate.")
 @click.option(
     "--model",
     "model_path",
@@ -211,32 +172,36 @@ def truth_command(log, criterion, hours, lat0_deg, lon0_deg, height_m, out_dir, 
     "out_dir",
     required=True,
     type=click.Path(file_okay=False, path_type=Path),
-    help="Folder for evaluation.json and position_error.png (created if needed).",
+    help="Folder for evaluation.json and position_error.png: new, empty, or holding only gyrodrift's outputs "
+    "(docs/outputs.md).",
 )
 @click.option(
     "--hours",
-    type=click.FloatRange(min=0.0, min_open=True),
+    type=FiniteFloat(min=0.0, min_open=True),
     default=72.0,
     show_default=True,
     help="Navigation hours after the 4 h alignment.",
 )
-@_site_options
+@site_options
 @click.option("--quiet", is_flag=True, help="No progress bar and no summary line.")
 def evaluate_command(log, drift_deg_h, model_path, out_dir, hours, lat0_deg, lon0_deg, height_m, quiet):
     """Navigate LOG 72 h after alignment without and with compensating the axial drift; plot both errors."""
-    from gyrodrift.procedure.evaluate import evaluate_compensation, write_evaluation
+    from gyrodrift.atomic import OutputFolder
+    from gyrodrift.procedure.evaluate import evaluate_compensation
     from gyrodrift.procedure.identify import identify
+    from gyrodrift.procedure.writers import EVALUATION_FILES, write_evaluation
 
     if (drift_deg_h is None) == (model_path is None):
         raise click.UsageError("give exactly one of --drift-deg-h or --model")
-    imu = _open(log, _site(lat0_deg, lon0_deg, height_m))
+    out = OutputFolder(out_dir, "evaluate", EVALUATION_FILES, inputs=[p for p in (log, model_path) if p is not None])
+    imu = _open(log, site_from_options(lat0_deg, lon0_deg, height_m))
     alignment = None
     source = "given"
     if model_path is not None:
-        ident = _guard(identify, imu, model_path, quiet=quiet)
+        ident = identify(imu, model_path, quiet=quiet)
         drift_deg_h, alignment, source = ident.drift_deg_h, ident.features.alignment, str(model_path)
-    ev = _guard(evaluate_compensation, imu, drift_deg_h, hours=hours, alignment=alignment, source=source, quiet=quiet)
-    write_evaluation(ev, out_dir)
+    ev = evaluate_compensation(imu, drift_deg_h, hours=hours, alignment=alignment, source=source, quiet=quiet)
+    write_evaluation(ev, out)
     if not quiet:
         click.echo(
             f"{ev.run}: compensating {ev.drift_deg_h:.6f} deg/h: {hours:g} h position error "
@@ -254,29 +219,38 @@ def evaluate_command(log, drift_deg_h, model_path, out_dir, hours, lat0_deg, lon
     type=click.Path(dir_okay=False, path_type=Path),
     help="Drift model (JSON, from `gyrodrift fit`).",
 )
-@_site_options
+@site_options
 @click.option(
     "--out",
     "out_dir",
     type=click.Path(file_okay=False, path_type=Path),
     default=None,
-    help="Folder for identification.json, alignment.json and alignment_z_sigma.png.",
+    help="Folder for identification.json, alignment.json and alignment_z_sigma.png: new, empty, or holding only "
+    "gyrodrift's outputs (docs/outputs.md).",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
 def identify_command(log, model_path, lat0_deg, lon0_deg, height_m, out_dir, as_json, quiet):
     """Align LOG, navigate 12 h and identify its axial drift with the model."""
-    from gyrodrift.atomic import atomic_write_json
-    from gyrodrift.procedure.align import write_alignment
+    from gyrodrift.atomic import OutputFolder
     from gyrodrift.procedure.identify import identify
+    from gyrodrift.procedure.writers import (
+        ALIGNMENT_FILES,
+        IDENTIFICATION_FILES,
+        identification_document,
+        write_alignment,
+        write_identification,
+    )
 
-    imu = _open(log, _site(lat0_deg, lon0_deg, height_m))
-    res = _guard(identify, imu, model_path, quiet=quiet)
-    doc = res.to_dict()
-    doc = {k: _num(v) for k, v in doc.items()}
-    if out_dir is not None:
-        write_alignment(res.features.alignment, out_dir)
-        atomic_write_json(doc, Path(out_dir) / "identification.json")
+    files = IDENTIFICATION_FILES + ALIGNMENT_FILES
+    out = None if out_dir is None else OutputFolder(out_dir, "identify", files, inputs=[log, model_path])
+    imu = _open(log, site_from_options(lat0_deg, lon0_deg, height_m))
+    res = identify(imu, model_path, quiet=quiet)
+    doc = identification_document(res)
+    if out is not None:
+        with out.publish() as stage:
+            write_identification(res, stage)
+            write_alignment(res.features.alignment, stage)
     if as_json:
         click.echo(json.dumps(doc, indent=2))
         return

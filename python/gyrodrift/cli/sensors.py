@@ -27,13 +27,14 @@ def allan_command(log: Path, out_dir: Path, quiet: bool) -> None:
     Example: gyrodrift allan static.parquet --out allan
     """
     from gyrodrift.allan import allan_deviation, scenario_noise_block
-    from gyrodrift.allan_output import allan_files
+    from gyrodrift.allan_output import ALLAN_FILES, allan_files
+    from gyrodrift.atomic import OutputFolder
     from gyrodrift.logs import open_log
 
+    out = OutputFolder(out_dir, "allan", ALLAN_FILES, inputs=[log])
     imu = open_log(log)
     result = allan_deviation(imu, quiet=quiet)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    paths = allan_files(result, out_dir)
+    paths = allan_files(result, out)
     if not quiet:
         noise = scenario_noise_block(result)
         g, a = noise["gyro"], noise["accel"]

@@ -5,23 +5,26 @@ from __future__ import annotations
 import json
 import math
 import os
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pyarrow as pa
+import pyarrow.parquet as pq
 
-from gyrodrift.atomic import atomic_write_json, atomic_write_parquet
-from gyrodrift.ins.imu_file import ImuChunk, ImuFileReader, ImuTruth
+from gyrodrift.atomic import OutputFolder, Stage, output_folder, staged, write_json
+from gyrodrift.errors import OptionError
 from gyrodrift.ins.nav_errors import attitude_errors_arcsec, position_errors
 from gyrodrift.ins.scenario import Scenario
-from gyrodrift.ins.simulate import DEFAULT_CHUNK_SAMPLES, ImuData, iter_core_chunks
-from gyrodrift.progress import progress
+from gyrodrift.ins.simulate import ImuData
+from gyrodrift.ins.stream import Track, run_navigators
+from gyrodrift.logs import DEFAULT_CHUNK_SAMPLES, ImuLog, LogError, LogTruth, open_log
+from gyrodrift.site import Site
 from gyrodrift.units import DEG, DEG_PER_H, HOUR, MICRO_G
 
-__all__ = ["NavResult", "navigate", "NAV_COLUMNS", "NAV_ERROR_COLUMNS", "SUMMARY_FORMAT"]
+__all__ = ["NavResult", "navigate", "as_log", "INITIAL_SOURCES", "NAV_COLUMNS", "NAV_ERROR_COLUMNS", "SUMMARY_FORMAT"]
 
 NAV_COLUMNS = (
     "t_s",
@@ -84,48 +87,41 @@ class NavResult:
         raise KeyError(f"no checkpoint at {t_h} h")
 
 
-@dataclass(frozen=True)
-class _Source:
-    chunks: Iterator[ImuChunk]
-    n_samples: int
-    rate_hz: float
-    truth: ImuTruth | None
-    label: str
+INITIAL_SOURCES = ("auto", "truth", "alignment")
+"""Where `navigate` takes its initial state from (besides a mapping of given values)."""
 
 
-def _core_source(scenario: Scenario, chunk_samples: int) -> Iterator[ImuChunk]:
-    for c in iter_core_chunks(scenario, chunk_samples):
-        true_deg = np.rad2deg(np.column_stack([c["pitch_rad"], c["roll_rad"], c["yaw_rad"]]))
-        yield ImuChunk(np.asarray(c["t_s"]), np.asarray(c["dtheta_rad"]), np.asarray(c["dv_m_s"]), true_deg)
+def as_log(
+    imu: str | os.PathLike[str] | ImuLog | ImuData | Scenario,
+    *,
+    site: Site | Mapping[str, float] | None = None,
+    require_temperature: bool = False,
+) -> ImuLog:
+    """The `gyrodrift.logs.ImuLog` of any IMU source `navigate` takes (a path, an ImuLog, an ImuData, a Scenario).
 
-
-def _open_source(imu: Any, chunk_samples: int) -> _Source:
+    `site` replaces or completes the source's site as in `gyrodrift.logs.open_log`.
+    """
+    if isinstance(imu, ImuLog):
+        if site is not None:
+            raise OptionError("navigate: give the site to open_log, not with an opened log")
+        return imu
     if isinstance(imu, Scenario):
-        s = imu
-        truth = ImuTruth(
-            s.site.lat_deg,
-            s.site.lon_deg,
-            s.site.height_m,
-            s.attitude.pitch_deg,
-            s.attitude.roll_deg,
-            s.attitude.yaw_deg,
-        )
-        return _Source(_core_source(s, chunk_samples), s.n_samples, s.run.rate_hz, truth, "<scenario>")
+        return ImuLog.from_scenario(imu, site=site)
     if isinstance(imu, ImuData):
         s = imu.scenario
-        truth = ImuTruth(
-            s.site.lat_deg,
-            s.site.lon_deg,
-            s.site.height_m,
-            s.attitude.pitch_deg,
-            s.attitude.roll_deg,
-            s.attitude.yaw_deg,
+        return ImuLog.from_arrays(
+            imu.columns,
+            rate_hz=s.run.rate_hz,
+            site=site,
+            source_site=Site(s.site.lat_deg, s.site.lon_deg, s.site.height_m),
+            truth=LogTruth(s.attitude.pitch_deg, s.attitude.roll_deg, s.attitude.yaw_deg),
+            require_temperature=require_temperature,
         )
-        return _Source(imu.chunks(chunk_samples), len(imu), s.run.rate_hz, truth, "<memory>")
     if isinstance(imu, (str, os.PathLike)):
-        reader = ImuFileReader(imu)
-        return _Source(reader.chunks(chunk_samples), reader.n_samples, reader.rate_hz, reader.truth, str(imu))
-    raise TypeError(f"navigate: imu must be a path to imu.parquet, an ImuData or a Scenario, got {type(imu).__name__}")
+        return open_log(imu, site=site, require_temperature=require_temperature)
+    raise TypeError(
+        f"navigate: imu must be a path to an IMU log, an ImuLog, an ImuData or a Scenario, got {type(imu).__name__}"
+    )
 
 
 def _vector3(name: str, value: Sequence[float] | None) -> list[float]:
@@ -133,41 +129,69 @@ def _vector3(name: str, value: Sequence[float] | None) -> list[float]:
         return [0.0, 0.0, 0.0]
     v = [float(x) for x in value]
     if len(v) != 3 or not all(math.isfinite(x) for x in v):
-        raise ValueError(f"navigate: {name} must be 3 finite numbers, got {value!r}")
+        raise OptionError(f"navigate: {name} must be 3 finite numbers, got {value!r}")
     return v
 
 
-def _initial_state(initial: str | Mapping[str, Any], truth: ImuTruth | None, label: str) -> dict[str, Any]:
-    keys = ("lat_deg", "lon_deg", "height_m", "pitch_deg", "roll_deg", "yaw_deg")
+_STATE_KEYS = ("lat_deg", "lon_deg", "height_m", "pitch_deg", "roll_deg", "yaw_deg")
+
+
+def _initial_from(initial: str | Mapping[str, Any], log: ImuLog) -> tuple[str, dict[str, Any]]:
+    """(source, state) where source is "given", "truth" or "alignment" (the state then comes later)."""
+    truth = None
+    if log.truth is not None and log.site is not None:
+        s, t = log.site, log.truth
+        truth = {
+            "lat_deg": s.lat_deg,
+            "lon_deg": s.lon_deg,
+            "height_m": s.height_m,
+            "pitch_deg": t.pitch_deg,
+            "roll_deg": t.roll_deg,
+            "yaw_deg": t.yaw_deg,
+        }
     if isinstance(initial, str):
-        if initial != "truth":
-            raise ValueError(f"navigate: initial must be 'truth' or a mapping, got {initial!r}")
-        given: Mapping[str, Any] = {}
-    else:
-        given = initial
-        unknown = set(given) - set(keys) - {"vel_enu_m_s"}
-        if unknown:
-            raise ValueError(f"navigate: unknown initial key(s) {sorted(unknown)} (expected {keys + ('vel_enu_m_s',)})")
+        if initial not in INITIAL_SOURCES:
+            raise OptionError(
+                f"navigate: --initial must be one of {', '.join(INITIAL_SOURCES)} or a mapping, got {initial!r}"
+            )
+        if initial == "alignment" or (initial == "auto" and truth is None):
+            return "alignment", {}
+        if truth is None:
+            raise LogError(
+                f"{log.label}: the log carries no true initial state (no gyrodrift.scenario metadata, or no site); "
+                "use --initial alignment (or give the initial state)"
+            )
+        return "truth", {**truth, "vel_enu_m_s": [0.0, 0.0, 0.0]}
+    unknown = set(initial) - set(_STATE_KEYS) - {"vel_enu_m_s"}
+    if unknown:
+        raise OptionError(
+            f"navigate: unknown initial key(s) {sorted(unknown)} (expected {_STATE_KEYS + ('vel_enu_m_s',)})"
+        )
     out: dict[str, Any] = {}
-    for k in keys:
-        if k in given:
-            out[k] = float(given[k])
+    for k in _STATE_KEYS:
+        if k in initial:
+            v = float(initial[k])
+            if not math.isfinite(v):
+                raise OptionError(f"navigate: initial {k} must be a finite number, got {initial[k]!r}")
+            out[k] = v
         elif truth is not None:
-            out[k] = float(getattr(truth, k))
+            out[k] = float(truth[k])
         else:
-            raise ValueError(f"navigate: {label} carries no truth; initial must give {k}")
-    out["vel_enu_m_s"] = _vector3("initial vel_enu_m_s", given.get("vel_enu_m_s"))
-    return out
+            raise OptionError(f"navigate: {log.label} carries no truth; initial must give {k}")
+    out["vel_enu_m_s"] = _vector3("initial vel_enu_m_s", initial.get("vel_enu_m_s"))
+    return "given", out
 
 
 def navigate(
-    imu: str | os.PathLike[str] | ImuData | Scenario,
+    imu: str | os.PathLike[str] | ImuLog | ImuData | Scenario,
     *,
     hours: float | None = None,
     compensate_drift_deg_h: float = 0.0,
     gyro_bias_deg_h: Sequence[float] | None = None,
     accel_bias_ug: Sequence[float] | None = None,
-    initial: str | Mapping[str, Any] = "truth",
+    initial: str | Mapping[str, Any] = "auto",
+    site: Site | Mapping[str, float] | None = None,
+    timeline: Any = None,
     decimation_s: float = 1.0,
     vertical: str = "fixed",
     out_dir: str | os.PathLike[str] | None = None,
@@ -178,26 +202,39 @@ def navigate(
 
     Parameters
     ----------
-    imu : path, ImuData or Scenario
-        An ``imu.parquet`` file (streamed in chunks), an in-memory `ImuData`, or a `Scenario` simulated on
-        the fly chunk by chunk (nothing stored: the fast path for long runs).
+    imu : path, ImuLog, ImuData or Scenario
+        Any IMU log the other commands take (Parquet or CSV, `gyrodrift.logs`; streamed in chunks), an opened
+        `ImuLog`, an in-memory `ImuData`, or a `Scenario` simulated on the fly chunk by chunk (nothing stored:
+        the fast path for long runs).
     hours : float, optional
-        Navigate only the first `hours` [h] (default: the whole run).
+        Navigate only the first `hours` [h] of navigation (default: to the end of the log). Must cover at
+        least one output step (`decimation_s`).
     compensate_drift_deg_h : float
         Axial (z) gyro drift estimate [deg/h], subtracted from the measured z rate
         (compensated = measured - estimate). Added to ``gyro_bias_deg_h[2]``.
     gyro_bias_deg_h, accel_bias_ug : 3 numbers, optional
-        Gyro [deg/h] and accelerometer [ug] bias estimates, body x y z, subtracted from the measurements.
-    initial : "truth" or mapping
-        Initial state. "truth": the true site and the attitude at table angle 0 from the scenario. A
-        mapping may give ``lat_deg, lon_deg, height_m, pitch_deg, roll_deg, yaw_deg`` [deg, m] and
-        ``vel_enu_m_s`` (3, m/s); missing keys come from the truth.
+        Gyro [deg/h] and accelerometer [ug] bias estimates, body x y z, subtracted from the measurements
+        (added to the alignment's own estimates when the state comes from an alignment).
+    initial : {"auto", "truth", "alignment"} or mapping
+        Initial state. "truth": the true site and the attitude at table angle 0 from the log's scenario
+        metadata (simulated logs), navigation from the first sample. "alignment": align the first
+        ``timeline.align_h`` hours of the log (`gyrodrift.procedure.align_log`, needs the site) and navigate
+        from the end of the alignment with its attitude, velocity and x/y gyro and accelerometer bias
+        estimates. "auto" (default): "truth" when the log carries it, else "alignment". A mapping gives
+        ``lat_deg, lon_deg, height_m, pitch_deg, roll_deg, yaw_deg`` [deg, m] and ``vel_enu_m_s`` (3, m/s);
+        missing keys come from the truth. ``summary["initial_source"]`` says which was used.
+    site : Site or mapping, optional
+        The static site, as in `gyrodrift.logs.open_log` (``--lat0-deg``, ``--lon0-deg``, ``--height-m``);
+        position errors are computed against it when known.
+    timeline : gyrodrift.procedure.Timeline, optional
+        The alignment span for ``initial="alignment"`` (default: `gyrodrift.procedure.DEFAULT_TIMELINE`, 4 h).
     decimation_s : float
-        Keep the state every `decimation_s` [s] (rounded to whole samples, counted from the run start).
+        Keep the state every `decimation_s` [s] (rounded to whole samples, counted from the navigation start).
     vertical : {"fixed", "damped"}
         Vertical channel of the core navigator ("fixed": height held, static base).
-    out_dir : path-like, optional
-        If given, write ``nav.parquet`` and ``summary.json`` there (atomically).
+    out_dir : path-like or gyrodrift.atomic.OutputFolder, optional
+        If given, write ``nav.parquet`` and ``summary.json`` there, published together (`write_navigation`);
+        the folder is checked before navigating (docs/outputs.md): an input file is never replaced.
     chunk_samples : int
         Samples per call to the core.
     quiet : bool
@@ -206,36 +243,79 @@ def navigate(
     Returns
     -------
     NavResult
-        Columns ``t_s`` [s], ``lat_deg``, ``lon_deg``, ``height_m``, ``vel_{e,n,u}_m_s`` (ENU),
-        ``pitch_deg``, ``roll_deg``, ``yaw_deg``; with a known truth also ``lat_err_arcsec``,
-        ``lon_err_arcsec``, ``pos_err_nmi`` and ``{pitch,roll,yaw}_err_arcsec`` (computed minus true). The
-        summary holds one checkpoint per whole hour ``{t_h, lat_deg, lon_deg, lat_err_arcsec,
-        lon_err_arcsec, pos_err_nmi}``, ``final_pos_err_nmi`` and ``max_pos_err_nmi`` (over kept samples,
-        checkpoints and the final state).
+        Columns ``t_s`` [s since the navigation start], ``lat_deg``, ``lon_deg``, ``height_m``,
+        ``vel_{e,n,u}_m_s`` (ENU), ``pitch_deg``, ``roll_deg``, ``yaw_deg``; with a known site also
+        ``lat_err_arcsec``, ``lon_err_arcsec``, ``pos_err_nmi``, and with true attitude columns
+        ``{pitch,roll,yaw}_err_arcsec`` (computed minus true). The summary holds one checkpoint per whole hour
+        of navigation ``{t_h, lat_deg, lon_deg, lat_err_arcsec, lon_err_arcsec, pos_err_nmi}``,
+        ``final_pos_err_nmi`` and ``max_pos_err_nmi`` (over kept samples, checkpoints and the final state),
+        ``initial_source`` and ``start_s`` (log time of the navigation start [s]).
     """
     from gyrodrift import _core
 
     if not (isinstance(chunk_samples, int) and chunk_samples >= 1):
-        raise ValueError(f"navigate: chunk_samples must be a positive integer, got {chunk_samples!r}")
+        raise OptionError(f"navigate: chunk_samples must be a positive integer, got {chunk_samples!r}")
     if not (decimation_s > 0 and math.isfinite(decimation_s)):
-        raise ValueError(f"navigate: decimation_s must be > 0, got {decimation_s!r}")
-    src = _open_source(imu, chunk_samples)
-    rate = src.rate_hz
-    n_total = src.n_samples
-    if hours is not None:
-        if not (hours > 0 and math.isfinite(hours)):
-            raise ValueError(f"navigate: hours must be > 0, got {hours!r}")
-        asked = int(round(hours * HOUR * rate))
-        if asked > n_total:
-            raise ValueError(f"navigate: {hours:g} h asked but the IMU data hold {n_total / (HOUR * rate):.4g} h")
-        n_total = asked
-    dec = max(1, int(round(decimation_s * rate)))
-    per_hour = int(round(HOUR * rate))
-    init = _initial_state(initial, src.truth, src.label)
-
+        raise OptionError(f"navigate: decimation_s must be > 0, got {decimation_s!r}")
+    if hours is not None and not (hours > 0):
+        raise OptionError(f"navigate: hours must be > 0, got {hours!r}")
+    if hours is not None and not math.isfinite(hours):
+        raise OptionError(f"navigate: --hours must be a finite number of hours, got {hours!r}")
     gyro_est = _vector3("gyro_bias_deg_h", gyro_bias_deg_h)
+    if not math.isfinite(compensate_drift_deg_h):
+        raise OptionError(f"navigate: --compensate-drift-deg-h must be finite, got {compensate_drift_deg_h!r}")
     gyro_est[2] += float(compensate_drift_deg_h)
     accel_est = _vector3("accel_bias_ug", accel_bias_ug)
+    if out_dir is not None:
+        out_dir = output_folder(
+            out_dir, "navigate", NAV_FILES, inputs=[imu] if isinstance(imu, (str, os.PathLike)) else ()
+        )
+    log = as_log(imu, site=site)
+    rate = log.rate_hz
+    source, init = _initial_from(initial, log)
+    dec = max(1, int(round(decimation_s * rate)))
+    start = 0
+    if source == "alignment":
+        from gyrodrift.procedure.align import align_log
+        from gyrodrift.procedure.timeline import DEFAULT_TIMELINE
+
+        timeline = DEFAULT_TIMELINE if timeline is None else timeline
+
+        if hours is not None:  # refuse a navigation the log cannot hold before aligning
+            log.require_duration(
+                timeline.log_hours_for(hours) * HOUR,
+                f"navigating --hours {hours:g} h after the {timeline.align_h:g} h alignment",
+            )
+        al = align_log(log, timeline=timeline, chunk_samples=chunk_samples, quiet=quiet)
+        start = al.samples_used
+        init = {
+            "lat_deg": al.site.lat_deg,
+            "lon_deg": al.site.lon_deg,
+            "height_m": al.site.height_m,
+            "pitch_deg": al.pitch_deg,
+            "roll_deg": al.roll_deg,
+            "yaw_deg": al.yaw_deg,
+            "vel_enu_m_s": [float(v) for v in al.vel_enu_m_s],
+        }
+        gyro_est = [gyro_est[0] + al.gyro_bias_deg_h[0], gyro_est[1] + al.gyro_bias_deg_h[1], gyro_est[2]]
+        accel_est = [a + b for a, b in zip(accel_est, al.accel_bias_ug, strict=True)]
+    available = log.n_samples - start
+    after = f" after the {start / rate / HOUR:g} h alignment" if start else ""
+    if hours is None:
+        n_total = available
+    else:
+        asked = hours * HOUR * rate
+        if not asked <= available + 0.5:
+            raise OptionError(
+                f"navigate: --hours {hours:g}: {hours:g} h asked but the IMU data hold "
+                f"{available / (HOUR * rate):.4g} h{after}"
+            )
+        n_total = int(round(asked))
+    if n_total < dec:
+        raise OptionError(
+            f"navigate: --hours {hours if hours is not None else available / (HOUR * rate):g} h is "
+            f"{n_total} sample(s){after}, shorter than one output step ({dec / rate:g} s = {dec} samples)"
+        )
 
     nav = _core.Navigator(
         {
@@ -253,112 +333,97 @@ def navigate(
     nav.set_gyro_bias([b * DEG_PER_H for b in gyro_est])
     nav.set_accel_bias([b * MICRO_G for b in accel_est])
 
-    parts: list[dict[str, np.ndarray]] = []
-    true_parts: list[np.ndarray] = []
-    hourly: list[tuple[int, dict[str, Any]]] = []
-    done = 0
-    with progress(n_total, "navigate", quiet) as bar:
-        for chunk in src.chunks:
-            if done >= n_total:
-                break
-            chunk = chunk.slice(0, n_total - done)
-            a = 0
-            while a < len(chunk):
-                # Split at whole hours so every checkpoint is the exact state at k * 3600 s.
-                b = min(len(chunk), a + per_hour - (done % per_hour))
-                seg = chunk.slice(a, b)
-                out = nav.process(
-                    np.ascontiguousarray(seg.dtheta_rad, dtype=np.float64),
-                    np.ascontiguousarray(seg.dv_m_s, dtype=np.float64),
-                    dec,
-                )
-                first = (dec - 1 - done) % dec
-                if len(out["t_s"]):
-                    parts.append(out)
-                    if seg.true_deg is not None:
-                        true_parts.append(seg.true_deg[first::dec])
-                done += len(seg)
-                if done % per_hour == 0:
-                    hourly.append((done // per_hour, nav.state()))
-                a = b
-            bar.update(len(chunk))
-    final = nav.state()
-    return _finish(
-        parts,
-        true_parts,
-        hourly,
-        final,
-        src,
-        init,
-        rate,
-        dec,
-        n_total,
-        done,
-        compensate_drift_deg_h,
-        gyro_est,
-        accel_est,
-        out_dir,
+    true_deg = np.empty((n_total // dec, 3)) if log.has_truth_columns else None
+
+    def keep_truth(piece, done: int) -> None:  # the true attitude at the kept samples (copied)
+        first = (dec - 1 - done) % dec
+        k = len(range(first, len(piece), dec))
+        true_deg[(done + first) // dec : (done + first) // dec + k] = piece.true_deg[first::dec]
+
+    (track,) = run_navigators(
+        log,
+        [nav],
+        n_samples=n_total,
+        start=start,
+        decimation=dec,
+        observe=keep_truth if true_deg is not None else None,
+        chunk_samples=chunk_samples,
+        quiet=quiet,
     )
-
-
-def _finish(
-    parts,
-    true_parts,
-    hourly,
-    final,
-    src,
-    init,
-    rate,
-    dec,
-    n_total,
-    done,
-    compensate_drift_deg_h,
-    gyro_est,
-    accel_est,
-    out_dir,
-) -> NavResult:
-    def cat(key: str) -> np.ndarray:
-        return np.concatenate([np.asarray(p[key], dtype=float) for p in parts]) if parts else np.zeros(0)
-
-    vel = (
-        np.concatenate([np.asarray(p["vel_enu_m_s"], dtype=float).reshape(-1, 3) for p in parts])
-        if parts
-        else np.zeros((0, 3))
+    run = _Run(
+        log=log,
+        start=start,
+        n_samples=n_total,
+        dec=dec,
+        initial_source=source,
+        init=init,
+        compensate_drift_deg_h=float(compensate_drift_deg_h),
+        gyro_est=gyro_est,
+        accel_est=accel_est,
     )
+    cols = _columns(track, true_deg, log.site)
+    summary = _summary(run, track, cols)
+    folder = None
+    if out_dir is not None:
+        folder = write_navigation(cols, summary, out_dir)
+    return NavResult(columns=cols, summary=summary, out_dir=folder)
+
+
+@dataclass(frozen=True)
+class _Run:
+    """What `navigate` did, for the summary."""
+
+    log: ImuLog
+    start: int
+    n_samples: int
+    dec: int
+    initial_source: str
+    init: dict[str, Any]
+    compensate_drift_deg_h: float
+    gyro_est: list[float]
+    accel_est: list[float]
+
+
+def _columns(track: Track, true_deg: np.ndarray | None, site: Site | None) -> dict[str, np.ndarray]:
+    """nav.parquet columns from the kept states (user units), with errors against the site and true attitude."""
+    k = track.kept
     cols: dict[str, np.ndarray] = {
-        "t_s": cat("t_s"),
-        "lat_deg": np.rad2deg(cat("lat_rad")),
-        "lon_deg": np.rad2deg(cat("lon_rad")),
-        "height_m": cat("height_m"),
-        "vel_e_m_s": vel[:, 0],
-        "vel_n_m_s": vel[:, 1],
-        "vel_u_m_s": vel[:, 2],
-        "pitch_deg": np.rad2deg(cat("pitch_rad")),
-        "roll_deg": np.rad2deg(cat("roll_rad")),
-        "yaw_deg": np.rad2deg(cat("yaw_rad")),
+        "t_s": k["t_s"],
+        "lat_deg": np.rad2deg(k["lat_rad"]),
+        "lon_deg": np.rad2deg(k["lon_rad"]),
+        "height_m": k["height_m"],
+        "vel_e_m_s": k["vel_enu_m_s"][:, 0],
+        "vel_n_m_s": k["vel_enu_m_s"][:, 1],
+        "vel_u_m_s": k["vel_enu_m_s"][:, 2],
+        "pitch_deg": np.rad2deg(k["pitch_rad"]),
+        "roll_deg": np.rad2deg(k["roll_rad"]),
+        "yaw_deg": np.rad2deg(k["yaw_rad"]),
     }
-    truth = src.truth
-    lat0 = lon0 = None
-    if truth is not None:
-        lat0, lon0 = truth.lat_deg * DEG, truth.lon_deg * DEG
-        pe = position_errors(cols["lat_deg"] * DEG, cols["lon_deg"] * DEG, lat0, lon0)
+    if site is not None:
+        pe = position_errors(k["lat_rad"], k["lon_rad"], site.lat_deg * DEG, site.lon_deg * DEG)
         cols["lat_err_arcsec"] = pe["lat_err_arcsec"]
         cols["lon_err_arcsec"] = pe["lon_err_arcsec"]
         cols["pos_err_nmi"] = pe["pos_err_nmi"]
-        if true_parts and sum(len(t) for t in true_parts) == len(cols["t_s"]):
-            tr = np.deg2rad(np.concatenate(true_parts))
-            ae = attitude_errors_arcsec(
-                cols["pitch_deg"] * DEG, cols["roll_deg"] * DEG, cols["yaw_deg"] * DEG, tr[:, 0], tr[:, 1], tr[:, 2]
+        if true_deg is not None:
+            tr = np.deg2rad(true_deg)
+            cols.update(
+                attitude_errors_arcsec(k["pitch_rad"], k["roll_rad"], k["yaw_rad"], tr[:, 0], tr[:, 1], tr[:, 2])
             )
-            cols.update(ae)
+    return cols
+
+
+def _summary(run: _Run, track: Track, cols: Mapping[str, np.ndarray]) -> dict[str, Any]:
+    """The content of summary.json (user units)."""
+    site = run.log.site
+    rate = run.log.rate_hz
 
     def point(state: Mapping[str, Any], extra: dict[str, Any]) -> dict[str, Any]:
         lat, lon = float(state["lat_rad"]), float(state["lon_rad"])
         d = dict(extra)
         d["lat_deg"] = math.degrees(lat)
         d["lon_deg"] = math.degrees(lon)
-        if truth is not None:
-            e = position_errors(lat, lon, lat0, lon0)
+        if site is not None:
+            e = position_errors(lat, lon, site.lat_deg * DEG, site.lon_deg * DEG)
             d["lat_err_arcsec"] = float(e["lat_err_arcsec"])
             d["lon_err_arcsec"] = float(e["lon_err_arcsec"])
             d["pos_err_nmi"] = float(e["pos_err_nmi"])
@@ -366,41 +431,51 @@ def _finish(
             d["lat_err_arcsec"] = d["lon_err_arcsec"] = d["pos_err_nmi"] = None
         return d
 
-    checkpoints = [point(st, {"t_h": k}) for k, st in hourly]
-    final_pt = point(final, {"t_h": done / (HOUR * rate)})
+    checkpoints = [point(st, {"t_h": k}) for k, st in track.hourly]
+    final_pt = point(track.final, {"t_h": run.n_samples / (HOUR * rate)})
     summary: dict[str, Any] = {
         "format": SUMMARY_FORMAT,
-        "imu": src.label,
+        "imu": run.log.label,
         "rate_hz": rate,
-        "n_samples": done,
-        "hours_navigated": done / (HOUR * rate),
-        "decimation_s": dec / rate,
-        "compensate_drift_deg_h": float(compensate_drift_deg_h),
-        "gyro_bias_deg_h": gyro_est,
-        "accel_bias_ug": accel_est,
-        "initial": init,
+        "n_samples": run.n_samples,
+        "hours_navigated": run.n_samples / (HOUR * rate),
+        "decimation_s": run.dec / rate,
+        "initial_source": run.initial_source,
+        "start_s": run.start / rate,
+        "compensate_drift_deg_h": run.compensate_drift_deg_h,
+        "gyro_bias_deg_h": run.gyro_est,
+        "accel_bias_ug": run.accel_est,
+        "initial": run.init,
         "truth": None
-        if truth is None
-        else {"lat_deg": truth.lat_deg, "lon_deg": truth.lon_deg, "height_m": truth.height_m},
+        if site is None
+        else {"lat_deg": site.lat_deg, "lon_deg": site.lon_deg, "height_m": site.height_m},
         "checkpoints": checkpoints,
         "final": final_pt,
         "final_pos_err_nmi": final_pt["pos_err_nmi"],
         "max_pos_err_nmi": None,
     }
-    if truth is not None:
+    if site is not None:
         candidates = [final_pt["pos_err_nmi"]] + [c["pos_err_nmi"] for c in checkpoints]
         if len(cols["pos_err_nmi"]):
             candidates.append(float(np.max(cols["pos_err_nmi"])))
         summary["max_pos_err_nmi"] = max(candidates)
+    return summary
 
-    folder = None
-    if out_dir is not None:
-        folder = Path(out_dir)
-        folder.mkdir(parents=True, exist_ok=True)
-        table = pa.Table.from_pydict(
-            {k: pa.array(v, pa.float64()) for k, v in cols.items()},
-        ).replace_schema_metadata({"gyrodrift.format": "gyrodrift-nav/1", "gyrodrift.imu": src.label})
-        json.dumps(summary, allow_nan=False)  # fail before writing either file: the two always match
-        atomic_write_parquet(table, folder / "nav.parquet")
-        atomic_write_json(summary, folder / "summary.json")
-    return NavResult(columns=cols, summary=summary, out_dir=folder)
+
+NAV_FILES = ("nav.parquet", "summary.json")
+"""The files of a navigation output, published together."""
+
+
+def write_navigation(
+    columns: Mapping[str, np.ndarray], summary: Mapping[str, Any], out: str | os.PathLike[str] | OutputFolder | Stage
+) -> Path:
+    """Write ``nav.parquet`` (the columns, float64, metadata ``gyrodrift.format = gyrodrift-nav/1``) and
+    ``summary.json`` into `out` as one set (`gyrodrift.atomic.staged`); return the folder."""
+    table = pa.Table.from_pydict(
+        {k: pa.array(v, pa.float64()) for k, v in columns.items()},
+    ).replace_schema_metadata({"gyrodrift.format": "gyrodrift-nav/1", "gyrodrift.imu": str(summary.get("imu"))})
+    json.dumps(summary, allow_nan=False)  # fail before writing either file
+    with staged(out, "navigate", NAV_FILES) as stage:
+        pq.write_table(table, stage.file("nav.parquet"))
+        write_json(dict(summary), stage.file("summary.json"))
+    return stage.folder

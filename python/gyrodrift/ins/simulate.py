@@ -11,12 +11,16 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from gyrodrift.atomic import temporary_path
-from gyrodrift.ins.imu_file import IMU_COLUMNS, ImuChunk, core_chunk_to_table, imu_schema, table_to_chunk
-from gyrodrift.ins.scenario import Scenario, write_scenario_toml
+from gyrodrift.atomic import OutputFolder, output_folder
+from gyrodrift.ins.imu_file import IMU_COLUMNS, core_chunk_to_table, imu_schema
+from gyrodrift.ins.scenario import Scenario
+from gyrodrift.ins.toml_writer import dumps_toml
 from gyrodrift.progress import progress
 
-__all__ = ["ImuData", "simulate", "iter_core_chunks", "rotation_summary", "DEFAULT_CHUNK_SAMPLES"]
+__all__ = ["ImuData", "simulate", "iter_core_chunks", "rotation_summary", "DEFAULT_CHUNK_SAMPLES", "SIMULATION_FILES"]
+
+SIMULATION_FILES = ("imu.parquet", "scenario.resolved.toml")
+"""The files of a simulation output, published together."""
 
 DEFAULT_CHUNK_SAMPLES = 100_000
 """Samples per chunk (and per Parquet row group): 1000 s at 100 Hz, about 10 MB of columns."""
@@ -48,12 +52,6 @@ class ImuData:
     def table(self) -> pa.Table:
         """The run as a pyarrow Table with the imu.parquet schema and metadata."""
         return pa.Table.from_pydict(self.columns, schema=self.schema or imu_schema(self.scenario))
-
-    def chunks(self, chunk_samples: int) -> Iterator[ImuChunk]:
-        """Consecutive chunks of at most `chunk_samples` samples (views, no copies of the columns)."""
-        whole = table_to_chunk(self.table())
-        for a in range(0, len(whole), chunk_samples):
-            yield whole.slice(a, a + chunk_samples)
 
 
 def rotation_summary(scenario: Scenario) -> dict:
@@ -91,7 +89,7 @@ def iter_core_chunks(scenario: Scenario, chunk_samples: int) -> Iterator[dict]:
 def simulate(
     scenario: Scenario,
     *,
-    out_dir: str | os.PathLike[str] | None = None,
+    out_dir: str | os.PathLike[str] | OutputFolder | None = None,
     chunk_samples: int = DEFAULT_CHUNK_SAMPLES,
     quiet: bool = True,
 ) -> ImuData | Path:
@@ -105,7 +103,8 @@ def simulate(
         None: return the whole run in memory (an `ImuData`; mind the size: 12 float64 columns, about
         100 bytes per sample, i.e. 35 MB per hour at 100 Hz, 2.5 GB for 72 h). Otherwise the folder (created if needed)
         receives ``imu.parquet`` (written chunk by chunk, one row group per chunk, never the whole run in
-        memory) and ``scenario.resolved.toml`` (every default written out); both are written atomically.
+        memory) and ``scenario.resolved.toml`` (every default written out), published together when the run
+        is complete (`gyrodrift.atomic.OutputFolder`; the folder is checked before simulating, docs/outputs.md).
     chunk_samples : int
         Samples asked from the core at a time (and rows per Parquet row group).
     quiet : bool
@@ -123,6 +122,7 @@ def simulate(
     b_gm(t) + b_rrw(t) + b_temp(t) e_z + noise``.
     """
     schema = imu_schema(scenario)
+    out = None if out_dir is None else output_folder(out_dir, "simulate", SIMULATION_FILES)
     bar = progress(scenario.n_samples, "simulate", quiet)
     with bar:
         if out_dir is None:
@@ -135,19 +135,17 @@ def simulate(
             cols = {c: (np.concatenate(v) if v else np.zeros(0)) for c, v in parts.items()}
             return ImuData(columns=cols, scenario=scenario, schema=schema)
 
-        folder = Path(out_dir)
-        folder.mkdir(parents=True, exist_ok=True)
-        dest = folder / "imu.parquet"
-        with temporary_path(dest) as tmp:
-            with pq.ParquetWriter(tmp, schema, **PARQUET_OPTIONS) as writer:
+        with out.publish() as stage:
+            with pq.ParquetWriter(stage.file("imu.parquet"), schema, **PARQUET_OPTIONS) as writer:
                 for chunk in iter_core_chunks(scenario, chunk_samples):
                     table = core_chunk_to_table(chunk, schema)
                     writer.write_table(table, row_group_size=max(table.num_rows, 1))
                     bar.update(table.num_rows)
-        write_scenario_toml(
-            scenario,
-            folder / "scenario.resolved.toml",
-            header="Resolved scenario written by gyrodrift simulate: every default written out.\n"
-            "Units are in the key names; see docs/scenarios.md.",
-        )
-        return dest
+            resolved = dumps_toml(
+                scenario.to_toml_dict(),
+                header="Resolved scenario written by gyrodrift simulate: every default written out.\n"
+                "Units are in the key names; see docs/scenarios.md.",
+            )
+            with open(stage.file("scenario.resolved.toml"), "w", encoding="utf-8", newline="") as fh:
+                fh.write(resolved)
+        return out.path / "imu.parquet"

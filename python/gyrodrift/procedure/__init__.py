@@ -11,19 +11,29 @@ extract_features(log, ..., with_truth=False) -> RunFeatures
 features_table(paths, ..., workers=None, scheduler=None) -> list[RunFeatures]; write_features_csv, write_curves_csv
 find_true_drift(log, criterion="final", hours=72, ...) -> TrueDrift; write_truth(truth, out_dir)
 evaluate_compensation(log, drift_deg_h, hours=72, ...) -> Evaluation; write_evaluation(ev, out_dir)
-identify(log, model, ...) -> Identification
+identify(log, model, ...) -> Identification; write_identification(res, out_dir)
+
+Writers (`gyrodrift.procedure.writers`) take results and publish their files as one set (docs/outputs.md).
 
 Logs are opened with `gyrodrift.logs.open_log` (Parquet or CSV, validated while streaming). See docs/procedure.md.
 """
 
-from gyrodrift.procedure.align import Alignment, align_log, write_alignment
-from gyrodrift.procedure.evaluate import Evaluation, evaluate_compensation, write_evaluation
+from gyrodrift.procedure.align import Alignment, align_log
+from gyrodrift.procedure.evaluate import Evaluation, evaluate_compensation
 from gyrodrift.procedure.features import RunFeatures, extract_features, features_run_table
-from gyrodrift.procedure.fleet import DaskMissingError, features_table, write_curves_csv, write_features_csv
+from gyrodrift.procedure.fleet import DaskMissingError, features_table
 from gyrodrift.procedure.identify import Identification, identify
 from gyrodrift.procedure.passes import NavCurve, PassResult, TemperatureStats, navigate_after_alignment
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
-from gyrodrift.procedure.truth import CRITERIA, TrueDrift, find_true_drift, write_truth
+from gyrodrift.procedure.truth import CRITERIA, TrueDrift, find_true_drift
+from gyrodrift.procedure.writers import (
+    write_alignment,
+    write_curves_csv,
+    write_evaluation,
+    write_features_csv,
+    write_identification,
+    write_truth,
+)
 
 __all__ = [
     "Alignment",
@@ -50,5 +60,6 @@ __all__ = [
     "write_alignment",
     "write_curves_csv",
     "write_features_csv",
+    "write_identification",
     "write_truth",
 ]

@@ -23,7 +23,7 @@ from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 from gyrodrift.progress import progress
 from gyrodrift.units import ARCSEC, DEG, DEG_PER_H, HOUR, MICRO_G
 
-__all__ = ["Alignment", "align_log", "write_alignment", "GYRO_BIAS_Z_STATE"]
+__all__ = ["Alignment", "align_log", "GYRO_BIAS_Z_STATE"]
 
 GYRO_BIAS_Z_STATE = 8
 """Column of the z-gyro bias in the aligner's covariance history (phi E N U, dv E N U, gyro bias x y z, ...);
@@ -167,7 +167,7 @@ def align_log(
     from gyrodrift import _core
 
     if log.site is None:
-        raise LogError(f"{log.path}: the log carries no site; give its latitude (site= / --lat0-deg)")
+        raise LogError(f"{log.label}: the log carries no site; give its latitude (--lat0-deg / site=)")
     site = log.site
     align_s = timeline.align_h * HOUR
     log.require_duration(align_s, "the alignment")
@@ -191,7 +191,7 @@ def align_log(
             if aligner.done:
                 break
     if not aligner.done:
-        raise ValueError(f"{log.path}: the aligner did not finish after {used} samples")
+        raise LogError(f"{log.label}: the aligner did not finish after {used} samples")
     r = aligner.result()
     hist_std = np.asarray(r["hist_std"], dtype=float)
     hist_t = np.asarray(r["hist_t_s"], dtype=float)
@@ -219,18 +219,3 @@ def align_log(
         hist_t_h=hist_t / HOUR,
         hist_gyro_z_std_deg_h=z_std / DEG_PER_H,
     )
-
-
-def write_alignment(alignment: Alignment, out_dir) -> dict:
-    """Write ``alignment.json`` (user units) and ``alignment_z_sigma.png`` into `out_dir` (created), atomically."""
-    from pathlib import Path
-
-    from gyrodrift.atomic import atomic_write_json
-    from gyrodrift.procedure.figures import plot_alignment_sigma
-
-    folder = Path(out_dir)
-    folder.mkdir(parents=True, exist_ok=True)
-    paths = {"json": folder / "alignment.json", "png": folder / "alignment_z_sigma.png"}
-    atomic_write_json(alignment.to_dict(), paths["json"])
-    plot_alignment_sigma(alignment, paths["png"])
-    return paths

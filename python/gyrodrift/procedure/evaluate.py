@@ -7,19 +7,18 @@ true; position error in nmi (1852 m).
 
 from __future__ import annotations
 
-import os
+import math
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
-from gyrodrift.atomic import atomic_write_json
+from gyrodrift.errors import OptionError
 from gyrodrift.logs import ImuLog
 from gyrodrift.procedure.align import Alignment, align_log
-from gyrodrift.procedure.passes import NavCurve, navigate_after_alignment
+from gyrodrift.procedure.passes import NavCurve, check_navigation_hours, navigate_after_alignment
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 from gyrodrift.units import HOUR
 
-__all__ = ["Evaluation", "evaluate_compensation", "write_evaluation"]
+__all__ = ["Evaluation", "evaluate_compensation"]
 
 
 @dataclass(frozen=True)
@@ -96,7 +95,9 @@ def evaluate_compensation(
     -------
     Evaluation
     """
-    hours = float(timeline.truth_h if hours is None else hours)
+    hours = check_navigation_hours(timeline.truth_h if hours is None else hours, decimation_s)
+    if not math.isfinite(drift_deg_h):
+        raise OptionError(f"--drift-deg-h: expected a finite drift in deg/h, got {drift_deg_h!r}")
     log.require_duration(
         timeline.log_hours_for(hours) * HOUR,
         f"the evaluation ({timeline.align_h:g} h alignment + {hours:g} h navigation)",
@@ -122,15 +123,3 @@ def evaluate_compensation(
         alignment=alignment,
         source=source,
     )
-
-
-def write_evaluation(ev: Evaluation, out_dir: str | os.PathLike[str]) -> dict[str, Path]:
-    """Write ``evaluation.json`` and ``position_error.png`` into `out_dir` (created), atomically."""
-    from gyrodrift.procedure.figures import plot_position_errors
-
-    folder = Path(out_dir)
-    folder.mkdir(parents=True, exist_ok=True)
-    paths = {"json": folder / "evaluation.json", "png": folder / "position_error.png"}
-    atomic_write_json(ev.to_dict(), paths["json"])
-    plot_position_errors(ev, paths["png"])
-    return paths

@@ -1,19 +1,18 @@
-"""Figures of the procedure (PNG, written atomically): alignment z-bias sigma, true-drift criterion curve,
-position error before and after compensation (the paper's Fig. 4/5)."""
+"""Figures of the procedure: alignment z-bias sigma, true-drift criterion curve, position error before and
+after compensation (the paper's Fig. 4/5). Each function takes a result and returns a matplotlib `Figure`
+(object API, no pyplot state); `gyrodrift.procedure.writers` saves them with `save_png`."""
 
 from __future__ import annotations
 
 import os
 from typing import TYPE_CHECKING
 
-from gyrodrift.atomic import temporary_path
-
 if TYPE_CHECKING:  # pragma: no cover
     from gyrodrift.procedure.align import Alignment
     from gyrodrift.procedure.evaluate import Evaluation
     from gyrodrift.procedure.truth import TrueDrift
 
-__all__ = ["plot_alignment_sigma", "plot_criterion", "plot_position_errors"]
+__all__ = ["alignment_sigma_figure", "criterion_figure", "position_error_figure", "save_png"]
 
 
 def _figure(nrows: int = 1):
@@ -24,13 +23,13 @@ def _figure(nrows: int = 1):
     return fig, axes
 
 
-def _save(fig, path: str | os.PathLike[str]) -> None:
+def save_png(fig, path: str | os.PathLike[str]) -> None:
+    """Save `fig` as PNG (110 dpi) to `path` as it is; callers publish it (`gyrodrift.atomic`)."""
     fig.tight_layout()
-    with temporary_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=110)
+    fig.savefig(path, format="png", dpi=110)
 
 
-def plot_alignment_sigma(alignment: Alignment, path: str | os.PathLike[str]) -> None:
+def alignment_sigma_figure(alignment: Alignment):
     """1-sigma of the axial (z) gyro bias over the alignment [deg/h] vs log time [h], log scale."""
     fig, (ax,) = _figure()
     ax.semilogy(alignment.hist_t_h, alignment.hist_gyro_z_std_deg_h, color="C0", label="z gyro bias 1-sigma")
@@ -42,10 +41,10 @@ def plot_alignment_sigma(alignment: Alignment, path: str | os.PathLike[str]) -> 
     )
     ax.grid(True, which="both", alpha=0.3)
     ax.legend()
-    _save(fig, path)
+    return fig
 
 
-def plot_criterion(truth: TrueDrift, path: str | os.PathLike[str]) -> None:
+def criterion_figure(truth: TrueDrift):
     """The criterion [nmi] vs the z drift [deg/h]: linear-model curve and the navigated verification points."""
     fig, (ax,) = _figure()
     ax.plot(truth.grid_drift_deg_h, truth.grid_nmi, color="C0", label="linear model")
@@ -56,10 +55,10 @@ def plot_criterion(truth: TrueDrift, path: str | os.PathLike[str]) -> None:
     ax.set_title(f"{truth.run}: true drift {truth.drift_deg_h:.6f} deg/h")
     ax.grid(True, alpha=0.3)
     ax.legend()
-    _save(fig, path)
+    return fig
 
 
-def plot_position_errors(ev: Evaluation, path: str | os.PathLike[str]) -> None:
+def position_error_figure(ev: Evaluation):
     """Position error [nmi] and latitude/longitude errors [arcsec] vs navigation time [h], before/after."""
     fig, (ax1, ax2) = _figure(2)
     b, a = ev.before, ev.after
@@ -80,4 +79,4 @@ def plot_position_errors(ev: Evaluation, path: str | os.PathLike[str]) -> None:
     ax2.set_ylabel("error [arcsec]")
     ax2.legend(ncol=2, fontsize="small")
     ax2.grid(True, alpha=0.3)
-    _save(fig, path)
+    return fig

@@ -8,24 +8,18 @@ only when a cluster is asked for.
 
 from __future__ import annotations
 
-import csv
-import io
-import math
 import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-from gyrodrift.atomic import atomic_write
 from gyrodrift.cluster import DEFAULT_CONNECT_TIMEOUT_S, DaskMissingError, SchedulerUnreachableError, dask_client
 from gyrodrift.logs import LogError, Site, open_log
-from gyrodrift.procedure.features import RUN_TABLE_COLUMNS, RunFeatures, extract_features
+from gyrodrift.procedure.features import RunFeatures, extract_features
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 from gyrodrift.progress import progress
 
 __all__ = [
     "features_table",
-    "write_features_csv",
-    "write_curves_csv",
     "DaskMissingError",
     "SchedulerUnreachableError",
 ]
@@ -113,7 +107,7 @@ def features_table(
     logs = [open_log(p, site=site) for p in paths]  # header problems surface before any work starts
     for log in logs:
         if log.site is None:
-            raise LogError(f"{log.path}: the log carries no site; give its latitude (site= / --lat0-deg)")
+            raise LogError(f"{log.label}: the log carries no site; give its latitude (--lat0-deg / site=)")
     names = [log.name for log in logs]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
@@ -139,37 +133,3 @@ def features_table(
                 results.append(f.result())
                 bar.update(1)
         return results
-
-
-def write_features_csv(features: Sequence[RunFeatures], path: str | os.PathLike[str]) -> None:
-    """Write the run table atomically: ``RUN_TABLE_COLUMNS`` (+ ``drift_deg_h`` when every run has it).
-
-    Floats are written with ``repr`` (shortest exact round trip), so a latitude keeps its 1e-12 deg digits.
-    Readable by `gyrodrift.runs.read_runs_csv`.
-    """
-    with_truth = bool(features) and all(math.isfinite(f.drift_deg_h) for f in features)
-    cols = list(RUN_TABLE_COLUMNS) + (["drift_deg_h"] if with_truth else [])
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(cols)
-    for f in features:
-        r = f.row()
-        w.writerow([r[c] if c == "run" else repr(float(r[c])) for c in cols])
-    with atomic_write(path, "w") as fh:
-        fh.write(buf.getvalue())
-
-
-def write_curves_csv(features: Sequence[RunFeatures], path: str | os.PathLike[str]) -> None:
-    """Write the hourly latitude-error curves atomically, one row per run and hour.
-
-    Columns: ``run``, ``t_h`` (navigation hour since the end of alignment, 0..12), ``lat_err_arcsec``
-    (computed minus true).
-    """
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(["run", "t_h", "lat_err_arcsec"])
-    for f in features:
-        for h, v in enumerate(f.lat_err_curve_arcsec):
-            w.writerow([f.run, h, repr(float(v))])
-    with atomic_write(path, "w") as fh:
-        fh.write(buf.getvalue())

@@ -39,11 +39,11 @@ from scipy.optimize import minimize_scalar
 from gyrodrift.earth import NMI_M
 from gyrodrift.logs import ImuLog
 from gyrodrift.procedure.align import Alignment, align_log
-from gyrodrift.procedure.passes import NavCurve, PassResult, navigate_after_alignment
+from gyrodrift.procedure.passes import NavCurve, PassResult, check_navigation_hours, navigate_after_alignment
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 from gyrodrift.units import HOUR
 
-__all__ = ["CRITERIA", "TrueDrift", "find_true_drift", "criterion_value", "minimise_linear_criterion", "write_truth"]
+__all__ = ["CRITERIA", "TrueDrift", "find_true_drift", "criterion_value", "minimise_linear_criterion"]
 
 CRITERIA = ("final", "rms", "max")
 """Position-error criteria over the navigation: at its end, root mean square, maximum."""
@@ -232,7 +232,7 @@ def find_true_drift(
         raise ValueError(f"unknown criterion {criterion!r}; expected one of {', '.join(CRITERIA)}")
     if not trial_deg_h:
         raise ValueError("trial_deg_h must be non-zero")
-    hours = float(timeline.truth_h if hours is None else hours)
+    hours = check_navigation_hours(timeline.truth_h if hours is None else hours, decimation_s)
     log.require_duration(
         timeline.log_hours_for(hours) * HOUR,
         f"the true drift ({timeline.align_h:g} h alignment + {hours:g} h navigation)",
@@ -306,18 +306,3 @@ def find_true_drift(
         optimum=mid,
         temperature=first.temperature,
     )
-
-
-def write_truth(truth: TrueDrift, out_dir) -> dict:
-    """Write ``true_drift.json`` and ``criterion.png`` (criterion vs drift) into `out_dir` (created), atomically."""
-    from pathlib import Path
-
-    from gyrodrift.atomic import atomic_write_json
-    from gyrodrift.procedure.figures import plot_criterion
-
-    folder = Path(out_dir)
-    folder.mkdir(parents=True, exist_ok=True)
-    paths = {"json": folder / "true_drift.json", "png": folder / "criterion.png"}
-    atomic_write_json(truth.to_dict(), paths["json"])
-    plot_criterion(truth, paths["png"])
-    return paths

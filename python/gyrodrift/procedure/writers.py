@@ -1,0 +1,157 @@
+"""The procedure's output files: each writer takes results and writes them, nothing else.
+
+Writers of a folder take ``out``: a folder path (the files are then published as one set with
+`gyrodrift.atomic.OutputFolder`) or a `gyrodrift.atomic.Stage` of a larger set (the CLI's ``truth --out`` writes
+the true drift and the alignment together). Writers of one file write it with `gyrodrift.atomic.atomic_write`,
+which replaces only a file gyrodrift wrote (recognised by its header). Figures come from
+`gyrodrift.procedure.figures`; the rules for outputs are in docs/outputs.md.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from gyrodrift.atomic import Stage, atomic_write, recognise_header, staged, write_json
+from gyrodrift.procedure.features import RUN_TABLE_COLUMNS
+
+if TYPE_CHECKING:  # pragma: no cover
+    from gyrodrift.procedure.align import Alignment
+    from gyrodrift.procedure.evaluate import Evaluation
+    from gyrodrift.procedure.features import RunFeatures
+    from gyrodrift.procedure.identify import Identification
+    from gyrodrift.procedure.truth import TrueDrift
+
+__all__ = [
+    "ALIGNMENT_FILES",
+    "EVALUATION_FILES",
+    "IDENTIFICATION_FILES",
+    "TRUTH_FILES",
+    "RUN_TABLE_RECOGNISER",
+    "CURVES_RECOGNISER",
+    "write_alignment",
+    "write_evaluation",
+    "write_identification",
+    "write_truth",
+    "write_features_csv",
+    "write_curves_csv",
+]
+
+ALIGNMENT_FILES = ("alignment.json", "alignment_z_sigma.png")
+TRUTH_FILES = ("true_drift.json", "criterion.png")
+EVALUATION_FILES = ("evaluation.json", "position_error.png")
+IDENTIFICATION_FILES = ("identification.json",)
+CURVES_COLUMNS = ("run", "t_h", "lat_err_arcsec")
+RUN_TABLE_RECOGNISER = recognise_header(",".join(RUN_TABLE_COLUMNS) + ",", ",".join(RUN_TABLE_COLUMNS) + "\n")
+"""Recognises a run table written by `write_features_csv` (the only kind of file it replaces)."""
+CURVES_RECOGNISER = recognise_header(",".join(CURVES_COLUMNS) + "\n")
+"""Recognises a curves table written by `write_curves_csv`."""
+
+
+def _paths(stage: Stage, names: Iterable[str]) -> dict[str, Path]:
+    return {name: stage.folder / name for name in names}
+
+
+def write_alignment(alignment: Alignment, out: str | os.PathLike[str] | Stage, command: str = "align") -> dict:
+    """Write ``alignment.json`` (user units) and ``alignment_z_sigma.png`` into `out` (a folder or a stage).
+
+    Returns the final paths, keyed ``"json"`` and ``"png"``.
+    """
+    from gyrodrift.procedure.figures import alignment_sigma_figure, save_png
+
+    with staged(out, command, ALIGNMENT_FILES) as stage:
+        write_json(alignment.to_dict(), stage.file("alignment.json"))
+        save_png(alignment_sigma_figure(alignment), stage.file("alignment_z_sigma.png"))
+    return dict(zip(("json", "png"), _paths(stage, ALIGNMENT_FILES).values(), strict=True))
+
+
+def write_truth(truth: TrueDrift, out: str | os.PathLike[str] | Stage) -> dict:
+    """Write ``true_drift.json`` and ``criterion.png`` (criterion vs drift) into `out` (a folder or a stage).
+
+    Returns the final paths, keyed ``"json"`` and ``"png"``.
+    """
+    from gyrodrift.procedure.figures import criterion_figure, save_png
+
+    with staged(out, "truth", TRUTH_FILES) as stage:
+        write_json(truth.to_dict(), stage.file("true_drift.json"))
+        save_png(criterion_figure(truth), stage.file("criterion.png"))
+    return dict(zip(("json", "png"), _paths(stage, TRUTH_FILES).values(), strict=True))
+
+
+def write_evaluation(ev: Evaluation, out: str | os.PathLike[str] | Stage) -> dict[str, Path]:
+    """Write ``evaluation.json`` and ``position_error.png`` into `out` (a folder or a stage), as one set.
+
+    Returns the final paths, keyed ``"json"`` and ``"png"``.
+    """
+    from gyrodrift.procedure.figures import position_error_figure, save_png
+
+    with staged(out, "evaluate", EVALUATION_FILES) as stage:
+        write_json(ev.to_dict(), stage.file("evaluation.json"))
+        save_png(position_error_figure(ev), stage.file("position_error.png"))
+    return dict(zip(("json", "png"), _paths(stage, EVALUATION_FILES).values(), strict=True))
+
+
+def identification_document(res: Identification) -> dict[str, Any]:
+    """`Identification.to_dict` with non-finite numbers as null (JSON has no NaN)."""
+
+    def num(x: Any) -> Any:
+        return None if isinstance(x, float) and not math.isfinite(x) else x
+
+    return {k: num(v) for k, v in res.to_dict().items()}
+
+
+def write_identification(res: Identification, out: str | os.PathLike[str] | Stage) -> dict[str, Path]:
+    """Write ``identification.json`` (format ``gyrodrift-identification/1``) into `out` (a folder or a stage)."""
+    with staged(out, "identify", IDENTIFICATION_FILES) as stage:
+        write_json(identification_document(res), stage.file("identification.json"))
+    return {"json": stage.folder / "identification.json"}
+
+
+def write_features_csv(
+    features: Sequence[RunFeatures],
+    path: str | os.PathLike[str],
+    *,
+    inputs: Iterable[str | os.PathLike[str]] = (),
+) -> None:
+    """Write the run table atomically: ``RUN_TABLE_COLUMNS`` (+ ``drift_deg_h`` when every run has it).
+
+    Floats are written with ``repr`` (shortest exact round trip), so a latitude keeps its 1e-12 deg digits.
+    Readable by `gyrodrift.runs.read_runs_csv`. An existing `path` is replaced only if it is a run table this
+    function wrote (or empty); `path` may not be one of `inputs`.
+    """
+    with_truth = bool(features) and all(math.isfinite(f.drift_deg_h) for f in features)
+    cols = list(RUN_TABLE_COLUMNS) + (["drift_deg_h"] if with_truth else [])
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(cols)
+    for f in features:
+        r = f.row()
+        w.writerow([r[c] if c == "run" else repr(float(r[c])) for c in cols])
+    with atomic_write(path, "w", inputs=inputs, recognise=RUN_TABLE_RECOGNISER, what="run table") as fh:
+        fh.write(buf.getvalue())
+
+
+def write_curves_csv(
+    features: Sequence[RunFeatures],
+    path: str | os.PathLike[str],
+    *,
+    inputs: Iterable[str | os.PathLike[str]] = (),
+) -> None:
+    """Write the hourly latitude-error curves atomically, one row per run and hour.
+
+    Columns: ``run``, ``t_h`` (navigation hour since the end of alignment, 0..12), ``lat_err_arcsec``
+    (computed minus true). An existing `path` is replaced only if this function wrote it (or it is empty).
+    """
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(CURVES_COLUMNS)
+    for f in features:
+        for h, v in enumerate(f.lat_err_curve_arcsec):
+            w.writerow([f.run, h, repr(float(v))])
+    with atomic_write(path, "w", inputs=inputs, recognise=CURVES_RECOGNISER, what="curves table") as fh:
+        fh.write(buf.getvalue())
