@@ -8,7 +8,9 @@ simulated once with the package's own simulator (`gyrodrift.ins.simulate`, writt
 and kept there for the next run when ``--dir`` is given). Then, each in a fresh Python process:
 
 * ``read``: the bare pyarrow read of the columns the commands use (``t_s``, the six increments, ``temp_c``),
-  ``ParquetFile.iter_batches`` of 100 000 rows with every column converted to numpy: the floor;
+  ``ParquetFile.iter_batches`` of 100 000 rows with every column converted to numpy, pyarrow's defaults;
+* ``read-nobuf``: the same with ``pre_buffer=False`` (what `gyrodrift.logs` does: with pre-buffering pyarrow
+  keeps every column chunk read until the file is closed, so the bare read itself grows with the file);
 * ``navigate LOG --out DIR`` (whole log, state every 1 s);
 * ``truth LOG --hours H-4`` (alignment + 72 h at 76 h: two reads of 2 and 3 navigators, more if refined);
 * ``features LOG --out runs.csv`` (alignment + 12 h: reads the first 16 h only, whatever the log length);
@@ -16,7 +18,7 @@ and kept there for the next run when ``--dir`` is given). Then, each in a fresh 
 
 Each child runs the command through the CLI entry point (`gyrodrift.cli.main`) and reports its own peak
 resident set size (``resource.getrusage(RUSAGE_SELF).ru_maxrss``) and wall time. The report prints, per
-command and length, the peak RSS [MB] and the time [s], and the ratio of ``navigate`` to the bare read of the
+command and length, the peak RSS [MB] and the time [s], and the ratio of ``navigate`` to the bare reads of the
 same log in the same run (target: <= 2.5). Targets (issue 8): peak RSS independent of the log length and
 <= 400 MB at 76 h. Never fails on a slow machine: it only reports.
 """
@@ -36,12 +38,13 @@ CHILD = r"""
 import json, resource, sys, time
 args, report = json.loads(sys.argv[1]), sys.argv[2]
 t0 = time.perf_counter()
-if args[0] == "read":
+if args[0] in ("read", "read-nobuf"):
     import numpy as np
     import pyarrow.parquet as pq
     cols = ["t_s", "dtheta_x_rad", "dtheta_y_rad", "dtheta_z_rad", "dv_x_m_s", "dv_y_m_s", "dv_z_m_s", "temp_c"]
     n = 0
-    for batch in pq.ParquetFile(args[1]).iter_batches(batch_size=100_000, columns=cols):
+    pf = pq.ParquetFile(args[1], pre_buffer=args[0] == "read")
+    for batch in pf.iter_batches(batch_size=100_000, columns=cols):
         arrays = [np.asarray(batch.column(i).to_numpy(zero_copy_only=False), dtype=np.float64) for i in range(8)]
         n += len(arrays[0])
 else:
@@ -102,8 +105,8 @@ def _run(args: list[str]) -> dict:
 
 def _command(name: str, log: Path, hours: float, out: Path) -> list[str]:
     nav_h = f"{hours - 4.0:g}"
-    if name == "read":
-        return ["read", str(log)]
+    if name in ("read", "read-nobuf"):
+        return [name, str(log)]
     if name == "navigate":
         return ["navigate", str(log), "--out", str(out / "nav"), "--quiet"]
     if name == "truth":
@@ -121,7 +124,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--rate-hz", type=float, default=100.0)
     ap.add_argument("--quick", action="store_true", help="17 h and 34 h (about a minute)")
     ap.add_argument("--dir", type=Path, default=None, help="keep the simulated logs here (reused next time)")
-    ap.add_argument("--commands", default="read,navigate,truth,features,evaluate")
+    ap.add_argument("--commands", default="read,read-nobuf,navigate,truth,features,evaluate")
     args = ap.parse_args(argv)
     lengths = [17.0, 34.0] if args.quick else [float(h) for h in args.hours.split(",")]
     commands = args.commands.split(",")
@@ -141,9 +144,11 @@ def main(argv: list[str] | None = None) -> None:
                     print(f"  {name:9s} FAILED: {r['error']}")
                 else:
                     print(f"  {name:9s} peak RSS {r['rss_mb']:7.0f} MB   wall {r['wall_s']:7.2f} s")
-            nav, read = results.get(("navigate", hours), {}), results.get(("read", hours), {})
-            if "wall_s" in nav and "wall_s" in read:
-                print(f"  navigate / bare read: {nav['wall_s'] / read['wall_s']:.2f} x (target <= 2.5)")
+            nav = results.get(("navigate", hours), {})
+            for ref in ("read", "read-nobuf"):
+                read = results.get((ref, hours), {})
+                if "wall_s" in nav and "wall_s" in read:
+                    print(f"  navigate / {ref}: {nav['wall_s'] / read['wall_s']:.2f} x (target <= 2.5)")
         print("\npeak RSS [MB] by length: " + ", ".join(f"{h:g} h" for h in lengths))
         for name in commands:
             cells = [results[name, h].get("rss_mb") for h in lengths]

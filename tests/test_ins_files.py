@@ -268,3 +268,37 @@ def test_navigate_argument_checks():
         TypeError, match="imu must be a path to an IMU log, an ImuLog, an ImuData or a Scenario, got int"
     ):
         navigate(3)
+
+
+def test_navigate_takes_any_log_and_says_where_the_initial_state_came_from(tmp_path):
+    """A CSV and a bare Parquet (no gyrodrift metadata) of the same run: the site from the options, the initial
+    state from an alignment of the first 4 h, the same numbers from both formats; the simulator's own file
+    still starts from its truth."""
+    import pyarrow.csv as pcsv
+
+    scn = Scenario.from_dict(
+        {
+            "run": {"duration_h": 4.3, "rate_hz": 10.0, "seed": 4},
+            "gyro": {"bias_deg_h": [0.005, -0.004, 0.003]},
+            "accel": {"bias_ug": [30.0, -20.0, 10.0]},
+            "attitude": {"yaw_deg": 40.0},
+        }
+    )
+    sim = simulate(scn, out_dir=tmp_path / "sim")
+    table = pq.read_table(sim).select(["t_s", *IMU_COLUMNS[1:7], "temp_c"]).replace_schema_metadata(None)
+    pcsv.write_csv(table, tmp_path / "run.csv")
+    pq.write_table(table, tmp_path / "bare.parquet")
+    site = ["--lat0-deg", repr(scn.site.lat_deg), "--lon0-deg", repr(scn.site.lon_deg)]
+    r = CliRunner().invoke(main, ["navigate", str(tmp_path / "run.csv"), *site, "--out", str(tmp_path / "c")])
+    assert r.exit_code == 0, r.output
+    assert "initial state from an alignment of the log's first hours" in r.output
+    csv_summary = json.loads((tmp_path / "c" / "summary.json").read_text())
+    assert csv_summary["initial_source"] == "alignment" and csv_summary["start_s"] == pytest.approx(4 * 3600.0)
+    assert csv_summary["hours_navigated"] == pytest.approx(0.3)
+    assert csv_summary["truth"]["lat_deg"] == scn.site.lat_deg
+    assert 0.0 < csv_summary["final_pos_err_nmi"] < 0.5  # aligned on the same data: no gross error
+    bare = navigate(tmp_path / "bare.parquet", site={"lat_deg": scn.site.lat_deg, "lon_deg": scn.site.lon_deg})
+    assert bare.summary["initial_source"] == "alignment"
+    assert bare.summary["final_pos_err_nmi"] == pytest.approx(csv_summary["final_pos_err_nmi"], rel=1e-9)
+    own = navigate(sim, hours=0.3)
+    assert own.summary["initial_source"] == "truth" and own.summary["start_s"] == 0.0

@@ -3,15 +3,16 @@
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
+from gyrodrift.errors import OptionError
 from gyrodrift.ins import Scenario, simulate
-from gyrodrift.ins.imu_file import ImuFileReader
-from gyrodrift.logs import INCREMENT_COLUMNS, RATE_COLUMNS, LogError, Site, open_log
+from gyrodrift.logs import INCREMENT_COLUMNS, RATE_COLUMNS, ImuLog, LogError, Site, open_log
 
 RATE = 10.0
 
@@ -79,17 +80,19 @@ def static_columns(n=60, rate=RATE, kind="increments"):
 # ------------------------------------------------------------------------------------------------
 
 
-def test_parquet_from_the_simulator_streams_the_same_samples_as_the_ins_reader(sim_parquet):
+def test_parquet_from_the_simulator_streams_the_same_samples_as_pyarrow_reads(sim_parquet):
     log = open_log(sim_parquet)
     assert (log.format, log.kind, log.rate_hz, log.n_samples) == ("parquet", "increments", RATE, 7200)
     assert log.rate_source == "metadata"
     assert log.site == Site(30.0, 100.0, 40.0)
     assert log.name == sim_parquet.parent.name  # imu.parquet is named after its folder
     t, dth, dv, temp, parts = whole(log)
-    ref = next(ImuFileReader(sim_parquet).chunks(10_000))
-    np.testing.assert_array_equal(t, ref.t_s)
-    np.testing.assert_array_equal(dth, ref.dtheta_rad)
-    np.testing.assert_array_equal(dv, ref.dv_m_s)
+    ref = pq.read_table(sim_parquet)
+    np.testing.assert_array_equal(t, ref.column("t_s").to_numpy())
+    np.testing.assert_array_equal(dth, np.column_stack([ref.column(c).to_numpy() for c in INCREMENT_COLUMNS[:3]]))
+    np.testing.assert_array_equal(dv, np.column_stack([ref.column(c).to_numpy() for c in INCREMENT_COLUMNS[3:]]))
+    true_deg = np.concatenate([p.true_deg for p in parts])
+    np.testing.assert_array_equal(true_deg[:, 2], ref.column("true_yaw_deg").to_numpy())
     assert temp[0] == pytest.approx(20.0, abs=0.01) and temp[-1] == pytest.approx(30 - 10 * math.exp(-2), abs=0.01)
     assert [p.first_index for p in parts][:3] == [0, 997, 1994]
 
@@ -120,7 +123,7 @@ def test_csv_rates_are_detected_and_converted_to_increments(tmp_path):
 
 def test_site_mapping_overrides_only_the_keys_given(sim_parquet):
     assert open_log(sim_parquet, site={"height_m": 0.0}).site == Site(30.0, 100.0, 0.0)
-    assert open_log(sim_parquet, site=Site(1.0)).site == Site(1.0, 0.0, 0.0)
+    assert open_log(sim_parquet, site=Site(1.0, 0.0, 0.0)).site == Site(1.0, 0.0, 0.0)
 
 
 def test_stop_reads_only_what_is_needed_and_complains_when_the_log_is_short(sim_parquet):
@@ -256,6 +259,160 @@ def test_unusable_files(tmp_path):
 
 def test_a_binary_csv_log_is_named(tmp_path):
     p = tmp_path / "notcsv.csv"
-    p.write_bytes(b"t_s,dtheta_x_rad\n\xff\xfe\x00\x81\x82\n")
-    with pytest.raises(LogError, match=r"notcsv.csv: not UTF-8 text"):
+    header = ",".join(["t_s", *INCREMENT_COLUMNS, "temp_c"]).encode()
+    p.write_bytes(header + b"\n\xff\xfe\x00\x81\x82\n")
+    with pytest.raises(LogError, match=r"notcsv.csv, row 2: not UTF-8 text \(byte 0xff at character 1\)"):
         open_log(p, site={"lat_deg": 28.0})
+
+
+# ------------------------------------------------------------------------------------------------
+# Hostile inputs (issue 8): one clear LogError each, never another exception, never a hang
+# ------------------------------------------------------------------------------------------------
+
+
+def good_table(n=60):
+    return pa.table(static_columns(n=n))
+
+
+def test_csv_header_with_spaces_around_the_names_is_read(tmp_path):
+    cols = static_columns()
+    path = write_csv(tmp_path / "spaced.csv", {f" {c} ": v for c, v in cols.items()})
+    t, dth, _, temp, _ = whole(open_log(path, site={"lat_deg": 1.0}))
+    np.testing.assert_array_equal(t, cols["t_s"])
+    np.testing.assert_array_equal(dth[:, 1], cols["dtheta_y_rad"])
+    np.testing.assert_array_equal(temp, cols["temp_c"])
+
+
+def test_duplicated_parquet_column_is_refused(tmp_path):
+    table = good_table()
+    dup = pa.Table.from_arrays([*table.columns, table.column("dv_x_m_s")], names=[*table.column_names, "dv_x_m_s"])
+    pq.write_table(dup, tmp_path / "dup.parquet")
+    with pytest.raises(LogError, match=r"dup\.parquet, row 1: column dv_x_m_s appears more than once"):
+        open_log(tmp_path / "dup.parquet", site={"lat_deg": 1.0})
+
+
+@pytest.mark.parametrize(
+    ("value", "message"),
+    [
+        ("1e400", r"gyrodrift\.rate_hz metadata must be in \(0, 1e\+06\] Hz, got inf"),
+        ("[5]", r"gyrodrift\.rate_hz metadata must be a number in Hz, got \[5\]"),
+        ("true", r"gyrodrift\.rate_hz metadata must be a number in Hz, got True"),
+        ("-10", r"gyrodrift\.rate_hz metadata must be in \(0, 1e\+06\] Hz, got -10"),
+        ("{", r"unreadable gyrodrift\.rate_hz metadata"),
+    ],
+)
+def test_unusable_rate_metadata(tmp_path, value, message):
+    path = tmp_path / "rate.parquet"
+    pq.write_table(good_table().replace_schema_metadata({"gyrodrift.rate_hz": value}), path)
+    with pytest.raises(LogError, match=message):
+        open_log(path, site={"lat_deg": 1.0})
+
+
+def test_damaged_data_pages_with_an_intact_footer(tmp_path):
+    path = tmp_path / "damaged.parquet"
+    pq.write_table(good_table(n=200), path, compression="none", row_group_size=50)
+    offset = pq.ParquetFile(path).metadata.row_group(2).column(3).data_page_offset
+    data = bytearray(path.read_bytes())
+    for k in range(offset, offset + 64):
+        data[k] ^= 0x5A
+    path.write_bytes(bytes(data))
+    log = open_log(path, site={"lat_deg": 1.0})  # the footer still reads
+    with pytest.raises(LogError, match=r"damaged\.parquet, row 101: damaged Parquet data after sample 100"):
+        list(log.chunks(50))
+
+
+def test_csv_row_with_the_wrong_number_of_cells_names_the_row(tmp_path):
+    path = bad_csv(tmp_path)
+    lines = path.read_text().splitlines()
+    lines[30] = "3.0,1,2"
+    path.write_text("\n".join(lines) + "\n")
+    assert stream_error(path) == f"{path}, row 31: 3 cells, expected 8 (one per header column)"
+
+
+def test_non_utf8_byte_late_in_a_csv_names_the_row(tmp_path):
+    path = bad_csv(tmp_path, n=3000)
+    data = path.read_bytes().splitlines(keepends=True)
+    data[2500] = data[2500].replace(b"25.0", b"2\xff5.0")
+    path.write_bytes(b"".join(data))
+    column = data[2500].index(b"\xff") + 1
+    assert stream_error(path, chunk_samples=1000) == (
+        f"{path}, row 2501: not UTF-8 text (byte 0xff at character {column}); expected a CSV log"
+    )
+
+
+def test_devices_fifos_and_folders_are_refused_without_blocking(tmp_path):
+    with pytest.raises(LogError, match=r"/dev/zero: not a regular file"):
+        open_log("/dev/zero")
+    fifo = tmp_path / "pipe.csv"
+    os.mkfifo(fifo)
+    with pytest.raises(LogError, match=r"pipe\.csv: not a regular file \(a device, FIFO or socket\)"):
+        open_log(fifo)  # opening a FIFO for reading would block until a writer comes
+    (tmp_path / "dir.parquet").mkdir()
+    with pytest.raises(LogError, match=r"dir\.parquet: is a folder"):
+        open_log(tmp_path / "dir.parquet")
+
+
+def test_bool_or_text_parquet_columns_are_refused(tmp_path):
+    table = good_table()
+    i = table.schema.get_field_index("dtheta_x_rad")
+    pq.write_table(table.set_column(i, "dtheta_x_rad", pa.array(np.zeros(60, bool))), tmp_path / "b.parquet")
+    with pytest.raises(LogError, match=r"b\.parquet, column dtheta_x_rad: expected numbers \(float64\), got .* bool"):
+        open_log(tmp_path / "b.parquet", site={"lat_deg": 1.0})
+    pq.write_table(table.set_column(i, "dtheta_x_rad", pa.array(["0"] * 60)), tmp_path / "s.parquet")
+    with pytest.raises(LogError, match=r"s\.parquet, column dtheta_x_rad: expected numbers"):
+        open_log(tmp_path / "s.parquet", site={"lat_deg": 1.0})
+
+
+@pytest.mark.parametrize("temp", [303.15, 1e6, -273.0])
+def test_temperatures_outside_the_run_table_limits_are_refused(tmp_path, temp):
+    """The same limits as the run tables (gyrodrift.runs.TEMPERATURE_LIMITS_C): a kelvin value is refused."""
+    from gyrodrift.runs import TEMPERATURE_LIMITS_C
+
+    assert TEMPERATURE_LIMITS_C == (-100.0, 200.0)
+
+    def warm(c):
+        c["temp_c"][44] = temp
+
+    assert stream_error(bad_csv(tmp_path, tweak=warm)) == (
+        f"{tmp_path / 'bad.csv'}, row 46, column temp_c: temperature {temp:.6g} deg C is outside [-100, 200] deg C "
+        "(a system temperature in deg C, not kelvin)"
+    )
+
+
+def test_the_rate_limit_is_the_same_for_every_source(tmp_path):
+    """A 2865 deg/s spike is refused by the file reader and by the in-memory source alike."""
+    cols = static_columns()
+    cols["dtheta_z_rad"][20] = math.radians(2865.0) / RATE
+    pq.write_table(pa.table(cols), tmp_path / "spike.parquet")
+    expected = "row 21, column dtheta_z_rad: impossible magnitude: angular rate 2865 deg/s exceeds 1000 deg/s"
+    with pytest.raises(LogError, match=expected):
+        list(open_log(tmp_path / "spike.parquet", site={"lat_deg": 1.0}).chunks(16))
+    with pytest.raises(LogError, match=expected):
+        list(ImuLog.from_arrays(cols, rate_hz=RATE).chunks(16))
+
+
+@pytest.mark.parametrize(
+    ("site", "flag"), [({"lat_deg": math.nan}, "--lat0-deg"), ({"lon_deg": math.inf}, "--lon0-deg")]
+)
+def test_non_finite_site_values_name_the_option(sim_parquet, site, flag):
+    with pytest.raises(OptionError, match=rf"{flag} \(\w+\): expected a finite number"):
+        open_log(sim_parquet, site=site)
+
+
+def test_one_site_class_for_scenarios_and_logs(sim_parquet):
+    from gyrodrift.ins import Site as InsSite
+
+    assert InsSite is Site
+    assert open_log(sim_parquet, site=InsSite(10.0, 20.0, 30.0)).site == Site(10.0, 20.0, 30.0)
+
+
+def test_the_scenario_source_streams_what_the_simulator_writes(sim_parquet):
+    import json
+
+    meta = pq.ParquetFile(sim_parquet).schema_arrow.metadata
+    scn = Scenario.from_dict(json.loads(meta[b"gyrodrift.scenario"]))
+    on_the_fly = ImuLog.from_scenario(scn)
+    assert (on_the_fly.rate_hz, on_the_fly.n_samples, on_the_fly.site) == (RATE, 7200, Site(30.0, 100.0, 40.0))
+    a, b = whole(on_the_fly, 1000), whole(open_log(sim_parquet), 1000)
+    for x, y in zip(a[:4], b[:4], strict=True):
+        np.testing.assert_array_equal(x, y)

@@ -24,7 +24,7 @@ import pytest
 from click.testing import CliRunner
 
 from gyrodrift.baselines import physics_inversion
-from gyrodrift.cli.procedure import evaluate_command, features_command, identify_command, truth_command
+from gyrodrift.cli import main
 from gyrodrift.ins import Scenario, simulate
 from gyrodrift.ins.synthetic_fleet import simulate_fleet
 from gyrodrift.logs import LogError, open_log
@@ -162,7 +162,7 @@ def test_true_drift_recovers_the_simulated_constant(long_log, long_alignment, tm
 def test_truth_command_other_criteria(long_log, tmp_path, criterion):
     out = tmp_path / "truth"
     r = CliRunner().invoke(
-        truth_command, [str(long_log), "--criterion", criterion, "--json", "--quiet", "--out", str(out)]
+        main, ["truth", str(long_log), "--criterion", criterion, "--json", "--quiet", "--out", str(out)]
     )
     assert r.exit_code == 0, r.output
     doc = json.loads(r.output)
@@ -185,7 +185,7 @@ def test_truth_needs_76_hours(fleet):
         r"alignment \+ 72 h navigation\) takes at least 76 h",
     ):
         find_true_drift(log)
-    r = CliRunner().invoke(truth_command, [str(fleet[0][0]), "--quiet"])
+    r = CliRunner().invoke(main, ["truth", str(fleet[0][0]), "--quiet"])
     assert r.exit_code == 1 and "takes at least 76 h" in r.output
 
 
@@ -207,19 +207,19 @@ def test_drift_known_to_0_0005_keeps_72h_error_below_1_nmi(long_log, long_alignm
 
 
 def test_evaluate_command_with_a_drift_and_with_a_model(long_log, model, tmp_path):
-    r = CliRunner().invoke(evaluate_command, [str(long_log), "--drift-deg-h", "0.003", "--out", str(tmp_path / "a")])
+    r = CliRunner().invoke(main, ["evaluate", str(long_log), "--drift-deg-h", "0.003", "--out", str(tmp_path / "a")])
     assert r.exit_code == 0, r.output
     doc = json.loads((tmp_path / "a" / "evaluation.json").read_text())
     assert doc["before"]["final_pos_err_nmi"] > 5.0 and doc["after"]["final_pos_err_nmi"] < 0.1
     assert re.search(r"72 h position error 5\.\d{3} -> 0\.0\d\d nmi \(final\)", r.output), r.output
     r = CliRunner().invoke(
-        evaluate_command, [str(long_log), "--model", str(model[1]), "--quiet", "--out", str(tmp_path / "b")]
+        main, ["evaluate", str(long_log), "--model", str(model[1]), "--quiet", "--out", str(tmp_path / "b")]
     )
     assert r.exit_code == 0, r.output
     doc = json.loads((tmp_path / "b" / "evaluation.json").read_text())
     assert doc["drift_source"] == str(model[1])
     assert doc["after"]["final_pos_err_nmi"] < doc["before"]["final_pos_err_nmi"] / 2
-    r = CliRunner().invoke(evaluate_command, [str(long_log), "--out", str(tmp_path / "c")])
+    r = CliRunner().invoke(main, ["evaluate", str(long_log), "--out", str(tmp_path / "c")])
     assert r.exit_code == 2 and "exactly one of --drift-deg-h or --model" in r.output
 
 
@@ -242,7 +242,7 @@ def test_features_of_a_run(fleet, fleet_features):
 def test_features_command_writes_a_run_table(fleet, fleet_features, tmp_path):
     out = tmp_path / "runs.csv"
     r = CliRunner().invoke(
-        features_command, [*map(str, fleet[0][:4]), "--out", str(out), "--curves", str(tmp_path / "curves.csv")]
+        main, ["features", *map(str, fleet[0][:4]), "--out", str(out), "--curves", str(tmp_path / "curves.csv")]
     )
     assert r.exit_code == 0, r.output
     curves = (tmp_path / "curves.csv").read_text().splitlines()
@@ -280,7 +280,7 @@ def test_a_bad_log_on_a_cluster_raises_its_own_error(fleet, tmp_path):
     with pytest.raises(LogError) as info:
         features_table([fleet[0][0], short], site={"lat_deg": 28.222}, workers=1, processes=False)
     assert str(info.value) == expected
-    r = CliRunner().invoke(features_command, [str(short), "--lat0-deg", "28.222", "--out", str(tmp_path / "x.csv")])
+    r = CliRunner().invoke(main, ["features", str(short), "--lat0-deg", "28.222", "--out", str(tmp_path / "x.csv")])
     assert r.exit_code == 1 and expected in r.output and not (tmp_path / "x.csv").exists()
 
 
@@ -288,7 +288,7 @@ def test_missing_dask_is_a_clear_message(fleet, monkeypatch, tmp_path):
     monkeypatch.setitem(__import__("sys").modules, "dask.distributed", None)
     with pytest.raises(DaskMissingError, match=r"needs dask\.distributed: pip install 'gyrodrift\[dask\]'"):
         features_table(fleet[0][:1], workers=1)
-    r = CliRunner().invoke(features_command, [str(fleet[0][0]), "--workers", "1", "--out", str(tmp_path / "x.csv")])
+    r = CliRunner().invoke(main, ["features", str(fleet[0][0]), "--workers", "1", "--out", str(tmp_path / "x.csv")])
     assert r.exit_code == 1 and "pip install 'gyrodrift[dask]'" in r.output
 
 
@@ -316,7 +316,7 @@ def test_identification_on_held_out_runs(fleet, fleet_features, model):
 
 def test_identify_command(fleet, model, tmp_path):
     r = CliRunner().invoke(
-        identify_command, [str(fleet[0][11]), "--model", str(model[1]), "--json", "--quiet", "--out", str(tmp_path)]
+        main, ["identify", str(fleet[0][11]), "--model", str(model[1]), "--json", "--quiet", "--out", str(tmp_path)]
     )
     assert r.exit_code == 0, r.output
     doc = json.loads(r.output)
@@ -332,7 +332,7 @@ def test_identify_command(fleet, model, tmp_path):
     }
     assert doc["training_error_kind"] == "loo_mae" and 0 < doc["training_error_deg_h"] < 3e-4
     assert (tmp_path / "alignment_z_sigma.png").read_bytes()[:8] == PNG_MAGIC
-    r = CliRunner().invoke(identify_command, [str(fleet[0][11]), "--model", str(model[1]), "--quiet"])
+    r = CliRunner().invoke(main, ["identify", str(fleet[0][11]), "--model", str(model[1]), "--quiet"])
     assert r.exit_code == 0
     assert "identified axial drift" in r.output and "90 % interval: [" in r.output
     assert "alignment z estimate" in r.output and "physics inversion" in r.output
@@ -341,7 +341,7 @@ def test_identify_command(fleet, model, tmp_path):
 
 def test_features_with_truth_on_a_long_log(long_log, tmp_path):
     out = tmp_path / "runs.csv"
-    r = CliRunner().invoke(features_command, [str(long_log), "--with-truth", "--quiet", "--out", str(out)])
+    r = CliRunner().invoke(main, ["features", str(long_log), "--with-truth", "--quiet", "--out", str(out)])
     assert r.exit_code == 0, r.output
     runs = read_runs_csv(out, require_truth=True)
     assert list(runs.run) == ["long76"]
@@ -368,7 +368,7 @@ def test_a_csv_log_of_rates_gives_the_features_of_its_parquet(fleet, fleet_featu
     assert f.run == "run01"
     assert f.lat_deg == pytest.approx(ref.lat_deg, abs=1e-3 / 3600)  # 1 mas
     assert (f.temp_min_c, f.temp_max_c) == (ref.temp_min_c, ref.temp_max_c)
-    r = CliRunner().invoke(features_command, [str(path), "--quiet", "--out", str(tmp_path / "x.csv")])
+    r = CliRunner().invoke(main, ["features", str(path), "--quiet", "--out", str(tmp_path / "x.csv")])
     assert r.exit_code == 1 and "the log carries no site; give its latitude" in r.output
 
 

@@ -1,10 +1,15 @@
-"""IMU logs of static-base runs: open, detect the sample rate, stream and validate (Parquet or CSV).
+"""IMU logs: the one reader of IMU data in the package (Parquet, CSV, in-memory arrays, a simulated scenario).
 
-A log is one row per IMU sample, body frame x right, y forward, z up (z = turntable = axial axis). Two
-formats, told apart by the file suffix (``.parquet`` / ``.pq`` or ``.csv``):
+A log is one row per IMU sample, body frame x right, y forward, z up (z = turntable = axial axis). Every
+source goes through the same checks and yields the same `LogChunk`s:
 
-* Parquet: the simulator's own ``imu.parquet`` (docs/scenarios.md) or any file with the same columns.
-* CSV: UTF-8, comma separated, one header row. Columns (order free, extra columns ignored):
+* Parquet (``.parquet`` / ``.pq``): the simulator's own ``imu.parquet`` (docs/scenarios.md) or any file with
+  the columns below, with or without gyrodrift metadata;
+* CSV (``.csv``): UTF-8, comma separated, one header row (names stripped of surrounding spaces);
+* in memory: `ImuLog.from_arrays` (a mapping of the same column names to numpy arrays);
+* a scenario simulated on the fly, chunk by chunk, nothing stored: `ImuLog.from_scenario`.
+
+Columns (order free, extra columns ignored):
 
   ============================================  ======  ==============================================
   ``t_s``                                       s       end time of the sample, strictly increasing
@@ -15,26 +20,36 @@ formats, told apart by the file suffix (``.parquet`` / ``.pq`` or ``.csv``):
   ``gyro_z_rad_s``                                                                                }
   ``accel_x_m_s2``, ``accel_y_m_s2``,           m/s^2   specific force, mean over the sample    }
   ``accel_z_m_s2``
-  ``temp_c``                                    deg C   system temperature (required)
+  ``temp_c``                                    deg C   system temperature (required unless the caller
+                                                        says otherwise: `navigate` does not need it)
+  ``true_pitch_deg``, ``true_roll_deg``,        deg     optional: the true attitude at the end of the
+  ``true_yaw_deg``                                      sample (simulated logs), for attitude errors
   ============================================  ======  ==============================================
 
   The header decides: all six increment columns -> ``kind = "increments"``; else all six rate columns ->
   ``kind = "rates"`` (converted to increments as rate / rate_hz, i.e. the rate is the mean over the
-  nominal sample interval ending at ``t_s``). Parquet files may use either set too.
+  nominal sample interval ending at ``t_s``). Columns must hold numbers (Parquet: integer or floating point
+  types; a bool or text column is refused); a name given twice is refused.
 
-Sample rate: the ``gyrodrift.rate_hz`` metadata of a Parquet file, otherwise 1 / median(dt) over the first
-1000 intervals. Every chunk is checked while it streams (a log is never loaded whole; an 88 h log at
-200 Hz is 63 million rows), and the first problem raises `LogError` naming the file, row and column:
+Sample rate: the ``gyrodrift.rate_hz`` metadata of a Parquet file (a JSON number), otherwise 1 / median(dt)
+over the first 1000 intervals; it must lie in (0, `MAX_RATE_HZ`]. Every chunk is checked while it streams (a
+log is never loaded whole; an 88 h log at 200 Hz is 63 million rows), and the first problem raises `LogError`
+naming the file, row and column:
 
 * time not strictly increasing (duplicated or going back), a gap (an interval off the nominal
-  1 / rate_hz by more than 1 %), NaN or empty cells, impossible magnitudes (|rate| > 1000 deg/s,
-  |specific force| > 100 g on any axis), a missing column (``temp_c`` included).
+  1 / rate_hz by more than 1 %), NaN or empty cells, infinite values, impossible magnitudes (|rate| >
+  `MAX_RATE_DEG_S` deg/s, |specific force| > `MAX_SPECIFIC_FORCE_G` g on any axis), a temperature outside
+  `gyrodrift.runs.TEMPERATURE_LIMITS_C` (the limits of the run tables: a kelvin value is refused), a missing
+  column, a CSV row with the wrong number of cells, a byte that is not UTF-8, damaged Parquet data pages.
+
+Only regular files are read: a device (``/dev/zero``), a FIFO or a folder is refused before it is opened.
 
 Row numbers: for CSV the line of the file (the header is row 1, the first sample row 2, as in
-`gyrodrift.runs`); for Parquet the 1-based sample index.
+`gyrodrift.runs`); for the other sources the 1-based sample index.
 
-The true static site (latitude, longitude, height) comes from the Parquet metadata ``gyrodrift.site``
-when present; otherwise the caller gives it (`open_log(..., site=...)`).
+The true static site (`gyrodrift.site.Site`) comes from the Parquet metadata ``gyrodrift.site`` (or the
+scenario) when present; otherwise the caller gives it (`open_log(..., site=...)`). Simulated logs also carry
+their true initial attitude (`LogTruth`, from the ``gyrodrift.scenario`` metadata).
 """
 
 from __future__ import annotations
@@ -44,39 +59,52 @@ import io
 import json
 import math
 import os
-import re
-from collections.abc import Iterator, Mapping
+import stat
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pyarrow as pa
 
-from gyrodrift.errors import InputError
+from gyrodrift.errors import InputError, OptionError
+from gyrodrift.runs import TEMPERATURE_LIMITS_C
+from gyrodrift.site import Site
 
 __all__ = [
     "LogError",
     "Site",
+    "LogTruth",
     "LogChunk",
     "ImuLog",
     "open_log",
     "INCREMENT_COLUMNS",
     "RATE_COLUMNS",
+    "TRUTH_COLUMNS",
     "MAX_RATE_DEG_S",
     "MAX_SPECIFIC_FORCE_G",
+    "MAX_RATE_HZ",
     "GAP_TOLERANCE",
+    "DEFAULT_CHUNK_SAMPLES",
 ]
 
 INCREMENT_COLUMNS = ("dtheta_x_rad", "dtheta_y_rad", "dtheta_z_rad", "dv_x_m_s", "dv_y_m_s", "dv_z_m_s")
 """Increment columns: angle [rad] then velocity [m/s] increments over the sample, body x y z."""
 RATE_COLUMNS = ("gyro_x_rad_s", "gyro_y_rad_s", "gyro_z_rad_s", "accel_x_m_s2", "accel_y_m_s2", "accel_z_m_s2")
 """Rate columns: angular rate [rad/s] then specific force [m/s^2], body x y z."""
+TRUTH_COLUMNS = ("true_pitch_deg", "true_roll_deg", "true_yaw_deg")
+"""Optional true attitude at the end of each sample [deg] (simulated logs)."""
 MAX_RATE_DEG_S = 1000.0
 """Largest plausible angular rate [deg/s] on any axis."""
 MAX_SPECIFIC_FORCE_G = 100.0
 """Largest plausible specific force [g = 9.80665 m/s^2] on any axis."""
+MAX_RATE_HZ = 1.0e6
+"""Largest accepted sample rate [Hz]."""
 GAP_TOLERANCE = 0.01
 """Largest relative deviation of a time step from the nominal 1 / rate_hz."""
+DEFAULT_CHUNK_SAMPLES = 100_000
+"""Samples per chunk: 1000 s at 100 Hz, about 7 MB of float64 columns."""
 
 _G0 = 9.80665
 _RATE_PROBE = 1000
@@ -87,12 +115,13 @@ class LogError(InputError):
 
 
 @dataclass(frozen=True)
-class Site:
-    """A static site, WGS-84 geodetic: latitude and longitude [deg], height above the ellipsoid [m]."""
+class LogTruth:
+    """The true attitude of a simulated run at t = 0 (table angle 0) [deg]: pitch, roll, yaw (counter-clockwise
+    about Up)."""
 
-    lat_deg: float
-    lon_deg: float = 0.0
-    height_m: float = 0.0
+    pitch_deg: float
+    roll_deg: float
+    yaw_deg: float
 
 
 @dataclass(frozen=True)
@@ -107,74 +136,78 @@ class LogChunk:
         End time of each sample [s], as recorded.
     dtheta_rad, dv_m_s : ndarray (n, 3)
         Angle [rad] and velocity [m/s] increments over each sample, body frame (rates already converted).
-    temp_c : ndarray (n,)
-        System temperature [deg C].
+    temp_c : ndarray (n,) or None
+        System temperature [deg C] (None when the log has none and the caller did not need it).
+    true_deg : ndarray (n, 3) or None
+        True pitch, roll, yaw at the end of each sample [deg] when the log carries them.
     """
 
     first_index: int
     t_s: np.ndarray
     dtheta_rad: np.ndarray
     dv_m_s: np.ndarray
-    temp_c: np.ndarray
+    temp_c: np.ndarray | None = None
+    true_deg: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.t_s)
 
     def slice(self, a: int, b: int) -> LogChunk:
         """Samples a..b-1 of the chunk (views)."""
-        return LogChunk(self.first_index + a, self.t_s[a:b], self.dtheta_rad[a:b], self.dv_m_s[a:b], self.temp_c[a:b])
-
-
-def _is_parquet(path: Path) -> bool:
-    return path.suffix.lower() in (".parquet", ".pq")
-
-
-def _kind_from_header(names: list[str], label: str) -> tuple[str, tuple[str, ...]]:
-    if "t_s" not in names:
-        raise LogError(f"{label}, row 1: missing column t_s (sample end time, s)")
-    if all(c in names for c in INCREMENT_COLUMNS):
-        kind, cols = "increments", INCREMENT_COLUMNS
-    elif all(c in names for c in RATE_COLUMNS):
-        kind, cols = "rates", RATE_COLUMNS
-    else:
-        inc = [c for c in INCREMENT_COLUMNS if c not in names]
-        rat = [c for c in RATE_COLUMNS if c not in names]
-        missing = inc if len(inc) <= len(rat) else rat
-        raise LogError(
-            f"{label}, row 1: missing column(s) {', '.join(missing)}: a log needs the increments "
-            f"{', '.join(INCREMENT_COLUMNS)} or the rates {', '.join(RATE_COLUMNS)}"
+        return LogChunk(
+            self.first_index + a,
+            self.t_s[a:b],
+            self.dtheta_rad[a:b],
+            self.dv_m_s[a:b],
+            None if self.temp_c is None else self.temp_c[a:b],
+            None if self.true_deg is None else self.true_deg[a:b],
         )
-    if "temp_c" not in names:
-        raise LogError(f"{label}, row 1: missing column temp_c (system temperature, deg C; the features need it)")
-    return kind, cols
+
+
+@dataclass(frozen=True)
+class _Raw:
+    """One block of a source before the checks: the columns as numpy arrays (names as in the log)."""
+
+    t: np.ndarray
+    sensors: tuple[np.ndarray, ...]  # six (n,) arrays, or (gyro (n, 3), accel (n, 3)) from the core
+    temp: np.ndarray | None
+    truth: tuple[np.ndarray, ...] | None
 
 
 class ImuLog:
-    """An opened IMU log: format, kind, sample rate, size and site; `chunks` streams validated samples.
+    """An opened IMU log: source, kind, sample rate, size, site and truth; `chunks` streams validated samples.
 
-    Use `open_log` to create one. The object holds only the file name and a few numbers, so it pickles
-    cheaply (dask workers reopen the file themselves).
+    Use `open_log`, `ImuLog.from_arrays` or `ImuLog.from_scenario` to create one. A file log holds only the
+    file name and a few numbers, so it pickles cheaply (dask workers reopen the file themselves).
 
     Attributes
     ----------
-    path : pathlib.Path
+    path : pathlib.Path or None
+        The file (None for in-memory and simulated sources).
+    label : str
+        What messages call the source (the path, ``<memory>``, ``<scenario>``).
     name : str
-        The file's stem (used as the run name), or its folder's name for a file called ``imu.parquet``.
-    format : {"parquet", "csv"}
+        The run name: the file's stem, or its folder's name for a file called ``imu.parquet``.
+    format : {"parquet", "csv", "memory", "scenario"}
     kind : {"increments", "rates"}
     rate_hz : float
         Sample rate [Hz].
-    n_samples : int or None
-        Number of samples (Parquet: exact; CSV: estimated from the first and last time stamps).
-    duration_s : float
-        n_samples / rate_hz [s].
+    rate_source : {"metadata", "time stamps", "scenario", "given"}
+    n_samples : int
+        Number of samples (CSV: estimated from the first and last time stamps).
     site : Site or None
-        The true static site when the file says it (Parquet metadata) or the caller gave it.
+        The true static site when the source says it or the caller gave it.
+    truth : LogTruth or None
+        The true initial attitude (simulated logs).
+    has_temperature, has_truth_columns : bool
+        Whether chunks carry ``temp_c`` and ``true_deg``.
     """
 
     def __init__(
         self,
-        path: Path,
+        *,
+        path: Path | None,
+        label: str,
         fmt: str,
         kind: str,
         columns: tuple[str, ...],
@@ -182,8 +215,15 @@ class ImuLog:
         n_samples: int,
         site: Site | None,
         rate_source: str,
+        truth: LogTruth | None = None,
+        has_temperature: bool = True,
+        has_truth_columns: bool = False,
+        name: str | None = None,
+        raw_names: Mapping[str, str] | None = None,
+        blocks: Callable[[int], Iterator[_Raw]] | None = None,
     ):
         self.path = path
+        self.label = label
         self.format = fmt
         self.kind = kind
         self._columns = columns
@@ -191,41 +231,179 @@ class ImuLog:
         self.n_samples = int(n_samples)
         self.site = site
         self.rate_source = rate_source
-        stem = path.name
-        for suffix in (".parquet", ".pq", ".csv"):
-            if stem.lower().endswith(suffix):
-                stem = stem[: -len(suffix)]
-        if stem == "imu" and path.parent.name:
-            stem = path.parent.name
-        self.name = stem
+        self.truth = truth
+        self.has_temperature = has_temperature
+        self.has_truth_columns = has_truth_columns
+        self._raw_names = dict(raw_names or {})
+        self._blocks = blocks
+        if name is None:
+            stem = path.name if path is not None else label
+            for suffix in (".parquet", ".pq", ".csv"):
+                if stem.lower().endswith(suffix):
+                    stem = stem[: -len(suffix)]
+            if path is not None and stem == "imu" and path.parent.name:
+                stem = path.parent.name
+            name = stem
+        self.name = name
 
     def __repr__(self) -> str:
         return (
-            f"ImuLog({str(self.path)!r}, format={self.format!r}, kind={self.kind!r}, rate_hz={self.rate_hz:g}, "
+            f"ImuLog({self.label!r}, format={self.format!r}, kind={self.kind!r}, rate_hz={self.rate_hz:g}, "
             f"n_samples={self.n_samples}, site={self.site})"
         )
 
+    def __getstate__(self) -> dict[str, Any]:
+        state = dict(self.__dict__)
+        if self.format in ("parquet", "csv"):
+            state["_blocks"] = None  # rebuilt from the path
+        return state
+
+    # ------------------------------------------------------------------------------------------
+    # Other sources
+    # ------------------------------------------------------------------------------------------
+    @classmethod
+    def from_arrays(
+        cls,
+        columns: Mapping[str, Any],
+        *,
+        rate_hz: float | None = None,
+        site: Site | Mapping[str, float] | None = None,
+        source_site: Site | None = None,
+        truth: LogTruth | None = None,
+        label: str = "<memory>",
+        require_temperature: bool = True,
+    ) -> ImuLog:
+        """A log over in-memory columns (the names of the module docstring, 1-D arrays of one length).
+
+        The arrays are not copied; chunks are checked exactly as a file's. `rate_hz` defaults to the
+        time stamps' (1 / median dt of the first 1000 intervals). `source_site` is the site the data come
+        with (as a file's metadata), `site` replaces or completes it as in `open_log`; `truth` the true
+        initial attitude.
+        """
+        names = list(columns)
+        kind, cols = _kind_from_header(names, label)
+        if require_temperature and "temp_c" not in names:
+            raise LogError(f"{label}, row 1: missing column temp_c (system temperature, deg C; the features need it)")
+        arrays: dict[str, np.ndarray] = {}
+        n = None
+        for c in ["t_s", *cols, "temp_c", *TRUTH_COLUMNS]:
+            if c not in columns:
+                continue
+            a = np.asarray(columns[c])
+            if a.ndim != 1 or a.dtype.kind not in "iuf":
+                raise LogError(f"{label}, column {c}: expected a 1-D array of numbers, got {a.dtype} {a.shape}")
+            if n is not None and len(a) != n:
+                raise LogError(f"{label}, column {c}: {len(a)} values, expected {n} like t_s")
+            n = len(a)
+            arrays[c] = a
+        if n is None or n < 2:
+            raise LogError(f"{label}: {n or 0} sample(s); a log needs many")
+        if rate_hz is None:
+            rate, rate_source = (
+                _rate_from_times(np.asarray(arrays["t_s"][: _RATE_PROBE + 1], float), label),
+                "time stamps",
+            )
+        else:
+            rate, rate_source = _check_rate(rate_hz, label), "given"
+        has_temp = "temp_c" in arrays
+        has_truth = all(c in arrays for c in TRUTH_COLUMNS)
+
+        def blocks(chunk_samples: int) -> Iterator[_Raw]:
+            for a in range(0, n, chunk_samples):
+                b = min(n, a + chunk_samples)
+                yield _Raw(
+                    arrays["t_s"][a:b],
+                    tuple(arrays[c][a:b] for c in cols),
+                    arrays["temp_c"][a:b] if has_temp else None,
+                    tuple(arrays[c][a:b] for c in TRUTH_COLUMNS) if has_truth else None,
+                )
+
+        return cls(
+            path=None,
+            label=label,
+            fmt="memory",
+            kind=kind,
+            columns=cols,
+            rate_hz=rate,
+            n_samples=n,
+            site=_merge_site(site, source_site, label),
+            rate_source=rate_source,
+            truth=truth,
+            has_temperature=has_temp,
+            has_truth_columns=has_truth,
+            blocks=blocks,
+        )
+
+    @classmethod
+    def from_scenario(cls, scenario: Any, *, site: Site | Mapping[str, float] | None = None) -> ImuLog:
+        """A log simulated on the fly from a `gyrodrift.ins.Scenario`, chunk by chunk (nothing stored).
+
+        Site, true initial attitude and true attitude columns come from the scenario.
+        """
+        from gyrodrift.ins.simulate import iter_core_chunks
+
+        s = scenario
+        label = "<scenario>"
+
+        def blocks(chunk_samples: int) -> Iterator[_Raw]:
+            for c in iter_core_chunks(s, chunk_samples):
+                truth = tuple(np.rad2deg(np.asarray(c[k], dtype=float)) for k in ("pitch_rad", "roll_rad", "yaw_rad"))
+                yield _Raw(
+                    np.asarray(c["t_s"], dtype=float),
+                    (np.asarray(c["dtheta_rad"], dtype=float), np.asarray(c["dv_m_s"], dtype=float)),
+                    np.asarray(c["temp_c"], dtype=float),
+                    truth,
+                )
+
+        return cls(
+            path=None,
+            label=label,
+            fmt="scenario",
+            kind="increments",
+            columns=INCREMENT_COLUMNS,
+            rate_hz=_check_rate(s.run.rate_hz, label),
+            n_samples=s.n_samples,
+            site=_merge_site(site, Site(s.site.lat_deg, s.site.lon_deg, s.site.height_m), label),
+            rate_source="scenario",
+            truth=LogTruth(s.attitude.pitch_deg, s.attitude.roll_deg, s.attitude.yaw_deg),
+            has_temperature=True,
+            has_truth_columns=True,
+            name="scenario",
+            blocks=blocks,
+        )
+
+    # ------------------------------------------------------------------------------------------
+    # Sizes
+    # ------------------------------------------------------------------------------------------
     @property
     def duration_s(self) -> float:
         """Length of the log [s] (n_samples / rate_hz)."""
         return self.n_samples / self.rate_hz
 
     def samples_for(self, seconds: float) -> int:
-        """Number of samples spanning `seconds` [s] at the log's rate (rounded)."""
-        return int(round(seconds * self.rate_hz))
+        """Number of samples spanning `seconds` [s] at the log's rate (rounded); `OptionError` if not finite."""
+        x = float(seconds) * self.rate_hz
+        if not math.isfinite(x):
+            raise OptionError(f"{self.label}: a duration of {seconds!r} s is not a finite number of samples")
+        return int(round(x))
 
     def require_duration(self, seconds: float, what: str) -> None:
         """Raise `LogError` if the log is shorter than `seconds` [s] (what: why that much is needed)."""
-        if self.n_samples < self.samples_for(seconds):
+        if not float(seconds) * self.rate_hz <= self.n_samples + 0.5:
             raise LogError(
-                f"{self.path}: the log lasts {self.duration_s / 3600.0:.3f} h; {what} takes at least "
+                f"{self.label}: the log lasts {self.duration_s / 3600.0:.3f} h; {what} takes at least "
                 f"{seconds / 3600.0:g} h"
             )
+
+    def require_temperature(self, what: str) -> None:
+        """Raise `LogError` if the log has no ``temp_c`` column (what: who needs it)."""
+        if not self.has_temperature:
+            raise LogError(f"{self.label}, row 1: missing column temp_c (system temperature, deg C; {what} needs it)")
 
     # ------------------------------------------------------------------------------------------
     # Streaming
     # ------------------------------------------------------------------------------------------
-    def chunks(self, chunk_samples: int = 100_000, stop: int | None = None) -> Iterator[LogChunk]:
+    def chunks(self, chunk_samples: int = DEFAULT_CHUNK_SAMPLES, stop: int | None = None) -> Iterator[LogChunk]:
         """Yield validated chunks of at most `chunk_samples` samples from the start of the log.
 
         Parameters
@@ -240,62 +418,142 @@ class ImuLog:
         LogError
             At the first bad row (see the module docstring), or when the log ends before `stop`.
         """
-        if chunk_samples < 1:
-            raise ValueError(f"chunk_samples must be >= 1, got {chunk_samples}")
+        if not (isinstance(chunk_samples, int) and chunk_samples >= 1):
+            raise OptionError(f"chunk_samples must be a positive integer, got {chunk_samples!r}")
         validator = _Validator(self)
         done = 0
-        for table in self._tables(chunk_samples):
-            n = table.num_rows
+        for raw in self._source_blocks(chunk_samples):
+            n = len(raw.t)
             if stop is not None and done + n > stop:
-                table = table.slice(0, stop - done)
-                n = table.num_rows
-            chunk = validator.check(table, done)
+                raw = _cut(raw, stop - done)
+                n = stop - done
+            chunk = validator.check(raw, done)
             done += n
             yield chunk
             if stop is not None and done >= stop:
                 return
         if stop is not None and done < stop:
             raise LogError(
-                f"{self.path}: the log ends after {done} samples ({done / self.rate_hz / 3600.0:.3f} h); "
+                f"{self.label}: the log ends after {done} samples ({done / self.rate_hz / 3600.0:.3f} h); "
                 f"{stop} samples ({stop / self.rate_hz / 3600.0:.3f} h) are needed"
             )
 
-    def _tables(self, chunk_samples: int) -> Iterator[pa.Table]:
-        cols = ["t_s", *self._columns, "temp_c"]
+    def _source_blocks(self, chunk_samples: int) -> Iterator[_Raw]:
+        if self._blocks is not None:
+            return self._blocks(chunk_samples)
         if self.format == "parquet":
-            import pyarrow.parquet as pq
+            return self._parquet_blocks(chunk_samples)
+        return self._csv_blocks(chunk_samples)
 
-            pf = pq.ParquetFile(self.path)
-            for batch in pf.iter_batches(batch_size=chunk_samples, columns=cols):
-                yield pa.Table.from_batches([batch])
-            return
+    def _wanted(self) -> list[str]:
+        cols = ["t_s", *self._columns]
+        if self.has_temperature:
+            cols.append("temp_c")
+        if self.has_truth_columns:
+            cols.extend(TRUTH_COLUMNS)
+        return cols
+
+    def _from_table(self, table: pa.Table | pa.RecordBatch, first: int) -> _Raw:
+        names = self._wanted()
+        arrays = {}
+        for name in names:
+            col = table.column(self._raw_names.get(name, name))
+            if col.null_count:
+                i = int(np.flatnonzero(np.asarray(col.is_null().to_numpy(zero_copy_only=False)))[0])
+                raise LogError(f"{_where(self, first + i, name)}: empty or NaN cell")
+            arrays[name] = np.asarray(col.to_numpy(zero_copy_only=False), dtype=np.float64)
+        return _Raw(
+            arrays["t_s"],
+            tuple(arrays[c] for c in self._columns),
+            arrays.get("temp_c"),
+            tuple(arrays[c] for c in TRUTH_COLUMNS) if self.has_truth_columns else None,
+        )
+
+    def _parquet_blocks(self, chunk_samples: int) -> Iterator[_Raw]:
+        import pyarrow.parquet as pq
+
+        _require_regular(self.path, self.label)
+        try:
+            # pre_buffer=False: with pre-buffering pyarrow keeps every column chunk it read until the file is
+            # closed, so the memory grew with the log (1.2 GB for 76 h at 100 Hz); without it the read is
+            # also faster (benchmarks/bench_memory.py).
+            pf = pq.ParquetFile(self.path, pre_buffer=False)
+            batches = pf.iter_batches(
+                batch_size=chunk_samples, columns=[self._raw_names.get(c, c) for c in self._wanted()]
+            )
+        except (pa.ArrowException, OSError) as exc:
+            raise LogError(f"{self.label}: unreadable Parquet file ({_short(exc)})") from None
+        done = 0
+        with pf:
+            while True:
+                try:
+                    batch = next(batches)
+                except StopIteration:
+                    return
+                except (pa.ArrowException, OSError) as exc:
+                    raise LogError(
+                        f"{self.label}, row {done + 1}: damaged Parquet data after sample {done} ({_short(exc)})"
+                    ) from None
+                raw = self._from_table(batch, done)
+                del batch
+                done += len(raw.t)
+                yield raw
+
+    def _csv_blocks(self, chunk_samples: int) -> Iterator[_Raw]:
         import pyarrow.csv as pcsv
 
-        types = {c: pa.float64() for c in cols}
+        _require_regular(self.path, self.label)
+        cols = [self._raw_names.get(c, c) for c in self._wanted()]
         try:
             reader = pcsv.open_csv(
                 self.path,
                 read_options=pcsv.ReadOptions(block_size=1 << 22),
-                convert_options=pcsv.ConvertOptions(column_types=types, include_columns=cols),
+                convert_options=pcsv.ConvertOptions(column_types={c: pa.float64() for c in cols}, include_columns=cols),
             )
-        except pa.ArrowInvalid as exc:
-            raise _csv_conversion_error(self.path, str(exc)) from None
+        except (pa.ArrowException, OSError) as exc:
+            raise _csv_problem(self, str(exc)) from None
         pending: list[pa.RecordBatch] = []
         size = 0
-        try:
-            for batch in reader:
-                pending.append(batch)
-                size += batch.num_rows
-                while size >= chunk_samples:
-                    table = pa.Table.from_batches(pending)
-                    yield table.slice(0, chunk_samples)
-                    rest = table.slice(chunk_samples)
-                    pending = rest.to_batches()
-                    size = rest.num_rows
-        except pa.ArrowInvalid as exc:
-            raise _csv_conversion_error(self.path, str(exc)) from None
+        done = 0
+        while True:
+            try:
+                batch = next(reader)
+            except StopIteration:
+                break
+            except (pa.ArrowException, OSError) as exc:
+                raise _csv_problem(self, str(exc)) from None
+            pending.append(batch)
+            size += batch.num_rows
+            while size >= chunk_samples:
+                table = pa.Table.from_batches(pending)
+                raw = self._from_table(table.slice(0, chunk_samples), done)
+                done += chunk_samples
+                rest = table.slice(chunk_samples)
+                pending = rest.to_batches()
+                size = rest.num_rows
+                del table, rest
+                yield raw
         if size:
-            yield pa.Table.from_batches(pending)
+            yield self._from_table(pa.Table.from_batches(pending), done)
+
+
+def _cut(raw: _Raw, n: int) -> _Raw:
+    return _Raw(
+        raw.t[:n],
+        tuple(a[:n] for a in raw.sensors),
+        None if raw.temp is None else raw.temp[:n],
+        None if raw.truth is None else tuple(a[:n] for a in raw.truth),
+    )
+
+
+def _where(log: ImuLog, index: int, column: str | None = None) -> str:
+    row = index + (2 if log.format == "csv" else 1)
+    return f"{log.label}, row {row}" + ("" if column is None else f", column {column}")
+
+
+def _short(exc: BaseException) -> str:
+    text = " ".join(str(exc).split())
+    return text if len(text) <= 200 else text[:197] + "..."
 
 
 class _Validator:
@@ -305,99 +563,192 @@ class _Validator:
         self.log = log
         self.dt = 1.0 / log.rate_hz
         self.prev_t: float | None = None
-        self.row_offset = 2 if log.format == "csv" else 1
-        self.max_rate = MAX_RATE_DEG_S * math.pi / 180.0
-        self.max_force = MAX_SPECIFIC_FORCE_G * _G0
+        scale = self.dt if log.kind == "increments" else 1.0  # limits on the stored values
+        self.limits = (MAX_RATE_DEG_S * math.pi / 180.0 * scale, MAX_SPECIFIC_FORCE_G * _G0 * scale)
 
-    def where(self, index: int, column: str) -> str:
-        return f"{self.log.path}, row {index + self.row_offset}, column {column}"
+    def _finite(self, a: np.ndarray, first: int, names: tuple[str, ...]) -> None:
+        bad = ~np.isfinite(a)
+        if bad.any():
+            i, j = (int(k[0]) for k in np.nonzero(bad.reshape(len(a), -1)))
+            v = float(a.reshape(len(a), -1)[i, j])
+            where = _where(self.log, first + i, names[j])
+            if math.isnan(v):
+                raise LogError(f"{where}: empty or NaN cell")
+            raise LogError(f"{where}: expected a finite number, got {v!r}")
 
-    def check(self, table: pa.Table, first: int) -> LogChunk:
+    def check(self, raw: _Raw, first: int) -> LogChunk:
         log = self.log
-        arrays: dict[str, np.ndarray] = {}
-        for name in ["t_s", *log._columns, "temp_c"]:
-            col = table.column(name)
-            if col.null_count:
-                i = int(np.flatnonzero(np.asarray(col.is_null().to_numpy(zero_copy_only=False)))[0])
-                raise LogError(f"{self.where(first + i, name)}: empty or NaN cell")
-            a = np.asarray(col.to_numpy(zero_copy_only=False), dtype=np.float64)
-            bad = ~np.isfinite(a)
+        t = np.asarray(raw.t, dtype=np.float64)
+        self._finite(t, first, ("t_s",))
+        if len(raw.sensors) == 2:
+            gyro, acc = raw.sensors
+        else:
+            gyro = np.column_stack(raw.sensors[:3]).astype(np.float64, copy=False)
+            acc = np.column_stack(raw.sensors[3:]).astype(np.float64, copy=False)
+        names = log._columns
+        self._finite(gyro, first, names[:3])
+        self._finite(acc, first, names[3:])
+        temp = None
+        if raw.temp is not None:
+            temp = np.asarray(raw.temp, dtype=np.float64)
+            self._finite(temp, first, ("temp_c",))
+            low, high = TEMPERATURE_LIMITS_C
+            bad = (temp < low) | (temp > high)
             if bad.any():
                 i = int(np.flatnonzero(bad)[0])
-                if np.isnan(a[i]):
-                    raise LogError(f"{self.where(first + i, name)}: empty or NaN cell")
-                raise LogError(f"{self.where(first + i, name)}: expected a finite number, got {float(a[i])!r}")
-            arrays[name] = a
-        t = arrays["t_s"]
-        full = t if self.prev_t is None else np.concatenate([[self.prev_t], t])
-        dt = np.diff(full)
-        off = 0 if self.prev_t is None else 1  # dt[k] ends at sample first + k + 1 - off
-        if len(dt):
-            back = dt <= 0.0
-            if back.any():
-                k = int(np.flatnonzero(back)[0])
-                i = first + k + 1 - off
-                what = "duplicated time stamp" if dt[k] == 0.0 else "time goes backwards"
                 raise LogError(
-                    f"{self.where(i, 't_s')}: {what} ({float(full[k + 1])!r} s after {float(full[k])!r} s); "
-                    "time must be strictly increasing"
+                    f"{_where(log, first + i, 'temp_c')}: temperature {float(temp[i]):.6g} deg C is outside "
+                    f"[{low:g}, {high:g}] deg C (a system temperature in deg C, not kelvin)"
                 )
-            gap = np.abs(dt - self.dt) > GAP_TOLERANCE * self.dt
-            if gap.any():
-                k = int(np.flatnonzero(gap)[0])
-                i = first + k + 1 - off
-                raise LogError(
-                    f"{self.where(i, 't_s')}: gap in time: step {dt[k]:.6g} s from {float(full[k])!r} s, expected "
-                    f"{self.dt:.6g} s (rate {log.rate_hz:g} Hz, tolerance {GAP_TOLERANCE:.0%})"
-                )
-        self.prev_t = float(t[-1]) if len(t) else self.prev_t
-        scale = log.rate_hz if log.kind == "increments" else 1.0
-        for j, name in enumerate(log._columns):
-            limit = self.max_rate if j < 3 else self.max_force
-            mag = np.abs(arrays[name]) * scale
-            over = mag > limit
+        true_deg = None
+        if raw.truth is not None:
+            true_deg = np.column_stack(raw.truth).astype(np.float64, copy=False)
+            self._finite(true_deg, first, TRUTH_COLUMNS)
+        self._check_time(t, first)
+        for j, (block, limit) in enumerate(((gyro, self.limits[0]), (acc, self.limits[1]))):
+            over = np.abs(block) > limit
             if over.any():
-                i = int(np.flatnonzero(over)[0])
-                if j < 3:
-                    msg = f"angular rate {mag[i] * 180.0 / math.pi:.6g} deg/s exceeds {MAX_RATE_DEG_S:g} deg/s"
+                i, k = (int(x[0]) for x in np.nonzero(over))
+                mag = abs(float(block[i, k])) / (self.dt if log.kind == "increments" else 1.0)
+                if j == 0:
+                    msg = f"angular rate {mag * 180.0 / math.pi:.6g} deg/s exceeds {MAX_RATE_DEG_S:g} deg/s"
                 else:
-                    msg = f"specific force {mag[i] / _G0:.6g} g exceeds {MAX_SPECIFIC_FORCE_G:g} g"
-                raise LogError(f"{self.where(first + i, name)}: impossible magnitude: {msg}")
-        gyro = np.column_stack([arrays[c] for c in log._columns[:3]])
-        acc = np.column_stack([arrays[c] for c in log._columns[3:]])
+                    msg = f"specific force {mag / _G0:.6g} g exceeds {MAX_SPECIFIC_FORCE_G:g} g"
+                raise LogError(f"{_where(log, first + i, names[3 * j + k])}: impossible magnitude: {msg}")
         if log.kind == "rates":
             gyro = gyro * self.dt
             acc = acc * self.dt
-        return LogChunk(first, t, gyro, acc, arrays["temp_c"])
+        return LogChunk(
+            first,
+            t,
+            np.ascontiguousarray(gyro),
+            np.ascontiguousarray(acc),
+            temp,
+            None if true_deg is None else true_deg,
+        )
+
+    def _check_time(self, t: np.ndarray, first: int) -> None:
+        if not len(t):
+            return
+        full = t if self.prev_t is None else np.concatenate([[self.prev_t], t])
+        dt = np.diff(full)
+        off = 0 if self.prev_t is None else 1  # dt[k] ends at sample first + k + 1 - off
+        self.prev_t = float(t[-1])
+        if not len(dt):
+            return
+        back = dt <= 0.0
+        if back.any():
+            k = int(np.flatnonzero(back)[0])
+            what = "duplicated time stamp" if dt[k] == 0.0 else "time goes backwards"
+            raise LogError(
+                f"{_where(self.log, first + k + 1 - off, 't_s')}: {what} ({float(full[k + 1])!r} s after "
+                f"{float(full[k])!r} s); time must be strictly increasing"
+            )
+        gap = np.abs(dt - self.dt) > GAP_TOLERANCE * self.dt
+        if gap.any():
+            k = int(np.flatnonzero(gap)[0])
+            raise LogError(
+                f"{_where(self.log, first + k + 1 - off, 't_s')}: gap in time: step {dt[k]:.6g} s from "
+                f"{float(full[k])!r} s, expected {self.dt:.6g} s (rate {self.log.rate_hz:g} Hz, tolerance "
+                f"{GAP_TOLERANCE:.0%})"
+            )
 
 
-def _csv_conversion_error(path: Path, message: str) -> LogError:
-    """Turn pyarrow's 'CSV column #k: ... invalid value' into a file/row/column message (scans the file)."""
-    m = re.search(r"invalid value '([^']*)'", message)
-    value = m.group(1) if m else None
-    with open(path, newline="", encoding="utf-8-sig") as fh:
-        reader = csv.reader(fh)
-        header = [h.strip() for h in next(reader)]
-        for rownum, row in enumerate(reader, start=2):
-            for name, cell in zip(header, row, strict=False):
-                if value is not None and cell.strip() != value:
-                    continue
-                try:
-                    float(cell)
-                except ValueError:
-                    if name in ("t_s", "temp_c") or name in INCREMENT_COLUMNS or name in RATE_COLUMNS:
-                        return LogError(f"{path}, row {rownum}, column {name}: expected a number, got {cell!r}")
-    return LogError(f"{path}: unreadable CSV ({message})")
+# ----------------------------------------------------------------------------------------------
+# Opening
+# ----------------------------------------------------------------------------------------------
+
+
+def _require_regular(path: Path | None, label: str) -> None:
+    """Refuse what is not a regular file (devices such as /dev/zero, FIFOs that would block, folders)."""
+    if path is None:
+        return
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        raise LogError(f"{label}: no such file") from None
+    except OSError as exc:
+        raise LogError(f"{label}: cannot read ({exc.strerror or exc})") from None
+    if stat.S_ISDIR(st.st_mode):
+        raise LogError(f"{label}: is a folder; expected a log file (.parquet, .pq or .csv)")
+    if not stat.S_ISREG(st.st_mode):
+        raise LogError(f"{label}: not a regular file (a device, FIFO or socket); expected a log file")
+
+
+def _kind_from_header(names: list[str], label: str) -> tuple[str, tuple[str, ...]]:
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise LogError(f"{label}, row 1: column {', '.join(dup)} appears more than once; column names must be unique")
+    if "t_s" not in names:
+        raise LogError(f"{label}, row 1: missing column t_s (sample end time, s)")
+    if all(c in names for c in INCREMENT_COLUMNS):
+        kind, cols = "increments", INCREMENT_COLUMNS
+    elif all(c in names for c in RATE_COLUMNS):
+        kind, cols = "rates", RATE_COLUMNS
+    else:
+        inc = [c for c in INCREMENT_COLUMNS if c not in names]
+        rat = [c for c in RATE_COLUMNS if c not in names]
+        missing = inc if len(inc) <= len(rat) else rat
+        raise LogError(
+            f"{label}, row 1: missing column(s) {', '.join(missing)}: a log needs the increments "
+            f"{', '.join(INCREMENT_COLUMNS)} or the rates {', '.join(RATE_COLUMNS)}"
+        )
+    return kind, cols
+
+
+def _check_rate(rate: Any, label: str, what: str = "sample rate") -> float:
+    if isinstance(rate, bool) or not isinstance(rate, (int, float, np.integer, np.floating)):
+        raise LogError(f"{label}: {what} must be a number in Hz, got {rate!r}")
+    try:
+        r = float(rate)
+    except OverflowError:
+        r = math.inf
+    if not (math.isfinite(r) and 0.0 < r <= MAX_RATE_HZ):
+        raise LogError(f"{label}: {what} must be in (0, {MAX_RATE_HZ:g}] Hz, got {rate!r}")
+    return r
+
+
+def _json_value(meta: Mapping[str, str], key: str, label: str) -> Any:
+    try:
+        return json.loads(meta[key])
+    except (ValueError, RecursionError) as exc:
+        raise LogError(f"{label}: unreadable {key} metadata ({_short(exc)})") from None
+
+
+def _number(value: Any, label: str, key: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise LogError(f"{label}: {key} must be a number, got {_short(repr(value))}")
+    try:
+        x = float(value)
+    except OverflowError:
+        x = math.inf
+    if not math.isfinite(x):
+        raise LogError(f"{label}: {key} must be a finite number, got {_short(repr(value))}")
+    return x
 
 
 def _read_site(meta: Mapping[str, str], label: str) -> Site | None:
     if "gyrodrift.site" not in meta:
         return None
-    try:
-        s = json.loads(meta["gyrodrift.site"])
-        return Site(float(s["lat_deg"]), float(s["lon_deg"]), float(s["height_m"]))
-    except (ValueError, KeyError, TypeError) as exc:
-        raise LogError(f"{label}: unreadable gyrodrift.site metadata ({exc})") from None
+    s = _json_value(meta, "gyrodrift.site", label)
+    if not isinstance(s, dict) or not all(k in s for k in ("lat_deg", "lon_deg", "height_m")):
+        raise LogError(f"{label}: gyrodrift.site metadata must be {{lat_deg, lon_deg, height_m}}")
+    return Site(*(_number(s[k], label, f"gyrodrift.site {k}") for k in ("lat_deg", "lon_deg", "height_m")))
+
+
+def _read_truth(meta: Mapping[str, str], label: str) -> LogTruth | None:
+    if "gyrodrift.scenario" not in meta:
+        return None
+    s = _json_value(meta, "gyrodrift.scenario", label)
+    att = s.get("attitude", {}) if isinstance(s, dict) else None
+    if not isinstance(att, dict):
+        raise LogError(f"{label}: gyrodrift.scenario metadata must be a table with an [attitude] table")
+    return LogTruth(
+        *(
+            _number(att.get(k, 0.0), label, f"gyrodrift.scenario attitude {k}")
+            for k in ("pitch_deg", "roll_deg", "yaw_deg")
+        )
+    )
 
 
 def _rate_from_times(t: np.ndarray, label: str) -> float:
@@ -407,79 +758,226 @@ def _rate_from_times(t: np.ndarray, label: str) -> float:
     med = float(np.median(dt))
     if not med > 0.0:
         raise LogError(f"{label}: cannot tell the sample rate (time stamps do not increase)")
-    return 1.0 / med
-
-
-def _csv_head_and_tail(path: Path, label: str) -> tuple[list[str], np.ndarray, float | None]:
-    """Header names, the first time stamps, and the last time stamp (read from the file's end)."""
-    with open(path, newline="", encoding="utf-8-sig") as fh:
-        reader = csv.reader(fh)
-        try:
-            header = [h.strip() for h in next(reader)]
-        except StopIteration:
-            raise LogError(f"{label}: empty file, expected a header row") from None
-        if "t_s" not in header:
-            return header, np.zeros(0), None
-        it = header.index("t_s")
-        times = []
-        for rownum, row in enumerate(reader, start=2):
-            if len(times) > _RATE_PROBE:
-                break
-            try:
-                times.append(float(row[it]))
-            except (ValueError, IndexError):
-                raise LogError(
-                    f"{label}, row {rownum}, column t_s: expected a number, got {row[it] if it < len(row) else ''!r}"
-                ) from None
-    last = None
-    with open(path, "rb") as fh:
-        fh.seek(0, os.SEEK_END)
-        size = fh.tell()
-        fh.seek(max(0, size - 65536))
-        lines = [ln for ln in fh.read().decode("utf-8", "replace").splitlines() if ln.strip()]
-    if lines:
-        cells = next(csv.reader(io.StringIO(lines[-1])))
-        try:
-            last = float(cells[it])
-        except (ValueError, IndexError):
-            last = None
-    return header, np.asarray(times, dtype=float), last
+    return _check_rate(1.0 / med, label, "the sample rate of the time stamps")
 
 
 def _merge_site(given: Site | Mapping[str, float] | None, from_file: Site | None, label: str) -> Site | None:
-    """A full `Site` replaces the file's; a mapping overrides only the keys it has (lon 0, height 0 by default)."""
+    """A `Site` replaces the file's; a mapping overrides only the keys it has (lon 0, height 0 by default)."""
     if given is None:
-        return from_file
-    if isinstance(given, Site):
-        site = given
-    else:
-        unknown = set(given) - {"lat_deg", "lon_deg", "height_m"}
+        site = from_file
+        if site is None:
+            return None
+    elif isinstance(given, Mapping):
+        flags = {"lat_deg": "--lat0-deg", "lon_deg": "--lon0-deg", "height_m": "--height-m"}
+        unknown = set(given) - set(flags)
         if unknown:
-            raise ValueError(f"site: unknown key(s) {sorted(unknown)} (expected lat_deg, lon_deg, height_m)")
-        base = from_file or Site(math.nan)
+            raise OptionError(f"site: unknown key(s) {sorted(unknown)} (expected lat_deg, lon_deg, height_m)")
+        for k, v in given.items():
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
+                raise OptionError(f"{flags[k]} ({k}): expected a finite number, got {v!r}")
+        if "lat_deg" not in given and from_file is None:
+            raise LogError(f"{label}: the log carries no site; give its latitude (--lat0-deg / site=)")
+        base = from_file or Site(math.nan, 0.0, 0.0)
         site = Site(
             float(given.get("lat_deg", base.lat_deg)),
             float(given.get("lon_deg", base.lon_deg)),
             float(given.get("height_m", base.height_m)),
         )
-        if not math.isfinite(site.lat_deg):
-            raise LogError(f"{label}: the log carries no site; give its latitude (lat_deg / --lat0-deg)")
-    if not (-90.0 < site.lat_deg < 90.0) or not math.isfinite(site.lon_deg) or not math.isfinite(site.height_m):
-        raise LogError(f"{label}: site {site} is not a valid static position (latitude strictly within +-90 deg)")
+    elif all(hasattr(given, k) for k in ("lat_deg", "lon_deg", "height_m")):
+        site = Site(float(given.lat_deg), float(given.lon_deg), float(given.height_m))
+    else:
+        raise OptionError(f"site: expected a gyrodrift.site.Site or a mapping, got {type(given).__name__}")
+    if not (-90.0 < site.lat_deg < 90.0):
+        raise OptionError(f"{label}: site latitude (--lat0-deg) must be strictly within +-90 deg, got {site.lat_deg!r}")
+    if not (math.isfinite(site.lon_deg) and math.isfinite(site.height_m)):
+        raise OptionError(f"{label}: site {site} is not a valid static position (finite longitude and height)")
     return site
 
 
-def open_log(path: str | os.PathLike[str], *, site: Site | Mapping[str, float] | None = None) -> ImuLog:
-    """Open an IMU log, check its header, detect its kind and sample rate.
+def _numeric_type(t: pa.DataType) -> bool:
+    return (pa.types.is_floating(t) or pa.types.is_integer(t)) and not pa.types.is_boolean(t)
+
+
+def _open_parquet(p: Path, label: str, site, require_temperature: bool) -> ImuLog:
+    import pyarrow.parquet as pq
+
+    try:
+        pf = pq.ParquetFile(p, pre_buffer=False)
+        schema = pf.schema_arrow
+        n = pf.metadata.num_rows
+    except (pa.ArrowException, OSError) as exc:
+        raise LogError(f"{label}: not a Parquet file ({_short(exc)})") from None
+    with pf:
+        names = list(schema.names)
+        kind, cols = _kind_from_header(names, label)
+        if require_temperature and "temp_c" not in names:
+            raise LogError(f"{label}, row 1: missing column temp_c (system temperature, deg C; the features need it)")
+        has_temp = "temp_c" in names
+        has_truth = all(c in names for c in TRUTH_COLUMNS)
+        for c in ["t_s", *cols, *(["temp_c"] if has_temp else []), *(TRUTH_COLUMNS if has_truth else ())]:
+            t = schema.field(c).type
+            if not _numeric_type(t):
+                raise LogError(f"{label}, column {c}: expected numbers (float64), got a column of type {t}")
+        meta = {k.decode("utf-8", "replace"): v.decode("utf-8", "replace") for k, v in (schema.metadata or {}).items()}
+        if n < 2:
+            raise LogError(f"{label}: {n} sample(s); a log needs many")
+        file_site = _read_site(meta, label)
+        truth = _read_truth(meta, label)
+        if "gyrodrift.rate_hz" in meta:
+            rate = _check_rate(_json_value(meta, "gyrodrift.rate_hz", label), label, "gyrodrift.rate_hz metadata")
+            rate_source = "metadata"
+        else:
+            try:
+                head = next(pf.iter_batches(batch_size=_RATE_PROBE + 1, columns=["t_s"]))
+                times = np.asarray(head.column(0).to_numpy(zero_copy_only=False), float)
+            except (pa.ArrowException, OSError, StopIteration) as exc:
+                raise LogError(f"{label}, row 1: damaged Parquet data ({_short(exc)})") from None
+            rate, rate_source = _rate_from_times(times, label), "time stamps"
+    return ImuLog(
+        path=p,
+        label=label,
+        fmt="parquet",
+        kind=kind,
+        columns=cols,
+        rate_hz=rate,
+        n_samples=n,
+        site=_merge_site(site, file_site, label),
+        rate_source=rate_source,
+        truth=truth,
+        has_temperature=has_temp,
+        has_truth_columns=has_truth,
+    )
+
+
+def _csv_lines(path: Path, label: str) -> Iterator[str]:
+    """The file's lines decoded as UTF-8 (a BOM on the first is dropped); `LogError` with the row otherwise."""
+    with open(path, "rb") as fh:
+        for rownum, line in enumerate(fh, start=1):
+            try:
+                text = line.decode("utf-8-sig" if rownum == 1 else "utf-8")
+            except UnicodeDecodeError as exc:
+                raise LogError(
+                    f"{label}, row {rownum}: not UTF-8 text (byte 0x{line[exc.start]:02x} at character "
+                    f"{exc.start + 1}); expected a CSV log"
+                ) from None
+            yield text
+
+
+def _csv_problem(log: ImuLog, message: str) -> LogError:
+    """Find the first bad row of a CSV that pyarrow refused (scans the file): cell count, number, UTF-8."""
+    label = log.label
+    used = set(log._wanted())
+    try:
+        reader = csv.reader(_csv_lines(log.path, label))
+        header = [h.strip() for h in next(reader)]
+        for row in reader:
+            rownum = reader.line_num
+            if not row or all(not c.strip() for c in row):
+                continue
+            if len(row) != len(header):
+                return LogError(
+                    f"{label}, row {rownum}: {len(row)} cells, expected {len(header)} (one per header column)"
+                )
+            for name, cell in zip(header, row, strict=True):
+                if name not in used:
+                    continue
+                try:
+                    float(cell)
+                except ValueError:
+                    if cell.strip() == "":
+                        return LogError(f"{label}, row {rownum}, column {name}: empty or NaN cell")
+                    return LogError(f"{label}, row {rownum}, column {name}: expected a number, got {_short(cell)!r}")
+    except LogError as exc:
+        return exc
+    except (csv.Error, StopIteration) as exc:
+        return LogError(f"{label}: unreadable CSV ({_short(exc)})")
+    return LogError(f"{label}: unreadable CSV ({_short(message)})")
+
+
+def _open_csv(p: Path, label: str, site, require_temperature: bool) -> ImuLog:
+    raw_header: list[str] = []
+    times: list[float] = []
+    try:
+        reader = csv.reader(_csv_lines(p, label))
+        try:
+            raw_header = next(reader)
+        except StopIteration:
+            raise LogError(f"{label}: empty file, expected a header row") from None
+        header = [h.strip() for h in raw_header]
+        kind, cols = _kind_from_header(header, label)
+        if require_temperature and "temp_c" not in header:
+            raise LogError(f"{label}, row 1: missing column temp_c (system temperature, deg C; the features need it)")
+        it = header.index("t_s")
+        for row in reader:
+            if len(times) > _RATE_PROBE:
+                break
+            cell = row[it] if it < len(row) else ""
+            try:
+                times.append(float(cell))
+            except ValueError:
+                raise LogError(
+                    f"{label}, row {reader.line_num}, column t_s: expected a number, got {_short(cell)!r}"
+                ) from None
+    except csv.Error as exc:
+        raise LogError(f"{label}: unreadable CSV ({_short(exc)})") from None
+    t = np.asarray(times, dtype=float)
+    rate = _rate_from_times(t, label)
+    last = _csv_last_time(p, it)
+    if last is None or not (math.isfinite(last) and last > t[0]):
+        raise LogError(f"{label}: cannot read the last time stamp of the file")
+    n = (last - t[0]) * rate + 1.0
+    if not n < 1e15:
+        raise LogError(f"{label}: the last time stamp {last!r} s is not plausible for {rate:g} Hz")
+    has_truth = all(c in header for c in TRUTH_COLUMNS)
+    return ImuLog(
+        path=p,
+        label=label,
+        fmt="csv",
+        kind=kind,
+        columns=cols,
+        rate_hz=rate,
+        n_samples=int(round(n)),
+        site=_merge_site(site, None, label),
+        rate_source="time stamps",
+        has_temperature="temp_c" in header,
+        has_truth_columns=has_truth,
+        raw_names={h: r for h, r in zip(header, raw_header, strict=True) if h != r},
+    )
+
+
+def _csv_last_time(path: Path, it: int) -> float | None:
+    with open(path, "rb") as fh:
+        fh.seek(0, os.SEEK_END)
+        size = fh.tell()
+        fh.seek(max(0, size - 65536))
+        lines = [ln for ln in fh.read().decode("utf-8", "replace").splitlines() if ln.strip()]
+    if not lines:
+        return None
+    try:
+        cells = next(csv.reader(io.StringIO(lines[-1])))
+        return float(cells[it])
+    except (ValueError, IndexError, StopIteration, csv.Error):
+        return None
+
+
+def open_log(
+    path: str | os.PathLike[str],
+    *,
+    site: Site | Mapping[str, float] | None = None,
+    require_temperature: bool = True,
+) -> ImuLog:
+    """Open an IMU log file, check its header, detect its kind and sample rate.
 
     Parameters
     ----------
     path : path-like
-        ``.parquet``/``.pq`` or ``.csv`` file (see the module docstring for the columns).
+        ``.parquet``/``.pq`` or ``.csv`` file (see the module docstring for the columns); a regular file.
     site : Site or mapping, optional
         The true static site (``lat_deg``, ``lon_deg`` [deg], ``height_m`` [m]). A `Site` replaces the file's
         metadata; a mapping overrides only the keys it gives (the rest from the file, else lon 0, height
         0). CSV files carry no site, so the procedure needs at least the latitude from here.
+    require_temperature : bool
+        Refuse a log without ``temp_c`` (default; the features need it). `navigate` does not.
 
     Returns
     -------
@@ -488,48 +986,17 @@ def open_log(path: str | os.PathLike[str], *, site: Site | Mapping[str, float] |
     Raises
     ------
     LogError
-        Missing file, unreadable file, missing columns, no detectable rate. Row-level problems are found
-        while streaming (`ImuLog.chunks`).
+        Missing file, not a regular file, unreadable file, missing or duplicated columns, columns that are not
+        numbers, no usable rate. Row-level problems are found while streaming (`ImuLog.chunks`).
+    OptionError
+        A site value that is not a finite number or a latitude outside (-90, 90) deg.
     """
     p = Path(path)
     label = str(path)
-    if not p.exists():
-        raise LogError(f"{label}: no such file")
-    if _is_parquet(p):
-        import pyarrow.parquet as pq
-
-        try:
-            pf = pq.ParquetFile(p)
-        except (pa.ArrowInvalid, OSError) as exc:
-            raise LogError(f"{label}: not a Parquet file ({exc})") from None
-        names = pf.schema_arrow.names
-        kind, cols = _kind_from_header(names, label)
-        meta = {k.decode(): v.decode() for k, v in (pf.schema_arrow.metadata or {}).items()}
-        n = pf.metadata.num_rows
-        if n < 2:
-            raise LogError(f"{label}: {n} sample(s); a log needs many")
-        file_site = _read_site(meta, label)
-        rate_source = "metadata"
-        try:
-            rate = float(json.loads(meta["gyrodrift.rate_hz"])) if "gyrodrift.rate_hz" in meta else None
-        except (ValueError, TypeError):
-            raise LogError(f"{label}: unreadable gyrodrift.rate_hz metadata") from None
-        if rate is None:
-            head = next(pf.iter_batches(batch_size=_RATE_PROBE + 1, columns=["t_s"]))
-            rate = _rate_from_times(np.asarray(head.column(0).to_numpy(zero_copy_only=False), float), label)
-            rate_source = "time stamps"
-        if not (math.isfinite(rate) and rate > 0):
-            raise LogError(f"{label}: sample rate must be > 0, got {rate!r}")
-        return ImuLog(p, "parquet", kind, cols, rate, n, _merge_site(site, file_site, label), rate_source)
-    if p.suffix.lower() != ".csv":
-        raise LogError(f"{label}: unknown log format {p.suffix!r} (expected .parquet, .pq or .csv)")
-    try:
-        header, times, last = _csv_head_and_tail(p, label)
-    except UnicodeDecodeError as exc:
-        raise LogError(f"{label}: not UTF-8 text near byte {exc.start}; expected a CSV log") from None
-    kind, cols = _kind_from_header(header, label)
-    rate = _rate_from_times(times, label)
-    if last is None or not last > times[0]:
-        raise LogError(f"{label}: cannot read the last time stamp of the file")
-    n = int(round((last - times[0]) * rate)) + 1
-    return ImuLog(p, "csv", kind, cols, rate, n, _merge_site(site, None, label), "time stamps")
+    _require_regular(p, label)
+    suffix = p.suffix.lower()
+    if suffix in (".parquet", ".pq"):
+        return _open_parquet(p, label, site, require_temperature)
+    if suffix == ".csv":
+        return _open_csv(p, label, site, require_temperature)
+    raise LogError(f"{label}: unknown log format {p.suffix!r} (expected .parquet, .pq or .csv)")

@@ -9,10 +9,12 @@ Public API
 load_scenario(path) -> Scenario
 simulate(scenario, *, out_dir=None, chunk_samples=100_000, quiet=True) -> ImuData | Path
 navigate(imu, *, hours=None, compensate_drift_deg_h=0.0, gyro_bias_deg_h=None, accel_bias_ug=None,
-         initial="truth", decimation_s=1.0, out_dir=None, quiet=True) -> NavResult
+         initial="auto", site=None, decimation_s=1.0, out_dir=None, quiet=True) -> NavResult
+
+IMU logs (files, in-memory arrays, scenarios simulated on the fly) are read by `gyrodrift.logs`; a bad one
+raises `LogError`.
 """
 
-from gyrodrift.ins.imu_file import ImuFileError
 from gyrodrift.ins.navigate import NavResult, navigate
 from gyrodrift.ins.scenario import (
     Accel,
@@ -22,19 +24,20 @@ from gyrodrift.ins.scenario import (
     Run,
     Scenario,
     ScenarioError,
-    Site,
     Temperature,
     load_scenario,
     write_scenario_toml,
 )
 from gyrodrift.ins.simulate import ImuData, simulate
+from gyrodrift.logs import LogError
+from gyrodrift.site import Site
 
 __all__ = [
     "Accel",
     "Attitude",
     "Gyro",
     "ImuData",
-    "ImuFileError",
+    "LogError",
     "NavResult",
     "Rotation",
     "Run",

@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from gyrodrift.errors import InputError
+from gyrodrift.site import Site
 from gyrodrift.units import ARCSEC, DEG, DEG_PER_H, DEG_PER_SQRT_H, HOUR, MICRO_G
 
 __all__ = [
@@ -58,15 +59,6 @@ class ScenarioError(InputError):
 # --------------------------------------------------------------------------------------------------
 # The typed scenario
 # --------------------------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class Site:
-    """Static site, WGS-84 geodetic: latitude and longitude [deg], height above the ellipsoid [m]."""
-
-    lat_deg: float = 28.222
-    lon_deg: float = 112.99
-    height_m: float = 0.0
 
 
 @dataclass(frozen=True)

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from gyrodrift.errors import OptionError
 from gyrodrift.logs import ImuLog
 from gyrodrift.procedure.align import Alignment, align_log
 from gyrodrift.procedure.passes import NavCurve, TemperatureStats, navigate_after_alignment
@@ -102,7 +103,7 @@ def _from_curve(
 ) -> RunFeatures:
     k = int(round(hours))
     if abs(hours - k) > 1e-9 or len(curve.hourly_lat_deg) <= k:
-        raise ValueError(f"{log.path}: the features need whole hours of navigation, got {hours!r}")
+        raise OptionError(f"{log.label}: the features need whole hours of navigation, got {hours!r}")
     lat = float(curve.hourly_lat_deg[k])
     lat0 = float(alignment.site.lat_deg if lat0_deg is None else lat0_deg)
     return RunFeatures(

@@ -145,7 +145,7 @@ def identify(
         model = load_model(model)
     if features is None:
         features = extract_features(log, timeline=timeline, lat0_deg=lat0_deg, chunk_samples=chunk_samples, quiet=quiet)
-    table = features_run_table([features], source=str(log.path))
+    table = features_run_table([features], source=log.label)
     drift = float(model.predict(table)[0])
     interval, note = None, NO_UNCERTAINTY_NOTE
     if model.loo_residuals_deg_h is not None:

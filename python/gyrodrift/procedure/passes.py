@@ -3,7 +3,8 @@
 Every pass starts at the end of alignment (sample ``alignment.samples_used``) from the aligned attitude and
 velocity at the known static site, with the alignment's x/y gyro and x/y/z accelerometer bias estimates
 subtracted, and the pass's own z-gyro drift (deg/h) subtracted from the z gyro (measured - estimate). All
-navigators of a call see the same chunks, so N trial drifts cost one read of the log.
+navigators of a call see the same chunks (`gyrodrift.ins.stream.run_navigators`, the engine `navigate` uses
+too), so N trial drifts cost one read of the log.
 
 Errors are computed minus true against the static site: north = dlat R_M, east = dlon R_N cos(lat),
 position error = hypot(north, east) / 1852 m (`gyrodrift.ins.nav_errors.position_errors`).
@@ -11,22 +12,21 @@ position error = hypot(north, east) / 1852 m (`gyrodrift.ins.nav_errors.position
 
 from __future__ import annotations
 
-import contextlib
-import os
+import math
 from collections.abc import Sequence
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from gyrodrift.earth import NMI_M
+from gyrodrift.errors import OptionError
 from gyrodrift.ins.nav_errors import position_errors
+from gyrodrift.ins.stream import run_navigators
 from gyrodrift.logs import ImuLog, LogError
 from gyrodrift.procedure.align import Alignment
-from gyrodrift.progress import progress
 from gyrodrift.units import DEG, HOUR
 
-__all__ = ["NavCurve", "TemperatureStats", "PassResult", "navigate_after_alignment"]
+__all__ = ["NavCurve", "TemperatureStats", "PassResult", "navigate_after_alignment", "check_navigation_hours"]
 
 
 @dataclass(frozen=True)
@@ -94,6 +94,25 @@ class PassResult:
     hours: float
 
 
+def check_navigation_hours(hours: float, decimation_s: float) -> float:
+    """`hours` [h] as a float if it is a finite navigation length of at least one output step (`decimation_s`
+    [s]); `OptionError` naming ``--hours`` otherwise (NaN, inf, 1e308 h, 1e-9 h)."""
+    try:
+        h = float(hours)
+    except (TypeError, ValueError):
+        raise OptionError(f"--hours: expected a number of hours, got {hours!r}") from None
+    if not math.isfinite(h) or not h > 0:
+        raise OptionError(f"--hours: expected a positive finite number of hours, got {hours!r}")
+    if h * HOUR < decimation_s:
+        raise OptionError(
+            f"--hours {h:g}: shorter than one output step of the error curves ({decimation_s:g} s); nothing would be "
+            "navigated"
+        )
+    if h > 1e6:
+        raise OptionError(f"--hours {h:g}: more than a million hours; no log is that long")
+    return h
+
+
 def navigate_after_alignment(
     log: ImuLog,
     alignment: Alignment,
@@ -137,16 +156,35 @@ def navigate_after_alignment(
 
     rate = log.rate_hz
     start = alignment.samples_used
+    hours = check_navigation_hours(hours, decimation_s)
     n_nav = log.samples_for(hours * HOUR)
     stop = start + n_nav
     if log.n_samples < stop:
         raise LogError(
-            f"{log.path}: the log lasts {log.duration_s / HOUR:.3f} h; {hours:g} h of navigation after the "
+            f"{log.label}: the log lasts {log.duration_s / HOUR:.3f} h; {hours:g} h of navigation after the "
             f"{start / rate / HOUR:g} h alignment take at least {stop / rate / HOUR:g} h"
         )
-    per_hour = log.samples_for(HOUR)
     dec = max(1, int(round(decimation_s * rate)))
-    n_temp = None if temperature_hours is None else log.samples_for(temperature_hours * HOUR)
+    if n_nav < dec:
+        raise OptionError(
+            f"--hours {hours:g}: {n_nav} sample(s) of navigation, shorter than one output step "
+            f"({dec / rate:g} s); the curves would be empty"
+        )
+    n_temp = None
+    if temperature_hours is not None:
+        log.require_temperature("the temperature statistics")
+        n_temp = log.samples_for(temperature_hours * HOUR)
+    temp = {"start": np.nan, "end": np.nan, "min": np.inf, "max": -np.inf}
+
+    def temperature(piece, done: int) -> None:
+        if n_temp is None or done >= n_temp:
+            return
+        tc = piece.temp_c[: n_temp - done]
+        if done == 0:
+            temp["start"] = float(tc[0])
+        temp["min"] = min(temp["min"], float(tc.min()))
+        temp["max"] = max(temp["max"], float(tc.max()))
+        temp["end"] = float(tc[-1])
 
     navs = []
     for d in drifts_deg_h:
@@ -154,63 +192,33 @@ def navigate_after_alignment(
         nav.set_gyro_bias(alignment.gyro_compensation_rad_s(float(d)))
         nav.set_accel_bias(alignment.accel_compensation_m_s2())
         navs.append(nav)
-    lat_parts: list[list[np.ndarray]] = [[] for _ in navs]
-    lon_parts: list[list[np.ndarray]] = [[] for _ in navs]
-    hourly: list[list[float]] = [[float(alignment.site.lat_deg * DEG)] for _ in navs]
-    t_min = np.inf
-    t_max = -np.inf
-    t_start = t_end = np.nan
-    done = 0
-    n_threads = min(len(navs), os.cpu_count() or 1) if threads is None else max(1, min(int(threads), len(navs)))
-    pool = ThreadPoolExecutor(max_workers=n_threads) if n_threads > 1 else None
-    with progress(n_nav, f"{desc} {log.name}", quiet) as bar, pool or contextlib.nullcontext():
-        for chunk in log.chunks(chunk_samples, stop=stop):
-            end_idx = chunk.first_index + len(chunk)
-            if end_idx <= start:
-                continue
-            if chunk.first_index < start:
-                chunk = chunk.slice(start - chunk.first_index, len(chunk))
-            if n_temp is not None and done < n_temp:
-                tc = chunk.temp_c[: n_temp - done]
-                if done == 0:
-                    t_start = float(tc[0])
-                t_min = min(t_min, float(tc.min()))
-                t_max = max(t_max, float(tc.max()))
-                t_end = float(tc[-1])
-            a = 0
-            while a < len(chunk):
-                b = min(len(chunk), a + per_hour - (done % per_hour))
-                dth = np.ascontiguousarray(chunk.dtheta_rad[a:b])
-                dv = np.ascontiguousarray(chunk.dv_m_s[a:b])
-                if pool is None:
-                    outs = [nav.process(dth, dv, dec) for nav in navs]
-                else:  # the core releases the GIL: the navigators of one segment run side by side
-                    outs = list(pool.map(lambda nav, dth=dth, dv=dv: nav.process(dth, dv, dec), navs))
-                for i, out in enumerate(outs):
-                    if len(out["lat_rad"]):
-                        lat_parts[i].append(np.asarray(out["lat_rad"], dtype=float))
-                        lon_parts[i].append(np.asarray(out["lon_rad"], dtype=float))
-                done += b - a
-                if done % per_hour == 0:
-                    for i, nav in enumerate(navs):
-                        hourly[i].append(float(nav.state()["lat_rad"]))
-                a = b
-            bar.update(len(chunk))
+    tracks = run_navigators(
+        log,
+        navs,
+        n_samples=n_nav,
+        start=start,
+        decimation=dec,
+        keys=("lat_rad", "lon_rad"),
+        observe=temperature,
+        threads=threads,
+        chunk_samples=chunk_samples,
+        quiet=quiet,
+        desc=f"{desc} {log.name}",
+    )
     lat0 = alignment.site.lat_deg * DEG
     lon0 = alignment.site.lon_deg * DEG
-    t_h = np.arange(1, done // dec + 1) * dec / rate / HOUR
-    if done % dec:  # the curves always end with the exact last state (the "final" criterion's point)
-        t_h = np.append(t_h, done / rate / HOUR)
-        for i, nav in enumerate(navs):
-            st = nav.state()
-            lat_parts[i].append(np.array([float(st["lat_rad"])]))
-            lon_parts[i].append(np.array([float(st["lon_rad"])]))
+    t_h = np.arange(1, n_nav // dec + 1) * dec / rate / HOUR
+    exact_end = n_nav % dec != 0  # the curves always end with the exact last state (the "final" criterion's point)
+    if exact_end:
+        t_h = np.append(t_h, n_nav / rate / HOUR)
     curves = []
-    for i, d in enumerate(drifts_deg_h):
-        lat = np.concatenate(lat_parts[i]) if lat_parts[i] else np.zeros(0)
-        lon = np.concatenate(lon_parts[i]) if lon_parts[i] else np.zeros(0)
+    for d, track in zip(drifts_deg_h, tracks, strict=True):
+        lat, lon = track.kept["lat_rad"], track.kept["lon_rad"]
+        if exact_end:
+            lat = np.append(lat, float(track.final["lat_rad"]))
+            lon = np.append(lon, float(track.final["lon_rad"]))
         pe = position_errors(lat, lon, lat0, lon0)
-        h = np.asarray(hourly[i])
+        h = np.array([lat0] + [float(st["lat_rad"]) for _, st in track.hourly])
         curves.append(
             NavCurve(
                 drift_deg_h=float(d),
@@ -223,7 +231,9 @@ def navigate_after_alignment(
                 hourly_lat_err_arcsec=(h - lat0) / DEG * 3600.0,
             )
         )
-    temperature = None
+    temperature_stats = None
     if n_temp is not None:
-        temperature = TemperatureStats(float(temperature_hours), t_start, t_end, float(t_min), float(t_max))
-    return PassResult(curves=curves, temperature=temperature, hours=float(hours))
+        temperature_stats = TemperatureStats(
+            float(temperature_hours), temp["start"], temp["end"], float(temp["min"]), float(temp["max"])
+        )
+    return PassResult(curves=curves, temperature=temperature_stats, hours=float(hours))

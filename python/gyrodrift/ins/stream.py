@@ -1,0 +1,139 @@
+"""The streaming engine: N navigators over one read of an IMU log, split at whole hours.
+
+`run_navigators` reads a `gyrodrift.logs.ImuLog` (a file, in-memory arrays or a scenario simulated on the fly)
+once, from sample ``start`` to ``start + n_samples``, and hands every chunk to each navigator in turn (or on
+threads: the core releases the GIL). Chunks are split at whole hours counted from ``start``, so the state at
+every hour is exact (not decimated). Every ``decimation``-th state (counted from ``start``, as the core counts
+its own samples) is copied into arrays allocated once for the whole run, so memory does not grow with the log
+beyond those outputs and nothing keeps a chunk of the log alive.
+
+The navigators are built by the caller (`gyrodrift.ins.navigate`, `gyrodrift.procedure.passes`): anything with
+``process(dtheta_rad, dv_m_s, decimation) -> dict`` and ``state() -> dict`` (`gyrodrift._core.Navigator`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from gyrodrift.logs import DEFAULT_CHUNK_SAMPLES, ImuLog, LogChunk
+from gyrodrift.progress import progress
+from gyrodrift.units import HOUR
+
+__all__ = ["Track", "run_navigators", "STATE_KEYS"]
+
+STATE_KEYS = ("t_s", "lat_rad", "lon_rad", "height_m", "vel_enu_m_s", "pitch_rad", "roll_rad", "yaw_rad")
+"""What the core navigator returns per kept sample (``vel_enu_m_s`` has 3 columns)."""
+
+
+@dataclass
+class Track:
+    """What one navigator left along the read.
+
+    Attributes
+    ----------
+    kept : dict of str to ndarray
+        The kept states (every ``decimation`` samples from ``start``), for the keys asked: (m,) arrays, (m, 3)
+        for ``vel_enu_m_s``.
+    hourly : list of (int, dict)
+        (k, state) after whole navigation hour k = 1, 2, ... (exact).
+    final : dict
+        The state after the last navigated sample.
+    """
+
+    kept: dict[str, np.ndarray]
+    hourly: list[tuple[int, dict[str, Any]]] = field(default_factory=list)
+    final: dict[str, Any] = field(default_factory=dict)
+
+
+def run_navigators(
+    log: ImuLog,
+    navigators: Sequence[Any],
+    *,
+    n_samples: int,
+    start: int = 0,
+    decimation: int = 1,
+    keys: Sequence[str] = STATE_KEYS,
+    observe: Callable[[LogChunk, int], None] | None = None,
+    threads: int | None = None,
+    chunk_samples: int = DEFAULT_CHUNK_SAMPLES,
+    quiet: bool = True,
+    desc: str = "navigate",
+) -> list[Track]:
+    """Navigate samples ``start .. start + n_samples - 1`` of `log` with every navigator, in one read.
+
+    Parameters
+    ----------
+    log : ImuLog
+        The source; it is read (and validated) from its first sample, the samples before `start` are skipped.
+    navigators : sequence
+        Core navigators positioned at sample `start` (built and biased by the caller).
+    n_samples : int
+        Samples to navigate (>= 1; the log must hold ``start + n_samples``).
+    decimation : int
+        Keep the state after every `decimation`-th navigated sample.
+    keys : sequence of str
+        Which `STATE_KEYS` to keep.
+    observe : callable, optional
+        ``observe(chunk, done)`` for every navigated piece of the log (`chunk` a `LogChunk` of views, `done` the
+        samples navigated before it); must not keep references to the views.
+    threads : int, optional
+        Threads running the navigators of one piece side by side (default: one per navigator, at most the
+        number of CPUs; 1 = in turn). Results do not depend on it.
+    chunk_samples, quiet, desc
+        Read size, progress switch and label.
+
+    Returns
+    -------
+    list of Track
+        One per navigator, in order.
+    """
+    per_hour = max(1, log.samples_for(HOUR))
+    dec = int(decimation)
+    m = n_samples // dec
+    tracks = [Track(kept={k: np.empty((m, 3) if k == "vel_enu_m_s" else m) for k in keys}) for _ in navigators]
+    stop = start + n_samples
+    done = 0
+    pos = 0
+    n_threads = min(len(navigators), os.cpu_count() or 1) if threads is None else max(1, min(threads, len(navigators)))
+    pool = ThreadPoolExecutor(max_workers=n_threads) if n_threads > 1 else None
+    with progress(n_samples, desc, quiet) as bar, pool or contextlib.nullcontext():
+        for chunk in log.chunks(chunk_samples, stop=stop):
+            if chunk.first_index + len(chunk) <= start:
+                continue
+            if chunk.first_index < start:
+                chunk = chunk.slice(start - chunk.first_index, len(chunk))
+            a = 0
+            while a < len(chunk):
+                b = min(len(chunk), a + per_hour - (done % per_hour))  # end at the next whole hour
+                piece = chunk.slice(a, b)
+                if observe is not None:
+                    observe(piece, done)
+                dth, dv = piece.dtheta_rad, piece.dv_m_s
+                if pool is None:
+                    outs = [nav.process(dth, dv, dec) for nav in navigators]
+                else:
+                    outs = list(pool.map(lambda nav, dth=dth, dv=dv: nav.process(dth, dv, dec), navigators))
+                k = (done + b - a) // dec - done // dec  # kept states in this piece
+                for track, out in zip(tracks, outs, strict=True):
+                    for key in keys:
+                        track.kept[key][pos : pos + k] = np.asarray(out[key], dtype=float).reshape(
+                            track.kept[key][pos : pos + k].shape
+                        )
+                pos += k
+                done += b - a
+                if done % per_hour == 0:
+                    for track, nav in zip(tracks, navigators, strict=True):
+                        track.hourly.append((done // per_hour, nav.state()))
+                a = b
+            bar.update(len(chunk))
+            del chunk
+    for track, nav in zip(tracks, navigators, strict=True):
+        track.final = nav.state()
+    return tracks
