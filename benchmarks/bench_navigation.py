@@ -4,7 +4,8 @@
 
 1. Rust `ImuSimulator` alone: the whole run (default 72 h at 100 Hz = 25.9 M samples), streamed in chunks,
    for the paper-like sensor (every noise channel, warm-up drift, tilted base) and for an ideal level one
-   (no noise draws, no Euler-angle trigonometry: the simulator's floor).
+   (no noise draws, no Euler-angle trigonometry: the simulator's floor); the paper-like sensor both with
+   fresh chunks (`next_chunk`) and with caller-owned buffers refilled in place (`fill_into`).
 2. Rust `Navigator` alone: the same run, chunks simulated beforehand are not kept (the simulator is timed
    separately and its time subtracted; the navigation time is measured around `process` only).
 3. The numpy `ReferenceNavigator` (python/gyrodrift/ins/reference_nav.py, the same equations, one sample
@@ -83,6 +84,24 @@ def _time_simulator(scn: Scenario, chunk: int, repeat: int = 1) -> tuple[int, fl
     return done, best
 
 
+def _time_simulator_fill_into(scn: Scenario, chunk: int, repeat: int = 1) -> tuple[int, float]:
+    """As `_time_simulator`, filling the same caller-owned buffers every time (`ImuSimulator.fill_into`)."""
+    best = math.inf
+    out = {k: np.zeros((chunk, 3) if k in ("dtheta_rad", "dv_m_s") else chunk) for k in CHUNK_KEYS}
+    for _ in range(repeat):
+        sim = _core.ImuSimulator(scn.to_core_config())
+        t0 = time.perf_counter()
+        done = 0
+        while (m := sim.fill_into(out)) > 0:
+            done += m
+        best = min(best, time.perf_counter() - t0)
+    return done, best
+
+
+CHUNK_KEYS = ("t_s", "dtheta_rad", "dv_m_s", "temp_c", "table_angle_rad", "pitch_rad", "roll_rad", "yaw_rad")
+"""The arrays of one simulator chunk (docs/ins-binding-contract.md)."""
+
+
 def _nav_config(s: Scenario) -> dict:
     return {
         "lat_rad": s.site.lat_deg * DEG,
@@ -120,6 +139,9 @@ def main(argv: list[str] | None = None) -> None:
     done, t_sim = _time_simulator(scn, args.chunk, args.repeat)
     noisy_rate = done / t_sim
     print(f"Rust ImuSimulator : {noisy_rate:14,.0f} samples/s   ({t_sim:.2f} s, paper-like noisy tilted sensor)")
+    done_f, t_fill = _time_simulator_fill_into(scn, args.chunk, args.repeat)
+    fill_rate = done_f / t_fill
+    print(f"Rust ImuSimulator : {fill_rate:14,.0f} samples/s   ({t_fill:.2f} s, same sensor, fill_into reused buffers)")
     done_i, t_ideal = _time_simulator(_ideal_scenario(args.hours, args.rate_hz), args.chunk, args.repeat)
     ideal_rate = done_i / t_ideal
     print(f"Rust ImuSimulator : {ideal_rate:14,.0f} samples/s   ({t_ideal:.2f} s, ideal level sensor)")

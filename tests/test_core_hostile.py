@@ -182,3 +182,31 @@ def test_huge_aligner_and_navigator_configs():
         _core.Navigator(
             dict(lat_rad=0.5, lon_rad=0.0, height_m=0.0, pitch_rad=0.0, roll_rad=0.0, yaw_rad=0.0, rate_hz=1e308)
         )
+
+
+def test_fill_into_matches_next_chunk_and_refuses_bad_buffers():
+    cfg = _sim_config(rotation_scheme="reciprocating", gyro_arw_rad_rts=1e-5, duration_s=25.0)
+    ref = _core.ImuSimulator(cfg).next_chunk(10**6)
+    keys = list(ref)
+    out = {k: np.zeros((700, 3) if ref[k].ndim == 2 else 700) for k in keys}
+    sim = _core.ImuSimulator(cfg)
+    got = {k: [] for k in keys}
+    while (m := sim.fill_into(out)) > 0:
+        for k in keys:
+            got[k].append(out[k][:m].copy())
+    for k in keys:
+        np.testing.assert_array_equal(np.concatenate(got[k]), ref[k])
+    sim = _core.ImuSimulator(cfg)
+    bad = [
+        ("dv_m_s", dict(out, dv_m_s=np.zeros((10, 3)))),
+        ("temp_c", dict(out, temp_c=np.zeros(700, dtype=np.float32))),
+        ("yaw_rad", dict(out, yaw_rad=np.zeros(1400)[::2])),
+        ("dtheta_rad", dict(out, dtheta_rad=np.zeros((700, 4)))),
+        ("pitch_rad", {k: v for k, v in out.items() if k != "pitch_rad"}),
+        ("roll_rad", dict(out, roll_rad=out["t_s"])),
+    ]
+    for key, arrays in bad:
+        with pytest.raises(CoreError) as info:
+            sim.fill_into(arrays)
+        assert type(info.value) is CoreError and info.value.key == key, str(info.value)
+    assert sim.samples_done == 0

@@ -501,13 +501,13 @@ impl ImuSimulator {
     pub fn fill(&mut self, out: ImuChunkSlices<'_>) -> Result<usize, CoreError> {
         let m = self.remaining().min(out.t_s.len() as u64) as usize;
         let short = [
-            ("dtheta", out.dtheta.len(), 3 * m),
-            ("dv", out.dv.len(), 3 * m),
+            ("dtheta_rad", out.dtheta.len(), 3 * m),
+            ("dv_m_s", out.dv.len(), 3 * m),
             ("temp_c", out.temp_c.len(), m),
-            ("table_angle", out.table_angle.len(), m),
-            ("pitch", out.pitch.len(), m),
-            ("roll", out.roll.len(), m),
-            ("yaw", out.yaw.len(), m),
+            ("table_angle_rad", out.table_angle.len(), m),
+            ("pitch_rad", out.pitch.len(), m),
+            ("roll_rad", out.roll.len(), m),
+            ("yaw_rad", out.yaw.len(), m),
         ]
         .into_iter()
         .find(|(_, len, need)| len < need);

@@ -143,7 +143,7 @@ fn simulator_refuses_short_buffers_tiny_spans_and_huge_chunks() {
         roll: &mut g,
         yaw: &mut h,
     };
-    assert_eq!(sim.fill(out).unwrap_err().key(), "dv");
+    assert_eq!(sim.fill(out).unwrap_err().key(), "dv_m_s");
     assert_eq!(sim.samples_done(), 0);
     assert_eq!(sim.chunk_len(0).unwrap_err().key(), "n");
     assert!(sim.chunk_len(MAX_CHUNK_SAMPLES + 1).is_err());

@@ -8,11 +8,14 @@ use gyrodrift_core::attitude::Euler;
 use gyrodrift_core::earth;
 use gyrodrift_core::error::CoreError as CoreFailure;
 use gyrodrift_core::imu_error::ImuErrorParams;
-use gyrodrift_core::simulator::{ImuChunkSlices, ImuSimulator as CoreSimulator, ImuSimulatorConfig};
+use gyrodrift_core::simulator::{ImuChunk, ImuChunkSlices, ImuSimulator as CoreSimulator, ImuSimulatorConfig};
 use gyrodrift_core::strapdown::{NavState, Navigator as CoreNavigator, NavigatorConfig, Vertical};
 use gyrodrift_core::temperature::TemperatureProfile;
 use gyrodrift_core::turntable::{balanced_reciprocating_span, RotationScheme};
-use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{
+    IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadwriteArray1,
+    PyReadwriteArray2, PyUntypedArrayMethods,
+};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::collections::HashMap;
@@ -290,108 +293,11 @@ fn sim_config(d: &Bound<'_, PyDict>) -> PyResult<ImuSimulatorConfig> {
     })
 }
 
-/// The eight output arrays of one `ImuSimulator.next_chunk` call.
-struct ChunkArrays {
-    t_s: Py<PyArray1<f64>>,
-    dtheta: Py<PyArray2<f64>>,
-    dv: Py<PyArray2<f64>>,
-    temp_c: Py<PyArray1<f64>>,
-    table: Py<PyArray1<f64>>,
-    pitch: Py<PyArray1<f64>>,
-    roll: Py<PyArray1<f64>>,
-    yaw: Py<PyArray1<f64>>,
-}
-
-/// Only the pool refers to `obj` (no dict, variable, view or buffer export of it is alive in Python).
-fn sole_owner<T>(obj: &Py<T>) -> bool {
-    // SAFETY: the pointer is a valid object kept alive by `obj`; called with the GIL held.
-    unsafe { pyo3::ffi::Py_REFCNT(obj.as_ptr()) == 1 }
-}
-
-impl ChunkArrays {
-    /// Fresh uninitialised arrays of m samples (every element is written by `fill` before Python sees it).
-    fn new(py: Python<'_>, m: usize) -> Self {
-        // SAFETY: see above; f64 has no invalid bit patterns.
-        unsafe {
-            ChunkArrays {
-                t_s: PyArray1::<f64>::new(py, m, false).unbind(),
-                dtheta: PyArray2::<f64>::new(py, [m, 3], false).unbind(),
-                dv: PyArray2::<f64>::new(py, [m, 3], false).unbind(),
-                temp_c: PyArray1::<f64>::new(py, m, false).unbind(),
-                table: PyArray1::<f64>::new(py, m, false).unbind(),
-                pitch: PyArray1::<f64>::new(py, m, false).unbind(),
-                roll: PyArray1::<f64>::new(py, m, false).unbind(),
-                yaw: PyArray1::<f64>::new(py, m, false).unbind(),
-            }
-        }
-    }
-
-    fn clone_ref(&self, py: Python<'_>) -> Self {
-        ChunkArrays {
-            t_s: self.t_s.clone_ref(py),
-            dtheta: self.dtheta.clone_ref(py),
-            dv: self.dv.clone_ref(py),
-            temp_c: self.temp_c.clone_ref(py),
-            table: self.table.clone_ref(py),
-            pitch: self.pitch.clone_ref(py),
-            roll: self.roll.clone_ref(py),
-            yaw: self.yaw.clone_ref(py),
-        }
-    }
-
-    /// True if these arrays were handed out before, Python has dropped every reference to them, and they
-    /// still have m samples, C order and write access: they can be filled again without anyone noticing.
-    fn reusable(&self, py: Python<'_>, m: usize) -> bool {
-        let ones = [&self.t_s, &self.temp_c, &self.table, &self.pitch, &self.roll, &self.yaw];
-        let twos = [&self.dtheta, &self.dv];
-        ones.iter()
-            .all(|a| sole_owner(a) && a.bind(py).shape() == [m] && a.bind(py).is_c_contiguous())
-            && twos
-                .iter()
-                .all(|a| sole_owner(a) && a.bind(py).shape() == [m, 3] && a.bind(py).is_c_contiguous())
-            && ones.iter().all(|a| a.bind(py).try_readwrite().is_ok())
-            && twos.iter().all(|a| a.bind(py).try_readwrite().is_ok())
-    }
-
-    /// Fill the arrays with the next samples of `sim` (GIL released while simulating).
-    fn fill(&self, py: Python<'_>, sim: &mut CoreSimulator) -> PyResult<usize> {
-        let ones =
-            [&self.t_s, &self.temp_c, &self.table, &self.pitch, &self.roll, &self.yaw].map(|a| a.bind(py).clone());
-        let mut w1 = Vec::with_capacity(6);
-        for a in &ones {
-            w1.push(a.try_readwrite().map_err(|e| value_err(e.to_string()))?);
-        }
-        let (dtheta, dv) = (self.dtheta.bind(py), self.dv.bind(py));
-        let mut w_dtheta = dtheta.try_readwrite().map_err(|e| value_err(e.to_string()))?;
-        let mut w_dv = dv.try_readwrite().map_err(|e| value_err(e.to_string()))?;
-        let [b_t, b_temp, b_table, b_pitch, b_roll, b_yaw] = &mut w1[..] else {
-            unreachable!()
-        };
-        let out = ImuChunkSlices {
-            t_s: b_t.as_slice_mut()?,
-            dtheta: w_dtheta.as_slice_mut()?,
-            dv: w_dv.as_slice_mut()?,
-            temp_c: b_temp.as_slice_mut()?,
-            table_angle: b_table.as_slice_mut()?,
-            pitch: b_pitch.as_slice_mut()?,
-            roll: b_roll.as_slice_mut()?,
-            yaw: b_yaw.as_slice_mut()?,
-        };
-        py.detach(|| sim.fill(out)).map_err(core_err)
-    }
-}
-
-/// Chunks kept for reuse: the typical loop `while (c := sim.next_chunk(n)) is not None` still holds the
-/// previous chunk during the call, so the one before it is the first that can be free.
-const CHUNK_POOL: usize = 2;
-
 /// Static-base IMU simulator with a single-axis turntable (see gyrodrift-core `simulator`).
 /// `ImuSimulator(config: dict)` with SI floats; `next_chunk(n)` streams the run.
 #[pyclass(module = "gyrodrift._core")]
 struct ImuSimulator {
     inner: CoreSimulator,
-    /// The arrays of the last chunks handed out, refilled once Python has dropped them (see `next_chunk`).
-    pool: Vec<ChunkArrays>,
 }
 
 #[pymethods]
@@ -401,7 +307,6 @@ impl ImuSimulator {
         let cfg = sim_config(config)?;
         Ok(ImuSimulator {
             inner: CoreSimulator::new(cfg).map_err(core_err)?,
-            pool: Vec::new(),
         })
     }
 
@@ -442,31 +347,83 @@ impl ImuSimulator {
         if m == 0 {
             return Ok(None);
         }
-        // The simulator writes straight into numpy arrays (no intermediate copy). Arrays of an earlier chunk
-        // that Python no longer references are refilled; fresh ones would cost a page fault per 4 kB (their
-        // memory comes from mmap at these sizes). Fresh arrays are created uninitialised: `fill` writes every
-        // element of m samples (m <= remaining) before they reach Python.
-        let arrays = match self.pool.iter().position(|a| a.reusable(py, m)) {
-            Some(i) => self.pool.remove(i),
-            None => ChunkArrays::new(py, m),
-        };
-        let written = arrays.fill(py, &mut self.inner)?;
+        // The core fills owned buffers with the GIL released; numpy then takes them over without a copy.
+        let mut chunk = ImuChunk::default();
+        let inner = &mut self.inner;
+        let written = py.detach(|| inner.next_chunk(m, &mut chunk));
         debug_assert_eq!(written, m);
         let d = PyDict::new(py);
-        d.set_item("t_s", arrays.t_s.bind(py))?;
-        d.set_item("dtheta_rad", arrays.dtheta.bind(py))?;
-        d.set_item("dv_m_s", arrays.dv.bind(py))?;
-        d.set_item("temp_c", arrays.temp_c.bind(py))?;
-        d.set_item("table_angle_rad", arrays.table.bind(py))?;
-        d.set_item("pitch_rad", arrays.pitch.bind(py))?;
-        d.set_item("roll_rad", arrays.roll.bind(py))?;
-        d.set_item("yaw_rad", arrays.yaw.bind(py))?;
-        if self.pool.len() >= CHUNK_POOL {
-            self.pool.remove(0);
-        }
-        self.pool.push(arrays.clone_ref(py));
+        let n3 = |v: Vec<f64>| -> PyResult<Bound<'py, PyArray2<f64>>> {
+            // Invariant: the core gives 3 m values for the (m, 3) arrays.
+            let a = numpy::ndarray::Array2::from_shape_vec((m, 3), v).expect("3 values per sample");
+            Ok(a.into_pyarray(py))
+        };
+        d.set_item("t_s", chunk.t_s.into_pyarray(py))?;
+        d.set_item("dtheta_rad", n3(chunk.dtheta)?)?;
+        d.set_item("dv_m_s", n3(chunk.dv)?)?;
+        d.set_item("temp_c", chunk.temp_c.into_pyarray(py))?;
+        d.set_item("table_angle_rad", chunk.table_angle.into_pyarray(py))?;
+        d.set_item("pitch_rad", chunk.pitch.into_pyarray(py))?;
+        d.set_item("roll_rad", chunk.roll.into_pyarray(py))?;
+        d.set_item("yaw_rad", chunk.yaw.into_pyarray(py))?;
         Ok(Some(d))
     }
+
+    /// Fill caller-provided arrays with the next samples instead of allocating a chunk (reuse the same
+    /// buffers in a streaming loop: a fresh chunk costs page faults and zeroing). `out` holds the keys of
+    /// `next_chunk`, each a writeable C-contiguous float64 array: (n,) or (n, 3). Fills the first
+    /// min(n, remaining) samples of every array and returns that count (0 when the run is over); the rest
+    /// of the arrays is left as it was. The caller owns the buffers: a kept chunk is overwritten by the next
+    /// call. Buffers too short, of another dtype or not contiguous are a `CoreError` naming the key.
+    fn fill_into(&mut self, py: Python<'_>, out: &Bound<'_, PyDict>) -> PyResult<usize> {
+        let mut t = writeable1(out, "t_s")?;
+        let mut dth = writeable2(out, "dtheta_rad")?;
+        let mut dv = writeable2(out, "dv_m_s")?;
+        let mut temp = writeable1(out, "temp_c")?;
+        let mut table = writeable1(out, "table_angle_rad")?;
+        let mut pitch = writeable1(out, "pitch_rad")?;
+        let mut roll = writeable1(out, "roll_rad")?;
+        let mut yaw = writeable1(out, "yaw_rad")?;
+        let contiguous = |key: &'static str| arg_err(key, "expected a C-contiguous array");
+        let slices = ImuChunkSlices {
+            t_s: t.as_slice_mut().map_err(|_| contiguous("t_s"))?,
+            dtheta: dth.as_slice_mut().map_err(|_| contiguous("dtheta_rad"))?,
+            dv: dv.as_slice_mut().map_err(|_| contiguous("dv_m_s"))?,
+            temp_c: temp.as_slice_mut().map_err(|_| contiguous("temp_c"))?,
+            table_angle: table.as_slice_mut().map_err(|_| contiguous("table_angle_rad"))?,
+            pitch: pitch.as_slice_mut().map_err(|_| contiguous("pitch_rad"))?,
+            roll: roll.as_slice_mut().map_err(|_| contiguous("roll_rad"))?,
+            yaw: yaw.as_slice_mut().map_err(|_| contiguous("yaw_rad"))?,
+        };
+        let inner = &mut self.inner;
+        py.detach(|| inner.fill(slices)).map_err(core_err)
+    }
+}
+
+/// The writeable (n,) float64 array `out[key]` of `fill_into`.
+fn writeable1<'py>(out: &Bound<'py, PyDict>, key: &'static str) -> PyResult<PyReadwriteArray1<'py, f64>> {
+    out.get_item(key)?
+        .ok_or_else(|| arg_err(key, "missing from the output arrays"))?
+        .extract()
+        .map_err(|_| arg_err(key, "expected a writeable (n,) float64 array, distinct from the others"))
+}
+
+/// The writeable (n, 3) float64 array `out[key]` of `fill_into`.
+fn writeable2<'py>(out: &Bound<'py, PyDict>, key: &'static str) -> PyResult<PyReadwriteArray2<'py, f64>> {
+    let a: PyReadwriteArray2<'py, f64> = out
+        .get_item(key)?
+        .ok_or_else(|| arg_err(key, "missing from the output arrays"))?
+        .extract()
+        .map_err(|_| {
+            arg_err(
+                key,
+                "expected a writeable (n, 3) float64 array, distinct from the others",
+            )
+        })?;
+    if a.shape()[1] != 3 {
+        return Err(arg_err(key, format!("expected shape (n, 3), got {:?}", a.shape())));
+    }
+    Ok(a)
 }
 
 const NAV_KEYS: &[&str] = &[
