@@ -119,3 +119,19 @@ def test_too_few_runs_for_the_coverage_is_said_not_printed_as_infinity(tmp_path)
     )
     r = CliRunner().invoke(main, args + ["--coverage", "0.8"])
     assert r.exit_code == 0 and "Infinity" not in r.output
+
+
+@pytest.mark.parametrize("bad", ["nan", "inf", "0", "1"])
+def test_predict_refuses_a_coverage_that_is_not_a_probability(tmp_path, bad):
+    paper = load_paper()
+    save_model(fit_drift_model(paper.train, gamma=30.0, sigma=1.5), tmp_path / "m.json")
+    csv_path = tmp_path / "paper.csv"
+    csv_path.write_bytes(paper_csv_path().read_bytes())
+    r = CliRunner().invoke(
+        main, ["predict", str(tmp_path / "m.json"), str(csv_path), "--lat0-deg", "28.222", "--coverage", bad]
+    )
+    assert r.exit_code == 2 and "Invalid value for '--coverage'" in r.output and "NaN" not in r.output
+    from gyrodrift.errors import OptionError
+
+    with pytest.raises(OptionError, match="coverage must be within"):
+        jackknife_half_width([1.0, 2.0], float(bad))

@@ -482,3 +482,96 @@ def test_works_in_pipeline_and_grid_search():
     search.fit(X, y)
     assert search.best_params_["lssvr__gamma"] == 100.0
     assert search.best_score_ > 0.9
+
+
+# ------------------------------------------------------------------ issue 8: never a NaN, say when not to trust
+
+
+@pytest.mark.parametrize("sigma", [1e-200, 1e-160, 1e160])
+def test_sigma_whose_square_is_not_a_normal_float_is_refused_not_nan(sigma):
+    from gyrodrift.errors import OptionError
+
+    X, y = make_data(n=8)
+    with pytest.raises(OptionError, match=r"sigma must be within \[1\.49e-154, 1\.34e\+154\]"):
+        LSSVR(gamma=1.0, sigma=sigma).fit(X, y)
+    with pytest.raises(OptionError, match="sigma must be within"):
+        kernel_matrix(X, sigma=sigma)
+    # just inside the range the RBF kernel is the identity off the data: finite, no NaN
+    model = LSSVR(gamma=1.0, sigma=1e-150).fit(X, y)
+    assert np.all(np.isfinite(model.predict(X + 0.5)))
+
+
+def _paper_inputs():
+    from sklearn.preprocessing import StandardScaler
+
+    from gyrodrift.datasets import load_paper
+    from gyrodrift.encodings import encode
+
+    train = load_paper().train
+    return StandardScaler().fit_transform(encode(train, "temp_range")), train.drift_deg_h
+
+
+def test_condition_number_estimate_is_within_a_small_factor_of_the_exact_one():
+    X, y = _paper_inputs()
+    for gamma, sigma in [(100.0, 1.0), (1e4, 3.0), (1e8, 10.0)]:
+        model = LSSVR(gamma=gamma, sigma=sigma).fit(X, y)
+        H = kernel_matrix(X, sigma=sigma) + np.eye(len(y)) / gamma
+        exact = np.linalg.cond(H, 1)
+        assert exact / 3 <= model.condition_number_ <= exact * 1.0000001
+
+
+def test_meaningless_solve_is_refused_and_untrustworthy_one_warned():
+    import warnings
+
+    from gyrodrift.lssvr import COND_REFUSE, COND_WARN, IllConditionedError, IllConditionedWarning
+
+    X, y = _paper_inputs()
+    # gamma 1e16, sigma 100 (issue 8): cond 2.7e18; the float64 LOO MAE was 0.0132 deg/h, the exact 0.0045
+    with pytest.raises(IllConditionedError, match=r"condition number 2\.\d+e\+18 >= 1/eps = 4\.5e\+15"):
+        LSSVR(gamma=1e16, sigma=100.0).fit(X, y)
+    with pytest.raises(IllConditionedError):
+        lssvr_loo_residuals(kernel_matrix(X, sigma=100.0), y, 1e16)
+    with pytest.warns(IllConditionedWarning, match=r"condition number 3\.\d+e\+15 > 4\.5e\+12"):
+        model = LSSVR(gamma=1e14, sigma=100.0).fit(X, y)
+    assert COND_WARN < model.condition_number_ < COND_REFUSE
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert LSSVR(gamma=1e10, sigma=30.0).fit(X, y).condition_number_ < COND_WARN
+
+
+def test_n_by_n_buffers_are_checked_against_the_available_memory_before_allocating(monkeypatch):
+    import gyrodrift.kernels as kernels
+    from gyrodrift.kernels import MemoryLimitError
+    from gyrodrift.tuning import make_objective
+
+    monkeypatch.setattr(kernels, "available_memory_bytes", lambda: 8 * 4 * 100 * 100)  # four 100 x 100 matrices
+    X, y = make_data(n=100)
+    LSSVR().fit(X, y)  # exactly fits
+    X, y = make_data(n=101)
+    with pytest.raises(MemoryLimitError, match=r"fitting the LSSVR on 101 samples needs .* enough for at most 100"):
+        LSSVR().fit(X, y)
+    with pytest.raises(MemoryLimitError, match=r"tuning the LSSVR on 101 samples"):
+        make_objective(X, y)
+    # the 200 000-run table of issue 8 would need 1.2 TiB for four matrices: said, not attempted
+    monkeypatch.setattr(kernels, "available_memory_bytes", lambda: 16 * 2**30)
+    with pytest.raises(MemoryLimitError, match=r"on 200000 samples needs about 1\.19e\+03 GiB .* at most 23170"):
+        kernels.check_matrix_memory(200_000, 200_000, 4, "fitting the LSSVR", unit="samples")
+
+
+def test_non_finite_predictions_are_refused_not_returned():
+    from gyrodrift.lssvr import NonFiniteResultError
+
+    X, y = make_data(n=10)
+    model = LSSVR(gamma=1.0, sigma=1.0, kernel="poly", degree=9).fit(X, y)
+    with pytest.raises(NonFiniteResultError, match="prediction is not finite"):
+        model.predict(np.full((1, 2), 1e200))
+    with pytest.raises(NonFiniteResultError, match="kernel matrix is not finite"):
+        LSSVR(gamma=1.0, sigma=1e-150, kernel="poly", degree=9).fit(X, y)
+
+
+def test_loo_residuals_are_a_documented_fitted_attribute():
+    X, y = make_data(n=12)
+    model = LSSVR(gamma=10.0, sigma=0.8).fit(X, y)
+    assert rel_err(model.loo_residuals_, brute_force_loo(model, X, y)) < 1e-8
+    np.testing.assert_array_equal(model.loo_residuals(), model.loo_residuals_)
+    assert "loo_residuals_" in LSSVR.__doc__ and "condition_number_" in LSSVR.__doc__

@@ -1,6 +1,8 @@
 """Model files: exact round trip, and clear errors for anything that is not a valid model file."""
 
 import json
+import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -85,3 +87,131 @@ def test_corrupted_and_missing_files(tmp_path, good_doc):
     binary.write_bytes(b"\x80\x04\x95\xff\xfe")
     with pytest.raises(ModelFileError, match="not a text file"):
         load_model(binary)
+
+
+# --- issue 8: hostile model files, old files, what fit warns about ------------------------------------------
+def test_schema_1_file_written_before_the_pipeline_model_is_refused_with_a_refit_message():
+    # tests/data/model_schema1.json was written by gyrodrift at commit a88f125 (fit_drift_model on the paper's
+    # training runs, temp_mean, minmax, gamma 30, sigma 1.5): fitted internals, no training runs.
+    path = Path(__file__).parent / "data" / "model_schema1.json"
+    assert json.loads(path.read_text())["schema_version"] == 1
+    with pytest.raises(
+        ModelFileError, match=r"model_schema1.json: a schema 1 model file .* refit it with `gyrodrift fit`"
+    ):
+        load_model(path)
+
+
+@pytest.mark.parametrize(
+    "edit, key",
+    [
+        (lambda t: t.replace('"gamma": 10.0', '"gamma": ' + "7" * 450), "gamma"),
+        (lambda t: t.replace('"gamma": 10.0', '"gamma": ' + "7" * 5000), "gamma"),
+        (lambda t: t.replace('"lat_deg": 28.2', '"lat_deg": -' + "9" * 401 + '.0, "x": 28.2', 1), None),
+        (lambda t: t.replace('"n_particles": 30', '"n_particles": ' + "3" * 420), "n_particles"),
+    ],
+)
+def test_huge_integers_name_file_and_key(tmp_path, good_doc, edit, key):
+    text = edit(json.dumps(good_doc))
+    path = tmp_path / "huge.json"
+    path.write_text(text)
+    with pytest.raises(ModelFileError, match=r"huge.json") as info:
+        load_model(path)
+    if key is not None:
+        assert re.search(rf"key '[\w.]*{key}' holds an integer of \d+ digits", str(info.value)), info.value
+
+
+def test_huge_integer_that_python_reads_but_float_cannot_names_the_key(tmp_path, good_doc):
+    good_doc["lssvr_params"]["gamma"] = 10**350  # 351 digits: below the digit guard, above float range
+    good_doc["lssvr_params"]["sigma"] = 1.0
+    path = tmp_path / "big.json"
+    path.write_text(json.dumps(good_doc))
+    with pytest.raises(ModelFileError, match=r"big.json \[lssvr_params\]: key 'gamma' holds an integer too large"):
+        load_model(path)
+
+
+def test_deeply_nested_json_is_a_model_file_error(tmp_path):
+    path = tmp_path / "deep.json"
+    path.write_text("[" * 100_000 + "]" * 100_000)
+    with pytest.raises(ModelFileError, match="deep.json: JSON nested too deeply"):
+        load_model(path)
+    path.write_text(
+        '{"format": "gyrodrift-drift-model", "schema_version": 2, "encoding": ' + "[" * 500 + "]" * 500 + "}"
+    )
+    with pytest.raises(ModelFileError, match="deep.json: key 'encoding' has the wrong type"):
+        load_model(path)
+
+
+@pytest.mark.parametrize("sigma", [1e-200, 1e200])
+def test_a_model_file_with_a_sigma_whose_square_is_not_a_normal_float_is_refused(tmp_path, good_doc, sigma):
+    good_doc["lssvr_params"]["sigma"] = sigma
+    path = tmp_path / "tiny.json"
+    path.write_text(json.dumps(good_doc))
+    with pytest.raises(ModelFileError, match=r"tiny.json: the model cannot be rebuilt .* sigma must be within"):
+        load_model(path)
+
+
+def test_an_ill_conditioned_model_file_is_refused(tmp_path, good_doc):
+    good_doc["lssvr_params"].update(gamma=1e16, sigma=100.0)
+    good_doc["fitted"].update(gamma=1e16, sigma=100.0)
+    path = tmp_path / "ill.json"
+    path.write_text(json.dumps(good_doc))
+    with pytest.raises(ModelFileError, match=r"ill.json: .*condition number 2\.\d+e\+18"):
+        load_model(path)
+
+
+def test_fit_warns_on_the_search_box_edge_on_stderr_and_in_the_file(tmp_path, paper):
+    from click.testing import CliRunner
+
+    from gyrodrift.cli import main
+    from gyrodrift.datasets import paper_csv_path
+
+    csv_path = tmp_path / "paper.csv"
+    csv_path.write_bytes(paper_csv_path().read_bytes())
+    out = tmp_path / "m.json"
+    args = ["fit", str(csv_path), "--lat0-deg", "28.222", "--split", "train", "--out", str(out), "--quiet"]
+    r = CliRunner().invoke(main, args + ["--objective", "train_mae", "--method", "grid"])
+    assert r.exit_code == 0, r.output
+    assert "warning: tuned value on the edge of its search box: gamma = 100000 in [0.01, 100000]" in r.stderr
+    doc = json.loads(out.read_text())
+    assert doc["fitted"]["on_search_bound"] == ["gamma"] and doc["warnings"][0].startswith("tuned value on the edge")
+    r = CliRunner().invoke(main, args + ["--method", "grid"])  # the LOO optimum lies inside the box
+    assert r.exit_code == 0 and "warning" not in r.stderr and json.loads(out.read_text())["warnings"] == []
+
+
+@pytest.mark.parametrize(
+    "extra, exit_code, message",
+    [
+        (["--gamma", "1", "--sigma", "1e-200"], 2, "Invalid value for '--sigma'"),
+        (["--gamma", "nan", "--sigma", "1"], 2, "Invalid value for '--gamma'"),
+        (["--split", "train", "--gamma", "1e16", "--sigma", "100"], 1, "--gamma 1e+16 --sigma 100: LSSVR: H = K"),
+        (["--gamma", "1e16", "--sigma", "100"], 1, "--gamma 1e+16 --sigma 100: LSSVR: H = K + I/gamma is not positive"),
+    ],
+)
+def test_fit_refuses_fixed_parameters_with_no_meaningful_solution(tmp_path, extra, exit_code, message):
+    from click.testing import CliRunner
+
+    from gyrodrift.cli import main
+    from gyrodrift.datasets import paper_csv_path
+
+    csv_path = tmp_path / "paper.csv"
+    csv_path.write_bytes(paper_csv_path().read_bytes())
+    out = tmp_path / "m.json"
+    r = CliRunner().invoke(main, ["fit", str(csv_path), "--lat0-deg", "28.222", "--out", str(out), *extra])
+    assert r.exit_code == exit_code and message in r.output, r.output
+    assert "Traceback" not in r.output and not out.exists()
+
+
+def test_ill_conditioned_but_usable_fit_warns_with_the_condition_number(tmp_path):
+    from click.testing import CliRunner
+
+    from gyrodrift.cli import main
+    from gyrodrift.datasets import paper_csv_path
+
+    csv_path = tmp_path / "paper.csv"
+    csv_path.write_bytes(paper_csv_path().read_bytes())
+    out = tmp_path / "m.json"
+    args = ["fit", str(csv_path), "--lat0-deg", "28.222", "--split", "train", "--out", str(out)]
+    r = CliRunner().invoke(main, args + ["--gamma", "1e14", "--sigma", "100"])
+    assert r.exit_code == 0, r.output
+    assert re.search(r"warning: LSSVR: H = K \+ I/gamma .* condition number 3\.\d+e\+15 > 4\.5e\+12", r.stderr)
+    assert "condition number" in json.loads(out.read_text())["warnings"][0]

@@ -150,3 +150,40 @@ def test_binary_file(tmp_path):
 def test_missing_file(tmp_path):
     with pytest.raises(RunTableError, match=r"nope.csv: cannot open"):
         read_runs_csv(tmp_path / "nope.csv", lat0_deg=0.0)
+
+
+# --- records, structured arrays and indexing (how a model file and scikit-learn see a table) ------------------
+def test_records_and_structured_arrays_round_trip_with_the_csv_checks():
+    from gyrodrift.runs import RunTable, as_run_table
+
+    runs = load_paper().runs
+    again = RunTable.from_records(runs.records(), source="x")
+    structured = as_run_table(runs.to_structured())
+    for table in (again, structured):
+        for name in ("run", "lat_deg", "lat0_deg", "temp_min_c", "temp_max_c", "drift_deg_h", "split"):
+            assert np.array_equal(getattr(table, name), getattr(runs, name)), name
+    bad = runs.records()
+    bad[4]["temp_max_c"] = 303.0
+    with pytest.raises(RunTableError, match=r"x, run 5, key temp_max_c: temperature 303.0 outside \[-100, 200\]"):
+        RunTable.from_records(bad, source="x")
+    bad = runs.records()
+    bad[2]["run"] = bad[0]["run"]
+    with pytest.raises(RunTableError, match=r"x, run 3: run '1' appears more than once"):
+        RunTable.from_records(bad, source="x")
+    with pytest.raises(RunTableError, match="expected a RunTable or a 1-D structured array"):
+        as_run_table([[1.0, 2.0]])
+
+
+def test_a_table_indexes_like_a_one_dimensional_array():
+    runs = load_paper().runs
+    assert runs.shape == (32,)
+    assert list(runs[[0, 3]].run) == ["1", "4"] and list(runs[np.arange(2), ...].run) == ["1", "2"]
+    assert list(runs[runs.split == "test"].run) == list(runs.select(runs.split == "test").run)
+    assert len(runs[5]) == 1 and len(runs[2:4]) == 2
+
+
+def test_malformed_csv_is_a_run_table_error_with_its_row(tmp_path):
+    path = tmp_path / "big.csv"
+    path.write_text('run,lat_deg,temp_min_c,temp_max_c\n1,28.2,1,2\n2,"' + "x" * 200_000 + '",1,2\n')
+    with pytest.raises(RunTableError, match=r"big.csv, row 3: malformed CSV"):
+        read_runs_csv(path, lat0_deg=28.222)

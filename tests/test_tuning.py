@@ -82,3 +82,106 @@ def test_train_mae_rewards_interpolation(data):
     f = make_objective(X, y, "train_mae")
     vals = f(np.array([[1.0, 1.0], [1e3, 0.3], [1e5, 0.05]]))
     assert vals[0] > vals[1] > vals[2]
+
+
+# --- the whole drift model as a scikit-learn pipeline, tuning inside fit ---------------------------------
+@pytest.fixture(scope="module")
+def paper():
+    from gyrodrift.datasets import load_paper
+
+    return load_paper()
+
+
+def test_tuning_inside_fit_is_the_tuner_then_an_lssvr(paper):
+    from sklearn.preprocessing import StandardScaler
+
+    from gyrodrift.encodings import encode
+    from gyrodrift.model import fit_drift_model
+
+    model = fit_drift_model(paper.train, method="cpso", max_iter=8, n_particles=6, rng=4)
+    Xs = StandardScaler().fit_transform(encode(paper.train, "temp_range"))
+    res = tune_lssvr(Xs, paper.train.drift_deg_h, max_iter=8, n_particles=6, rng=4)
+    assert (model.tuning.gamma, model.tuning.sigma, model.tuning.history) == (res.gamma, res.sigma, res.history)
+    direct = LSSVR(gamma=res.gamma, sigma=res.sigma).fit(Xs, paper.train.drift_deg_h)
+    assert model.lssvr.alpha_.tobytes() == direct.alpha_.tobytes()
+    assert model.loo_residuals().tobytes() == direct.loo_residuals_.tobytes()
+
+
+def test_clone_gives_an_unfitted_twin_that_refits_to_the_same_bits(paper):
+    from sklearn.base import clone
+    from sklearn.exceptions import NotFittedError
+
+    from gyrodrift.model import DriftModel, make_drift_model
+
+    model = make_drift_model(encoding="temp_span", method="pso", max_iter=6, n_particles=6, random_state=2)
+    model.fit(paper.train)
+    twin = clone(model)
+    assert isinstance(twin, DriftModel) and twin.get_params()["lssvr__random_state"] == 2
+    with pytest.raises(NotFittedError):
+        twin.predict(paper.test)
+    twin.fit(paper.train)
+    assert twin.predict(paper.test).tobytes() == model.predict(paper.test).tobytes()
+
+
+def test_cross_val_score_on_the_whole_model_equals_manual_folds(paper):
+    from sklearn.model_selection import KFold, cross_val_score
+
+    from gyrodrift.model import fit_drift_model, make_drift_model
+
+    runs, y = paper.train, paper.train.drift_deg_h
+    cv = KFold(4)
+    scores = cross_val_score(make_drift_model(gamma=30.0, sigma=1.5), runs, y, cv=cv, scoring="neg_mean_absolute_error")
+    manual = []
+    for train, test in cv.split(np.arange(len(runs))):
+        m = fit_drift_model(runs.select(train), gamma=30.0, sigma=1.5)
+        manual.append(-np.mean(np.abs(y[test] - m.predict(runs.select(test)))))
+    np.testing.assert_array_equal(scores, manual)
+    # The structured-array form of the same runs gives the same scores.
+    again = cross_val_score(
+        make_drift_model(gamma=30.0, sigma=1.5), runs.to_structured(), y, cv=cv, scoring="neg_mean_absolute_error"
+    )
+    np.testing.assert_array_equal(again, scores)
+
+
+@pytest.mark.filterwarnings("ignore::gyrodrift.tuning.SearchBoundWarning")
+def test_grid_search_over_encoding_scaling_and_objective(paper):
+    from sklearn.model_selection import GridSearchCV
+    from sklearn.preprocessing import StandardScaler
+
+    from gyrodrift.model import DriftModel, make_drift_model
+
+    grid = {
+        "encode__encoding": ["temp_range", "lat_only"],
+        "scale": [StandardScaler(), "passthrough"],
+        "lssvr__objective": ["loo_mae", "train_mae"],
+    }
+    search = GridSearchCV(make_drift_model(method="grid", grid_size=6), grid, cv=3, scoring="neg_mean_absolute_error")
+    search.fit(paper.train, paper.train.drift_deg_h)
+    assert len(search.cv_results_["params"]) == 8
+    best = search.best_estimator_
+    assert isinstance(best, DriftModel) and best.encoding == search.best_params_["encode__encoding"]
+    assert best.training["n_runs"] == 22 and np.all(np.isfinite(best.predict(paper.test)))
+
+
+def test_estimator_parameters_are_keyword_only():
+    from gyrodrift.model import RunEncoder, TunedLSSVR
+
+    for cls in (LSSVR, TunedLSSVR, RunEncoder):
+        with pytest.raises(TypeError):
+            cls(1.0)
+
+
+def test_edge_of_the_search_box_is_warned_and_recorded(paper):
+    from gyrodrift.model import make_drift_model
+    from gyrodrift.tuning import SearchBoundWarning, on_search_bound
+
+    model = make_drift_model(method="grid", grid_size=5, bounds=((1.0, 2.0), (0.5, 0.6)))
+    with pytest.warns(SearchBoundWarning, match=r"gamma = 2 in \[1, 2\]"):
+        model.fit(paper.train)
+    assert model.named_steps["lssvr"].on_search_bound_ == on_search_bound(
+        model.lssvr.gamma, model.lssvr.sigma, ((1.0, 2.0), (0.5, 0.6))
+    )
+    assert "gamma" in model.named_steps["lssvr"].on_search_bound_
+    assert model.fit_warnings()[0].startswith("tuned value on the edge of its search box")
+    assert on_search_bound(1.5, 0.55, ((1.0, 2.0), (0.5, 0.6))) == []
+    assert on_search_bound(1.0 + 1e-7, 0.6, ((1.0, 2.0), (0.5, 0.6))) == ["gamma", "sigma"]

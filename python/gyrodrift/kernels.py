@@ -180,7 +180,8 @@ def polynomial_kernel(X, Z=None, sigma: float = 1.0, degree: int = 3, coef0: flo
     degree = _check_degree(degree)
     if isinstance(coef0, bool) or not isinstance(coef0, numbers.Real) or not np.isfinite(coef0):
         raise OptionError(f"coef0 must be a finite real number, got {coef0!r}")
-    return (linear_kernel(X, Z) / (sigma * sigma) + float(coef0)) ** degree
+    with np.errstate(over="ignore", invalid="ignore"):  # overflow gives inf, which the LSSVR refuses by name
+        return (linear_kernel(X, Z) / (sigma * sigma) + float(coef0)) ** degree
 
 
 MAX_DEGREE = 64

@@ -638,7 +638,8 @@ class LSSVR(RegressorMixin, BaseEstimator):
         check_is_fitted(self, ("alpha_", "intercept_", "X_fit_"))
         X = _validate_data(self, X, dtype=np.float64, reset=False)
         check_matrix_memory(X.shape[0], self.X_fit_.shape[0], 2, "predicting with the LSSVR", unit="samples")
-        out = self._kernel(X, self.X_fit_) @ self.alpha_ + self.intercept_
+        with np.errstate(over="ignore", invalid="ignore"):  # checked below
+            out = self._kernel(X, self.X_fit_) @ self.alpha_ + self.intercept_
         if not np.all(np.isfinite(out)):
             raise NonFiniteResultError(
                 f"LSSVR: a prediction is not finite for {self._describe()} (kernel overflow on inputs far "

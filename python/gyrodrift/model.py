@@ -329,7 +329,7 @@ class DriftModel(Pipeline):
         if len(runs) < 3:
             raise InputError(f"{runs.source}: need at least 3 training runs, got {len(runs)}")
         super().fit(X, trained.drift_deg_h, **params)
-        self.training_ = {
+        self.training_: dict[str, Any] = {
             "n_runs": len(trained),
             "sha256": training_digest(trained),
             "source": trained.source,

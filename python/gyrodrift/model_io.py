@@ -251,8 +251,8 @@ def model_from_dict(doc: dict, where: str = "<model>") -> DriftModel:
     _refuse_huge_ints(doc, where)
     version = doc.get("schema_version")
     if version == 1:
-        training = doc.get("training") if isinstance(doc.get("training"), dict) else {}
-        source = training.get("source", "its training table")
+        training = doc.get("training")
+        source = training.get("source", "its training table") if isinstance(training, dict) else "its training table"
         raise ModelFileError(
             f"{where}: a schema 1 model file (written by gyrodrift before 0.2: fitted internals, no training "
             f"runs), which this version ({__version__}) no longer reads; refit it with `gyrodrift fit` on "

@@ -155,6 +155,7 @@ def conclusion(results: dict) -> list[str]:
     paper_mae = float(np.mean(np.abs(true - claim_pred)))
     chosen = next(m for m in results["methods"] if m["name"] == results["selected_by_loo"]["name"])
     physics = _method(results, "physics_inversion")
+    assert physics is not None, "results without the physics inversion"
     best_learned = min(
         (m for m in results["methods"] if m["family"] not in ("physics_inversion", "paper_params")),
         key=lambda m: m["test_mae_deg_h"],

@@ -23,6 +23,7 @@ import math
 import time
 import warnings
 from importlib import resources
+from typing import Any
 
 import numpy as np
 
@@ -35,7 +36,14 @@ from gyrodrift.progress import progress
 from gyrodrift.runs import RunTable
 from gyrodrift.tuning import SearchBoundWarning, on_search_bound
 
-PAPER_SETTINGS = {"n_particles": 30, "max_iter": 100, "w": 0.75, "c1": 2.0, "c2": 2.0, "chaos_steps": 10}
+PAPER_SETTINGS: dict[str, Any] = {
+    "n_particles": 30,
+    "max_iter": 100,
+    "w": 0.75,
+    "c1": 2.0,
+    "c2": 2.0,
+    "chaos_steps": 10,
+}
 """The paper's CPSO settings (section 3)."""
 
 PAPER_GAMMA = 102.124
@@ -136,7 +144,9 @@ def _run_reproduction(seed: int, quiet: bool) -> dict:
         tick = lambda _res: bar.update(1) and None  # noqa: E731 - one-line progress hook
         seeds = np.random.SeedSequence(seed).spawn(3 * len(REPORTED_ENCODINGS))
         for k, enc in enumerate(REPORTED_ENCODINGS):
-            common = dict(encoding=enc, scaling=SCALING, n_particles=PAPER_SETTINGS["n_particles"], quiet=True)
+            common: dict[str, Any] = dict(
+                encoding=enc, scaling=SCALING, n_particles=PAPER_SETTINGS["n_particles"], quiet=True
+            )
             m = fit_drift_model(
                 data.train,
                 objective="train_mae",
@@ -158,6 +168,7 @@ def _run_reproduction(seed: int, quiet: bool) -> dict:
                 callback=tick,
                 **common,
             )
+            assert m.tuning is not None
             cpso_nfev = m.tuning.nfev
             methods.append(_model_entry(f"CPSO-LSSVM, LOO MAE ({enc})", "cpso_loo", m, data))
             pso_iter = math.ceil(cpso_nfev / PAPER_SETTINGS["n_particles"]) - 1
@@ -176,6 +187,7 @@ def _run_reproduction(seed: int, quiet: bool) -> dict:
             )
     for enc in REPORTED_ENCODINGS:
         m = fit_drift_model(data.train, encoding=enc, scaling=SCALING, objective="loo_mae", method="grid", quiet=True)
+        assert m.tuning is not None
         m.tuning.settings["grid_size"] = GRID_SIZE
         methods.append(_model_entry(f"grid-search LSSVM, LOO MAE ({enc})", "grid_loo", m, data))
     methods.append(

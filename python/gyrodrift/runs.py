@@ -81,7 +81,7 @@ class RunTable:
     temp_min_c: np.ndarray
     temp_max_c: np.ndarray
     drift_deg_h: np.ndarray
-    split: np.ndarray = field(default=None)  # type: ignore[assignment]
+    split: np.ndarray = field(default=None)  # type: ignore[arg-type]  # filled in by __post_init__
     source: str = "<memory>"
 
     def __post_init__(self):
@@ -382,7 +382,14 @@ def read_runs_csv(path, *, lat0_deg: float | None = None, require_truth: bool = 
         if require_truth and "drift_deg_h" not in col:
             raise RunTableError(f"{name}, row 1: missing column 'drift_deg_h' (true axial drift, deg/h) for training")
 
-        runs, lat, lat0, tmin, tmax, drift, split, rows = [], [], [], [], [], [], [], []
+        runs: list[str] = []
+        split: list[str] = []
+        rows: list[int] = []
+        lat: list[float] = []
+        lat0: list[float] = []
+        tmin: list[float] = []
+        tmax: list[float] = []
+        drift: list[float] = []
         for rownum, row in enumerate(reader, start=2):
             if not row or all(not cell.strip() for cell in row):
                 continue
@@ -401,6 +408,7 @@ def read_runs_csv(path, *, lat0_deg: float | None = None, require_truth: bool = 
                 if not -90.0 <= l0 <= 90.0:
                     raise RunTableError(f"{where}, column lat0_deg: expected a latitude within [-90, 90] deg, got {l0}")
             else:
+                assert lat0_deg is not None  # checked with the header
                 l0 = float(lat0_deg)
             lat0.append(l0)
             if has_minmax:

@@ -91,7 +91,7 @@ def fit(data, out, encoding, scaling, objective, method, gamma, sigma, seed, lat
     """
     from gyrodrift.atomic import check_output_file, recognise_json_format
     from gyrodrift.errors import OptionError
-    from gyrodrift.lssvr import IllConditionedError
+    from gyrodrift.lssvr import IllConditionedError, NotPositiveDefiniteError
     from gyrodrift.model import fit_drift_model
     from gyrodrift.model_io import FORMAT, save_model
 
@@ -119,7 +119,7 @@ def fit(data, out, encoding, scaling, objective, method, gamma, sigma, seed, lat
                 rng=seed,
                 quiet=quiet,
             )
-    except IllConditionedError as exc:
+    except (IllConditionedError, NotPositiveDefiniteError) as exc:
         if gamma is None:
             raise
         raise OptionError(f"--gamma {gamma:g} --sigma {sigma:g}: {exc}") from None
