@@ -1,0 +1,636 @@
+"""Code generation: a fitted drift model as a C99 header/source pair or a ``no_std`` Rust module.
+
+The generated code computes the identified axial drift [deg/h] on the navigation computer from the raw run
+inputs the model's encoding reads (latitude at the 12th hour of free navigation [deg], site latitude [deg],
+temperature extremes over the 12 h [deg C]), exactly as ``DriftModel.predict`` does: the encoding's features
+(`FEATURE_EXPRESSIONS`, the same operations as `gyrodrift.encodings.encode`), the scaler, the kernel (the
+conventions of `gyrodrift.kernels`: rbf ``exp(-|x - z|^2 / sigma^2)``, linear ``x . z``, polynomial
+``(x . z / sigma^2 + coef0)^degree``), the support vectors, alpha and the intercept. Every float is printed with
+17 significant digits, which round-trips a float64, so the constants are the model's bits.
+
+The only differences from Python are in the last bits: the kernel sum ``sum_i alpha_i K_i`` is accumulated in
+order (numpy hands it to BLAS, which blocks and may fuse), ``exp`` is the target's libm (numpy may use its own
+SIMD exp), and an integer power is repeated multiplication (numpy calls ``pow`` for degrees other than 2).
+docs/export.md gives the measured differences.
+
+Provenance travels with the code, as comments and as constants and functions: the training digest (SHA-256 of
+the training runs, `gyrodrift.model.training_digest`), the exporting package's version, the encoding, scaling,
+kernel and hyperparameters, and the range of each feature over the training runs, with a function returning
+the ranges and one saying whether an input lies within them, so that the navigation computer can refuse to
+extrapolate.
+
+This module only builds texts (`export_model` returns ``{file name: text}``); the command writes them
+(`gyrodrift.cli.export`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from gyrodrift import __version__
+from gyrodrift.encodings import encode
+from gyrodrift.errors import InputError, OptionError
+
+__all__ = [
+    "FEATURE_EXPRESSIONS",
+    "LANGUAGES",
+    "RAW_INPUTS",
+    "ExportSpec",
+    "FeatureExpression",
+    "export_model",
+    "export_spec",
+    "output_names",
+]
+
+LANGUAGES: dict[str, tuple[str, ...]] = {
+    "c": ("gyrodrift_model.h", "gyrodrift_model.c"),
+    "rust": ("gyrodrift_model.rs",),
+}
+"""Target languages and the files each export writes."""
+
+RAW_INPUTS: dict[str, str] = {
+    "lat_deg": "latitude at the 12th hour of free navigation [deg]",
+    "lat0_deg": "true site latitude [deg]",
+    "temp_min_c": "lowest system temperature over the 12 h [deg C]",
+    "temp_max_c": "highest system temperature over the 12 h [deg C]",
+}
+"""The raw run inputs (`gyrodrift.runs.RunTable` columns) a generated function can read, with their units."""
+
+
+@dataclass(frozen=True)
+class FeatureExpression:
+    """How one feature of `gyrodrift.choices.ENCODINGS` is computed from the raw inputs in generated code.
+
+    ``c`` and ``rust`` are expression templates: ``{lat_deg}`` and the other `RAW_INPUTS` stand for the input
+    fields, ``{cos}`` (and any other name in ``functions``) for the math function, so that the same operations,
+    in the same order, as `gyrodrift.encodings.encode` are written in each language.
+    """
+
+    inputs: tuple[str, ...]
+    c: str
+    rust: str
+    unit: str
+    functions: tuple[str, ...] = ()
+
+
+FEATURE_EXPRESSIONS: dict[str, FeatureExpression] = {
+    "lat_err_arcsec": FeatureExpression(
+        ("lat_deg", "lat0_deg"), "({lat_deg} - {lat0_deg}) * 3600.0", "({lat_deg} - {lat0_deg}) * 3600.0", "arcsec"
+    ),
+    "temp_min_c": FeatureExpression(("temp_min_c",), "{temp_min_c}", "{temp_min_c}", "deg C"),
+    "temp_max_c": FeatureExpression(("temp_max_c",), "{temp_max_c}", "{temp_max_c}", "deg C"),
+    "temp_mean_c": FeatureExpression(
+        ("temp_min_c", "temp_max_c"),
+        "0.5 * ({temp_min_c} + {temp_max_c})",
+        "0.5 * ({temp_min_c} + {temp_max_c})",
+        "deg C",
+    ),
+    "temp_span_c": FeatureExpression(
+        ("temp_min_c", "temp_max_c"), "{temp_max_c} - {temp_min_c}", "{temp_max_c} - {temp_min_c}", "deg C"
+    ),
+}
+"""Every feature name of every encoding, as generated C and Rust (tests/test_export.py checks that none is
+missing: a new encoding must add its features here)."""
+
+_PREFIX = "gyrodrift_model"
+
+
+@dataclass(frozen=True)
+class ExportSpec:
+    """Everything the generated code needs, as plain numbers (read from a fitted `DriftModel`).
+
+    ``input_ranges`` and ``feature_ranges`` hold (min, max) of each raw input (``inputs``) and of each feature
+    (``feature_names``) over the training runs, in their units; ``mean``/
+    ``scale`` (standard: ``(x - mean) / scale``) or ``scale``/``offset`` (minmax: ``x * scale + offset``)
+    the scaler; ``support_vectors`` are in scaled units.
+    """
+
+    encoding: str
+    scaling: str
+    feature_names: tuple[str, ...]
+    inputs: tuple[str, ...]
+    functions: tuple[str, ...]
+    kernel: str
+    gamma: float
+    sigma: float
+    degree: int
+    coef0: float
+    support_vectors: np.ndarray
+    alpha: np.ndarray
+    intercept: float
+    mean: np.ndarray | None
+    scale: np.ndarray | None
+    offset: np.ndarray | None
+    input_ranges: tuple[tuple[float, float], ...]
+    feature_ranges: tuple[tuple[float, float], ...]
+    training: dict
+    model_sha256: str | None
+
+
+def output_names(lang: str) -> tuple[str, ...]:
+    """The files an export to ``lang`` writes; `OptionError` (naming ``--lang``) for an unknown language."""
+    try:
+        return LANGUAGES[lang]
+    except (KeyError, TypeError):
+        raise OptionError(f"--lang: unknown language {lang!r}; expected one of {', '.join(LANGUAGES)}") from None
+
+
+def _ranges(values: np.ndarray) -> tuple[tuple[float, float], ...]:
+    """(min, max) of each column of ``values``."""
+    values = np.asarray(values, float).reshape(len(values), -1)
+    return tuple((float(lo), float(hi)) for lo, hi in zip(values.min(axis=0), values.max(axis=0), strict=True))
+
+
+def export_spec(model, *, model_sha256: str | None = None) -> ExportSpec:
+    """The numbers of a fitted `gyrodrift.model.DriftModel` that the generated code needs.
+
+    ``model_sha256`` (the SHA-256 of the model file's bytes, if known) is recorded in the provenance.
+    Raises `InputError` if a feature of the model's encoding has no entry in `FEATURE_EXPRESSIONS`.
+    """
+    names = tuple(model.feature_names)
+    missing = [name for name in names if name not in FEATURE_EXPRESSIONS]
+    if missing:
+        raise InputError(
+            f"encoding {model.encoding!r}: feature {', '.join(missing)} has no C/Rust expression in "
+            "gyrodrift.export.FEATURE_EXPRESSIONS; it cannot be exported"
+        )
+    inputs = tuple(name for name in RAW_INPUTS if any(name in FEATURE_EXPRESSIONS[f].inputs for f in names))
+    functions = tuple(sorted({fn for f in names for fn in FEATURE_EXPRESSIONS[f].functions}))
+    est = model.lssvr
+    kernel = "poly" if est.kernel == "polynomial" else str(est.kernel)
+    if kernel == "rbf":
+        functions = tuple(sorted({*functions, "exp"}))
+    sv = np.asarray(est.X_fit_, float)
+    alpha = np.asarray(est.alpha_, float)
+    if alpha.ndim != 1:
+        raise InputError(f"a model with {alpha.shape[1]} targets cannot be exported (one drift per run expected)")
+    scaler = model.named_steps["scale"]
+    runs = getattr(model, "training_", {}).get("runs")
+    if runs is None:
+        raise InputError("the model does not carry its training runs (needed for the input ranges); refit it")
+    mean = scale = offset = None
+    if model.scaling == "standard":
+        mean, scale = np.asarray(scaler.mean_, float), np.asarray(scaler.scale_, float)
+    elif model.scaling == "minmax":
+        scale, offset = np.asarray(scaler.scale_, float), np.asarray(scaler.min_, float)
+    return ExportSpec(
+        encoding=model.encoding,
+        scaling=model.scaling,
+        feature_names=names,
+        inputs=inputs,
+        functions=functions,
+        kernel=kernel,
+        gamma=float(est.gamma),
+        sigma=float(est.sigma),
+        degree=int(est.degree),
+        coef0=float(est.coef0),
+        support_vectors=sv,
+        alpha=alpha,
+        intercept=float(est.intercept_),
+        mean=mean,
+        scale=scale,
+        offset=offset,
+        input_ranges=_ranges(np.column_stack([getattr(runs, name) for name in inputs])),
+        feature_ranges=_ranges(encode(runs, model.encoding)),
+        training=dict(model.training),
+        model_sha256=model_sha256,
+    )
+
+
+def export_model(model, lang: str, *, model_sha256: str | None = None) -> dict[str, str]:
+    """The generated files of ``model`` for ``lang`` (``"c"`` or ``"rust"``): ``{file name: text}``.
+
+    The texts depend only on the model, ``model_sha256`` and the package version (no time stamp), so exporting
+    the same model twice gives the same bytes.
+    """
+    output_names(lang)
+    spec = export_spec(model, model_sha256=model_sha256)
+    return _c_files(spec) if lang == "c" else _rust_files(spec)
+
+
+# --- literals and provenance ---------------------------------------------------------------------------
+
+
+def _lit(x: float) -> str:
+    """A float64 literal valid in C and Rust that reads back as exactly ``x`` (17 significant digits)."""
+    x = float(x)
+    if not math.isfinite(x):
+        raise InputError(f"the model holds a non-finite number ({x}); it cannot be exported")
+    text = format(x, ".17g")
+    if not any(ch in text for ch in ".e"):
+        text += ".0"
+    assert float(text) == x  # 17 significant digits always round-trip a float64
+    return text
+
+
+def _provenance_lines(spec: ExportSpec) -> list[str]:
+    """Human-readable provenance, one line each (the caller adds the comment markers)."""
+    training = spec.training
+    lines = [
+        f"Exported by gyrodrift {__version__} (`gyrodrift export`). Do not edit: export the model file again.",
+        f"Training digest (SHA-256 of the training runs): {training.get('sha256', 'unknown')}",
+        f"Training runs: {training.get('n_runs', 'unknown')} from {training.get('source', 'unknown')}",
+    ]
+    if spec.model_sha256:
+        lines.append(f"Model file SHA-256: {spec.model_sha256}")
+    lines += [
+        f"Encoding: {spec.encoding} (features: {', '.join(spec.feature_names)})",
+        f"Scaling: {spec.scaling}",
+        f"Kernel: {_kernel_formula(spec)}",
+        f"Hyperparameters: gamma = {_lit(spec.gamma)}, sigma = {_lit(spec.sigma)} (scaled input units)"
+        + (f", degree = {spec.degree}, coef0 = {_lit(spec.coef0)}" if spec.kernel == "poly" else ""),
+        f"Support vectors: {spec.support_vectors.shape[0]}",
+        "Inputs read, with their range over the training runs (the range check refuses inputs outside it):",
+    ]
+    for name, (lo, hi) in zip(spec.inputs, spec.input_ranges, strict=True):
+        lines.append(f"  {name}: [{_lit(lo)}, {_lit(hi)}], {RAW_INPUTS[name]}")
+    lines.append("Features, with their range over the training runs (checked too):")
+    for name, (lo, hi) in zip(spec.feature_names, spec.feature_ranges, strict=True):
+        lines.append(f"  {name}: [{_lit(lo)}, {_lit(hi)}] {FEATURE_EXPRESSIONS[name].unit}")
+    lines.append("Output: identified axial gyro drift [deg/h] (subtract it from the z-gyro output).")
+    return lines
+
+
+def _kernel_formula(spec: ExportSpec) -> str:
+    if spec.kernel == "rbf":
+        return "rbf, K(x, z) = exp(-|x - z|^2 / sigma^2)"
+    if spec.kernel == "linear":
+        return "linear, K(x, z) = x . z"
+    return "poly, K(x, z) = (x . z / sigma^2 + coef0)^degree"
+
+
+def _feature_exprs(spec: ExportSpec, lang: str, field: str, function: str) -> list[str]:
+    """The expression of each feature in ``lang``, reading inputs as ``field.format(name)``."""
+    out = []
+    for name in spec.feature_names:
+        expr = FEATURE_EXPRESSIONS[name]
+        template = expr.c if lang == "c" else expr.rust
+        subst = {inp: field.format(inp) for inp in RAW_INPUTS}
+        subst.update({fn: function.format(fn) for fn in expr.functions})
+        out.append(template.format(**subst))
+    return out
+
+
+# --- C ---------------------------------------------------------------------------------------------------
+
+
+def _c_array(values) -> str:
+    return "{" + ", ".join(_lit(v) for v in values) + "}"
+
+
+def _c_range_table(name: str, count: str, names, ranges) -> str:
+    rows = ",\n".join(f'    {{"{n}", {_lit(lo)}, {_lit(hi)}}}' for n, (lo, hi) in zip(names, ranges, strict=True))
+    return f"static const {_PREFIX}_range {name}[{count}] = {{\n{rows}\n}};"
+
+
+def _c_files(spec: ExportSpec) -> dict[str, str]:
+    header_name, source_name = LANGUAGES["c"]
+    P, U = _PREFIX, _PREFIX.upper()
+    guard = U + "_H"
+    nf, nsv, ni = len(spec.feature_names), spec.support_vectors.shape[0], len(spec.inputs)
+    prov = "\n".join(" * " + line if line else " *" for line in _provenance_lines(spec))
+    fields = "\n".join(f"    double {name}; /* {RAW_INPUTS[name]} */" for name in spec.inputs)
+    header = f"""/*
+ * {header_name}: the identified axial gyro drift model, C99, no allocation, no I/O, const data only.
+ *
+{prov}
+ */
+#ifndef {guard}
+#define {guard}
+
+#define {U}_GYRODRIFT_VERSION "{__version__}"
+#define {U}_TRAINING_SHA256 "{spec.training.get("sha256", "")}"
+#define {U}_ENCODING "{spec.encoding}"
+#define {U}_SCALING "{spec.scaling}"
+#define {U}_KERNEL "{spec.kernel}"
+#define {U}_N_INPUTS {ni}
+#define {U}_N_FEATURES {nf}
+#define {U}_N_SUPPORT_VECTORS {nsv}
+
+/* The raw run inputs the model reads. */
+typedef struct {P}_inputs {{
+{fields}
+}} {P}_inputs;
+
+/* The range of one input or feature over the training runs (name, then min and max in its unit). */
+typedef struct {P}_range {{
+    const char *name;
+    double min;
+    double max;
+}} {P}_range;
+
+/* The {ni} training ranges of the inputs, in the order of the fields of {P}_inputs. */
+const {P}_range *{P}_input_ranges(void);
+
+/* The {nf} training ranges of the features, in the order of {P}_features. */
+const {P}_range *{P}_feature_ranges(void);
+
+/* The model's features of `inputs` (the same operations as gyrodrift.encodings.encode). */
+void {P}_features(const {P}_inputs *inputs, double features[{U}_N_FEATURES]);
+
+/* 1 when every input and every feature lies within its training range (NaN never does), else 0. */
+int {P}_in_range(const {P}_inputs *inputs);
+
+/* The identified axial gyro drift [deg/h]; check {P}_in_range first: the model does not extrapolate. */
+double {P}_drift_deg_h(const {P}_inputs *inputs);
+
+#endif /* {guard} */
+"""
+    feats = _feature_exprs(spec, "c", "inputs->{}", "{}")
+    feature_lines = "\n".join(f"    features[{k}] = {e};" for k, e in enumerate(feats))
+    input_values = ", ".join(f"inputs->{name}" for name in spec.inputs)
+    data = [
+        _c_range_table(f"{P}_input_range_table", f"{U}_N_INPUTS", spec.inputs, spec.input_ranges),
+        _c_range_table(f"{P}_feature_range_table", f"{U}_N_FEATURES", spec.feature_names, spec.feature_ranges),
+    ]
+    scale_loop = ""
+    if spec.scaling == "standard":
+        data.append(f"static const double {P}_mean[{U}_N_FEATURES] = {_c_array(spec.mean)};")
+        data.append(f"static const double {P}_scale[{U}_N_FEATURES] = {_c_array(spec.scale)};")
+        scale_loop = f"""    for (k = 0; k < {U}_N_FEATURES; ++k) {{
+        x[k] = (x[k] - {P}_mean[k]) / {P}_scale[k];
+    }}
+"""
+    elif spec.scaling == "minmax":
+        data.append(f"static const double {P}_scale[{U}_N_FEATURES] = {_c_array(spec.scale)};")
+        data.append(f"static const double {P}_offset[{U}_N_FEATURES] = {_c_array(spec.offset)};")
+        scale_loop = f"""    for (k = 0; k < {U}_N_FEATURES; ++k) {{
+        x[k] = x[k] * {P}_scale[k] + {P}_offset[k];
+    }}
+"""
+    sv_rows = ",\n".join("    " + _c_array(row) for row in spec.support_vectors)
+    data.append(f"static const double {P}_support_vectors[{U}_N_SUPPORT_VECTORS][{U}_N_FEATURES] = {{\n{sv_rows}\n}};")
+    data.append(f"static const double {P}_alpha[{U}_N_SUPPORT_VECTORS] = {_c_array(spec.alpha)};")
+    data.append(f"static const double {P}_intercept = {_lit(spec.intercept)};")
+    sigma2 = f"({_lit(spec.sigma)} * {_lit(spec.sigma)})"
+    if spec.kernel == "rbf":
+        kernel_body = f"""        double d2 = 0.0;
+        for (k = 0; k < {U}_N_FEATURES; ++k) {{
+            const double t = x[k] - {P}_support_vectors[i][k];
+            d2 += t * t;
+        }}
+        kval = exp(-d2 / {sigma2});"""
+    else:
+        kernel_body = f"""        double dot = 0.0;
+        for (k = 0; k < {U}_N_FEATURES; ++k) {{
+            dot += x[k] * {P}_support_vectors[i][k];
+        }}"""
+        if spec.kernel == "linear":
+            kernel_body += "\n        kval = dot;"
+        else:
+            kernel_body += f"""
+        base = dot / {sigma2} + {_lit(spec.coef0)};
+        kval = base;
+        for (j = 1; j < {spec.degree}; ++j) {{
+            kval *= base;
+        }}"""
+    decls = "        double kval;\n" + ("        double base;\n        int j;\n" if spec.kernel == "poly" else "")
+    libm = f"#include <math.h> /* {', '.join(spec.functions)} */\n" if spec.functions else ""
+    source = f"""/*
+ * {source_name}: the identified axial gyro drift model (see {header_name} for the interface).
+ *
+{prov}
+ *
+{_numerics_note(spec, " * ")}
+ */
+#include "{header_name}"
+{libm}
+{(chr(10) + chr(10)).join(data)}
+
+const {P}_range *{P}_input_ranges(void)
+{{
+    return {P}_input_range_table;
+}}
+
+const {P}_range *{P}_feature_ranges(void)
+{{
+    return {P}_feature_range_table;
+}}
+
+void {P}_features(const {P}_inputs *inputs, double features[{U}_N_FEATURES])
+{{
+{feature_lines}
+}}
+
+int {P}_in_range(const {P}_inputs *inputs)
+{{
+    const double u[{U}_N_INPUTS] = {{{input_values}}};
+    double x[{U}_N_FEATURES];
+    int k;
+    for (k = 0; k < {U}_N_INPUTS; ++k) {{
+        if (!(u[k] >= {P}_input_range_table[k].min && u[k] <= {P}_input_range_table[k].max)) {{
+            return 0;
+        }}
+    }}
+    {P}_features(inputs, x);
+    for (k = 0; k < {U}_N_FEATURES; ++k) {{
+        if (!(x[k] >= {P}_feature_range_table[k].min && x[k] <= {P}_feature_range_table[k].max)) {{
+            return 0;
+        }}
+    }}
+    return 1;
+}}
+
+double {P}_drift_deg_h(const {P}_inputs *inputs)
+{{
+    double x[{U}_N_FEATURES];
+    double acc = 0.0;
+    int i, k;
+    {P}_features(inputs, x);
+{scale_loop}    for (i = 0; i < {U}_N_SUPPORT_VECTORS; ++i) {{
+{decls}{kernel_body}
+        acc += {P}_alpha[i] * kval;
+    }}
+    return acc + {P}_intercept;
+}}
+"""
+    return {header_name: header, source_name: source}
+
+
+def _numerics_note(spec: ExportSpec, marker: str) -> str:
+    """Where the generated arithmetic may differ from numpy's in the last bits (comment lines)."""
+    parts = ["the kernel sum (accumulated in support-vector order; numpy hands it to BLAS)"]
+    if "exp" in spec.functions:
+        parts.append("exp (the target's libm; numpy may use its own)")
+    if spec.kernel == "poly" and spec.degree > 2:
+        parts.append("the integer power (repeated multiplication; numpy calls pow)")
+    text = (
+        "Numerics: the same operations, in the same order, as Python's DriftModel.predict, except "
+        + ", ".join(parts)
+        + ". Compile without fast-math options (no reassociation, no contraction into fused multiply-adds)."
+    )
+    words, lines, line = text.split(), [], ""
+    for word in words:
+        if len(line) + len(word) + 1 > 100:
+            lines.append(line)
+            line = word
+        else:
+            line = f"{line} {word}" if line else word
+    lines.append(line)
+    return "\n".join(marker + ln for ln in lines)
+
+
+# --- Rust ------------------------------------------------------------------------------------------------
+
+
+def _rust_array(values) -> str:
+    return "[" + ", ".join(_lit(v) for v in values) + "]"
+
+
+def _rust_range_table(name: str, count: str, names, ranges) -> str:
+    rows = "\n".join(
+        f'    Range {{ name: "{n}", min: {_lit(lo)}, max: {_lit(hi)} }},'
+        for n, (lo, hi) in zip(names, ranges, strict=True)
+    )
+    return f"static {name}: [Range; {count}] = [\n{rows}\n];"
+
+
+def _rust_files(spec: ExportSpec) -> dict[str, str]:
+    (file_name,) = LANGUAGES["rust"]
+    nf, nsv, ni = len(spec.feature_names), spec.support_vectors.shape[0], len(spec.inputs)
+    prov = "\n".join("//! " + line if line else "//!" for line in _provenance_lines(spec))
+    fields = "\n".join(f"    /// {RAW_INPUTS[n]}\n    pub {n}: f64," for n in spec.inputs)
+    math_fields = "\n".join(
+        f"    /// `{fn}` of an f64 (e.g. `libm::{fn}`, or `f64::{fn}` with std)\n    pub {fn}: fn(f64) -> f64,"
+        for fn in spec.functions
+    )
+    feats = _feature_exprs(spec, "rust", "inputs.{}", "(math.{})")
+    features_math = "math" if any(FEATURE_EXPRESSIONS[f].functions for f in spec.feature_names) else "_math"
+    feature_items = "\n".join(f"        {e}," for e in feats)
+    input_values = ", ".join(f"inputs.{name}" for name in spec.inputs)
+    data = [
+        _rust_range_table("INPUT_RANGES", "N_INPUTS", spec.inputs, spec.input_ranges),
+        _rust_range_table("FEATURE_RANGES", "N_FEATURES", spec.feature_names, spec.feature_ranges),
+    ]
+    scale_loop = ""
+    if spec.scaling == "standard":
+        data.append(f"static MEAN: [f64; N_FEATURES] = {_rust_array(spec.mean)};")
+        data.append(f"static SCALE: [f64; N_FEATURES] = {_rust_array(spec.scale)};")
+        scale_loop = """    for k in 0..N_FEATURES {
+        x[k] = (x[k] - MEAN[k]) / SCALE[k];
+    }
+"""
+    elif spec.scaling == "minmax":
+        data.append(f"static SCALE: [f64; N_FEATURES] = {_rust_array(spec.scale)};")
+        data.append(f"static OFFSET: [f64; N_FEATURES] = {_rust_array(spec.offset)};")
+        scale_loop = """    for k in 0..N_FEATURES {
+        x[k] = x[k] * SCALE[k] + OFFSET[k];
+    }
+"""
+    sv_rows = "\n".join("    " + _rust_array(row) + "," for row in spec.support_vectors)
+    data.append(f"static SUPPORT_VECTORS: [[f64; N_FEATURES]; N_SUPPORT_VECTORS] = [\n{sv_rows}\n];")
+    data.append(f"static ALPHA: [f64; N_SUPPORT_VECTORS] = {_rust_array(spec.alpha)};")
+    data.append(f"const INTERCEPT: f64 = {_lit(spec.intercept)};")
+    sigma2 = f"({_lit(spec.sigma)}_f64 * {_lit(spec.sigma)}_f64)"
+    if spec.kernel == "rbf":
+        kernel_body = f"""        let mut d2 = 0.0_f64;
+        for k in 0..N_FEATURES {{
+            let t = x[k] - sv[k];
+            d2 += t * t;
+        }}
+        let kval = (math.exp)(-d2 / {sigma2});"""
+    else:
+        kernel_body = """        let mut dot = 0.0_f64;
+        for k in 0..N_FEATURES {
+            dot += x[k] * sv[k];
+        }"""
+        if spec.kernel == "linear":
+            kernel_body += "\n        let kval = dot;"
+        else:
+            kernel_body += f"""
+        let base = dot / {sigma2} + {_lit(spec.coef0)}_f64;
+        let mut kval = base;
+        for _ in 1..{spec.degree} {{
+            kval *= base;
+        }}"""
+    x_binding = "let x" if spec.scaling == "none" else "let mut x"
+    text = f"""//! {file_name}: the identified axial gyro drift model, `no_std` (only `core`), no allocation, no I/O.
+//!
+{prov}
+//!
+{_numerics_note(spec, "//! ")}
+#![allow(clippy::excessive_precision, clippy::unreadable_literal, clippy::needless_range_loop)]
+
+/// Version of gyrodrift that exported this module.
+pub const GYRODRIFT_VERSION: &str = "{__version__}";
+/// SHA-256 of the training runs (`gyrodrift.model.training_digest`).
+pub const TRAINING_SHA256: &str = "{spec.training.get("sha256", "")}";
+/// Encoding of a run into the model's features.
+pub const ENCODING: &str = "{spec.encoding}";
+/// Input scaling fitted on the training runs.
+pub const SCALING: &str = "{spec.scaling}";
+/// Kernel of the LSSVR.
+pub const KERNEL: &str = "{spec.kernel}";
+/// Number of raw inputs (fields of [`Inputs`]).
+pub const N_INPUTS: usize = {ni};
+/// Number of features.
+pub const N_FEATURES: usize = {nf};
+/// Number of support vectors (training runs).
+pub const N_SUPPORT_VECTORS: usize = {nsv};
+
+/// The raw run inputs the model reads.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Inputs {{
+{fields}
+}}
+
+/// The math functions the model needs (`core` has none): pass e.g. `libm`'s, or std's.
+#[derive(Clone, Copy, Debug)]
+pub struct Math {{
+{math_fields}
+}}
+
+/// The range of one input or feature over the training runs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Range {{
+    /// Input or feature name (the unit is in the name or in the field's documentation).
+    pub name: &'static str,
+    /// Smallest value over the training runs.
+    pub min: f64,
+    /// Largest value over the training runs.
+    pub max: f64,
+}}
+
+{(chr(10) + chr(10)).join(data)}
+
+/// The training range of each input, in the order of the fields of [`Inputs`].
+pub fn input_ranges() -> &'static [Range; N_INPUTS] {{
+    &INPUT_RANGES
+}}
+
+/// The training range of each feature, in the order of [`features`].
+pub fn feature_ranges() -> &'static [Range; N_FEATURES] {{
+    &FEATURE_RANGES
+}}
+
+/// The model's features of `inputs` (the same operations as `gyrodrift.encodings.encode`).
+pub fn features(inputs: &Inputs, {features_math}: &Math) -> [f64; N_FEATURES] {{
+    [
+{feature_items}
+    ]
+}}
+
+fn within(ranges: &[Range], values: &[f64]) -> bool {{
+    ranges.iter().zip(values.iter()).all(|(r, &v)| v >= r.min && v <= r.max)
+}}
+
+/// True when every input and every feature lies within its training range (NaN never does).
+pub fn in_range(inputs: &Inputs, math: &Math) -> bool {{
+    within(&INPUT_RANGES, &[{input_values}]) && within(&FEATURE_RANGES, &features(inputs, math))
+}}
+
+/// The identified axial gyro drift [deg/h]; check [`in_range`] first: the model does not extrapolate.
+pub fn drift_deg_h(inputs: &Inputs, math: &Math) -> f64 {{
+    {x_binding} = features(inputs, math);
+{scale_loop}    let mut acc = 0.0_f64;
+    for (sv, &alpha) in SUPPORT_VECTORS.iter().zip(ALPHA.iter()) {{
+{kernel_body}
+        acc += alpha * kval;
+    }}
+    acc + INTERCEPT
+}}
+"""
+    return {file_name: text}
