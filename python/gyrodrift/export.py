@@ -552,7 +552,7 @@ def _rust_files(spec: ExportSpec) -> dict[str, str]:
 {prov}
 //!
 {_numerics_note(spec, "//! ")}
-#![allow(clippy::excessive_precision, clippy::unreadable_literal, clippy::needless_range_loop)]
+#![allow(clippy::doc_markdown, clippy::excessive_precision, clippy::needless_range_loop, clippy::unreadable_literal)]
 
 /// Version of gyrodrift that exported this module.
 pub const GYRODRIFT_VERSION: &str = "{__version__}";
@@ -597,16 +597,19 @@ pub struct Range {{
 {(chr(10) + chr(10)).join(data)}
 
 /// The training range of each input, in the order of the fields of [`Inputs`].
+#[must_use]
 pub fn input_ranges() -> &'static [Range; N_INPUTS] {{
     &INPUT_RANGES
 }}
 
 /// The training range of each feature, in the order of [`features`].
+#[must_use]
 pub fn feature_ranges() -> &'static [Range; N_FEATURES] {{
     &FEATURE_RANGES
 }}
 
 /// The model's features of `inputs` (the same operations as `gyrodrift.encodings.encode`).
+#[must_use]
 pub fn features(inputs: &Inputs, {features_math}: &Math) -> [f64; N_FEATURES] {{
     [
 {feature_items}
@@ -618,11 +621,13 @@ fn within(ranges: &[Range], values: &[f64]) -> bool {{
 }}
 
 /// True when every input and every feature lies within its training range (NaN never does).
+#[must_use]
 pub fn in_range(inputs: &Inputs, math: &Math) -> bool {{
     within(&INPUT_RANGES, &[{input_values}]) && within(&FEATURE_RANGES, &features(inputs, math))
 }}
 
 /// The identified axial gyro drift [deg/h]; check [`in_range`] first: the model does not extrapolate.
+#[must_use]
 pub fn drift_deg_h(inputs: &Inputs, math: &Math) -> f64 {{
     {x_binding} = features(inputs, math);
 {scale_loop}    let mut acc = 0.0_f64;
