@@ -575,3 +575,14 @@ def test_loo_residuals_are_a_documented_fitted_attribute():
     assert rel_err(model.loo_residuals_, brute_force_loo(model, X, y)) < 1e-8
     np.testing.assert_array_equal(model.loo_residuals(), model.loo_residuals_)
     assert "loo_residuals_" in LSSVR.__doc__ and "condition_number_" in LSSVR.__doc__
+
+
+@pytest.mark.parametrize("n", [22, 40])  # the stacked path (n <= 32) and the loop
+def test_tuner_candidates_whose_solve_is_meaningless_get_inf_rows(n):
+    rng = np.random.default_rng(5)
+    X = rng.normal(size=(n, 3))
+    y = rng.normal(size=n) * 1e-3
+    D = squared_distances(X)
+    errors = rbf_batch_errors(D, y, [100.0, 1e16], [1.0, 100.0], "loo")
+    assert np.all(np.isfinite(errors[0])) and np.all(np.isinf(errors[1]))
+    np.testing.assert_allclose(errors[0], lssvr_loo_residuals(kernel_matrix(X, sigma=1.0), y, 100.0), rtol=1e-9)

@@ -339,7 +339,8 @@ def rbf_batch_errors(sqdist, y, gammas, sigmas, kind: str = "train") -> np.ndarr
     -------
     ndarray, shape (m, n)
         Row j holds the errors of candidate j, observed minus predicted, unit of ``y``. A candidate whose
-        ``H`` is not numerically positive definite gets a row of ``+inf`` instead of an exception.
+        ``H`` is not numerically positive definite, or whose condition number reaches ``COND_REFUSE`` (its
+        solution has no correct digit; ``LSSVR.fit`` refuses it), gets a row of ``+inf`` instead of an exception.
 
     Notes
     -----
@@ -373,6 +374,9 @@ def rbf_batch_errors(sqdist, y, gammas, sigmas, kind: str = "train") -> np.ndarr
       needs a general inverse of each factor, 3-7x slower than ``dtrtri``/``dpotrs`` at n >= 100,
       and m*n*n memory. Building each kernel from ``sqdist`` in place of calling the public
       functions saves their validation (symmetry check, copies).
+
+    The condition check (exact 1-norm condition number for the stack, ``dpocon`` in the loop) came later;
+    with it, on the same shared machine: n = 22 train 0.46 ms, loo 0.48 ms; n = 100 train 2.7 ms, loo 4.5 ms.
     """
     if kind not in ("train", "loo"):
         raise ValueError(f"kind must be 'train' or 'loo', got {kind!r}")
@@ -416,6 +420,7 @@ def _rbf_batch_stacked(D, y, g, sg, kind):
     n = D.shape[0]
     H = rbf_from_squared_distances(D, sg[:, None, None])
     H[:, np.arange(n), np.arange(n)] += 1.0 / g[:, None]
+    anorm = np.abs(H).sum(axis=1).max(axis=1)  # ||H||_1 (H symmetric)
     L = np.linalg.cholesky(H)  # lower, H = L L'
     # No stacked triangular inverse in numpy: inv() of the triangular factor (LU, O(n^3) like dtrtri
     # but with a larger constant) is still the fastest for small n; H^-1 = L^-T L^-1.
@@ -426,9 +431,15 @@ def _rbf_batch_stacked(D, y, g, sg, kind):
     s = p.sum(axis=1, keepdims=True)
     alpha = q - (q.sum(axis=1, keepdims=True) / s) * p
     if kind == "train":
-        return alpha / g[:, None]
-    hinv_diag = np.einsum("mki,mki->mi", Linv, Linv)
-    return alpha / (hinv_diag - p * p / s)
+        out = alpha / g[:, None]
+    else:
+        hinv_diag = np.einsum("mki,mki->mi", Linv, Linv)
+        out = alpha / (hinv_diag - p * p / s)
+    # The exact 1-norm condition number (>= the dpocon estimate LSSVR.fit uses, so a candidate kept here is
+    # never refused by the final fit): small stacks, one more (m, n, n) product.
+    cond = anorm * np.abs(np.swapaxes(Linv, 1, 2) @ Linv).sum(axis=1).max(axis=1)
+    out[~(cond < COND_REFUSE)] = np.inf
+    return out
 
 
 def _rbf_batch_loop(D, y, g, sg, kind):
@@ -440,8 +451,9 @@ def _rbf_batch_loop(D, y, g, sg, kind):
     for j in range(g.size):
         H = rbf_from_squared_distances(D, sg[j])
         H.flat[diag] += 1.0 / g[j]
+        anorm = _one_norm(H)
         U = _cholesky_upper(H)
-        if U is None:
+        if U is None or not _condition_number(U, anorm) < COND_REFUSE:  # as LSSVR.fit refuses it
             out[j] = np.inf
             continue
         pq = _cho_solve(U, B)
