@@ -237,6 +237,22 @@ def test_export_is_deterministic_and_carries_provenance(fitted):
     assert f"temp_min_c: [{export._lit(lo)}," in header
 
 
+@pytest.mark.skipif(CC is None, reason="no C compiler (cc) on PATH")
+def test_provenance_text_cannot_break_the_generated_code(tmp_path):
+    paper = gyrodrift.load_paper().train
+    hostile = 'runs */ #error "x" ??/\n#error "y" \u00e9.csv'
+    train = RunTable(**{**{f: getattr(paper, f) for f in (*RAW, "run", "drift_deg_h")}, "source": hostile})
+    model = fit_drift_model(train, encoding="lat_only", scaling="standard", gamma=100.0, sigma=0.7)
+    assert model.training["source"] == hostile
+    files = export.export_model(model, "c")
+    for name, text in files.items():
+        (tmp_path / name).write_text(text)
+    subprocess.run([CC, *CFLAGS, "-c", "gyrodrift_model.c"], cwd=tmp_path, check=True, timeout=120)
+    rust = export.export_model(model, "rust")["gyrodrift_model.rs"]
+    line = next(ln for ln in rust.splitlines() if ln.startswith("//! Training runs:"))
+    assert line.endswith('#error \\"y\\" \\u00e9.csv')  # one comment line, escaped
+
+
 # --- C ------------------------------------------------------------------------------------------------------
 
 _C_DRIVER = """#include <stdio.h>

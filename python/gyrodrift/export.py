@@ -25,7 +25,9 @@ This module only builds texts (`export_model` returns ``{file name: text}``); th
 
 from __future__ import annotations
 
+import json
 import math
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -159,6 +161,9 @@ def export_spec(model, *, model_sha256: str | None = None) -> ExportSpec:
         )
     inputs = tuple(name for name in RAW_INPUTS if any(name in FEATURE_EXPRESSIONS[f].inputs for f in names))
     functions = tuple(sorted({fn for f in names for fn in FEATURE_EXPRESSIONS[f].functions}))
+    training = dict(model.training)
+    if not re.fullmatch(r"[0-9a-f]{64}", str(training.get("sha256", ""))):
+        raise InputError(f"the model's training digest is not a SHA-256 hex digest: {training.get('sha256')!r}")
     est = model.lssvr
     kernel = "poly" if est.kernel == "polynomial" else str(est.kernel)
     if kernel == "rbf":
@@ -195,7 +200,7 @@ def export_spec(model, *, model_sha256: str | None = None) -> ExportSpec:
         offset=offset,
         input_ranges=_ranges(np.column_stack([getattr(runs, name) for name in inputs])),
         feature_ranges=_ranges(encode(runs, model.encoding)),
-        training=dict(model.training),
+        training=training,
         model_sha256=model_sha256,
     )
 
@@ -226,13 +231,20 @@ def _lit(x: float) -> str:
     return text
 
 
+def _comment_text(value) -> str:
+    """``value`` as text safe inside a C block comment and a Rust line comment: printable ASCII on one line
+    (JSON escapes for the rest), no ``*/`` and no C trigraph (``??/`` would splice lines)."""
+    text = json.dumps(str(value), ensure_ascii=True)[1:-1].replace("*/", "*\\/")
+    return re.sub(r"\?(?=\?)", r"?\\", text)
+
+
 def _provenance_lines(spec: ExportSpec) -> list[str]:
     """Human-readable provenance, one line each (the caller adds the comment markers)."""
     training = spec.training
     lines = [
         f"Exported by gyrodrift {__version__} (`gyrodrift export`). Do not edit: export the model file again.",
         f"Training digest (SHA-256 of the training runs): {training.get('sha256', 'unknown')}",
-        f"Training runs: {training.get('n_runs', 'unknown')} from {training.get('source', 'unknown')}",
+        f"Training runs: {training.get('n_runs', 'unknown')} from {_comment_text(training.get('source', '?'))}",
     ]
     if spec.model_sha256:
         lines.append(f"Model file SHA-256: {spec.model_sha256}")
@@ -302,7 +314,7 @@ def _c_files(spec: ExportSpec) -> dict[str, str]:
 #define {guard}
 
 #define {U}_GYRODRIFT_VERSION "{__version__}"
-#define {U}_TRAINING_SHA256 "{spec.training.get("sha256", "")}"
+#define {U}_TRAINING_SHA256 "{spec.training["sha256"]}"
 #define {U}_ENCODING "{spec.encoding}"
 #define {U}_SCALING "{spec.scaling}"
 #define {U}_KERNEL "{spec.kernel}"
@@ -557,7 +569,7 @@ def _rust_files(spec: ExportSpec) -> dict[str, str]:
 /// Version of gyrodrift that exported this module.
 pub const GYRODRIFT_VERSION: &str = "{__version__}";
 /// SHA-256 of the training runs (`gyrodrift.model.training_digest`).
-pub const TRAINING_SHA256: &str = "{spec.training.get("sha256", "")}";
+pub const TRAINING_SHA256: &str = "{spec.training["sha256"]}";
 /// Encoding of a run into the model's features.
 pub const ENCODING: &str = "{spec.encoding}";
 /// Input scaling fitted on the training runs.
