@@ -185,3 +185,15 @@ def test_edge_of_the_search_box_is_warned_and_recorded(paper):
     assert model.fit_warnings()[0].startswith("tuned value on the edge of its search box")
     assert on_search_bound(1.5, 0.55, ((1.0, 2.0), (0.5, 0.6))) == []
     assert on_search_bound(1.0 + 1e-7, 0.6, ((1.0, 2.0), (0.5, 0.6))) == ["gamma", "sigma"]
+
+
+@pytest.mark.filterwarnings("ignore::gyrodrift.tuning.SearchBoundWarning")
+def test_tuned_lssvr_passes_scikit_learns_estimator_checks():
+    from sklearn.utils.estimator_checks import check_estimator
+
+    from gyrodrift.model import TunedLSSVR
+
+    for est in (TunedLSSVR(gamma=1.0, sigma=1.0), TunedLSSVR(method="grid", grid_size=3)):
+        results = check_estimator(est, on_fail=None)
+        failed = [(r["check_name"], str(r["exception"])[:200]) for r in results if r["status"] == "failed"]
+        assert len(results) > 40 and failed == []

@@ -202,6 +202,8 @@ class TunedLSSVR(RegressorMixin, BaseEstimator):
     loo_residuals_ : ndarray, shape (n_samples,)
         Exact leave-one-out residuals of the fitted LSSVR, observed minus predicted [unit of y]
         (``LSSVR.loo_residuals_``).
+    n_iter_ : int
+        Tuning iterations run (``tuning_.nit``; 1 for the grid, and for given gamma and sigma: one fit).
     n_features_in_ : int
     """
 
@@ -283,6 +285,7 @@ class TunedLSSVR(RegressorMixin, BaseEstimator):
         self.tuning_ = tuning
         self.on_search_bound_ = on_bound
         self.loo_residuals_ = self.lssvr_.loo_residuals_
+        self.n_iter_ = tuning.nit if tuning is not None else 1
         return self
 
     def predict(self, X) -> np.ndarray:
