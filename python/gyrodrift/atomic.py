@@ -44,7 +44,7 @@ import secrets
 import socket
 import stat
 import time
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import IO, Any
 
@@ -55,10 +55,12 @@ __all__ = [
     "STALE_AFTER_S",
     "OutputFolder",
     "Stage",
+    "atomic_files",
     "atomic_write",
     "atomic_write_json",
     "check_complete",
     "check_output_file",
+    "check_output_files",
     "clean_stale_temporaries",
     "os_error_reason",
     "output_folder",
@@ -378,6 +380,61 @@ def atomic_write(
     _fsync_directory(folder)
 
 
+def check_output_files(*targets: Mapping[str, Any]) -> list[Path]:
+    """`check_output_file` for each target (a mapping of its arguments), and no two targets the same file;
+    returns the real destinations."""
+    reals = [check_output_file(**t) for t in targets]
+    for i, real in enumerate(reals):
+        for j in range(i):
+            if _same_file(real, reals[j]) or real == reals[j]:
+                raise _fail(targets[i]["path"], f"is also {os.fspath(targets[j]['path'])}; give two different files")
+    return reals
+
+
+@contextlib.contextmanager
+def atomic_files(*targets: Mapping[str, Any]) -> Iterator[list[Path]]:
+    """Several single files written together: none is replaced before all are written and fsynced.
+
+    Each target is a mapping of `check_output_file`'s arguments (``path``, and optionally ``inputs``,
+    ``recognise``, ``what``); two targets may not be the same file. Yields one temporary path per target
+    (write each plainly). On a clean exit every target is checked again and the temporaries are renamed
+    in order, so a failure while writing (a full disk) leaves every file as it was; on any exception every
+    temporary is removed. Used by ``features --out ... --curves ...``.
+    """
+    reals = check_output_files(*targets)
+    temporaries: list[Path] = []
+    try:
+        for t, real in zip(targets, reals, strict=True):
+            clean_stale_temporaries(real.parent)
+            with _naming(t["path"]):
+                temporaries.append(_create_temporary(real.parent, real.name))
+        try:
+            yield list(temporaries)
+        except OSError as exc:
+            if isinstance(exc, OutputError):
+                raise
+            if exc.filename is not None:
+                named = [k for k, tmp in enumerate(temporaries) if os.fspath(tmp) == os.fsdecode(exc.filename)]
+                if not named:
+                    raise
+            else:  # a failed write names no file: the one being written is the last that holds data
+                named = [k for k, tmp in enumerate(temporaries) if tmp.exists() and tmp.stat().st_size > 0] or [0]
+            raise _fail(targets[named[-1]]["path"], os_error_reason(exc)) from exc
+        for t, tmp in zip(targets, temporaries, strict=True):
+            with _naming(t["path"]):
+                _fsync_file(tmp)
+        reals = [check_output_file(**t) for t in targets]
+        for t, tmp, real in zip(targets, list(temporaries), reals, strict=True):
+            with _naming(t["path"]):
+                os.replace(tmp, real)
+            temporaries.remove(tmp)
+            _fsync_directory(real.parent)
+    finally:
+        for tmp in temporaries:
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
+
+
 def _json_text(obj: Any, indent: int = 2) -> str:
     return json.dumps(obj, indent=indent, allow_nan=False) + "\n"
 
@@ -530,9 +587,10 @@ def _commit_set(manifest: dict[str, Any], command: str, files: dict[str, Any], m
 def check_complete(path: str | os.PathLike[str]) -> None:
     """Refuse to read a file of a torn output set (for the package's loaders of its own outputs).
 
-    If `path`'s folder has a manifest and lists `path`, every file of its set must still be the one written
-    with it and no publication may be unfinished; otherwise `OutputError` says which file and what to do.
-    A file outside any manifest (a user's file, an older gyrodrift's output) passes.
+    If `path`'s folder has a manifest and lists `path`, no publication of it may be unfinished and every file
+    of its set must still be there with the size it was written with (no hashing: a loader calls this at
+    every open); otherwise `OutputError` says which file and what to do. A file outside any manifest (a
+    user's file, an older gyrodrift's output) passes.
     """
     p = Path(path)
     try:
@@ -553,7 +611,11 @@ def check_complete(path: str | os.PathLike[str]) -> None:
         if p.name not in files:
             continue
         for name, entry in files.items():
-            if not _matches(p.parent / name, entry):
+            try:
+                same = os.stat(p.parent / name).st_size == entry.get("bytes")
+            except OSError:
+                same = False
+            if not same:
                 raise _fail(
                     p,
                     f"written by `gyrodrift {command}` together with {name}, which has changed or is missing since; "

@@ -990,10 +990,15 @@ def open_log(
         numbers, no usable rate. Row-level problems are found while streaming (`ImuLog.chunks`).
     OptionError
         A site value that is not a finite number or a latitude outside (-90, 90) deg.
+    OutputError
+        The log belongs to a gyrodrift output set that an interrupted run left unfinished (docs/outputs.md).
     """
+    from gyrodrift.atomic import check_complete
+
     p = Path(path)
     label = str(path)
     _require_regular(p, label)
+    check_complete(p)  # a log whose output set an interrupted `simulate` left unfinished (docs/outputs.md)
     suffix = p.suffix.lower()
     if suffix in (".parquet", ".pq"):
         return _open_parquet(p, label, site, require_temperature)

@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from gyrodrift import __version__
-from gyrodrift.atomic import atomic_write_json
+from gyrodrift.atomic import atomic_write_json, recognise_json_format
 from gyrodrift.choices import ENCODINGS, METHODS, OBJECTIVES, SCALINGS
 from gyrodrift.errors import GyrodriftError, InputError
 from gyrodrift.lssvr import IllConditionedWarning
@@ -136,9 +136,17 @@ def model_to_dict(model: DriftModel) -> dict:
     }
 
 
-def save_model(model: DriftModel, path) -> None:
-    """Write ``model`` to ``path`` as JSON, atomically (an interrupted write leaves any old file intact)."""
-    atomic_write_json(model_to_dict(model), path)
+MODEL_FILE_RECOGNISER = recognise_json_format(FORMAT)
+"""Recognises a model file: the only kind of existing file `save_model` (``fit --out``) replaces."""
+
+
+def save_model(model: DriftModel, path, *, inputs=()) -> None:
+    """Write ``model`` to ``path`` as JSON, atomically (an interrupted write leaves any old file intact).
+
+    An existing ``path`` is replaced only if it is a gyrodrift model file (`MODEL_FILE_RECOGNISER`) or empty,
+    and never if it is one of `inputs` (docs/outputs.md); otherwise `gyrodrift.errors.OutputError`.
+    """
+    atomic_write_json(model_to_dict(model), path, inputs=inputs, recognise=MODEL_FILE_RECOGNISER, what="model file")
 
 
 def _need(doc: dict, key: str, kind, where: str):

@@ -65,7 +65,7 @@ _split_option = click.option(
 
 @click.command()
 @click.argument("data", type=click.Path(dir_okay=False))
-@click.option("--out", "out", required=True, type=click.Path(dir_okay=False), help="Model file to write (JSON).")
+@click.option("--out", "out", required=True, type=click.Path(), help="Model file to write (JSON).")
 @click.option("--encoding", type=click.Choice(list(ENCODINGS)), default="temp_range", show_default=True)
 @click.option("--scaling", type=click.Choice(list(SCALINGS)), default="standard", show_default=True)
 @click.option("--objective", type=click.Choice(list(OBJECTIVES)), default="loo_mae", show_default=True)
@@ -89,16 +89,16 @@ def fit(data, out, encoding, scaling, objective, method, gamma, sigma, seed, lat
     Warnings (a tuned value on the edge of its search box, an ill-conditioned solve) go to stderr and into the
     model file's "warnings".
     """
-    from gyrodrift.atomic import check_output_file, recognise_json_format
+    from gyrodrift.atomic import check_output_file
     from gyrodrift.errors import OptionError
     from gyrodrift.lssvr import IllConditionedError, NotPositiveDefiniteError
     from gyrodrift.model import fit_drift_model
-    from gyrodrift.model_io import FORMAT, save_model
+    from gyrodrift.model_io import MODEL_FILE_RECOGNISER, save_model
 
     if (gamma is None) != (sigma is None):
         raise OptionError("give both --gamma and --sigma, or neither (then both are tuned)")
 
-    check_output_file(out, inputs=[data], recognise=recognise_json_format(FORMAT), what="model file")
+    check_output_file(out, inputs=[data], recognise=MODEL_FILE_RECOGNISER, what="model file")
     runs = _read_runs(data, lat0_deg, True, split)
     if split is None and any(runs.split):
         click.echo(
@@ -123,7 +123,7 @@ def fit(data, out, encoding, scaling, objective, method, gamma, sigma, seed, lat
         if gamma is None:
             raise
         raise OptionError(f"--gamma {gamma:g} --sigma {sigma:g}: {exc}") from None
-    save_model(model, out)
+    save_model(model, out, inputs=[data])
     est = model.lssvr
     loo = model.loo_residuals()
     click.echo(
@@ -136,7 +136,7 @@ def fit(data, out, encoding, scaling, objective, method, gamma, sigma, seed, lat
 @click.argument("model_file", type=click.Path(dir_okay=False))
 @click.argument("data", type=click.Path(dir_okay=False))
 @click.option("--format", "fmt", type=click.Choice(["csv", "jsonl"]), default="csv", show_default=True)
-@click.option("--out", type=click.Path(dir_okay=False), default=None, help="Write here (atomically) instead of stdout.")
+@click.option("--out", type=click.Path(), default=None, help="Write here (atomically) instead of stdout.")
 @click.option(
     "--coverage",
     type=FiniteFloat(0.0, 1.0, min_open=True, max_open=True),
@@ -203,7 +203,7 @@ def predict(model_file, data, fmt, out, coverage, lat0_deg, split):
 @click.option(
     "--out",
     "out_dir",
-    type=click.Path(file_okay=False),
+    type=click.Path(),
     default="gyrodrift-reproduce",
     show_default=True,
     help="Folder for results.json, report.md, report.html and the figures: new, empty, or holding only "

@@ -18,7 +18,7 @@ __all__ = ["simulate_command", "navigate_command"]
     "--out",
     "out_dir",
     required=True,
-    type=click.Path(file_okay=False, path_type=Path),
+    type=click.Path(path_type=Path),
     help="Folder receiving imu.parquet and scenario.resolved.toml: new, empty, or holding only gyrodrift's "
     "outputs (docs/outputs.md).",
 )
@@ -83,7 +83,7 @@ _INITIAL_WORDS = {
     "--out",
     "out_dir",
     required=True,
-    type=click.Path(file_okay=False, path_type=Path),
+    type=click.Path(path_type=Path),
     help="Folder receiving nav.parquet and summary.json: new, empty, or holding only gyrodrift's outputs, "
     "e.g. the simulation's own folder (docs/outputs.md).",
 )

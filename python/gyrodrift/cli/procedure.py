@@ -28,7 +28,7 @@ def _open(path, site):
     "--out",
     "out",
     required=True,
-    type=click.Path(dir_okay=False, path_type=Path),
+    type=click.Path(path_type=Path),
     help="Run table to write (CSV, atomically).",
 )
 @site_options
@@ -56,7 +56,7 @@ def _open(path, site):
 )
 @click.option(
     "--curves",
-    type=click.Path(dir_okay=False, path_type=Path),
+    type=click.Path(path_type=Path),
     default=None,
     help="Also write the hourly latitude-error curves (run, t_h, lat_err_arcsec) to this CSV.",
 )
@@ -69,20 +69,12 @@ def features_command(
     Columns: run (the log's stem), lat_deg (latitude at navigation hour 12), lat0_deg, temp_min_c,
     temp_max_c, temp_start_c, temp_end_c (over those 12 h), and drift_deg_h with --with-truth.
     """
-    from gyrodrift.atomic import check_output_file
     from gyrodrift.procedure.fleet import features_table
-    from gyrodrift.procedure.writers import (
-        CURVES_RECOGNISER,
-        RUN_TABLE_RECOGNISER,
-        write_curves_csv,
-        write_features_csv,
-    )
+    from gyrodrift.procedure.writers import check_features_outputs, write_features_csv
 
     if workers is not None and scheduler is not None:
         raise click.UsageError("give --workers or --scheduler, not both")
-    check_output_file(out, inputs=logs, recognise=RUN_TABLE_RECOGNISER, what="run table")
-    if curves is not None:
-        check_output_file(curves, inputs=(*logs, out), recognise=CURVES_RECOGNISER, what="curves table")
+    check_features_outputs(out, curves, inputs=logs)
     rows = features_table(
         [str(p) for p in logs],
         site=site_from_options(lat0_deg, lon0_deg, height_m),
@@ -93,9 +85,7 @@ def features_command(
         connect_timeout_s=connect_timeout_s,
         quiet=quiet,
     )
-    write_features_csv(rows, out, inputs=logs)
-    if curves is not None:
-        write_curves_csv(rows, curves, inputs=(*logs, out))
+    write_features_csv(rows, out, curves=curves, inputs=logs)
     if not quiet:
         click.echo(f"wrote {len(rows)} run(s) to {out}")
 
@@ -120,7 +110,7 @@ def features_command(
 @click.option(
     "--out",
     "out_dir",
-    type=click.Path(file_okay=False, path_type=Path),
+    type=click.Path(path_type=Path),
     default=None,
     help="Folder for true_drift.json, criterion.png, alignment.json and alignment_z_sigma.png: new, empty, or "
     "holding only gyrodrift's outputs (docs/outputs.md).",
@@ -171,7 +161,7 @@ def truth_command(log, criterion, hours, lat0_deg, lon0_deg, height_m, out_dir, 
     "--out",
     "out_dir",
     required=True,
-    type=click.Path(file_okay=False, path_type=Path),
+    type=click.Path(path_type=Path),
     help="Folder for evaluation.json and position_error.png: new, empty, or holding only gyrodrift's outputs "
     "(docs/outputs.md).",
 )
@@ -223,7 +213,7 @@ def evaluate_command(log, drift_deg_h, model_path, out_dir, hours, lat0_deg, lon
 @click.option(
     "--out",
     "out_dir",
-    type=click.Path(file_okay=False, path_type=Path),
+    type=click.Path(path_type=Path),
     default=None,
     help="Folder for identification.json, alignment.json and alignment_z_sigma.png: new, empty, or holding only "
     "gyrodrift's outputs (docs/outputs.md).",

@@ -15,7 +15,7 @@ __all__ = ["allan_command", "COMMANDS"]
     "--out",
     "out_dir",
     required=True,
-    type=click.Path(file_okay=False, path_type=Path),
+    type=click.Path(path_type=Path),
     help="Folder for allan.json, allan.png and noise.toml (created if needed).",
 )
 @click.option("--quiet", is_flag=True, help="No progress bar and no summary.")

@@ -8,7 +8,8 @@ Public API (plain functions returning dataclasses; the CLI in `gyrodrift.cli.pro
 align_log(log, ...) -> Alignment; write_alignment(alignment, out_dir)
 navigate_after_alignment(log, alignment, drifts_deg_h, hours, ...) -> PassResult
 extract_features(log, ..., with_truth=False) -> RunFeatures
-features_table(paths, ..., workers=None, scheduler=None) -> list[RunFeatures]; write_features_csv, write_curves_csv
+features_table(paths, ..., workers=None, scheduler=None) -> list[RunFeatures]
+write_features_csv(rows, path, curves=None)
 find_true_drift(log, criterion="final", hours=72, ...) -> TrueDrift; write_truth(truth, out_dir)
 evaluate_compensation(log, drift_deg_h, hours=72, ...) -> Evaluation; write_evaluation(ev, out_dir)
 identify(log, model, ...) -> Identification; write_identification(res, out_dir)
@@ -28,7 +29,6 @@ from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 from gyrodrift.procedure.truth import CRITERIA, TrueDrift, find_true_drift
 from gyrodrift.procedure.writers import (
     write_alignment,
-    write_curves_csv,
     write_evaluation,
     write_features_csv,
     write_identification,
@@ -58,7 +58,6 @@ __all__ = [
     "navigate_after_alignment",
     "write_evaluation",
     "write_alignment",
-    "write_curves_csv",
     "write_features_csv",
     "write_identification",
     "write_truth",

@@ -17,7 +17,7 @@ from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from gyrodrift.atomic import Stage, atomic_write, recognise_header, staged, write_json
+from gyrodrift.atomic import Stage, atomic_files, check_output_files, recognise_header, staged, write_json
 from gyrodrift.procedure.features import RUN_TABLE_COLUMNS
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -38,8 +38,10 @@ __all__ = [
     "write_evaluation",
     "write_identification",
     "write_truth",
+    "check_features_outputs",
+    "features_csv_text",
+    "curves_csv_text",
     "write_features_csv",
-    "write_curves_csv",
 ]
 
 ALIGNMENT_FILES = ("alignment.json", "alignment_z_sigma.png")
@@ -112,17 +114,11 @@ def write_identification(res: Identification, out: str | os.PathLike[str] | Stag
     return {"json": stage.folder / "identification.json"}
 
 
-def write_features_csv(
-    features: Sequence[RunFeatures],
-    path: str | os.PathLike[str],
-    *,
-    inputs: Iterable[str | os.PathLike[str]] = (),
-) -> None:
-    """Write the run table atomically: ``RUN_TABLE_COLUMNS`` (+ ``drift_deg_h`` when every run has it).
+def features_csv_text(features: Sequence[RunFeatures]) -> str:
+    """The run table of `features`: ``RUN_TABLE_COLUMNS`` (+ ``drift_deg_h`` when every run has it).
 
     Floats are written with ``repr`` (shortest exact round trip), so a latitude keeps its 1e-12 deg digits.
-    Readable by `gyrodrift.runs.read_runs_csv`. An existing `path` is replaced only if it is a run table this
-    function wrote (or empty); `path` may not be one of `inputs`.
+    Readable by `gyrodrift.runs.read_runs_csv`.
     """
     with_truth = bool(features) and all(math.isfinite(f.drift_deg_h) for f in features)
     cols = list(RUN_TABLE_COLUMNS) + (["drift_deg_h"] if with_truth else [])
@@ -132,26 +128,53 @@ def write_features_csv(
     for f in features:
         r = f.row()
         w.writerow([r[c] if c == "run" else repr(float(r[c])) for c in cols])
-    with atomic_write(path, "w", inputs=inputs, recognise=RUN_TABLE_RECOGNISER, what="run table") as fh:
-        fh.write(buf.getvalue())
+    return buf.getvalue()
 
 
-def write_curves_csv(
-    features: Sequence[RunFeatures],
-    path: str | os.PathLike[str],
-    *,
-    inputs: Iterable[str | os.PathLike[str]] = (),
-) -> None:
-    """Write the hourly latitude-error curves atomically, one row per run and hour.
-
-    Columns: ``run``, ``t_h`` (navigation hour since the end of alignment, 0..12), ``lat_err_arcsec``
-    (computed minus true). An existing `path` is replaced only if this function wrote it (or it is empty).
-    """
+def curves_csv_text(features: Sequence[RunFeatures]) -> str:
+    """The hourly latitude-error curves, one row per run and hour: ``run``, ``t_h`` (navigation hour since the
+    end of alignment, 0..12), ``lat_err_arcsec`` (computed minus true)."""
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(CURVES_COLUMNS)
     for f in features:
         for h, v in enumerate(f.lat_err_curve_arcsec):
             w.writerow([f.run, h, repr(float(v))])
-    with atomic_write(path, "w", inputs=inputs, recognise=CURVES_RECOGNISER, what="curves table") as fh:
-        fh.write(buf.getvalue())
+    return buf.getvalue()
+
+
+def _features_targets(path, curves, inputs) -> list[dict[str, Any]]:
+    inputs = tuple(inputs)
+    targets = [{"path": path, "inputs": inputs, "recognise": RUN_TABLE_RECOGNISER, "what": "run table"}]
+    if curves is not None:
+        targets.append({"path": curves, "inputs": inputs, "recognise": CURVES_RECOGNISER, "what": "curves table"})
+    return targets
+
+
+def check_features_outputs(
+    path: str | os.PathLike[str],
+    curves: str | os.PathLike[str] | None = None,
+    inputs: Iterable[str | os.PathLike[str]] = (),
+) -> None:
+    """Check, before the work, that `write_features_csv` may write `path` (and `curves`)."""
+    check_output_files(*_features_targets(path, curves, inputs))
+
+
+def write_features_csv(
+    features: Sequence[RunFeatures],
+    path: str | os.PathLike[str],
+    *,
+    curves: str | os.PathLike[str] | None = None,
+    inputs: Iterable[str | os.PathLike[str]] = (),
+) -> None:
+    """Write the run table (`features_csv_text`) to `path` and, if given, the curves (`curves_csv_text`) to
+    `curves`, together (`gyrodrift.atomic.atomic_files`: neither is replaced unless both are written).
+
+    An existing file is replaced only if it is a table of the same kind written by gyrodrift (or empty); no
+    output may be one of `inputs` or the other output (docs/outputs.md).
+    """
+    texts = [features_csv_text(features)] + ([curves_csv_text(features)] if curves is not None else [])
+    with atomic_files(*_features_targets(path, curves, inputs)) as temporaries:
+        for text, tmp in zip(texts, temporaries, strict=True):
+            with open(tmp, "w", encoding="utf-8", newline="") as fh:
+                fh.write(text)
