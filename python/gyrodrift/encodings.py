@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from gyrodrift.choices import ENCODINGS
+from gyrodrift.errors import OptionError
 from gyrodrift.runs import RunTable
 
 ENCODING_DESCRIPTIONS = {
@@ -24,11 +25,13 @@ ENCODING_DESCRIPTIONS = {
 
 
 def feature_names(encoding: str) -> tuple[str, ...]:
-    """Names (with units) of the features an encoding produces."""
+    """Names (with units) of the features an encoding produces; an unknown name is an ``OptionError``."""
+    if not isinstance(encoding, str):
+        raise OptionError(f"unknown encoding {encoding!r}; expected one of {', '.join(ENCODINGS)}")
     try:
         return ENCODINGS[encoding]
     except KeyError:
-        raise ValueError(f"unknown encoding {encoding!r}; expected one of {', '.join(ENCODINGS)}") from None
+        raise OptionError(f"unknown encoding {encoding!r}; expected one of {', '.join(ENCODINGS)}") from None
 
 
 def encode(runs: RunTable, encoding: str) -> np.ndarray:
