@@ -82,6 +82,7 @@ COMMANDS = {
     "evaluate": lambda i, loc: ["evaluate", i.log, "--drift-deg-h", 0.003, "--hours", 0.5, "--out", loc / "eval"],
     "identify --out": lambda i, loc: ["identify", i.log, "--model", i.model, "--out", loc / "ident", "--quiet"],
     "allan": lambda i, loc: ["allan", i.static_log, "--out", loc / "allan", "--quiet"],
+    "export": lambda i, loc: ["export", i.model, "--lang", "c", "--out", loc / "export"],
 }
 
 
