@@ -149,7 +149,7 @@ def main(argv: list[str] | None = None) -> None:
     # 2. navigator (simulate + navigate streamed; navigation timed around process only)
     tracemalloc.start()
     sim = _core.ImuSimulator(scn.to_core_config())
-    nav = _core.Navigator(_nav_config(scn))
+    nav = _core.Navigator(_core.NavigatorConfig(**_nav_config(scn)))
     dec = int(round(args.rate_hz))  # one output per second
     t_nav = 0.0
     done = 0

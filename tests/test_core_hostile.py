@@ -18,12 +18,14 @@ DT = 1.0 / RATE_HZ
 
 
 def _aligner():
-    return _core.Aligner(dict(lat_rad=0.5, lon_rad=0.0, height_m=0.0, rate_hz=RATE_HZ, fine_s=320.0))
+    return _core.Aligner(_core.AlignerConfig(lat_rad=0.5, lon_rad=0.0, height_m=0.0, rate_hz=RATE_HZ, fine_s=320.0))
 
 
 def _navigator():
     return _core.Navigator(
-        dict(lat_rad=0.5, lon_rad=0.0, height_m=0.0, pitch_rad=0.0, roll_rad=0.0, yaw_rad=0.0, rate_hz=RATE_HZ)
+        _core.NavigatorConfig(
+            lat_rad=0.5, lon_rad=0.0, height_m=0.0, pitch_rad=0.0, roll_rad=0.0, yaw_rad=0.0, rate_hz=RATE_HZ
+        )
     )
 
 
@@ -132,10 +134,10 @@ def test_navigator_divergence_and_arguments():
         nav.set_accel_bias("abc")
 
 
-def _sim_config(**kw):
+def _sim_config(**kw) -> _core.SimulatorConfig:
     base = dict(lat_rad=0.5, rate_hz=100.0, duration_s=10.0)
     base.update(kw)
-    return base
+    return _core.SimulatorConfig(**base)
 
 
 @pytest.mark.parametrize(
@@ -173,15 +175,36 @@ def test_simulator_chunk_sizes():
 
 def test_huge_aligner_and_navigator_configs():
     with pytest.raises(CoreError, match="coarse_s"):
-        _core.Aligner(dict(lat_rad=0.5, lon_rad=0.0, height_m=0.0, rate_hz=RATE_HZ, coarse_s=1e300))
+        _core.AlignerConfig(lat_rad=0.5, lon_rad=0.0, height_m=0.0, rate_hz=RATE_HZ, coarse_s=1e300)
     with pytest.raises(CoreError, match="latitude"):
-        _core.Navigator(
-            dict(lat_rad=1.6, lon_rad=0.0, height_m=0.0, pitch_rad=0.0, roll_rad=0.0, yaw_rad=0.0, rate_hz=RATE_HZ)
+        _core.NavigatorConfig(
+            lat_rad=1.6, lon_rad=0.0, height_m=0.0, pitch_rad=0.0, roll_rad=0.0, yaw_rad=0.0, rate_hz=RATE_HZ
         )
     with pytest.raises(CoreError, match="rate_hz"):
-        _core.Navigator(
-            dict(lat_rad=0.5, lon_rad=0.0, height_m=0.0, pitch_rad=0.0, roll_rad=0.0, yaw_rad=0.0, rate_hz=1e308)
+        _core.NavigatorConfig(
+            lat_rad=0.5, lon_rad=0.0, height_m=0.0, pitch_rad=0.0, roll_rad=0.0, yaw_rad=0.0, rate_hz=1e308
         )
+    with pytest.raises(CoreError, match="vertical"):
+        _core.NavigatorConfig(
+            lat_rad=0.5, lon_rad=0.0, height_m=0.0, pitch_rad=0.0, roll_rad=0.0, yaw_rad=0.0, rate_hz=10, vertical="x"
+        )
+    with pytest.raises(CoreError, match="rotation_scheme"):
+        _sim_config(rotation_scheme="wobble")
+
+
+def test_configs_resolve_the_core_defaults():
+    # The defaults live in the core only; the typed configs show them resolved.
+    c = _sim_config(rotation_scheme="reciprocating")
+    assert c.rotation_rate_rad_s == pytest.approx(np.deg2rad(6.0), rel=1e-15)
+    assert c.rotation_accel_rad_s2 == pytest.approx(np.deg2rad(100.0), rel=1e-15)
+    assert c.reciprocating_span_rad == pytest.approx(2 * np.pi, rel=1e-15)
+    assert (c.temp_start_c, c.temp_end_c, c.temp_tau_s, c.seed) == (20.0, 20.0, 3600.0, 0)
+    a = _core.AlignerConfig(lat_rad=0.5, lon_rad=0.0, height_m=0.0, rate_hz=RATE_HZ, coarse_s=600.0)
+    assert (a.coarse_s, a.fine_s, a.update_s, a.att_sigma_rad) == (600.0, 13800.0, 1.0, None)
+    n = _core.NavigatorConfig(
+        lat_rad=0.5, lon_rad=0.0, height_m=0.0, pitch_rad=0.0, roll_rad=0.0, yaw_rad=0.0, rate_hz=RATE_HZ
+    )
+    assert (n.vertical, n.vel_enu_m_s) == ("fixed", [0.0, 0.0, 0.0])
 
 
 def test_fill_into_matches_next_chunk_and_refuses_bad_buffers():

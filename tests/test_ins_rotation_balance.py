@@ -101,9 +101,9 @@ def test_balanced_span_round_trips_and_reaches_the_core():
     assert s.rotation.span_deg == "balanced" and s.rotation.balanced_span
     assert Scenario.from_dict(s.to_toml_dict()) == s
     cfg = s.to_core_config()
-    assert cfg["reciprocating_balanced"] is True
-    assert scenario(rotation=SLOW).to_core_config()["reciprocating_balanced"] is False
-    # The binding checks the new key's type and names it.
+    assert cfg.reciprocating_balanced is True
+    assert scenario(rotation=SLOW).to_core_config().reciprocating_balanced is False
+    # The typed config checks the new keyword's type and names it.
     base = {
         "lat_rad": 0.5,
         "rate_hz": 10.0,
@@ -111,9 +111,11 @@ def test_balanced_span_round_trips_and_reaches_the_core():
         "rotation_scheme": "reciprocating",
         "rotation_accel_rad_s2": 10 * DEG,
     }
-    with pytest.raises(ValueError, match=r"^reciprocating_balanced: must be a bool"):
-        _core.ImuSimulator(dict(base, reciprocating_balanced=1))
-    sim = _core.ImuSimulator(dict(base, reciprocating_balanced=True, reciprocating_span_rad=4 * math.pi))
+    with pytest.raises(TypeError, match="reciprocating_balanced"):
+        _core.SimulatorConfig(**base, reciprocating_balanced=1)
+    sim = _core.ImuSimulator(
+        _core.SimulatorConfig(**base, reciprocating_balanced=True, reciprocating_span_rad=4 * math.pi)
+    )
     two = _core.balanced_reciprocating_span_rad(base.get("rotation_rate_rad_s", 6 * DEG), 10 * DEG, 0.0, 2)
     assert sim.reciprocating_span_rad == pytest.approx(two, abs=1e-12) and 3.5 * math.pi < two < 4 * math.pi
     assert sim.modulation_residual < 1e-12

@@ -72,7 +72,7 @@ impl AlignerConfig {
             height,
             rate_hz,
             coarse_s,
-            fine_s: DEFAULT_TOTAL_S - coarse_s,
+            fine_s: Self::default_fine_s(coarse_s),
             update_s: 1.0,
             att_sigma: None,
             gyro_bias_sigma: [0.01 * DEG_PER_HOUR; 3],
@@ -82,6 +82,11 @@ impl AlignerConfig {
             zupt_sigma: 0.001,
             history_s: 60.0,
         }
+    }
+
+    /// The default fine span [s] after a coarse span of `coarse_s` [s]: the rest of `DEFAULT_TOTAL_S`.
+    pub fn default_fine_s(coarse_s: f64) -> f64 {
+        (DEFAULT_TOTAL_S - coarse_s).max(0.0)
     }
 
     /// Range checks; errors name the contract key.

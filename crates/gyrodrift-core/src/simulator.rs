@@ -76,7 +76,8 @@ impl ImuSimulatorConfig {
         check_duration(self.duration_s, self.rate_hz)?;
         check_attitude(self.attitude)?;
         self.errors.validate()?;
-        self.temperature.validate()
+        self.temperature.validate()?;
+        check_period(&Turntable::new(self.scheme.clone())?, 1.0 / self.rate_hz)
     }
 }
 
@@ -257,7 +258,6 @@ impl ImuSimulator {
         cfg.validate()?;
         let table = Turntable::new(cfg.scheme.clone())?;
         let dt = 1.0 / cfg.rate_hz;
-        check_period(&table, dt)?;
         let errors = ImuErrorModel::new(cfg.errors.clone(), dt, cfg.seed)?;
         let c_b0n = euler_to_dcm(cfg.attitude);
         let g = earth::normal_gravity(cfg.lat, cfg.height);

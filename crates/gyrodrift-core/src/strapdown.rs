@@ -58,6 +58,28 @@ pub enum Vertical {
     Damped,
 }
 
+impl Vertical {
+    /// The mechanisation named `name` ("fixed" or "damped").
+    pub fn from_name(name: &str) -> Result<Self, CoreError> {
+        match name {
+            "fixed" => Ok(Vertical::Fixed),
+            "damped" => Ok(Vertical::Damped),
+            other => Err(CoreError::Setting {
+                key: "vertical",
+                message: format!("expected \"fixed\" or \"damped\", got {other:?}"),
+            }),
+        }
+    }
+
+    /// Its name ("fixed" or "damped").
+    pub fn name(self) -> &'static str {
+        match self {
+            Vertical::Fixed => "fixed",
+            Vertical::Damped => "damped",
+        }
+    }
+}
+
 /// Initial state and settings of a navigator (SI).
 #[derive(Clone, Debug, PartialEq)]
 pub struct NavigatorConfig {

@@ -13,7 +13,42 @@ pub enum TemperatureProfile {
     Series { t_s: Vec<f64>, temp_c: Vec<f64> },
 }
 
+/// Default temperature of a warm-up's start [deg C] and its time constant [s].
+pub const DEFAULT_TEMP_C: f64 = 20.0;
+pub const DEFAULT_TAU_S: f64 = 3600.0;
+
 impl TemperatureProfile {
+    /// A profile from its named settings (the keywords of the binding's `SimulatorConfig`): a series when both
+    /// `series_t_s` and `series_c` are given, else a warm-up with `start_c` (default `DEFAULT_TEMP_C`), `end_c`
+    /// (default `start_c`: constant) and `tau_s` (default `DEFAULT_TAU_S`).
+    pub fn from_settings(
+        start_c: Option<f64>,
+        end_c: Option<f64>,
+        tau_s: Option<f64>,
+        series_t_s: Option<Vec<f64>>,
+        series_c: Option<Vec<f64>>,
+    ) -> Result<Self, CoreError> {
+        match (series_t_s, series_c) {
+            (Some(t_s), Some(temp_c)) => Ok(TemperatureProfile::Series { t_s, temp_c }),
+            (None, None) => {
+                let start_c = start_c.unwrap_or(DEFAULT_TEMP_C);
+                Ok(TemperatureProfile::WarmUp {
+                    start_c,
+                    end_c: end_c.unwrap_or(start_c),
+                    tau_s: tau_s.unwrap_or(DEFAULT_TAU_S),
+                })
+            }
+            (Some(_), None) => Err(CoreError::Setting {
+                key: "temp_series_c",
+                message: "required with temp_series_t_s".to_string(),
+            }),
+            (None, Some(_)) => Err(CoreError::Setting {
+                key: "temp_series_t_s",
+                message: "required with temp_series_c".to_string(),
+            }),
+        }
+    }
+
     /// Validate; errors name the contract key.
     pub fn validate(&self) -> Result<(), CoreError> {
         match self {

@@ -176,6 +176,87 @@ pub fn balanced_reciprocating_span(rate: f64, accel: f64, dwell: f64, turns: u32
     Ok(0.5 * (lo + hi))
 }
 
+/// Default cruise rate of the table [rad/s] (6 deg/s).
+pub const DEFAULT_TABLE_RATE_RAD_S: f64 = 6.0 * std::f64::consts::PI / 180.0;
+/// Default peak acceleration of starts, stops and reversals [rad/s^2] (100 deg/s^2: a ramp to 6 deg/s takes
+/// 0.12 s and a 360 deg reciprocating span leaves 0.2 % of a horizontal error un-modulated).
+pub const DEFAULT_TABLE_ACCEL_RAD_S2: f64 = 100.0 * std::f64::consts::PI / 180.0;
+/// Default reciprocating span [rad] (one turn).
+pub const DEFAULT_RECIPROCATING_SPAN_RAD: f64 = TAU;
+/// Names of the schemes, as the binding and the scenario files spell them.
+pub const SCHEME_NAMES: [&str; 4] = ["none", "continuous", "reciprocating", "indexing"];
+
+/// Default indexing positions [rad]: 0, 90, 180, 270, 360, 270, 180, 90 deg, an order whose slews mirror each
+/// other, so the modulation residual cancels exactly.
+pub fn default_indexing_positions() -> Vec<f64> {
+    use std::f64::consts::PI;
+    vec![0.0, 0.5 * PI, PI, 1.5 * PI, 2.0 * PI, 1.5 * PI, PI, 0.5 * PI]
+}
+
+/// A scheme from its named settings (the keywords of the binding's `SimulatorConfig`); `None` takes the
+/// defaults above. With `balanced` the reciprocating span becomes [`balanced_reciprocating_span`] near
+/// round(span / 2 pi) turns (at least one).
+pub fn scheme_from_settings(
+    name: &str,
+    rate: Option<f64>,
+    accel: Option<f64>,
+    span: Option<f64>,
+    balanced: bool,
+    positions: Option<Vec<f64>>,
+    dwell: Option<f64>,
+) -> Result<RotationScheme, CoreError> {
+    let rate = rate.unwrap_or(DEFAULT_TABLE_RATE_RAD_S);
+    let accel = accel.unwrap_or(DEFAULT_TABLE_ACCEL_RAD_S2);
+    let dwell = dwell.unwrap_or(0.0);
+    Ok(match name {
+        "none" => RotationScheme::None,
+        "continuous" => RotationScheme::Continuous { rate, accel },
+        "reciprocating" => {
+            let span = span.unwrap_or(DEFAULT_RECIPROCATING_SPAN_RAD);
+            let span = if balanced {
+                check_span(span)?;
+                let turns = (span / TAU).round().max(1.0) as u32;
+                balanced_reciprocating_span(rate, accel, dwell, turns)?
+            } else {
+                span
+            };
+            RotationScheme::Reciprocating {
+                rate,
+                accel,
+                span,
+                dwell,
+            }
+        }
+        "indexing" => RotationScheme::Indexing {
+            rate,
+            accel,
+            positions: positions.unwrap_or_else(default_indexing_positions),
+            dwell,
+        },
+        other => {
+            return Err(CoreError::Setting {
+                key: "rotation_scheme",
+                message: format!("expected one of {}, got {other:?}", SCHEME_NAMES.join(", ")),
+            })
+        }
+    })
+}
+
+/// Largest reciprocating span [rad] (about 159 turns).
+pub const MAX_SPAN_RAD: f64 = 1000.0;
+
+fn check_span(span: f64) -> Result<(), CoreError> {
+    check(
+        span.is_finite() && span > 0.0 && span <= MAX_SPAN_RAD,
+        "reciprocating_span_rad",
+        format!(
+            "span {} is outside (0, {}]",
+            Unit::Deg.show(span),
+            Unit::Deg.show(MAX_SPAN_RAD)
+        ),
+    )
+}
+
 /// A stretch of constant table rate (see [`Turntable::uniform_at`]): angle(t) = angle0 + rate (t - start)
 /// for start <= t <= end (absolute times [s], angle [rad], rate [rad/s]).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -327,15 +408,7 @@ impl Turntable {
                 dwell,
             } => {
                 check_rate_accel(*rate, *accel)?;
-                check(
-                    span.is_finite() && *span > 0.0 && *span <= 1000.0,
-                    "reciprocating_span_rad",
-                    format!(
-                        "span {} is outside (0, {}]",
-                        Unit::Deg.show(*span),
-                        Unit::Deg.show(1000.0)
-                    ),
-                )?;
+                check_span(*span)?;
                 check(
                     dwell.is_finite() && *dwell >= 0.0,
                     "dwell_s",

@@ -1,62 +1,17 @@
 //! Binding of `gyrodrift_core::alignment::Aligner` as `_core.Aligner` (docs/alignment-contract.md).
 //! It converts types and releases the GIL, nothing else.
 
-use super::{core_err, flat, increments, Config};
-use gyrodrift_core::alignment::{Aligner as CoreAligner, AlignerConfig, DEFAULT_TOTAL_S};
+use super::config::AlignerConfig;
+use super::{core_err, flat, increments};
+use gyrodrift_core::alignment::Aligner as CoreAligner;
 use gyrodrift_core::kalman::{N_STATES, STATE_NAMES};
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-const ALIGN_KEYS: &[&str] = &[
-    "lat_rad",
-    "lon_rad",
-    "height_m",
-    "rate_hz",
-    "coarse_s",
-    "fine_s",
-    "update_s",
-    "att_sigma_rad",
-    "gyro_bias_sigma_rad_s",
-    "accel_bias_sigma_m_s2",
-    "gyro_arw_rad_rts",
-    "accel_vrw_m_s_rts",
-    "zupt_sigma_m_s",
-    "history_s",
-];
-
-fn align_config(d: &Bound<'_, PyDict>) -> PyResult<AlignerConfig> {
-    let c = Config::new(d, ALIGN_KEYS, "Aligner")?;
-    let base = AlignerConfig::new(
-        c.f64_req("lat_rad")?,
-        c.f64_req("lon_rad")?,
-        c.f64_req("height_m")?,
-        c.f64_req("rate_hz")?,
-    );
-    let coarse_s = c.f64_or("coarse_s", base.coarse_s)?;
-    let att_sigma = if c.map.contains_key("att_sigma_rad") {
-        Some(c.array_or("att_sigma_rad", [0.0; 3])?)
-    } else {
-        None
-    };
-    Ok(AlignerConfig {
-        coarse_s,
-        fine_s: c.f64_or("fine_s", (DEFAULT_TOTAL_S - coarse_s).max(0.0))?,
-        update_s: c.f64_or("update_s", base.update_s)?,
-        att_sigma,
-        gyro_bias_sigma: c.array_or("gyro_bias_sigma_rad_s", base.gyro_bias_sigma)?,
-        accel_bias_sigma: c.array_or("accel_bias_sigma_m_s2", base.accel_bias_sigma)?,
-        gyro_arw: c.f64_or("gyro_arw_rad_rts", base.gyro_arw)?,
-        accel_vrw: c.f64_or("accel_vrw_m_s_rts", base.accel_vrw)?,
-        zupt_sigma: c.f64_or("zupt_sigma_m_s", base.zupt_sigma)?,
-        history_s: c.f64_or("history_s", base.history_s)?,
-        ..base
-    })
-}
-
 /// Static-base alignment with the turntable running (see gyrodrift-core `alignment`):
 /// inertial-frame coarse alignment, then a 12-state zero-velocity Kalman fine alignment (closed loop).
-/// `Aligner(config: dict)` with SI floats; `process` streams the IMU log; `result()` once `done`.
+/// `Aligner(config: AlignerConfig)`; `process` streams the IMU log; `result()` once `done`.
 #[pyclass(module = "gyrodrift._core")]
 pub struct Aligner {
     inner: CoreAligner,
@@ -65,9 +20,9 @@ pub struct Aligner {
 #[pymethods]
 impl Aligner {
     #[new]
-    fn new(config: &Bound<'_, PyDict>) -> PyResult<Self> {
+    fn new(config: &AlignerConfig) -> PyResult<Self> {
         Ok(Aligner {
-            inner: CoreAligner::new(align_config(config)?).map_err(core_err)?,
+            inner: CoreAligner::new(config.inner.clone()).map_err(core_err)?,
         })
     }
 

@@ -3,14 +3,14 @@
 //! `docs/ins-binding-contract.md`.
 
 mod alignment;
+mod config;
 
-use gyrodrift_core::attitude::Euler;
+use config::{AlignerConfig, NavigatorConfig, SimulatorConfig};
+
 use gyrodrift_core::earth;
 use gyrodrift_core::error::CoreError as CoreFailure;
-use gyrodrift_core::imu_error::ImuErrorParams;
-use gyrodrift_core::simulator::{ImuChunk, ImuChunkSlices, ImuSimulator as CoreSimulator, ImuSimulatorConfig};
-use gyrodrift_core::strapdown::{NavState, Navigator as CoreNavigator, NavigatorConfig, Vertical};
-use gyrodrift_core::temperature::TemperatureProfile;
+use gyrodrift_core::simulator::{ImuChunk, ImuChunkSlices, ImuSimulator as CoreSimulator};
+use gyrodrift_core::strapdown::{NavState, Navigator as CoreNavigator};
 use gyrodrift_core::turntable::{balanced_reciprocating_span, RotationScheme};
 use numpy::{
     IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadwriteArray1,
@@ -18,8 +18,29 @@ use numpy::{
 };
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use std::collections::HashMap;
-use std::f64::consts::PI;
+
+/// `f(lat, h)` over equal-length float64 arrays of latitude [rad] and height [m], GIL released.
+fn earth_map<'py>(
+    py: Python<'py>,
+    lat_rad: &PyReadonlyArray1<'py, f64>,
+    height_m: &PyReadonlyArray1<'py, f64>,
+    f: fn(f64, f64) -> f64,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let lat = lat_rad
+        .as_slice()
+        .map_err(|_| arg_err("lat_rad", "expected a contiguous array"))?;
+    let h = height_m
+        .as_slice()
+        .map_err(|_| arg_err("height_m", "expected a contiguous array"))?;
+    if lat.len() != h.len() {
+        return Err(arg_err(
+            "height_m",
+            format!("lat_rad has {} values but height_m has {}", lat.len(), h.len()),
+        ));
+    }
+    let out: Vec<f64> = py.detach(|| lat.iter().zip(h).map(|(&l, &z)| f(l, z)).collect());
+    Ok(PyArray1::from_vec(py, out))
+}
 
 /// Normal gravity [m/s^2] for arrays of latitude [rad] and height [m] (WGS-84 Somigliana).
 #[pyfunction]
@@ -28,17 +49,7 @@ fn normal_gravity<'py>(
     lat_rad: PyReadonlyArray1<'py, f64>,
     height_m: PyReadonlyArray1<'py, f64>,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-    let lat = lat_rad.as_slice()?;
-    let h = height_m.as_slice()?;
-    if lat.len() != h.len() {
-        return Err(value_err(format!(
-            "lat_rad has {} values but height_m has {}",
-            lat.len(),
-            h.len()
-        )));
-    }
-    let out: Vec<f64> = py.detach(|| lat.iter().zip(h).map(|(&l, &z)| earth::normal_gravity(l, z)).collect());
-    Ok(PyArray1::from_vec(py, out))
+    earth_map(py, &lat_rad, &height_m, earth::normal_gravity)
 }
 
 pyo3::import_exception!(gyrodrift.errors, CoreError);
@@ -64,237 +75,8 @@ fn arg_err(key: &'static str, message: impl std::fmt::Display) -> PyErr {
     })
 }
 
-/// A refused config value as a `gyrodrift.errors.CoreError`.
-fn value_err(message: impl Into<String>) -> PyErr {
-    CoreError::new_err(message.into())
-}
-
-/// The config dict, checked against the allowed keys; values taken out by typed getters.
-struct Config<'py> {
-    map: HashMap<String, Bound<'py, PyAny>>,
-}
-
-impl<'py> Config<'py> {
-    fn new(d: &Bound<'py, PyDict>, allowed: &[&str], what: &str) -> PyResult<Self> {
-        let mut map = HashMap::new();
-        for (k, v) in d.iter() {
-            let key: String = k
-                .extract()
-                .map_err(|_| value_err(format!("{what} config keys must be strings, got {k}")))?;
-            if !allowed.contains(&key.as_str()) {
-                return Err(value_err(format!(
-                    "{key}: unknown key in the {what} config (allowed: {})",
-                    allowed.join(", ")
-                )));
-            }
-            map.insert(key, v);
-        }
-        Ok(Config { map })
-    }
-
-    fn f64_opt(&self, key: &str) -> PyResult<Option<f64>> {
-        match self.map.get(key) {
-            None => Ok(None),
-            Some(v) => v
-                .extract::<f64>()
-                .map(Some)
-                .map_err(|_| value_err(format!("{key}: must be a float, got {v}"))),
-        }
-    }
-
-    fn f64_or(&self, key: &str, default: f64) -> PyResult<f64> {
-        Ok(self.f64_opt(key)?.unwrap_or(default))
-    }
-
-    fn f64_req(&self, key: &str) -> PyResult<f64> {
-        self.f64_opt(key)?
-            .ok_or_else(|| value_err(format!("{key}: required key is missing")))
-    }
-
-    fn list_opt(&self, key: &str) -> PyResult<Option<Vec<f64>>> {
-        match self.map.get(key) {
-            None => Ok(None),
-            Some(v) => v
-                .extract::<Vec<f64>>()
-                .map(Some)
-                .map_err(|_| value_err(format!("{key}: must be a sequence of floats, got {v}"))),
-        }
-    }
-
-    fn array_or<const N: usize>(&self, key: &str, default: [f64; N]) -> PyResult<[f64; N]> {
-        match self.list_opt(key)? {
-            None => Ok(default),
-            Some(v) => v
-                .try_into()
-                .map_err(|v: Vec<f64>| value_err(format!("{key}: must hold {N} values, got {}", v.len()))),
-        }
-    }
-
-    fn bool_or(&self, key: &str, default: bool) -> PyResult<bool> {
-        match self.map.get(key) {
-            None => Ok(default),
-            Some(v) => v
-                .cast::<pyo3::types::PyBool>()
-                .map(|b| b.is_true())
-                .map_err(|_| value_err(format!("{key}: must be a bool, got {v}"))),
-        }
-    }
-
-    fn str_or(&self, key: &str, default: &str) -> PyResult<String> {
-        match self.map.get(key) {
-            None => Ok(default.to_string()),
-            Some(v) => v
-                .extract::<String>()
-                .map_err(|_| value_err(format!("{key}: must be a string, got {v}"))),
-        }
-    }
-}
-
-const SIM_KEYS: &[&str] = &[
-    "lat_rad",
-    "lon_rad",
-    "height_m",
-    "rate_hz",
-    "duration_s",
-    "seed",
-    "pitch_rad",
-    "roll_rad",
-    "yaw_rad",
-    "rotation_scheme",
-    "rotation_rate_rad_s",
-    "rotation_accel_rad_s2",
-    "reciprocating_span_rad",
-    "reciprocating_balanced",
-    "positions_rad",
-    "dwell_s",
-    "gyro_bias_rad_s",
-    "gyro_arw_rad_rts",
-    "gyro_bias_instability_rad_s",
-    "gyro_correlation_s",
-    "gyro_rrw_rad_s_rts",
-    "gyro_scale",
-    "gyro_misalignment_rad",
-    "accel_bias_m_s2",
-    "accel_vrw_m_s_rts",
-    "accel_scale",
-    "temp_start_c",
-    "temp_end_c",
-    "temp_tau_s",
-    "temp_series_t_s",
-    "temp_series_c",
-    "drift_t0_c",
-    "drift_k1_rad_s_per_c",
-    "drift_k2_rad_s_per_c2",
-    "drift_k3_rad_s_per_c_per_s",
-];
-
-/// Defaults of optional keys (SI). Documented in docs/ins-binding-contract.md.
-const DEFAULT_RATE: f64 = 6.0 * PI / 180.0;
-/// Same default as the scenario files (python/gyrodrift/ins/scenario.py): fast reversals leave little residual.
-const DEFAULT_ACCEL: f64 = 100.0 * PI / 180.0;
-
-fn sim_config(d: &Bound<'_, PyDict>) -> PyResult<ImuSimulatorConfig> {
-    let c = Config::new(d, SIM_KEYS, "ImuSimulator")?;
-    let seed = match c.map.get("seed") {
-        None => 0,
-        Some(v) => v
-            .extract::<u64>()
-            .map_err(|_| value_err(format!("seed: must be an integer in [0, 2**64), got {v}")))?,
-    };
-    let rate = c.f64_or("rotation_rate_rad_s", DEFAULT_RATE)?;
-    let accel = c.f64_or("rotation_accel_rad_s2", DEFAULT_ACCEL)?;
-    let dwell = c.f64_or("dwell_s", 0.0)?;
-    let scheme_name = c.str_or("rotation_scheme", "none")?;
-    let scheme = match scheme_name.as_str() {
-        "none" => RotationScheme::None,
-        "continuous" => RotationScheme::Continuous { rate, accel },
-        "reciprocating" => {
-            let span = c.f64_or("reciprocating_span_rad", 2.0 * PI)?;
-            let span = if c.bool_or("reciprocating_balanced", false)? {
-                if !(span.is_finite() && span > 0.0 && span <= 1000.0) {
-                    return Err(value_err(format!(
-                        "reciprocating_span_rad: must be positive and finite, got {span}"
-                    )));
-                }
-                let turns = (span / (2.0 * PI)).round().max(1.0) as u32;
-                balanced_reciprocating_span(rate, accel, dwell, turns).map_err(core_err)?
-            } else {
-                span
-            };
-            RotationScheme::Reciprocating {
-                rate,
-                accel,
-                span,
-                dwell,
-            }
-        }
-        "indexing" => RotationScheme::Indexing {
-            rate,
-            accel,
-            // The 8-step order cancels exactly (see the contract's modulation residual).
-            positions: c
-                .list_opt("positions_rad")?
-                .unwrap_or_else(|| vec![0.0, 0.5 * PI, PI, 1.5 * PI, 2.0 * PI, 1.5 * PI, PI, 0.5 * PI]),
-            dwell,
-        },
-        other => {
-            return Err(value_err(format!(
-            "rotation_scheme: must be one of \"none\", \"continuous\", \"reciprocating\", \"indexing\", got {other:?}"
-        )))
-        }
-    };
-    let d0 = ImuErrorParams::default();
-    let errors = ImuErrorParams {
-        gyro_bias: c.array_or("gyro_bias_rad_s", d0.gyro_bias)?,
-        gyro_arw: c.f64_or("gyro_arw_rad_rts", d0.gyro_arw)?,
-        gyro_bias_instability: c.f64_or("gyro_bias_instability_rad_s", d0.gyro_bias_instability)?,
-        gyro_correlation: c.f64_or("gyro_correlation_s", d0.gyro_correlation)?,
-        gyro_rrw: c.f64_or("gyro_rrw_rad_s_rts", d0.gyro_rrw)?,
-        gyro_scale: c.array_or("gyro_scale", d0.gyro_scale)?,
-        gyro_misalignment: c.array_or("gyro_misalignment_rad", d0.gyro_misalignment)?,
-        accel_bias: c.array_or("accel_bias_m_s2", d0.accel_bias)?,
-        accel_vrw: c.f64_or("accel_vrw_m_s_rts", d0.accel_vrw)?,
-        accel_scale: c.array_or("accel_scale", d0.accel_scale)?,
-        drift_t0_c: c.f64_or("drift_t0_c", d0.drift_t0_c)?,
-        drift_k1: c.f64_or("drift_k1_rad_s_per_c", 0.0)?,
-        drift_k2: c.f64_or("drift_k2_rad_s_per_c2", 0.0)?,
-        drift_k3: c.f64_or("drift_k3_rad_s_per_c_per_s", 0.0)?,
-    };
-    let series_t = c.list_opt("temp_series_t_s")?;
-    let series_c = c.list_opt("temp_series_c")?;
-    let temperature = match (series_t, series_c) {
-        (Some(t_s), Some(temp_c)) => TemperatureProfile::Series { t_s, temp_c },
-        (None, None) => {
-            let start_c = c.f64_or("temp_start_c", 20.0)?;
-            TemperatureProfile::WarmUp {
-                start_c,
-                end_c: c.f64_or("temp_end_c", start_c)?,
-                tau_s: c.f64_or("temp_tau_s", 3600.0)?,
-            }
-        }
-        (Some(_), None) => return Err(value_err("temp_series_c: required with temp_series_t_s")),
-        (None, Some(_)) => return Err(value_err("temp_series_t_s: required with temp_series_c")),
-    };
-    Ok(ImuSimulatorConfig {
-        lat: c.f64_req("lat_rad")?,
-        lon: c.f64_or("lon_rad", 0.0)?,
-        height: c.f64_or("height_m", 0.0)?,
-        rate_hz: c.f64_req("rate_hz")?,
-        duration_s: c.f64_req("duration_s")?,
-        seed,
-        attitude: Euler {
-            pitch: c.f64_or("pitch_rad", 0.0)?,
-            roll: c.f64_or("roll_rad", 0.0)?,
-            yaw: c.f64_or("yaw_rad", 0.0)?,
-        },
-        scheme,
-        errors,
-        temperature,
-    })
-}
-
 /// Static-base IMU simulator with a single-axis turntable (see gyrodrift-core `simulator`).
-/// `ImuSimulator(config: dict)` with SI floats; `next_chunk(n)` streams the run.
+/// `ImuSimulator(config: SimulatorConfig)`; `next_chunk(n)` or `fill_into(out)` streams the run.
 #[pyclass(module = "gyrodrift._core")]
 struct ImuSimulator {
     inner: CoreSimulator,
@@ -303,10 +85,9 @@ struct ImuSimulator {
 #[pymethods]
 impl ImuSimulator {
     #[new]
-    fn new(config: &Bound<'_, PyDict>) -> PyResult<Self> {
-        let cfg = sim_config(config)?;
+    fn new(config: &SimulatorConfig) -> PyResult<Self> {
         Ok(ImuSimulator {
-            inner: CoreSimulator::new(cfg).map_err(core_err)?,
+            inner: CoreSimulator::new(config.inner.clone()).map_err(core_err)?,
         })
     }
 
@@ -426,44 +207,6 @@ fn writeable2<'py>(out: &Bound<'py, PyDict>, key: &'static str) -> PyResult<PyRe
     Ok(a)
 }
 
-const NAV_KEYS: &[&str] = &[
-    "lat_rad",
-    "lon_rad",
-    "height_m",
-    "vel_enu_m_s",
-    "pitch_rad",
-    "roll_rad",
-    "yaw_rad",
-    "rate_hz",
-    "vertical",
-];
-
-fn nav_config(d: &Bound<'_, PyDict>) -> PyResult<NavigatorConfig> {
-    let c = Config::new(d, NAV_KEYS, "Navigator")?;
-    let vertical = match c.str_or("vertical", "fixed")?.as_str() {
-        "fixed" => Vertical::Fixed,
-        "damped" => Vertical::Damped,
-        other => {
-            return Err(value_err(format!(
-                "vertical: must be \"fixed\" or \"damped\", got {other:?}"
-            )))
-        }
-    };
-    Ok(NavigatorConfig {
-        lat: c.f64_req("lat_rad")?,
-        lon: c.f64_req("lon_rad")?,
-        height: c.f64_req("height_m")?,
-        vel: c.array_or("vel_enu_m_s", [0.0; 3])?,
-        attitude: Euler {
-            pitch: c.f64_req("pitch_rad")?,
-            roll: c.f64_req("roll_rad")?,
-            yaw: c.f64_req("yaw_rad")?,
-        },
-        rate_hz: c.f64_req("rate_hz")?,
-        vertical,
-    })
-}
-
 /// Output columns of `Navigator.process`.
 #[derive(Default)]
 struct NavColumns {
@@ -564,7 +307,7 @@ fn flat<'a>(a: &'a PyReadonlyArray2<'_, f64>, key: &'static str) -> PyResult<&'a
     a.as_slice().map_err(|_| arg_err(key, "expected a C-contiguous array"))
 }
 
-/// Strapdown navigator (see gyrodrift-core `strapdown`). `Navigator(config: dict)` with SI floats.
+/// Strapdown navigator (see gyrodrift-core `strapdown`). `Navigator(config: NavigatorConfig)`.
 #[pyclass(module = "gyrodrift._core")]
 struct Navigator {
     inner: CoreNavigator,
@@ -573,9 +316,9 @@ struct Navigator {
 #[pymethods]
 impl Navigator {
     #[new]
-    fn new(config: &Bound<'_, PyDict>) -> PyResult<Self> {
+    fn new(config: &NavigatorConfig) -> PyResult<Self> {
         Ok(Navigator {
-            inner: CoreNavigator::new(nav_config(config)?).map_err(core_err)?,
+            inner: CoreNavigator::new(config.inner.clone()).map_err(core_err)?,
         })
     }
 
@@ -674,6 +417,9 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("NMI_M", earth::NMI)?;
     m.add_function(wrap_pyfunction!(normal_gravity, m)?)?;
     m.add_function(wrap_pyfunction!(balanced_reciprocating_span_rad, m)?)?;
+    m.add_class::<SimulatorConfig>()?;
+    m.add_class::<NavigatorConfig>()?;
+    m.add_class::<AlignerConfig>()?;
     m.add_class::<ImuSimulator>()?;
     m.add_class::<Navigator>()?;
     m.add_class::<alignment::Aligner>()?;

@@ -318,17 +318,17 @@ def navigate(
         )
 
     nav = _core.Navigator(
-        {
-            "lat_rad": init["lat_deg"] * DEG,
-            "lon_rad": init["lon_deg"] * DEG,
-            "height_m": init["height_m"],
-            "vel_enu_m_s": init["vel_enu_m_s"],
-            "pitch_rad": init["pitch_deg"] * DEG,
-            "roll_rad": init["roll_deg"] * DEG,
-            "yaw_rad": init["yaw_deg"] * DEG,
-            "rate_hz": float(rate),
-            "vertical": vertical,
-        }
+        _core.NavigatorConfig(
+            lat_rad=init["lat_deg"] * DEG,
+            lon_rad=init["lon_deg"] * DEG,
+            height_m=init["height_m"],
+            vel_enu_m_s=init["vel_enu_m_s"],
+            pitch_rad=init["pitch_deg"] * DEG,
+            roll_rad=init["roll_deg"] * DEG,
+            yaw_rad=init["yaw_deg"] * DEG,
+            rate_hz=float(rate),
+            vertical=vertical,
+        )
     )
     nav.set_gyro_bias([b * DEG_PER_H for b in gyro_est])
     nav.set_accel_bias([b * MICRO_G for b in accel_est])

@@ -1,7 +1,8 @@
 """Scenario files: a TOML description of one simulated static-base run, validated into frozen dataclasses.
 
 Every key carries its user unit in its name (``lat_deg``, ``bias_deg_h``, ``vrw_ug_rthz``).
-`Scenario.to_core_config` converts to the SI dict of the binding contract (docs/ins-binding-contract.md);
+`Scenario.to_core_config` converts to the typed SI config of the core (`gyrodrift._core.SimulatorConfig`,
+docs/ins-binding-contract.md);
 `Scenario.to_toml_dict` / `write_scenario_toml` give back the fully resolved scenario (every default
 written out, a temperature series inlined) that reloads to an equal object.
 
@@ -20,11 +21,14 @@ import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from gyrodrift.errors import InputError
 from gyrodrift.site import Site
 from gyrodrift.units import ARCSEC, DEG, DEG_PER_H, DEG_PER_SQRT_H, HOUR, MICRO_G
+
+if TYPE_CHECKING:
+    from gyrodrift import _core
 
 __all__ = [
     "ScenarioError",
@@ -217,13 +221,20 @@ class Scenario:
             out[f.name] = values
         return out
 
-    def to_core_config(self) -> dict[str, Any]:
-        """The SI config dict of `gyrodrift._core.ImuSimulator` (see docs/ins-binding-contract.md).
+    def to_core_config(self) -> _core.SimulatorConfig:
+        """The validated SI config of `gyrodrift._core.ImuSimulator` (see docs/ins-binding-contract.md).
 
         Conversions: deg -> rad, deg/h -> rad/s, deg/sqrt(h) -> rad/sqrt(s), deg/h/sqrt(h) -> rad/s/sqrt(s),
         ug -> m/s^2 (1 ug = 9.80665e-6 m/s^2), ug/sqrt(Hz) -> m/s/sqrt(s), ppm -> 1e-6, arcsec -> rad,
         h -> s; k3 [deg/h per degC/h] -> [rad/s per degC/s] (multiply by deg/h and by 3600 s/h).
+
+        Raises
+        ------
+        gyrodrift.errors.CoreError
+            A value the core refuses (`Scenario.from_dict` has already checked them, naming the file and key).
         """
+        from gyrodrift import _core
+
         s, r, rot, g, a, t, att = (
             self.site,
             self.run,
@@ -233,46 +244,46 @@ class Scenario:
             self.temperature,
             self.attitude,
         )
-        cfg: dict[str, Any] = {
-            "lat_rad": s.lat_deg * DEG,
-            "lon_rad": s.lon_deg * DEG,
-            "height_m": float(s.height_m),
-            "rate_hz": float(r.rate_hz),
-            "duration_s": r.duration_h * HOUR,
-            "seed": int(r.seed),
-            "pitch_rad": att.pitch_deg * DEG,
-            "roll_rad": att.roll_deg * DEG,
-            "yaw_rad": att.yaw_deg * DEG,
-            "rotation_scheme": rot.scheme,
-            "rotation_rate_rad_s": rot.rate_deg_s * DEG,
-            "rotation_accel_rad_s2": rot.accel_deg_s2 * DEG,
-            # "balanced": the core replaces the one-turn span by the balanced span near it.
-            "reciprocating_span_rad": 2.0 * math.pi if rot.balanced_span else rot.span_deg * DEG,
-            "reciprocating_balanced": rot.balanced_span,
-            "positions_rad": [p * DEG for p in rot.positions_deg],
-            "dwell_s": float(rot.dwell_s),
-            "gyro_bias_rad_s": [b * DEG_PER_H for b in g.bias_deg_h],
-            "gyro_arw_rad_rts": g.arw_deg_rth * DEG_PER_SQRT_H,
-            "gyro_bias_instability_rad_s": g.bias_instability_deg_h * DEG_PER_H,
-            "gyro_correlation_s": float(g.correlation_s),
-            "gyro_rrw_rad_s_rts": g.rrw_deg_h_rth * DEG_PER_H_PER_SQRT_H,
-            "gyro_scale": [p * 1e-6 for p in g.scale_ppm],
-            "gyro_misalignment_rad": [m * ARCSEC for m in g.misalignment_arcsec],
-            "accel_bias_m_s2": [b * MICRO_G for b in a.bias_ug],
-            "accel_vrw_m_s_rts": a.vrw_ug_rthz * MICRO_G,
-            "accel_scale": [p * 1e-6 for p in a.scale_ppm],
-            "temp_start_c": float(t.start_c),
-            "temp_end_c": float(t.end_c),
-            "temp_tau_s": t.tau_h * HOUR,
-            "drift_t0_c": float(t.t0_c),
-            "drift_k1_rad_s_per_c": t.k1_deg_h_per_c * DEG_PER_H,
-            "drift_k2_rad_s_per_c2": t.k2_deg_h_per_c2 * DEG_PER_H,
-            "drift_k3_rad_s_per_c_per_s": t.k3_deg_h_per_c_per_h * DEG_PER_H * HOUR,
-        }
-        if t.series_t_h is not None:
-            cfg["temp_series_t_s"] = [x * HOUR for x in t.series_t_h]
-            cfg["temp_series_c"] = [float(x) for x in t.series_temp_c]
-        return cfg
+        series_t, series_c = t.series_t_h, t.series_temp_c
+        # "balanced": the core replaces the one-turn span by the balanced span near it.
+        span_rad = 2.0 * math.pi if isinstance(rot.span_deg, str) else rot.span_deg * DEG
+        return _core.SimulatorConfig(
+            lat_rad=s.lat_deg * DEG,
+            lon_rad=s.lon_deg * DEG,
+            height_m=float(s.height_m),
+            rate_hz=float(r.rate_hz),
+            duration_s=r.duration_h * HOUR,
+            seed=int(r.seed),
+            pitch_rad=att.pitch_deg * DEG,
+            roll_rad=att.roll_deg * DEG,
+            yaw_rad=att.yaw_deg * DEG,
+            rotation_scheme=rot.scheme,
+            rotation_rate_rad_s=rot.rate_deg_s * DEG,
+            rotation_accel_rad_s2=rot.accel_deg_s2 * DEG,
+            reciprocating_span_rad=span_rad,
+            reciprocating_balanced=rot.balanced_span,
+            positions_rad=[p * DEG for p in rot.positions_deg],
+            dwell_s=float(rot.dwell_s),
+            gyro_bias_rad_s=[b * DEG_PER_H for b in g.bias_deg_h],
+            gyro_arw_rad_rts=g.arw_deg_rth * DEG_PER_SQRT_H,
+            gyro_bias_instability_rad_s=g.bias_instability_deg_h * DEG_PER_H,
+            gyro_correlation_s=float(g.correlation_s),
+            gyro_rrw_rad_s_rts=g.rrw_deg_h_rth * DEG_PER_H_PER_SQRT_H,
+            gyro_scale=[p * 1e-6 for p in g.scale_ppm],
+            gyro_misalignment_rad=[m * ARCSEC for m in g.misalignment_arcsec],
+            accel_bias_m_s2=[b * MICRO_G for b in a.bias_ug],
+            accel_vrw_m_s_rts=a.vrw_ug_rthz * MICRO_G,
+            accel_scale=[p * 1e-6 for p in a.scale_ppm],
+            temp_start_c=float(t.start_c),
+            temp_end_c=float(t.end_c),
+            temp_tau_s=t.tau_h * HOUR,
+            temp_series_t_s=None if series_t is None else [x * HOUR for x in series_t],
+            temp_series_c=None if series_c is None else [float(x) for x in series_c],
+            drift_t0_c=float(t.t0_c),
+            drift_k1_rad_s_per_c=t.k1_deg_h_per_c * DEG_PER_H,
+            drift_k2_rad_s_per_c2=t.k2_deg_h_per_c2 * DEG_PER_H,
+            drift_k3_rad_s_per_c_per_s=t.k3_deg_h_per_c_per_h * DEG_PER_H * HOUR,
+        )
 
 
 def write_scenario_toml(scenario: Scenario, path: str | os.PathLike[str], header: str | None = None) -> None:
