@@ -7,8 +7,9 @@ For every log length (hours, comma separated; 76 h at 100 Hz = 27.4 M samples is
 simulated once with the package's own simulator (`gyrodrift.ins.simulate`, written to ``DIR/<h>h/imu.parquet``
 and kept there for the next run when ``--dir`` is given). Then, each in a fresh Python process:
 
-* ``read``: the bare pyarrow read of the columns the commands use (``t_s``, the six increments, ``temp_c``),
-  ``ParquetFile.iter_batches`` of 100 000 rows with every column converted to numpy, pyarrow's defaults;
+* ``read``: the bare pyarrow read of the columns `navigate` reads (``t_s``, the six increments, ``temp_c`` and
+  the three true attitude columns), ``ParquetFile.iter_batches`` of 100 000 rows with every column converted to
+  numpy, pyarrow's defaults;
 * ``read-nobuf``: the same with ``pre_buffer=False`` (what `gyrodrift.logs` does: with pre-buffering pyarrow
   keeps every column chunk read until the file is closed, so the bare read itself grows with the file);
 * ``navigate LOG --out DIR`` (whole log, state every 1 s);
@@ -41,11 +42,12 @@ t0 = time.perf_counter()
 if args[0] in ("read", "read-nobuf"):
     import numpy as np
     import pyarrow.parquet as pq
-    cols = ["t_s", "dtheta_x_rad", "dtheta_y_rad", "dtheta_z_rad", "dv_x_m_s", "dv_y_m_s", "dv_z_m_s", "temp_c"]
+    cols = ["t_s", "dtheta_x_rad", "dtheta_y_rad", "dtheta_z_rad", "dv_x_m_s", "dv_y_m_s", "dv_z_m_s", "temp_c",
+            "true_pitch_deg", "true_roll_deg", "true_yaw_deg"]
     n = 0
     pf = pq.ParquetFile(args[1], pre_buffer=args[0] == "read")
     for batch in pf.iter_batches(batch_size=100_000, columns=cols):
-        arrays = [np.asarray(batch.column(i).to_numpy(zero_copy_only=False), dtype=np.float64) for i in range(8)]
+        arrays = [np.asarray(batch.column(i).to_numpy(zero_copy_only=False), dtype=np.float64) for i in range(11)]
         n += len(arrays[0])
 else:
     from gyrodrift.cli import main

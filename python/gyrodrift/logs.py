@@ -577,20 +577,52 @@ class _Validator:
             raise LogError(f"{where}: expected a finite number, got {v!r}")
 
     def check(self, raw: _Raw, first: int) -> LogChunk:
+        """The chunk of `raw` (samples `first`...), or `LogError` at its first problem.
+
+        One vectorised pass per quantity decides that a chunk is clean (the usual case); only a chunk with a
+        problem goes through the detailed checks, in a fixed order (non-finite values, temperature range, time,
+        magnitudes), which name the row and column.
+        """
         log = self.log
         t = np.asarray(raw.t, dtype=np.float64)
-        self._finite(t, first, ("t_s",))
         if len(raw.sensors) == 2:
             gyro, acc = raw.sensors
         else:
             gyro = np.column_stack(raw.sensors[:3]).astype(np.float64, copy=False)
             acc = np.column_stack(raw.sensors[3:]).astype(np.float64, copy=False)
+        temp = None if raw.temp is None else np.asarray(raw.temp, dtype=np.float64)
+        true_deg = None if raw.truth is None else np.column_stack(raw.truth).astype(np.float64, copy=False)
+        low, high = TEMPERATURE_LIMITS_C
+        clean = (
+            bool(np.isfinite(t).all())
+            and self._time_ok(t)
+            and bool((np.abs(gyro) <= self.limits[0]).all())  # NaN and inf fail too
+            and bool((np.abs(acc) <= self.limits[1]).all())
+            and (temp is None or bool(((temp >= low) & (temp <= high)).all()))
+            and (true_deg is None or bool(np.isfinite(true_deg).all()))
+        )
+        if not clean:
+            self._explain(t, gyro, acc, temp, true_deg, first)
+        self.prev_t = float(t[-1]) if len(t) else self.prev_t
+        if log.kind == "rates":
+            gyro = gyro * self.dt
+            acc = acc * self.dt
+        return LogChunk(first, t, np.ascontiguousarray(gyro), np.ascontiguousarray(acc), temp, true_deg)
+
+    def _time_ok(self, t: np.ndarray) -> bool:
+        if not len(t):
+            return True
+        full = t if self.prev_t is None else np.concatenate([[self.prev_t], t])
+        return bool((np.abs(np.diff(full) - self.dt) <= GAP_TOLERANCE * self.dt).all())
+
+    def _explain(self, t, gyro, acc, temp, true_deg, first: int) -> None:
+        """Raise the `LogError` of the first problem of a chunk that failed the fast checks."""
+        log = self.log
         names = log._columns
+        self._finite(t, first, ("t_s",))
         self._finite(gyro, first, names[:3])
         self._finite(acc, first, names[3:])
-        temp = None
-        if raw.temp is not None:
-            temp = np.asarray(raw.temp, dtype=np.float64)
+        if temp is not None:
             self._finite(temp, first, ("temp_c",))
             low, high = TEMPERATURE_LIMITS_C
             bad = (temp < low) | (temp > high)
@@ -600,9 +632,7 @@ class _Validator:
                     f"{_where(log, first + i, 'temp_c')}: temperature {float(temp[i]):.6g} deg C is outside "
                     f"[{low:g}, {high:g}] deg C (a system temperature in deg C, not kelvin)"
                 )
-        true_deg = None
-        if raw.truth is not None:
-            true_deg = np.column_stack(raw.truth).astype(np.float64, copy=False)
+        if true_deg is not None:
             self._finite(true_deg, first, TRUTH_COLUMNS)
         self._check_time(t, first)
         for j, (block, limit) in enumerate(((gyro, self.limits[0]), (acc, self.limits[1]))):
@@ -615,17 +645,6 @@ class _Validator:
                 else:
                     msg = f"specific force {mag / _G0:.6g} g exceeds {MAX_SPECIFIC_FORCE_G:g} g"
                 raise LogError(f"{_where(log, first + i, names[3 * j + k])}: impossible magnitude: {msg}")
-        if log.kind == "rates":
-            gyro = gyro * self.dt
-            acc = acc * self.dt
-        return LogChunk(
-            first,
-            t,
-            np.ascontiguousarray(gyro),
-            np.ascontiguousarray(acc),
-            temp,
-            None if true_deg is None else true_deg,
-        )
 
     def _check_time(self, t: np.ndarray, first: int) -> None:
         if not len(t):
@@ -633,7 +652,6 @@ class _Validator:
         full = t if self.prev_t is None else np.concatenate([[self.prev_t], t])
         dt = np.diff(full)
         off = 0 if self.prev_t is None else 1  # dt[k] ends at sample first + k + 1 - off
-        self.prev_t = float(t[-1])
         if not len(dt):
             return
         back = dt <= 0.0

@@ -2,7 +2,8 @@
 
 `run_navigators` reads a `gyrodrift.logs.ImuLog` (a file, in-memory arrays or a scenario simulated on the fly)
 once, from sample ``start`` to ``start + n_samples``, and hands every chunk to each navigator in turn (or on
-threads: the core releases the GIL). Chunks are split at whole hours counted from ``start``, so the state at
+threads: the core releases the GIL); the next chunks are read and checked on a thread meanwhile
+(`prefetched`). Chunks are split at whole hours counted from ``start``, so the state at
 every hour is exact (not decimated). Every ``decimation``-th state (counted from ``start``, as the core counts
 its own samples) is copied into arrays allocated once for the whole run, so memory does not grow with the log
 beyond those outputs and nothing keeps a chunk of the log alive.
@@ -15,10 +16,12 @@ from __future__ import annotations
 
 import contextlib
 import os
-from collections.abc import Callable, Sequence
+import queue
+import threading
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -26,7 +29,9 @@ from gyrodrift.logs import DEFAULT_CHUNK_SAMPLES, ImuLog, LogChunk
 from gyrodrift.progress import progress
 from gyrodrift.units import HOUR
 
-__all__ = ["Track", "run_navigators", "STATE_KEYS"]
+__all__ = ["Track", "run_navigators", "prefetched", "STATE_KEYS"]
+
+T = TypeVar("T")
 
 STATE_KEYS = ("t_s", "lat_rad", "lon_rad", "height_m", "vel_enu_m_s", "pitch_rad", "roll_rad", "yaw_rad")
 """What the core navigator returns per kept sample (``vel_enu_m_s`` has 3 columns)."""
@@ -50,6 +55,54 @@ class Track:
     kept: dict[str, np.ndarray]
     hourly: list[tuple[int, dict[str, Any]]] = field(default_factory=list)
     final: dict[str, Any] = field(default_factory=dict)
+
+
+def prefetched(items: Iterator[T], depth: int = 2) -> Iterator[T]:
+    """Iterate `items` with up to `depth` items produced ahead on a thread.
+
+    The next chunks of a log are read, decoded and checked while the core navigates the current one (pyarrow,
+    numpy and the core release the GIL), so a navigation costs about the larger of reading and navigating
+    instead of their sum; memory grows by `depth` chunks. An exception of the producer is raised here, in
+    order; leaving the loop early stops the producer and closes `items`.
+    """
+    q: queue.Queue = queue.Queue(maxsize=depth)
+    stop = threading.Event()
+    end = object()
+
+    def put(entry) -> bool:
+        while not stop.is_set():
+            try:
+                q.put(entry, timeout=0.05)
+                return True
+            except queue.Full:
+                continue
+        return False
+
+    def produce() -> None:
+        try:
+            for item in items:
+                if not put((item, None)):
+                    return
+            put((end, None))
+        except BaseException as exc:  # handed to the consumer, raised there
+            put((end, exc))
+
+    worker = threading.Thread(target=produce, name="gyrodrift-prefetch", daemon=True)
+    worker.start()
+    try:
+        while True:
+            item, exc = q.get()
+            if item is end:
+                if exc is not None:
+                    raise exc
+                return
+            yield item
+    finally:
+        stop.set()
+        worker.join()
+        close = getattr(items, "close", None)
+        if close is not None:
+            close()
 
 
 def run_navigators(
@@ -104,7 +157,7 @@ def run_navigators(
     n_threads = min(len(navigators), os.cpu_count() or 1) if threads is None else max(1, min(threads, len(navigators)))
     pool = ThreadPoolExecutor(max_workers=n_threads) if n_threads > 1 else None
     with progress(n_samples, desc, quiet) as bar, pool or contextlib.nullcontext():
-        for chunk in log.chunks(chunk_samples, stop=stop):
+        for chunk in prefetched(log.chunks(chunk_samples, stop=stop)):
             if chunk.first_index + len(chunk) <= start:
                 continue
             if chunk.first_index < start:
