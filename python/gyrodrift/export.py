@@ -15,9 +15,9 @@ docs/export.md gives the measured differences.
 
 Provenance travels with the code, as comments and as constants and functions: the training digest (SHA-256 of
 the training runs, `gyrodrift.model.training_digest`), the exporting package's version, the encoding, scaling,
-kernel and hyperparameters, and the range of each feature over the training runs, with a function returning
-the ranges and one saying whether an input lies within them, so that the navigation computer can refuse to
-extrapolate.
+kernel and hyperparameters, and the range of each raw input and of each feature over the training runs, with
+functions returning the ranges and one saying whether an input lies within them, so that the navigation
+computer can refuse to extrapolate.
 
 This module only builds texts (`export_model` returns ``{file name: text}``); the command writes them
 (`gyrodrift.cli.export`).
