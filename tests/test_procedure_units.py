@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from gyrodrift.procedure.features import RunFeatures
+from gyrodrift.procedure.results import RunFeatures
 from gyrodrift.procedure.timeline import Timeline
 from gyrodrift.procedure.truth import CRITERIA, criterion_value, minimise_linear_criterion
 from gyrodrift.procedure.writers import write_features_csv

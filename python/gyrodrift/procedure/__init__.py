@@ -14,19 +14,31 @@ find_true_drift(log, criterion="final", hours=72, ...) -> TrueDrift; write_truth
 evaluate_compensation(log, drift_deg_h, hours=72, ...) -> Evaluation; write_evaluation(ev, out_dir)
 identify(log, model, ...) -> Identification; write_identification(res, out_dir)
 
-Writers (`gyrodrift.procedure.writers`) take results and publish their files as one set (docs/outputs.md).
+Layers: the result dataclasses live in `gyrodrift.procedure.results`; the algorithms import them (never
+matplotlib or the file writer); `gyrodrift.procedure.figures` draws results and `gyrodrift.procedure.writers`
+writes them, each set of files published together (docs/outputs.md).
 
 Logs are opened with `gyrodrift.logs.open_log` (Parquet or CSV, validated while streaming). See docs/procedure.md.
 """
 
-from gyrodrift.procedure.align import Alignment, align_log
-from gyrodrift.procedure.evaluate import Evaluation, evaluate_compensation
-from gyrodrift.procedure.features import RunFeatures, extract_features, features_run_table
+from gyrodrift.procedure.align import align_log
+from gyrodrift.procedure.evaluate import evaluate_compensation
+from gyrodrift.procedure.features import extract_features, features_run_table
 from gyrodrift.procedure.fleet import DaskMissingError, features_table
-from gyrodrift.procedure.identify import Identification, identify
-from gyrodrift.procedure.passes import NavCurve, PassResult, TemperatureStats, navigate_after_alignment
+from gyrodrift.procedure.identify import identify
+from gyrodrift.procedure.passes import navigate_after_alignment
+from gyrodrift.procedure.results import (
+    Alignment,
+    Evaluation,
+    Identification,
+    NavCurve,
+    PassResult,
+    RunFeatures,
+    TemperatureStats,
+    TrueDrift,
+)
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
-from gyrodrift.procedure.truth import CRITERIA, TrueDrift, find_true_drift
+from gyrodrift.procedure.truth import CRITERIA, find_true_drift
 from gyrodrift.procedure.writers import (
     write_alignment,
     write_evaluation,

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
@@ -23,10 +23,7 @@ from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 from gyrodrift.progress import progress
 from gyrodrift.units import ARCSEC, DEG, DEG_PER_H, HOUR, MICRO_G
 
-if TYPE_CHECKING:
-    pass
-
-__all__ = ["Alignment", "align_log", "GYRO_BIAS_Z_STATE"]
+__all__ = ["align_log", "GYRO_BIAS_Z_STATE"]
 
 GYRO_BIAS_Z_STATE = 8
 """Column of the z-gyro bias in the aligner's covariance history (phi E N U, dv E N U, gyro bias x y z, ...);

@@ -8,62 +8,16 @@ true; position error in nmi (1852 m).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from typing import Any
 
 from gyrodrift.errors import OptionError
 from gyrodrift.logs import ImuLog
-from gyrodrift.procedure.align import Alignment, align_log
-from gyrodrift.procedure.passes import NavCurve, check_navigation_hours, navigate_after_alignment
+from gyrodrift.procedure.align import align_log
+from gyrodrift.procedure.passes import check_navigation_hours, navigate_after_alignment
+from gyrodrift.procedure.results import Alignment, Evaluation
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 from gyrodrift.units import HOUR
 
-__all__ = ["Evaluation", "evaluate_compensation"]
-
-
-@dataclass(frozen=True)
-class Evaluation:
-    """Position errors over `hours` after alignment, before and after compensating `drift_deg_h`.
-
-    Attributes
-    ----------
-    run : str
-    drift_deg_h : float
-        The compensated z drift [deg/h].
-    hours : float
-    before, after : NavCurve
-        Error curves (``t_h`` since the end of alignment).
-    source : str
-        Where the drift came from (``"given"`` or the model file).
-    """
-
-    run: str
-    drift_deg_h: float
-    hours: float
-    before: NavCurve = field(repr=False)
-    after: NavCurve = field(repr=False)
-    alignment: Alignment | None = field(default=None, repr=False)
-    source: str = "given"
-
-    @property
-    def before_final_nmi(self) -> float:
-        return self.before.final_nmi
-
-    @property
-    def after_final_nmi(self) -> float:
-        return self.after.final_nmi
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready summary: final and max position error [nmi], before and after."""
-        return {
-            "format": "gyrodrift-evaluation/1",
-            "run": self.run,
-            "drift_deg_h": self.drift_deg_h,
-            "drift_source": self.source,
-            "hours": self.hours,
-            "before": {"final_pos_err_nmi": self.before.final_nmi, "max_pos_err_nmi": self.before.max_nmi},
-            "after": {"final_pos_err_nmi": self.after.final_nmi, "max_pos_err_nmi": self.after.max_nmi},
-        }
+__all__ = ["evaluate_compensation"]
 
 
 def evaluate_compensation(

@@ -14,82 +14,20 @@ asked, ``drift_deg_h`` (`gyrodrift.procedure.truth`, found over 72 h in the same
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
 from gyrodrift.errors import OptionError
 from gyrodrift.logs import ImuLog
-from gyrodrift.procedure.align import Alignment, align_log
-from gyrodrift.procedure.passes import NavCurve, TemperatureStats, navigate_after_alignment
+from gyrodrift.procedure.align import align_log
+from gyrodrift.procedure.passes import navigate_after_alignment
+from gyrodrift.procedure.results import Alignment, NavCurve, RunFeatures, TemperatureStats, TrueDrift
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
-from gyrodrift.procedure.truth import TrueDrift, find_true_drift
+from gyrodrift.procedure.truth import find_true_drift
 from gyrodrift.runs import RunTable
 from gyrodrift.units import HOUR
 
-__all__ = ["RunFeatures", "extract_features", "features_run_table", "RUN_TABLE_COLUMNS"]
-
-RUN_TABLE_COLUMNS = ("run", "lat_deg", "lat0_deg", "temp_min_c", "temp_max_c", "temp_start_c", "temp_end_c")
-"""Columns written by `gyrodrift features` (plus ``drift_deg_h`` with the truth)."""
-
-
-@dataclass(frozen=True)
-class RunFeatures:
-    """The features of one run (one row of a run table) and how they were obtained.
-
-    Attributes
-    ----------
-    run : str
-        The log's name (file stem).
-    lat_deg : float
-        Navigated latitude at navigation hour `hours` (12) [deg].
-    lat0_deg : float
-        True site latitude [deg].
-    lat_err_curve_arcsec : ndarray (hours + 1,)
-        Latitude error at navigation hours 0, 1, ..., 12 [arcsec], computed minus true.
-    temp_start_c, temp_end_c, temp_min_c, temp_max_c : float
-        Temperature over the 12 h [deg C].
-    drift_deg_h : float
-        The true drift when asked (`with_truth`), else NaN [deg/h].
-    hours : float
-        Navigation hours of the features (12).
-    alignment : Alignment
-    truth : TrueDrift or None
-    """
-
-    run: str
-    lat_deg: float
-    lat0_deg: float
-    lat_err_curve_arcsec: np.ndarray = field(repr=False)
-    temp_start_c: float = math.nan
-    temp_end_c: float = math.nan
-    temp_min_c: float = math.nan
-    temp_max_c: float = math.nan
-    drift_deg_h: float = math.nan
-    hours: float = 12.0
-    alignment: Alignment | None = field(default=None, repr=False)
-    truth: TrueDrift | None = field(default=None, repr=False)
-
-    @property
-    def lat_err_arcsec(self) -> float:
-        """Latitude error at the end of the features window [arcsec] (computed minus true)."""
-        return (self.lat_deg - self.lat0_deg) * 3600.0
-
-    def row(self) -> dict[str, Any]:
-        """The run-table row (``RUN_TABLE_COLUMNS``, plus ``drift_deg_h`` when known)."""
-        r = {
-            "run": self.run,
-            "lat_deg": self.lat_deg,
-            "lat0_deg": self.lat0_deg,
-            "temp_min_c": self.temp_min_c,
-            "temp_max_c": self.temp_max_c,
-            "temp_start_c": self.temp_start_c,
-            "temp_end_c": self.temp_end_c,
-        }
-        if math.isfinite(self.drift_deg_h):
-            r["drift_deg_h"] = self.drift_deg_h
-        return r
+__all__ = ["extract_features", "features_run_table"]
 
 
 def _from_curve(

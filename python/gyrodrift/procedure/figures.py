@@ -5,12 +5,8 @@ after compensation (the paper's Fig. 4/5). Each function takes a result and retu
 from __future__ import annotations
 
 import os
-from typing import TYPE_CHECKING
 
-if TYPE_CHECKING:  # pragma: no cover
-    from gyrodrift.procedure.align import Alignment
-    from gyrodrift.procedure.evaluate import Evaluation
-    from gyrodrift.procedure.truth import TrueDrift
+from gyrodrift.procedure.results import Alignment, Evaluation, TrueDrift
 
 __all__ = ["alignment_sigma_figure", "criterion_figure", "position_error_figure", "save_png"]
 

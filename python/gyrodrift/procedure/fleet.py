@@ -14,7 +14,8 @@ from pathlib import Path
 
 from gyrodrift.cluster import DEFAULT_CONNECT_TIMEOUT_S, DaskMissingError, SchedulerUnreachableError, dask_client
 from gyrodrift.logs import LogError, Site, open_log
-from gyrodrift.procedure.features import RunFeatures, extract_features
+from gyrodrift.procedure.features import extract_features
+from gyrodrift.procedure.results import RunFeatures
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 from gyrodrift.progress import progress
 

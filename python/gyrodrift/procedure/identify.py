@@ -14,89 +14,23 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
 from gyrodrift.baselines import physics_inversion
 from gyrodrift.logs import ImuLog
 from gyrodrift.model import DriftModel, min_runs_for_coverage
-from gyrodrift.procedure.features import RunFeatures, extract_features, features_run_table
+from gyrodrift.procedure.features import extract_features, features_run_table
+from gyrodrift.procedure.results import Identification, RunFeatures
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 
-__all__ = ["Identification", "identify", "NO_UNCERTAINTY_NOTE", "INTERVAL_NOTE"]
+__all__ = ["identify", "NO_UNCERTAINTY_NOTE", "INTERVAL_NOTE"]
 
 NO_UNCERTAINTY_NOTE = "the LSSVR gives a point estimate, no predictive uncertainty"
 INTERVAL_NOTE = (
     "jackknife interval from the model's leave-one-out residuals on its {n} training runs (empirical, for runs "
     "like the training runs); the LSSVR itself gives no predictive uncertainty"
 )
-
-
-@dataclass(frozen=True)
-class Identification:
-    """The identified axial drift of a run.
-
-    Attributes
-    ----------
-    run : str
-    drift_deg_h : float
-        Model prediction [deg/h] (subtract from the z gyro).
-    physics_drift_deg_h : float
-        Physics inversion of the 12 h latitude error [deg/h].
-    alignment_z_drift_deg_h, alignment_z_drift_std_deg_h : float
-        The alignment's own z-gyro bias estimate and 1-sigma [deg/h] (not used).
-    model_std_deg_h : float or None
-        Predictive 1-sigma of the model; None for the LSSVR (it has none).
-    interval_deg_h : tuple of float or None
-        (low, high) jackknife interval of the identified drift [deg/h] at ``interval_coverage``; None when the
-        model carries no leave-one-out residuals.
-    interval_coverage : float
-    uncertainty_note : str
-    training_error_deg_h : float or None
-        The model's error on its training runs [deg/h]: the mean absolute closed-form leave-one-out residual
-        when the fitted estimator is at hand, else the best fitness of its tuning (model files keep no
-        factorisation); None when neither is known.
-    training_error_kind : str or None
-        ``"loo_mae"``, or the tuning objective (``"loo_mae"``, ``"train_mae"``, ``"kfold_mae"``).
-    features : RunFeatures
-    """
-
-    run: str
-    drift_deg_h: float
-    physics_drift_deg_h: float
-    alignment_z_drift_deg_h: float
-    alignment_z_drift_std_deg_h: float
-    model_std_deg_h: float | None
-    interval_deg_h: tuple[float, float] | None
-    interval_coverage: float
-    uncertainty_note: str
-    training_error_deg_h: float | None
-    training_error_kind: str | None
-    features: RunFeatures = field(repr=False)
-
-    def to_dict(self) -> dict[str, Any]:
-        f = self.features
-        return {
-            "format": "gyrodrift-identification/1",
-            "run": self.run,
-            "drift_deg_h": self.drift_deg_h,
-            "physics_drift_deg_h": self.physics_drift_deg_h,
-            "alignment_z_drift_deg_h": self.alignment_z_drift_deg_h,
-            "alignment_z_drift_std_deg_h": self.alignment_z_drift_std_deg_h,
-            "model_std_deg_h": self.model_std_deg_h,
-            "interval_deg_h": None if self.interval_deg_h is None else list(self.interval_deg_h),
-            "interval_coverage": self.interval_coverage,
-            "uncertainty_note": self.uncertainty_note,
-            "training_error_deg_h": self.training_error_deg_h,
-            "training_error_kind": self.training_error_kind,
-            "features": {
-                **f.row(),
-                "lat_err_arcsec": f.lat_err_arcsec,
-                "lat_err_curve_arcsec": [float(x) for x in f.lat_err_curve_arcsec],
-            },
-        }
 
 
 def _training_error(model: DriftModel) -> tuple[float | None, str | None]:

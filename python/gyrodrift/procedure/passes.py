@@ -14,84 +14,17 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 
 import numpy as np
 
-from gyrodrift.earth import NMI_M
 from gyrodrift.errors import OptionError
 from gyrodrift.ins.nav_errors import position_errors
 from gyrodrift.ins.stream import run_navigators
 from gyrodrift.logs import ImuLog, LogError
-from gyrodrift.procedure.align import Alignment
+from gyrodrift.procedure.results import Alignment, NavCurve, PassResult, TemperatureStats
 from gyrodrift.units import DEG, HOUR
 
-__all__ = ["NavCurve", "TemperatureStats", "PassResult", "navigate_after_alignment", "check_navigation_hours"]
-
-
-@dataclass(frozen=True)
-class NavCurve:
-    """Position error of one navigation pass over time (computed minus true).
-
-    Attributes
-    ----------
-    drift_deg_h : float
-        z-gyro drift subtracted in this pass [deg/h].
-    t_h : ndarray (m,)
-        Time since the start of navigation (end of alignment) [h], every ``decimation_s``, and the exact end
-        of the pass as the last value (also when it is not a multiple of ``decimation_s``).
-    north_m, east_m : ndarray (m,)
-        North and east position errors [m].
-    lat_err_arcsec, lon_err_arcsec : ndarray (m,)
-        Latitude and longitude errors [arcsec].
-    hourly_lat_deg, hourly_lat_err_arcsec : ndarray (h + 1,)
-        Latitude and its error at whole navigation hours 0, 1, ..., exact (not decimated).
-    """
-
-    drift_deg_h: float
-    t_h: np.ndarray = field(repr=False)
-    north_m: np.ndarray = field(repr=False)
-    east_m: np.ndarray = field(repr=False)
-    lat_err_arcsec: np.ndarray = field(repr=False)
-    lon_err_arcsec: np.ndarray = field(repr=False)
-    hourly_lat_deg: np.ndarray = field(repr=False)
-    hourly_lat_err_arcsec: np.ndarray = field(repr=False)
-
-    @property
-    def pos_err_nmi(self) -> np.ndarray:
-        """Horizontal position error [nmi, 1852 m]."""
-        return np.hypot(self.north_m, self.east_m) / NMI_M
-
-    @property
-    def final_nmi(self) -> float:
-        """Position error at the end of the pass [nmi]."""
-        return float(self.pos_err_nmi[-1])
-
-    @property
-    def max_nmi(self) -> float:
-        """Largest position error over the pass [nmi]."""
-        return float(np.max(self.pos_err_nmi))
-
-
-@dataclass(frozen=True)
-class TemperatureStats:
-    """System temperature over the first ``hours`` of navigation [deg C]: at the first and last sample,
-    lowest and highest."""
-
-    hours: float
-    start_c: float
-    end_c: float
-    min_c: float
-    max_c: float
-
-
-@dataclass(frozen=True)
-class PassResult:
-    """Curves of the navigators of one read (in the order of the drifts asked) and the temperature."""
-
-    curves: list[NavCurve]
-    temperature: TemperatureStats | None
-    hours: float
+__all__ = ["navigate_after_alignment", "check_navigation_hours"]
 
 
 def check_navigation_hours(hours: float, decimation_s: float) -> float:

@@ -30,20 +30,18 @@ alignment's own z estimate plays no part.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Any
-
 import numpy as np
 from scipy.optimize import minimize_scalar
 
 from gyrodrift.earth import NMI_M
 from gyrodrift.logs import ImuLog
-from gyrodrift.procedure.align import Alignment, align_log
-from gyrodrift.procedure.passes import NavCurve, PassResult, check_navigation_hours, navigate_after_alignment
+from gyrodrift.procedure.align import align_log
+from gyrodrift.procedure.passes import check_navigation_hours, navigate_after_alignment
+from gyrodrift.procedure.results import Alignment, PassResult, TrueDrift
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 from gyrodrift.units import HOUR
 
-__all__ = ["CRITERIA", "TrueDrift", "find_true_drift", "criterion_value", "minimise_linear_criterion"]
+__all__ = ["CRITERIA", "find_true_drift", "criterion_value", "minimise_linear_criterion"]
 
 CRITERIA = ("final", "rms", "max")
 """Position-error criteria over the navigation: at its end, root mean square, maximum."""
@@ -84,95 +82,6 @@ def minimise_linear_criterion(n0, e0, gn, ge, criterion: str) -> float:
         f, bounds=(d_rms - half, d_rms + half), method="bounded", options={"xatol": 1e-12, "maxiter": 500}
     )
     return float(res.x)
-
-
-@dataclass(frozen=True)
-class TrueDrift:
-    """The true axial drift of a run and the evidence for it.
-
-    Attributes
-    ----------
-    run : str
-    drift_deg_h : float
-        The z-gyro drift minimising the criterion [deg/h] (subtract it from the z gyro).
-    criterion : str
-        ``final``, ``rms`` or ``max``.
-    hours : float
-        Navigation hours after alignment over which the criterion is taken.
-    predicted_nmi : float
-        Criterion at ``drift_deg_h`` predicted by the linear model [nmi].
-    verify_drift_deg_h : ndarray (3,)
-        ``d* - step``, ``d*``, ``d* + step`` [deg/h], navigated in the verification read.
-    verify_nmi : ndarray (3,)
-        The criterion of those three navigations [nmi].
-    verified : bool
-        The navigated criterion at ``d*`` is not above either neighbour.
-    uncompensated_nmi : float
-        Criterion with no z compensation [nmi].
-    grid_drift_deg_h, grid_nmi : ndarray
-        The criterion curve from the linear model on a grid around ``d*``.
-    sensitivity_nmi_per_deg_h : float
-        Position error at the end per deg/h of z drift (hypot of the final north/east sensitivities).
-    refinements : int
-        Verification reads that moved ``d*`` (0 when the first linearisation was exact enough).
-    last_step_deg_h : float
-        The move the last re-linearisation asked for [deg/h] (below `tolerance_deg_h` unless the
-        refinements ran out).
-    alignment : Alignment
-    base : NavCurve
-        The uncompensated navigation (z drift 0), kept for the features.
-    optimum : NavCurve
-        The verification navigation at ``d*``.
-    temperature : TemperatureStats or None
-        Temperature over the features window of the first read (when asked).
-    """
-
-    run: str
-    drift_deg_h: float
-    criterion: str
-    hours: float
-    trial_deg_h: float
-    predicted_nmi: float
-    verify_drift_deg_h: np.ndarray
-    verify_nmi: np.ndarray
-    verified: bool
-    uncompensated_nmi: float
-    grid_drift_deg_h: np.ndarray = field(repr=False)
-    grid_nmi: np.ndarray = field(repr=False)
-    sensitivity_nmi_per_deg_h: float = 0.0
-    refinements: int = 0
-    last_step_deg_h: float = 0.0
-    alignment: Alignment | None = field(default=None, repr=False)
-    base: NavCurve | None = field(default=None, repr=False)
-    optimum: NavCurve | None = field(default=None, repr=False)
-    temperature: Any = field(default=None, repr=False)
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready summary (user units)."""
-        return {
-            "format": "gyrodrift-true-drift/1",
-            "run": self.run,
-            "drift_deg_h": self.drift_deg_h,
-            "criterion": self.criterion,
-            "hours": self.hours,
-            "trial_deg_h": self.trial_deg_h,
-            "predicted_nmi": self.predicted_nmi,
-            "uncompensated_nmi": self.uncompensated_nmi,
-            "verify": [
-                {"drift_deg_h": float(d), "criterion_nmi": float(v)}
-                for d, v in zip(self.verify_drift_deg_h, self.verify_nmi, strict=False)
-            ],
-            "verified": bool(self.verified),
-            "sensitivity_nmi_per_deg_h": self.sensitivity_nmi_per_deg_h,
-            "refinements": self.refinements,
-            "last_step_deg_h": self.last_step_deg_h,
-            "alignment_z_drift_deg_h": None if self.alignment is None else self.alignment.z_drift_deg_h,
-            "alignment_z_drift_std_deg_h": None if self.alignment is None else self.alignment.z_drift_std_deg_h,
-            "grid": {
-                "drift_deg_h": [float(x) for x in self.grid_drift_deg_h],
-                "criterion_nmi": [float(x) for x in self.grid_nmi],
-            },
-        }
 
 
 def find_true_drift(

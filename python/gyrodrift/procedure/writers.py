@@ -15,17 +15,11 @@ import math
 import os
 from collections.abc import Iterable, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from gyrodrift.atomic import Stage, atomic_files, check_output_files, recognise_header, staged, write_json
-from gyrodrift.procedure.features import RUN_TABLE_COLUMNS
-
-if TYPE_CHECKING:  # pragma: no cover
-    from gyrodrift.procedure.align import Alignment
-    from gyrodrift.procedure.evaluate import Evaluation
-    from gyrodrift.procedure.features import RunFeatures
-    from gyrodrift.procedure.identify import Identification
-    from gyrodrift.procedure.truth import TrueDrift
+from gyrodrift.procedure.figures import alignment_sigma_figure, criterion_figure, position_error_figure, save_png
+from gyrodrift.procedure.results import RUN_TABLE_COLUMNS, Alignment, Evaluation, Identification, RunFeatures, TrueDrift
 
 __all__ = [
     "ALIGNMENT_FILES",
@@ -64,8 +58,6 @@ def write_alignment(alignment: Alignment, out: str | os.PathLike[str] | Stage, c
 
     Returns the final paths, keyed ``"json"`` and ``"png"``.
     """
-    from gyrodrift.procedure.figures import alignment_sigma_figure, save_png
-
     with staged(out, command, ALIGNMENT_FILES) as stage:
         write_json(alignment.to_dict(), stage.file("alignment.json"))
         save_png(alignment_sigma_figure(alignment), stage.file("alignment_z_sigma.png"))
@@ -77,8 +69,6 @@ def write_truth(truth: TrueDrift, out: str | os.PathLike[str] | Stage) -> dict:
 
     Returns the final paths, keyed ``"json"`` and ``"png"``.
     """
-    from gyrodrift.procedure.figures import criterion_figure, save_png
-
     with staged(out, "truth", TRUTH_FILES) as stage:
         write_json(truth.to_dict(), stage.file("true_drift.json"))
         save_png(criterion_figure(truth), stage.file("criterion.png"))
@@ -90,8 +80,6 @@ def write_evaluation(ev: Evaluation, out: str | os.PathLike[str] | Stage) -> dic
 
     Returns the final paths, keyed ``"json"`` and ``"png"``.
     """
-    from gyrodrift.procedure.figures import position_error_figure, save_png
-
     with staged(out, "evaluate", EVALUATION_FILES) as stage:
         write_json(ev.to_dict(), stage.file("evaluation.json"))
         save_png(position_error_figure(ev), stage.file("position_error.png"))

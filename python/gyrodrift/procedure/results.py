@@ -1,0 +1,463 @@
+"""The procedure's results: plain frozen dataclasses, in user units, with their JSON form (`to_dict`).
+
+The algorithms (`align`, `passes`, `truth`, `features`, `evaluate`, `identify`) produce them; the writers
+(`gyrodrift.procedure.writers`) and the figures (`gyrodrift.procedure.figures`) take them. This module imports
+neither, nor matplotlib, nor the file system: the dependency runs one way, algorithms -> results <- outputs.
+
+- `Alignment` (`align_log`): attitude, biases and their 1-sigma at the end of alignment.
+- `NavCurve`, `TemperatureStats`, `PassResult` (`navigate_after_alignment`): the error curves of one read.
+- `TrueDrift` (`find_true_drift`), `RunFeatures` (`extract_features`; `RUN_TABLE_COLUMNS` is its run-table row),
+  `Evaluation` (`evaluate_compensation`), `Identification` (`identify`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from gyrodrift.earth import NMI_M
+from gyrodrift.site import Site
+from gyrodrift.units import DEG, DEG_PER_H, MICRO_G
+
+if TYPE_CHECKING:  # pragma: no cover
+    from gyrodrift import _core
+
+__all__ = [
+    "Alignment",
+    "NavCurve",
+    "TemperatureStats",
+    "PassResult",
+    "TrueDrift",
+    "RUN_TABLE_COLUMNS",
+    "RunFeatures",
+    "Evaluation",
+    "Identification",
+]
+
+
+@dataclass(frozen=True)
+class Alignment:
+    """The outcome of the alignment, in user units.
+
+    Attributes
+    ----------
+    run : str
+        Name of the log.
+    site : Site
+        The known static site used [deg, deg, m].
+    samples_used : int
+        Samples consumed by the alignment; navigation starts with the next one.
+    t_s : float
+        End of the alignment [s] as the aligner counts it (samples_used / rate_hz).
+    pitch_deg, roll_deg, yaw_deg : float
+        Attitude at the end of alignment (yaw counter-clockwise about Up).
+    coarse_pitch_deg, coarse_roll_deg, coarse_yaw_deg : float
+        Attitude from the coarse alignment.
+    vel_enu_m_s : tuple of 3 floats
+        Velocity estimate at the end (ENU) [m/s].
+    gyro_bias_deg_h, gyro_bias_std_deg_h : tuple of 3 floats
+        Gyro bias estimates and their 1-sigma, body x y z [deg/h].
+    accel_bias_ug, accel_bias_std_ug : tuple of 3 floats
+        Accelerometer bias estimates and 1-sigma, body x y z [ug].
+    att_std_arcsec : tuple of 3 floats
+        Attitude error 1-sigma, E N U [arcsec].
+    hist_t_h : ndarray
+        Times of the covariance history [h from the start of the log].
+    hist_gyro_z_std_deg_h : ndarray
+        1-sigma of the z (axial) gyro bias over the alignment [deg/h].
+    """
+
+    run: str
+    site: Site
+    rate_hz: float
+    samples_used: int
+    t_s: float
+    pitch_deg: float
+    roll_deg: float
+    yaw_deg: float
+    coarse_pitch_deg: float
+    coarse_roll_deg: float
+    coarse_yaw_deg: float
+    vel_enu_m_s: tuple[float, float, float]
+    gyro_bias_deg_h: tuple[float, float, float]
+    gyro_bias_std_deg_h: tuple[float, float, float]
+    accel_bias_ug: tuple[float, float, float]
+    accel_bias_std_ug: tuple[float, float, float]
+    att_std_arcsec: tuple[float, float, float]
+    hist_t_h: np.ndarray = field(repr=False)
+    hist_gyro_z_std_deg_h: np.ndarray = field(repr=False)
+
+    @property
+    def z_drift_deg_h(self) -> float:
+        """The alignment's own axial (z) drift estimate [deg/h] (reported, never applied)."""
+        return self.gyro_bias_deg_h[2]
+
+    @property
+    def z_drift_std_deg_h(self) -> float:
+        """Its 1-sigma at the end of alignment [deg/h]."""
+        return self.gyro_bias_std_deg_h[2]
+
+    def navigator_config(self) -> _core.NavigatorConfig:
+        """SI config of `_core.Navigator` starting at the end of alignment (static site, aligned state)."""
+        from gyrodrift import _core
+
+        return _core.NavigatorConfig(
+            lat_rad=self.site.lat_deg * DEG,
+            lon_rad=self.site.lon_deg * DEG,
+            height_m=float(self.site.height_m),
+            vel_enu_m_s=[float(v) for v in self.vel_enu_m_s],
+            pitch_rad=self.pitch_deg * DEG,
+            roll_rad=self.roll_deg * DEG,
+            yaw_rad=self.yaw_deg * DEG,
+            rate_hz=float(self.rate_hz),
+            vertical="fixed",
+        )
+
+    def gyro_compensation_rad_s(self, z_drift_deg_h: float) -> list[float]:
+        """Gyro biases for `Navigator.set_gyro_bias`: estimated x, y and the given z drift [deg/h] (SI)."""
+        return [self.gyro_bias_deg_h[0] * DEG_PER_H, self.gyro_bias_deg_h[1] * DEG_PER_H, z_drift_deg_h * DEG_PER_H]
+
+    def accel_compensation_m_s2(self) -> list[float]:
+        """All three accelerometer bias estimates for `Navigator.set_accel_bias` [m/s^2]."""
+        return [b * MICRO_G for b in self.accel_bias_ug]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dict (user units; the history as lists)."""
+        d = asdict(self)
+        d["site"] = asdict(self.site)
+        d["hist_t_h"] = [float(x) for x in self.hist_t_h]
+        d["hist_gyro_z_std_deg_h"] = [float(x) for x in self.hist_gyro_z_std_deg_h]
+        for k, v in list(d.items()):
+            if isinstance(v, tuple):
+                d[k] = [float(x) for x in v]
+        d["format"] = "gyrodrift-alignment/1"
+        return d
+
+
+@dataclass(frozen=True)
+class NavCurve:
+    """Position error of one navigation pass over time (computed minus true).
+
+    Attributes
+    ----------
+    drift_deg_h : float
+        z-gyro drift subtracted in this pass [deg/h].
+    t_h : ndarray (m,)
+        Time since the start of navigation (end of alignment) [h], every ``decimation_s``, and the exact end
+        of the pass as the last value (also when it is not a multiple of ``decimation_s``).
+    north_m, east_m : ndarray (m,)
+        North and east position errors [m].
+    lat_err_arcsec, lon_err_arcsec : ndarray (m,)
+        Latitude and longitude errors [arcsec].
+    hourly_lat_deg, hourly_lat_err_arcsec : ndarray (h + 1,)
+        Latitude and its error at whole navigation hours 0, 1, ..., exact (not decimated).
+    """
+
+    drift_deg_h: float
+    t_h: np.ndarray = field(repr=False)
+    north_m: np.ndarray = field(repr=False)
+    east_m: np.ndarray = field(repr=False)
+    lat_err_arcsec: np.ndarray = field(repr=False)
+    lon_err_arcsec: np.ndarray = field(repr=False)
+    hourly_lat_deg: np.ndarray = field(repr=False)
+    hourly_lat_err_arcsec: np.ndarray = field(repr=False)
+
+    @property
+    def pos_err_nmi(self) -> np.ndarray:
+        """Horizontal position error [nmi, 1852 m]."""
+        return np.hypot(self.north_m, self.east_m) / NMI_M
+
+    @property
+    def final_nmi(self) -> float:
+        """Position error at the end of the pass [nmi]."""
+        return float(self.pos_err_nmi[-1])
+
+    @property
+    def max_nmi(self) -> float:
+        """Largest position error over the pass [nmi]."""
+        return float(np.max(self.pos_err_nmi))
+
+
+@dataclass(frozen=True)
+class TemperatureStats:
+    """System temperature over the first ``hours`` of navigation [deg C]: at the first and last sample,
+    lowest and highest."""
+
+    hours: float
+    start_c: float
+    end_c: float
+    min_c: float
+    max_c: float
+
+
+@dataclass(frozen=True)
+class PassResult:
+    """Curves of the navigators of one read (in the order of the drifts asked) and the temperature."""
+
+    curves: list[NavCurve]
+    temperature: TemperatureStats | None
+    hours: float
+
+
+@dataclass(frozen=True)
+class TrueDrift:
+    """The true axial drift of a run and the evidence for it.
+
+    Attributes
+    ----------
+    run : str
+    drift_deg_h : float
+        The z-gyro drift minimising the criterion [deg/h] (subtract it from the z gyro).
+    criterion : str
+        ``final``, ``rms`` or ``max``.
+    hours : float
+        Navigation hours after alignment over which the criterion is taken.
+    predicted_nmi : float
+        Criterion at ``drift_deg_h`` predicted by the linear model [nmi].
+    verify_drift_deg_h : ndarray (3,)
+        ``d* - step``, ``d*``, ``d* + step`` [deg/h], navigated in the verification read.
+    verify_nmi : ndarray (3,)
+        The criterion of those three navigations [nmi].
+    verified : bool
+        The navigated criterion at ``d*`` is not above either neighbour.
+    uncompensated_nmi : float
+        Criterion with no z compensation [nmi].
+    grid_drift_deg_h, grid_nmi : ndarray
+        The criterion curve from the linear model on a grid around ``d*``.
+    sensitivity_nmi_per_deg_h : float
+        Position error at the end per deg/h of z drift (hypot of the final north/east sensitivities).
+    refinements : int
+        Verification reads that moved ``d*`` (0 when the first linearisation was exact enough).
+    last_step_deg_h : float
+        The move the last re-linearisation asked for [deg/h] (below `tolerance_deg_h` unless the
+        refinements ran out).
+    alignment : Alignment
+    base : NavCurve
+        The uncompensated navigation (z drift 0), kept for the features.
+    optimum : NavCurve
+        The verification navigation at ``d*``.
+    temperature : TemperatureStats or None
+        Temperature over the features window of the first read (when asked).
+    """
+
+    run: str
+    drift_deg_h: float
+    criterion: str
+    hours: float
+    trial_deg_h: float
+    predicted_nmi: float
+    verify_drift_deg_h: np.ndarray
+    verify_nmi: np.ndarray
+    verified: bool
+    uncompensated_nmi: float
+    grid_drift_deg_h: np.ndarray = field(repr=False)
+    grid_nmi: np.ndarray = field(repr=False)
+    sensitivity_nmi_per_deg_h: float = 0.0
+    refinements: int = 0
+    last_step_deg_h: float = 0.0
+    alignment: Alignment | None = field(default=None, repr=False)
+    base: NavCurve | None = field(default=None, repr=False)
+    optimum: NavCurve | None = field(default=None, repr=False)
+    temperature: Any = field(default=None, repr=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready summary (user units)."""
+        return {
+            "format": "gyrodrift-true-drift/1",
+            "run": self.run,
+            "drift_deg_h": self.drift_deg_h,
+            "criterion": self.criterion,
+            "hours": self.hours,
+            "trial_deg_h": self.trial_deg_h,
+            "predicted_nmi": self.predicted_nmi,
+            "uncompensated_nmi": self.uncompensated_nmi,
+            "verify": [
+                {"drift_deg_h": float(d), "criterion_nmi": float(v)}
+                for d, v in zip(self.verify_drift_deg_h, self.verify_nmi, strict=False)
+            ],
+            "verified": bool(self.verified),
+            "sensitivity_nmi_per_deg_h": self.sensitivity_nmi_per_deg_h,
+            "refinements": self.refinements,
+            "last_step_deg_h": self.last_step_deg_h,
+            "alignment_z_drift_deg_h": None if self.alignment is None else self.alignment.z_drift_deg_h,
+            "alignment_z_drift_std_deg_h": None if self.alignment is None else self.alignment.z_drift_std_deg_h,
+            "grid": {
+                "drift_deg_h": [float(x) for x in self.grid_drift_deg_h],
+                "criterion_nmi": [float(x) for x in self.grid_nmi],
+            },
+        }
+
+
+RUN_TABLE_COLUMNS = ("run", "lat_deg", "lat0_deg", "temp_min_c", "temp_max_c", "temp_start_c", "temp_end_c")
+"""Columns written by `gyrodrift features` (plus ``drift_deg_h`` with the truth)."""
+
+
+@dataclass(frozen=True)
+class RunFeatures:
+    """The features of one run (one row of a run table) and how they were obtained.
+
+    Attributes
+    ----------
+    run : str
+        The log's name (file stem).
+    lat_deg : float
+        Navigated latitude at navigation hour `hours` (12) [deg].
+    lat0_deg : float
+        True site latitude [deg].
+    lat_err_curve_arcsec : ndarray (hours + 1,)
+        Latitude error at navigation hours 0, 1, ..., 12 [arcsec], computed minus true.
+    temp_start_c, temp_end_c, temp_min_c, temp_max_c : float
+        Temperature over the 12 h [deg C].
+    drift_deg_h : float
+        The true drift when asked (`with_truth`), else NaN [deg/h].
+    hours : float
+        Navigation hours of the features (12).
+    alignment : Alignment
+    truth : TrueDrift or None
+    """
+
+    run: str
+    lat_deg: float
+    lat0_deg: float
+    lat_err_curve_arcsec: np.ndarray = field(repr=False)
+    temp_start_c: float = math.nan
+    temp_end_c: float = math.nan
+    temp_min_c: float = math.nan
+    temp_max_c: float = math.nan
+    drift_deg_h: float = math.nan
+    hours: float = 12.0
+    alignment: Alignment | None = field(default=None, repr=False)
+    truth: TrueDrift | None = field(default=None, repr=False)
+
+    @property
+    def lat_err_arcsec(self) -> float:
+        """Latitude error at the end of the features window [arcsec] (computed minus true)."""
+        return (self.lat_deg - self.lat0_deg) * 3600.0
+
+    def row(self) -> dict[str, Any]:
+        """The run-table row (``RUN_TABLE_COLUMNS``, plus ``drift_deg_h`` when known)."""
+        r = {
+            "run": self.run,
+            "lat_deg": self.lat_deg,
+            "lat0_deg": self.lat0_deg,
+            "temp_min_c": self.temp_min_c,
+            "temp_max_c": self.temp_max_c,
+            "temp_start_c": self.temp_start_c,
+            "temp_end_c": self.temp_end_c,
+        }
+        if math.isfinite(self.drift_deg_h):
+            r["drift_deg_h"] = self.drift_deg_h
+        return r
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """Position errors over `hours` after alignment, before and after compensating `drift_deg_h`.
+
+    Attributes
+    ----------
+    run : str
+    drift_deg_h : float
+        The compensated z drift [deg/h].
+    hours : float
+    before, after : NavCurve
+        Error curves (``t_h`` since the end of alignment).
+    source : str
+        Where the drift came from (``"given"`` or the model file).
+    """
+
+    run: str
+    drift_deg_h: float
+    hours: float
+    before: NavCurve = field(repr=False)
+    after: NavCurve = field(repr=False)
+    alignment: Alignment | None = field(default=None, repr=False)
+    source: str = "given"
+
+    @property
+    def before_final_nmi(self) -> float:
+        return self.before.final_nmi
+
+    @property
+    def after_final_nmi(self) -> float:
+        return self.after.final_nmi
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready summary: final and max position error [nmi], before and after."""
+        return {
+            "format": "gyrodrift-evaluation/1",
+            "run": self.run,
+            "drift_deg_h": self.drift_deg_h,
+            "drift_source": self.source,
+            "hours": self.hours,
+            "before": {"final_pos_err_nmi": self.before.final_nmi, "max_pos_err_nmi": self.before.max_nmi},
+            "after": {"final_pos_err_nmi": self.after.final_nmi, "max_pos_err_nmi": self.after.max_nmi},
+        }
+
+
+@dataclass(frozen=True)
+class Identification:
+    """The identified axial drift of a run.
+
+    Attributes
+    ----------
+    run : str
+    drift_deg_h : float
+        Model prediction [deg/h] (subtract from the z gyro).
+    physics_drift_deg_h : float
+        Physics inversion of the 12 h latitude error [deg/h].
+    alignment_z_drift_deg_h, alignment_z_drift_std_deg_h : float
+        The alignment's own z-gyro bias estimate and 1-sigma [deg/h] (not used).
+    model_std_deg_h : float or None
+        Predictive 1-sigma of the model; None for the LSSVR (it has none).
+    interval_deg_h : tuple of float or None
+        (low, high) jackknife interval of the identified drift [deg/h] at ``interval_coverage``; None when the
+        model carries no leave-one-out residuals.
+    interval_coverage : float
+    uncertainty_note : str
+    training_error_deg_h : float or None
+        The model's error on its training runs [deg/h]: the mean absolute closed-form leave-one-out residual
+        when the fitted estimator is at hand, else the best fitness of its tuning (model files keep no
+        factorisation); None when neither is known.
+    training_error_kind : str or None
+        ``"loo_mae"``, or the tuning objective (``"loo_mae"``, ``"train_mae"``, ``"kfold_mae"``).
+    features : RunFeatures
+    """
+
+    run: str
+    drift_deg_h: float
+    physics_drift_deg_h: float
+    alignment_z_drift_deg_h: float
+    alignment_z_drift_std_deg_h: float
+    model_std_deg_h: float | None
+    interval_deg_h: tuple[float, float] | None
+    interval_coverage: float
+    uncertainty_note: str
+    training_error_deg_h: float | None
+    training_error_kind: str | None
+    features: RunFeatures = field(repr=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        f = self.features
+        return {
+            "format": "gyrodrift-identification/1",
+            "run": self.run,
+            "drift_deg_h": self.drift_deg_h,
+            "physics_drift_deg_h": self.physics_drift_deg_h,
+            "alignment_z_drift_deg_h": self.alignment_z_drift_deg_h,
+            "alignment_z_drift_std_deg_h": self.alignment_z_drift_std_deg_h,
+            "model_std_deg_h": self.model_std_deg_h,
+            "interval_deg_h": None if self.interval_deg_h is None else list(self.interval_deg_h),
+            "interval_coverage": self.interval_coverage,
+            "uncertainty_note": self.uncertainty_note,
+            "training_error_deg_h": self.training_error_deg_h,
+            "training_error_kind": self.training_error_kind,
+            "features": {
+                **f.row(),
+                "lat_err_arcsec": f.lat_err_arcsec,
+                "lat_err_curve_arcsec": [float(x) for x in f.lat_err_curve_arcsec],
+            },
+        }
