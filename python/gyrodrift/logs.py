@@ -138,8 +138,8 @@ class LogChunk:
         Angle [rad] and velocity [m/s] increments over each sample, body frame (rates already converted).
     temp_c : ndarray (n,) or None
         System temperature [deg C] (None when the log has none and the caller did not need it).
-    true_deg : ndarray (n, 3) or None
-        True pitch, roll, yaw at the end of each sample [deg] when the log carries them.
+    truth : tuple of 3 ndarrays (n,) or None
+        True pitch, roll, yaw at the end of each sample [deg] when the log carries them (`true_deg` stacks them).
     """
 
     first_index: int
@@ -147,10 +147,15 @@ class LogChunk:
     dtheta_rad: np.ndarray
     dv_m_s: np.ndarray
     temp_c: np.ndarray | None = None
-    true_deg: np.ndarray | None = None
+    truth: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     def __len__(self) -> int:
         return len(self.t_s)
+
+    @property
+    def true_deg(self) -> np.ndarray | None:
+        """The true attitude as one (n, 3) array (pitch, roll, yaw) [deg], or None."""
+        return None if self.truth is None else np.column_stack(self.truth)
 
     def slice(self, a: int, b: int) -> LogChunk:
         """Samples a..b-1 of the chunk (views)."""
@@ -160,7 +165,7 @@ class LogChunk:
             self.dtheta_rad[a:b],
             self.dv_m_s[a:b],
             None if self.temp_c is None else self.temp_c[a:b],
-            None if self.true_deg is None else self.true_deg[a:b],
+            None if self.truth is None else tuple(c[a:b] for c in self.truth),
         )
 
 
@@ -200,7 +205,7 @@ class ImuLog:
     truth : LogTruth or None
         The true initial attitude (simulated logs).
     has_temperature, has_truth_columns : bool
-        Whether chunks carry ``temp_c`` and ``true_deg``.
+        Whether chunks carry ``temp_c`` and ``truth``.
     """
 
     def __init__(
@@ -537,6 +542,14 @@ class ImuLog:
             yield self._from_table(pa.Table.from_batches(pending), done)
 
 
+def _stack3(columns: tuple[np.ndarray, ...]) -> np.ndarray:
+    """Three (n,) columns as one C-contiguous (n, 3) float64 array (what the core takes)."""
+    out = np.empty((len(columns[0]), 3))
+    for j, c in enumerate(columns):
+        out[:, j] = c
+    return out
+
+
 def _cut(raw: _Raw, n: int) -> _Raw:
     return _Raw(
         raw.t[:n],
@@ -588,10 +601,9 @@ class _Validator:
         if len(raw.sensors) == 2:
             gyro, acc = raw.sensors
         else:
-            gyro = np.column_stack(raw.sensors[:3]).astype(np.float64, copy=False)
-            acc = np.column_stack(raw.sensors[3:]).astype(np.float64, copy=False)
+            gyro, acc = _stack3(raw.sensors[:3]), _stack3(raw.sensors[3:])
         temp = None if raw.temp is None else np.asarray(raw.temp, dtype=np.float64)
-        true_deg = None if raw.truth is None else np.column_stack(raw.truth).astype(np.float64, copy=False)
+        truth = None if raw.truth is None else tuple(np.asarray(c, dtype=np.float64) for c in raw.truth)
         low, high = TEMPERATURE_LIMITS_C
         clean = (
             bool(np.isfinite(t).all())
@@ -599,15 +611,15 @@ class _Validator:
             and bool((np.abs(gyro) <= self.limits[0]).all())  # NaN and inf fail too
             and bool((np.abs(acc) <= self.limits[1]).all())
             and (temp is None or bool(((temp >= low) & (temp <= high)).all()))
-            and (true_deg is None or bool(np.isfinite(true_deg).all()))
+            and (truth is None or all(bool(np.isfinite(c).all()) for c in truth))
         )
         if not clean:
-            self._explain(t, gyro, acc, temp, true_deg, first)
+            self._explain(t, gyro, acc, temp, truth, first)
         self.prev_t = float(t[-1]) if len(t) else self.prev_t
         if log.kind == "rates":
             gyro = gyro * self.dt
             acc = acc * self.dt
-        return LogChunk(first, t, np.ascontiguousarray(gyro), np.ascontiguousarray(acc), temp, true_deg)
+        return LogChunk(first, t, np.ascontiguousarray(gyro), np.ascontiguousarray(acc), temp, truth)
 
     def _time_ok(self, t: np.ndarray) -> bool:
         if not len(t):
@@ -615,7 +627,7 @@ class _Validator:
         full = t if self.prev_t is None else np.concatenate([[self.prev_t], t])
         return bool((np.abs(np.diff(full) - self.dt) <= GAP_TOLERANCE * self.dt).all())
 
-    def _explain(self, t, gyro, acc, temp, true_deg, first: int) -> None:
+    def _explain(self, t, gyro, acc, temp, truth, first: int) -> None:
         """Raise the `LogError` of the first problem of a chunk that failed the fast checks."""
         log = self.log
         names = log._columns
@@ -632,8 +644,9 @@ class _Validator:
                     f"{_where(log, first + i, 'temp_c')}: temperature {float(temp[i]):.6g} deg C is outside "
                     f"[{low:g}, {high:g}] deg C (a system temperature in deg C, not kelvin)"
                 )
-        if true_deg is not None:
-            self._finite(true_deg, first, TRUTH_COLUMNS)
+        if truth is not None:
+            for c, name in zip(truth, TRUTH_COLUMNS, strict=True):
+                self._finite(c, first, (name,))
         self._check_time(t, first)
         for j, (block, limit) in enumerate(((gyro, self.limits[0]), (acc, self.limits[1]))):
             over = np.abs(block) > limit

@@ -338,7 +338,8 @@ def navigate(
     def keep_truth(piece, done: int) -> None:  # the true attitude at the kept samples (copied)
         first = (dec - 1 - done) % dec
         k = len(range(first, len(piece), dec))
-        true_deg[(done + first) // dec : (done + first) // dec + k] = piece.true_deg[first::dec]
+        for j, column in enumerate(piece.truth):
+            true_deg[(done + first) // dec : (done + first) // dec + k, j] = column[first::dec]
 
     (track,) = run_navigators(
         log,
