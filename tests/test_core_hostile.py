@@ -233,3 +233,18 @@ def test_fill_into_matches_next_chunk_and_refuses_bad_buffers():
             sim.fill_into(arrays)
         assert type(info.value) is CoreError and info.value.key == key, str(info.value)
     assert sim.samples_done == 0
+
+
+def test_the_type_stub_names_what_the_extension_has():
+    import re
+    from pathlib import Path
+
+    stub = (Path(_core.__file__).parent / "_core.pyi").read_text()
+    names = re.findall(r"^(?:class |def )?([A-Za-z_][A-Za-z_0-9]*)(?:: Final|\(|:)", stub, re.M)
+    names = [n for n in names if n not in ("ArrayLike", "FloatArray")]
+    assert len(names) > 25
+    assert [n for n in names if not hasattr(_core, n)] == []
+    for cls in ("SimulatorConfig", "NavigatorConfig", "AlignerConfig", "ImuSimulator", "Navigator", "Aligner"):
+        block = stub.split(f"class {cls}:")[1].split("\nclass ")[0]
+        for attr in re.findall(r"def ([a-z_0-9]+)\(", block):
+            assert hasattr(getattr(_core, cls), attr), f"{cls}.{attr}"

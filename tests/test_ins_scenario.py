@@ -8,6 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from gyrodrift import _core
 from gyrodrift.ins.scenario import Scenario, ScenarioError, load_scenario, write_scenario_toml
 from gyrodrift.ins.toml_writer import dumps_toml
 from gyrodrift.units import ARCSEC, DEG, DEG_PER_H, DEG_PER_SQRT_H, HOUR, MICRO_G
@@ -52,8 +53,8 @@ BAD = [
     ("[gyro]\nmisalignment_arcsec = [1, 2, 3]\n", "[gyro] misalignment_arcsec: expected 6 numbers, got 3"),
     ("[gyro]\nbias_deg_h = 0.001\n", "[gyro] bias_deg_h: expected 3 numbers, got number 0.001"),
     ('[gyro]\nbias_deg_h = [0, "a", 0]\n', "[gyro] bias_deg_h: element 1: expected a number, got string 'a'"),
-    ("[site]\nlat_deg = 95.0\n", "[site] lat_deg: must be strictly between -90 and 90, got 95"),
-    ("[site]\nlat_deg = -90\n", "[site] lat_deg: must be strictly between -90 and 90, got -90"),
+    ("[site]\nlat_deg = 95.0\n", "[site] lat_deg: must be between -89 and 89, got 95"),
+    ("[site]\nlat_deg = -90\n", "[site] lat_deg: must be between -89 and 89, got -90"),
     ('[site]\nlat_deg = "28.2"\n', "[site] lat_deg: expected a number, got string '28.2'"),
     ("[site]\nlat_deg = nan\n", "[site] lat_deg: expected a finite number, got nan"),
     ("[run]\nduration_h = 0\n", "[run] duration_h: must be > 0, got 0"),
@@ -258,7 +259,7 @@ finite = st.floats(min_value=-1e3, max_value=1e3, allow_nan=False, allow_infinit
 
 @settings(max_examples=60, deadline=None)
 @given(
-    lat=st.floats(min_value=-89.0, max_value=89.0),
+    lat=st.floats(min_value=-_core.MAX_LAT_DEG, max_value=_core.MAX_LAT_DEG),
     bias=st.lists(finite, min_size=3, max_size=3),
     ug=st.lists(finite, min_size=3, max_size=3),
     rate=st.floats(min_value=1.0, max_value=2000.0),

@@ -16,6 +16,27 @@ WGS84_A_M: Final[float]
 WGS84_F: Final[float]
 OMEGA_IE_RAD_S: Final[float]
 NMI_M: Final[float]
+STANDARD_GRAVITY_M_S2: Final[float]
+
+# Limits of the shared quantities, in the units their names carry (gyrodrift-core `limits`, `turntable`,
+# `simulator`); scenario files and the core refuse the same values.
+MAX_LAT_DEG: Final[float]
+MAX_LON_DEG: Final[float]
+MIN_HEIGHT_M: Final[float]
+MAX_HEIGHT_M: Final[float]
+MIN_RATE_HZ: Final[float]
+MAX_RATE_HZ: Final[float]
+MAX_DURATION_S: Final[float]
+MAX_PITCH_DEG: Final[float]
+MAX_ROLL_DEG: Final[float]
+MAX_YAW_DEG: Final[float]
+MAX_ANGULAR_RATE_DEG_S: Final[float]
+MAX_SPECIFIC_FORCE_G: Final[float]
+MAX_TABLE_RATE_DEG_S: Final[float]
+MAX_TABLE_ACCEL_DEG_S2: Final[float]
+MAX_SPAN_DEG: Final[float]
+MIN_SAMPLES_PER_PERIOD: Final[float]
+MAX_CHUNK_SAMPLES: Final[int]
 
 def normal_gravity(lat_rad: FloatArray, height_m: FloatArray) -> FloatArray: ...
 def balanced_reciprocating_span_rad(

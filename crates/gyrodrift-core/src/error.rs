@@ -72,7 +72,7 @@ pub(crate) fn check(ok: bool, key: &'static str, message: impl Into<String>) -> 
 }
 
 /// User units of messages: the SI value is converted before printing.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum Unit {
     /// rad printed in deg.
     Deg,
@@ -86,7 +86,22 @@ pub(crate) enum Unit {
     G,
     /// Printed as it is, with this unit name (m, m/s, Hz, s, deg C, "").
     Si(&'static str),
+    /// Multiplied by the factor, printed with the name (e.g. rad/sqrt(s) in deg/sqrt(h)).
+    Scaled(f64, &'static str),
 }
+
+/// rad/sqrt(s) printed in deg/sqrt(h) (angle random walk).
+pub(crate) const DEG_PER_RTH: Unit = Unit::Scaled(180.0 / std::f64::consts::PI * 60.0, "deg/sqrt(h)");
+/// rad/s/sqrt(s) printed in deg/h/sqrt(h) (rate random walk).
+pub(crate) const DEG_H_PER_RTH: Unit = Unit::Scaled(180.0 / std::f64::consts::PI * 3600.0 * 60.0, "deg/h/sqrt(h)");
+/// m/s^2 printed in ug (1 ug = 9.80665e-6 m/s^2).
+pub(crate) const MICRO_G: Unit = Unit::Scaled(1.0 / (STANDARD_GRAVITY * 1e-6), "ug");
+/// m/s/sqrt(s) printed in ug/sqrt(Hz) (velocity random walk).
+pub(crate) const MICRO_G_PER_RTHZ: Unit = Unit::Scaled(1.0 / (STANDARD_GRAVITY * 1e-6), "ug/sqrt(Hz)");
+/// A ratio printed in ppm.
+pub(crate) const PPM: Unit = Unit::Scaled(1e6, "ppm");
+/// rad printed in arcsec.
+pub(crate) const ARCSEC: Unit = Unit::Scaled(180.0 / std::f64::consts::PI * 3600.0, "arcsec");
 
 /// One standard gravity [m/s^2] (the unit g of messages and of the specific-force limit).
 pub const STANDARD_GRAVITY: f64 = 9.806_65;
@@ -98,6 +113,7 @@ impl Unit {
             Unit::DegPerH => x.to_degrees() * 3600.0,
             Unit::G => x / STANDARD_GRAVITY,
             Unit::Si(_) => x,
+            Unit::Scaled(factor, _) => x * factor,
         }
     }
 
@@ -113,7 +129,7 @@ impl Unit {
             Unit::DegPerH => "deg/h",
             Unit::DegPerS2 => "deg/s^2",
             Unit::G => "g",
-            Unit::Si(n) => n,
+            Unit::Si(n) | Unit::Scaled(_, n) => n,
         }
     }
 
@@ -161,6 +177,31 @@ pub(crate) fn show_all(v: &[f64], unit: Unit) -> String {
         "" => format!("({})", items.join(", ")),
         n => format!("({}) {n}", items.join(", ")),
     }
+}
+
+/// Check that every element of `v` (SI) lies in [lo, hi] and is finite; the message shows all of them.
+pub(crate) fn all_in_range(
+    key: &'static str,
+    quantity: &str,
+    v: &[f64],
+    lo: f64,
+    hi: f64,
+    unit: Unit,
+) -> Result<(), CoreError> {
+    check(
+        v.iter().all(|x| x.is_finite() && *x >= lo && *x <= hi),
+        key,
+        format!(
+            "{quantity} {} is outside [{}, {}]{}",
+            show_all(v, unit),
+            sig(unit.convert(lo)),
+            sig(unit.convert(hi)),
+            match unit.name() {
+                "" => String::new(),
+                n => format!(" {n}"),
+            }
+        ),
+    )
 }
 
 /// A number with 6 significant digits, without trailing zeros (90 not 90.00000, 1e-300 in exponent form).

@@ -32,6 +32,11 @@ use rand_core::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_pcg::Pcg64Mcg;
 
+/// Largest constant, Gauss-Markov and estimated gyro bias [rad/s] (about 20600 deg/h).
+pub const MAX_GYRO_BIAS_RAD_S: f64 = 0.1;
+/// Largest constant and estimated accelerometer bias [m/s^2] (about 1 g).
+pub const MAX_ACCEL_BIAS_M_S2: f64 = 10.0;
+
 /// Parameters of the error model (SI units; see the module docs for the equations).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ImuErrorParams {
@@ -90,82 +95,98 @@ impl Default for ImuErrorParams {
 impl ImuErrorParams {
     /// Range checks; errors name the contract key. Limits reject nonsense, not unusual sensors.
     pub fn validate(&self) -> Result<(), CoreError> {
-        let fin = |v: &[f64]| v.iter().all(|x| x.is_finite());
-        check(
-            fin(&self.gyro_bias) && self.gyro_bias.iter().all(|b| b.abs() <= 0.1),
-            "gyro_bias_rad_s",
-            format!(
-                "gyro bias {} must be finite and within +-{}",
-                crate::error::show_all(&self.gyro_bias, Unit::DegPerH),
-                Unit::DegPerH.show(0.1)
-            ),
-        )?;
-        check(
-            self.gyro_arw.is_finite() && self.gyro_arw >= 0.0 && self.gyro_arw <= 0.1,
+        use crate::error::{
+            all_in_range, in_range, ARCSEC, DEG_H_PER_RTH, DEG_PER_RTH, MICRO_G, MICRO_G_PER_RTHZ, PPM,
+        };
+        let (gb, g) = (MAX_GYRO_BIAS_RAD_S, Unit::DegPerH);
+        all_in_range("gyro_bias_rad_s", "gyro bias", &self.gyro_bias, -gb, gb, g)?;
+        in_range(
             "gyro_arw_rad_rts",
-            "must be in [0, 0.1] rad/sqrt(s)",
+            "angle random walk",
+            self.gyro_arw,
+            0.0,
+            0.1,
+            DEG_PER_RTH,
         )?;
-        check(
-            self.gyro_bias_instability.is_finite()
-                && self.gyro_bias_instability >= 0.0
-                && self.gyro_bias_instability <= 0.1,
+        in_range(
             "gyro_bias_instability_rad_s",
-            "must be in [0, 0.1] rad/s",
+            "bias instability",
+            self.gyro_bias_instability,
+            0.0,
+            gb,
+            g,
         )?;
         check(
             self.gyro_correlation.is_finite() && self.gyro_correlation > 0.0,
             "gyro_correlation_s",
-            "must be positive and finite",
+            format!(
+                "correlation time {} s must be positive and finite",
+                crate::error::sig(self.gyro_correlation)
+            ),
         )?;
-        check(
-            self.gyro_rrw.is_finite() && self.gyro_rrw >= 0.0 && self.gyro_rrw <= 0.1,
+        in_range(
             "gyro_rrw_rad_s_rts",
-            "must be in [0, 0.1] rad/s/sqrt(s)",
+            "rate random walk",
+            self.gyro_rrw,
+            0.0,
+            0.1,
+            DEG_H_PER_RTH,
         )?;
-        check(
-            fin(&self.gyro_scale) && self.gyro_scale.iter().all(|s| s.abs() <= 0.1),
-            "gyro_scale",
-            "must be finite with |s| <= 0.1",
-        )?;
-        check(
-            fin(&self.gyro_misalignment) && self.gyro_misalignment.iter().all(|s| s.abs() <= 0.1),
+        all_in_range("gyro_scale", "gyro scale factor", &self.gyro_scale, -0.1, 0.1, PPM)?;
+        all_in_range(
             "gyro_misalignment_rad",
-            "must be finite with |m| <= 0.1 rad",
+            "gyro misalignment",
+            &self.gyro_misalignment,
+            -0.1,
+            0.1,
+            ARCSEC,
         )?;
-        check(
-            fin(&self.accel_bias) && self.accel_bias.iter().all(|b| b.abs() <= 10.0),
+        let ab = MAX_ACCEL_BIAS_M_S2;
+        all_in_range(
             "accel_bias_m_s2",
-            "must be finite with |b| <= 10 m/s^2",
+            "accelerometer bias",
+            &self.accel_bias,
+            -ab,
+            ab,
+            MICRO_G,
         )?;
-        check(
-            self.accel_vrw.is_finite() && self.accel_vrw >= 0.0 && self.accel_vrw <= 1.0,
+        in_range(
             "accel_vrw_m_s_rts",
-            "must be in [0, 1] m/s/sqrt(s)",
+            "velocity random walk",
+            self.accel_vrw,
+            0.0,
+            1.0,
+            MICRO_G_PER_RTHZ,
         )?;
-        check(
-            fin(&self.accel_scale) && self.accel_scale.iter().all(|s| s.abs() <= 0.1),
+        all_in_range(
             "accel_scale",
-            "must be finite with |s| <= 0.1",
+            "accelerometer scale factor",
+            &self.accel_scale,
+            -0.1,
+            0.1,
+            PPM,
         )?;
-        check(
-            self.drift_t0_c.is_finite() && (-100.0..=200.0).contains(&self.drift_t0_c),
+        in_range(
             "drift_t0_c",
-            "must be in [-100, 200] deg C",
+            "drift reference temperature",
+            self.drift_t0_c,
+            -100.0,
+            200.0,
+            Unit::Si("deg C"),
         )?;
-        check(
-            self.drift_k1.is_finite() && self.drift_k1.abs() <= 1e-3,
-            "drift_k1_rad_s_per_c",
-            "must be finite with |k1| <= 1e-3 rad/s/degC",
-        )?;
-        check(
-            self.drift_k2.is_finite() && self.drift_k2.abs() <= 1e-3,
-            "drift_k2_rad_s_per_c2",
-            "must be finite with |k2| <= 1e-3 rad/s/degC^2",
-        )?;
-        check(
-            self.drift_k3.is_finite() && self.drift_k3.abs() <= 1.0,
+        let per_c = Unit::Scaled(180.0 / std::f64::consts::PI * 3600.0, "deg/h/degC");
+        in_range("drift_k1_rad_s_per_c", "drift k1", self.drift_k1, -1e-3, 1e-3, per_c)?;
+        let per_c2 = Unit::Scaled(180.0 / std::f64::consts::PI * 3600.0, "deg/h/degC^2");
+        in_range("drift_k2_rad_s_per_c2", "drift k2", self.drift_k2, -1e-3, 1e-3, per_c2)?;
+        // k3 [rad/s per degC/s] in [deg/h per degC/h]: x 180/pi x 3600 / 3600.
+        let per_c_per_h = Unit::Scaled(180.0 / std::f64::consts::PI, "deg/h per degC/h");
+        in_range(
             "drift_k3_rad_s_per_c_per_s",
-            "must be finite with |k3| <= 1 rad/s per degC/s",
+            "drift k3",
+            self.drift_k3,
+            -1.0,
+            1.0,
+            per_c_per_h,
         )
     }
 

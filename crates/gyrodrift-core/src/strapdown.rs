@@ -40,8 +40,9 @@ use crate::attitude::{
     scale, sub, Euler, Quat, Vec3,
 };
 use crate::earth;
+use crate::error::{all_in_range, show_all, Unit};
 use crate::error::{check, CoreError};
-use crate::error::{show_all, Unit};
+use crate::imu_error::{MAX_ACCEL_BIAS_M_S2, MAX_GYRO_BIAS_RAD_S};
 use crate::limits::{check_attitude, check_increments, check_site};
 
 /// Samples between refreshes of the position-dependent Earth terms.
@@ -244,15 +245,8 @@ impl Navigator {
 
     /// Set the estimated gyro bias [rad/s], subtracted from every following sample (measured - estimate).
     pub fn set_gyro_bias(&mut self, b: Vec3) -> Result<(), CoreError> {
-        check(
-            b.iter().all(|x| x.is_finite() && x.abs() <= 0.1),
-            "gyro_bias_rad_s",
-            format!(
-                "gyro bias {} must be finite and within +-{}",
-                show_all(&b, Unit::DegPerH),
-                Unit::DegPerH.show(0.1)
-            ),
-        )?;
+        let m = MAX_GYRO_BIAS_RAD_S;
+        all_in_range("gyro_bias_rad_s", "gyro bias", &b, -m, m, Unit::DegPerH)?;
         self.gyro_bias = b;
         self.gyro_bias_dt = scale(b, self.dt);
         Ok(())
@@ -260,14 +254,14 @@ impl Navigator {
 
     /// Set the estimated accelerometer bias [m/s^2], subtracted from every following sample.
     pub fn set_accel_bias(&mut self, b: Vec3) -> Result<(), CoreError> {
-        check(
-            b.iter().all(|x| x.is_finite() && x.abs() <= 10.0),
+        let m = MAX_ACCEL_BIAS_M_S2;
+        all_in_range(
             "accel_bias_m_s2",
-            format!(
-                "accelerometer bias {} must be finite and within +-10 m/s^2 ({})",
-                show_all(&b, Unit::Si("m/s^2")),
-                Unit::G.show(10.0)
-            ),
+            "accelerometer bias",
+            &b,
+            -m,
+            m,
+            crate::error::MICRO_G,
         )?;
         self.accel_bias = b;
         self.accel_bias_dt = scale(b, self.dt);

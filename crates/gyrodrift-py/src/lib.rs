@@ -415,6 +415,36 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("WGS84_F", earth::F)?;
     m.add("OMEGA_IE_RAD_S", earth::OMEGA_IE)?;
     m.add("NMI_M", earth::NMI)?;
+    m.add("STANDARD_GRAVITY_M_S2", gyrodrift_core::error::STANDARD_GRAVITY)?;
+    // The limits of gyrodrift-core (`limits`, `turntable`, `simulator`), in the units their names carry.
+    {
+        use gyrodrift_core::limits as l;
+        use gyrodrift_core::turntable as t;
+        for (name, value) in [
+            ("MAX_LAT_DEG", l::MAX_LAT_DEG),
+            ("MAX_LON_DEG", l::MAX_LON_DEG),
+            ("MIN_HEIGHT_M", l::MIN_HEIGHT_M),
+            ("MAX_HEIGHT_M", l::MAX_HEIGHT_M),
+            ("MIN_RATE_HZ", l::MIN_RATE_HZ),
+            ("MAX_RATE_HZ", l::MAX_RATE_HZ),
+            ("MAX_DURATION_S", l::MAX_DURATION_S),
+            ("MAX_PITCH_DEG", l::MAX_PITCH_DEG),
+            ("MAX_ROLL_DEG", l::MAX_ROLL_DEG),
+            ("MAX_YAW_DEG", l::MAX_YAW_DEG),
+            ("MAX_ANGULAR_RATE_DEG_S", l::MAX_ANGULAR_RATE_DEG_S),
+            ("MAX_SPECIFIC_FORCE_G", l::MAX_SPECIFIC_FORCE_G),
+            ("MAX_TABLE_RATE_DEG_S", t::MAX_TABLE_RATE_RAD_S.to_degrees()),
+            ("MAX_TABLE_ACCEL_DEG_S2", t::MAX_TABLE_ACCEL_RAD_S2.to_degrees()),
+            ("MAX_SPAN_DEG", t::MAX_SPAN_RAD.to_degrees()),
+            (
+                "MIN_SAMPLES_PER_PERIOD",
+                gyrodrift_core::simulator::MIN_SAMPLES_PER_PERIOD,
+            ),
+        ] {
+            m.add(name, value)?;
+        }
+        m.add("MAX_CHUNK_SAMPLES", gyrodrift_core::simulator::MAX_CHUNK_SAMPLES)?;
+    }
     m.add_function(wrap_pyfunction!(normal_gravity, m)?)?;
     m.add_function(wrap_pyfunction!(balanced_reciprocating_span_rad, m)?)?;
     m.add_class::<SimulatorConfig>()?;

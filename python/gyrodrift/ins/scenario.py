@@ -52,6 +52,12 @@ ROTATION_SCHEMES = ("none", "continuous", "reciprocating", "indexing")
 BALANCED = "balanced"
 """The value of ``[rotation] span_deg`` that asks for the balanced reciprocating span."""
 
+MAX_SCENARIO_BYTES = 1 << 20
+"""Largest scenario TOML file [bytes] (a full scenario is about 1 kB; an inline series of 10 000 points ~200 kB)."""
+
+MAX_SERIES_ROWS = 1_000_000
+"""Most rows of a ``[temperature] series_csv`` (1 s steps for 11 days), checked while reading."""
+
 DEG_PER_H_PER_SQRT_H = DEG_PER_H / math.sqrt(HOUR)
 """One deg/h/sqrt(h) (rate random walk) [rad/s/sqrt(s)]."""
 
@@ -312,12 +318,18 @@ def load_scenario(path: str | os.PathLike[str]) -> Scenario:
         raise ScenarioError(f"{source}: no such file") from None
     except OSError as exc:
         raise ScenarioError(f"{source}: cannot read: {exc.strerror or exc}") from None
+    if len(raw) > MAX_SCENARIO_BYTES:
+        raise ScenarioError(f"{source}: {len(raw)} bytes, a scenario file holds at most {MAX_SCENARIO_BYTES}")
     try:
         data = tomllib.loads(raw.decode("utf-8"))
     except UnicodeDecodeError:
         raise ScenarioError(f"{source}: not UTF-8 text") from None
     except tomllib.TOMLDecodeError as exc:
         raise ScenarioError(f"{source}: invalid TOML: {exc}") from None
+    except ValueError as exc:  # e.g. an integer of more than 4300 digits
+        raise ScenarioError(f"{source}: invalid TOML: {exc}") from None
+    except RecursionError:
+        raise ScenarioError(f"{source}: invalid TOML: arrays or tables nested too deeply") from None
     return Scenario.from_dict(data, source=source, base_dir=p.parent)
 
 
@@ -364,16 +376,22 @@ class _Validator:
             return float(default)
         v = table[key]
         if isinstance(v, bool) or not isinstance(v, (int, float)):
-            raise self.fail(sec, key, f"expected a number, got {_type_name(v)} {v!r}")
-        v = float(v)
-        if not math.isfinite(v):
-            raise self.fail(sec, key, f"expected a finite number, got {v!r}")
-        return v
+            raise self.fail(sec, key, f"expected a number, got {_type_name(v)} {_show(v)}")
+        f = _finite(v)
+        if f is None:
+            raise self.fail(sec, key, f"expected a finite number, got {_show(v)}")
+        return f
 
     def positive(self, sec, table, key, default) -> float:
         v = self.number(sec, table, key, default)
         if not v > 0:
             raise self.fail(sec, key, f"must be > 0, got {_fmt(v)}")
+        return v
+
+    def positive_at_most(self, sec, table, key, default, hi, unit: str = "") -> float:
+        v = self.positive(sec, table, key, default)
+        if v > hi:
+            raise self.fail(sec, key, f"must be at most {hi:.6g}{unit}, got {_fmt(v)}")
         return v
 
     def non_negative(self, sec, table, key, default) -> float:
@@ -395,7 +413,7 @@ class _Validator:
             return default
         v = table[key]
         if isinstance(v, bool) or not isinstance(v, int):
-            raise self.fail(sec, key, f"expected an integer, got {_type_name(v)} {v!r}")
+            raise self.fail(sec, key, f"expected an integer, got {_type_name(v)} {_show(v)}")
         if v < 0:
             raise self.fail(sec, key, f"must be >= 0, got {v}")
         return v
@@ -407,7 +425,7 @@ class _Validator:
         v = table[key]
         if not isinstance(v, (list, tuple)):
             want = f"{n} numbers" if n is not None else "an array of numbers"
-            raise self.fail(sec, key, f"expected {want}, got {_type_name(v)} {v!r}")
+            raise self.fail(sec, key, f"expected {want}, got {_type_name(v)} {_show(v)}")
         if n is not None and len(v) != n:
             raise self.fail(sec, key, f"expected {n} numbers, got {len(v)}")
         if n is None and len(v) == 0:
@@ -415,10 +433,11 @@ class _Validator:
         out = []
         for i, x in enumerate(v):
             if isinstance(x, bool) or not isinstance(x, (int, float)):
-                raise self.fail(sec, key, f"element {i}: expected a number, got {_type_name(x)} {x!r}")
-            if not math.isfinite(float(x)):
-                raise self.fail(sec, key, f"element {i}: expected a finite number, got {x!r}")
-            out.append(float(x))
+                raise self.fail(sec, key, f"element {i}: expected a number, got {_type_name(x)} {_show(x)}")
+            f = _finite(x)
+            if f is None:
+                raise self.fail(sec, key, f"element {i}: expected a finite number, got {_show(x)}")
+            out.append(f)
         return tuple(out)
 
     def section(self, data: Mapping[str, Any], name: str, cls: type) -> Mapping[str, Any]:
@@ -440,7 +459,7 @@ class _Validator:
         for name in data:
             if name not in self.SECTIONS:
                 raise self.fail(None, None, f"unknown section [{name}] (expected one of: {', '.join(self.SECTIONS)})")
-        return Scenario(
+        scenario = Scenario(
             site=self.site(data),
             run=self.run(data),
             rotation=self.rotation(data),
@@ -449,24 +468,45 @@ class _Validator:
             temperature=self.temperature(data),
             attitude=self.attitude(data),
         )
+        self.core_check(scenario, data)
+        return scenario
+
+    def core_check(self, scenario: Scenario, data: Mapping[str, Any]) -> None:
+        """Let the core validate the whole run (its ranges are the one source); name the TOML key it refuses."""
+        from gyrodrift.errors import CoreError
+
+        try:
+            scenario.to_core_config()
+        except CoreError as exc:
+            key = getattr(exc, "key", None)
+            section, toml_key = _CORE_KEYS.get(key, (None, None))
+            if toml_key in ("series_t_h", "series_temp_c") and "series_csv" in data.get("temperature", {}):
+                toml_key = "series_csv"
+            msg = str(exc)
+            if key and msg.startswith(f"{key}: "):
+                msg = msg[len(key) + 2 :]
+            raise self.fail(section, toml_key, msg) from None
 
     def site(self, data) -> Site:
         t, d = self.section(data, "site", Site), Site()
+        c = _limits()
         return Site(
-            lat_deg=self.in_range("site", t, "lat_deg", d.lat_deg, -90.0, 90.0, open_interval=True),
-            lon_deg=self.in_range("site", t, "lon_deg", d.lon_deg, -180.0, 360.0),
-            height_m=self.in_range("site", t, "height_m", d.height_m, -1.0e4, 1.0e5),
+            lat_deg=self.in_range("site", t, "lat_deg", d.lat_deg, -c.MAX_LAT_DEG, c.MAX_LAT_DEG),
+            lon_deg=self.in_range("site", t, "lon_deg", d.lon_deg, -c.MAX_LON_DEG, c.MAX_LON_DEG),
+            height_m=self.in_range("site", t, "height_m", d.height_m, c.MIN_HEIGHT_M, c.MAX_HEIGHT_M),
         )
 
     def run(self, data) -> Run:
         t, d = self.section(data, "run", Run), Run()
+        c = _limits()
+        max_h = c.MAX_DURATION_S / HOUR
         run = Run(
-            duration_h=self.positive("run", t, "duration_h", d.duration_h),
-            rate_hz=self.positive("run", t, "rate_hz", d.rate_hz),
+            duration_h=self.positive_at_most("run", t, "duration_h", d.duration_h, max_h, " h"),
+            rate_hz=self.in_range("run", t, "rate_hz", d.rate_hz, c.MIN_RATE_HZ, c.MAX_RATE_HZ),
             seed=self.integer("run", t, "seed", d.seed),
         )
         if run.seed >= 2**64:
-            raise self.fail("run", "seed", f"must be < 2**64, got {run.seed}")
+            raise self.fail("run", "seed", f"must be < 2**64, got {_show(run.seed)}")
         if round(run.duration_h * HOUR * run.rate_hz) < 1:
             raise self.fail("run", "duration_h", "shorter than one sample")
         return run
@@ -476,12 +516,15 @@ class _Validator:
         scheme = t.get("scheme", d.scheme)
         if scheme not in ROTATION_SCHEMES:
             opts = ", ".join(repr(s) for s in ROTATION_SCHEMES)
-            raise self.fail("rotation", "scheme", f"expected one of {opts}, got {scheme!r}")
+            raise self.fail("rotation", "scheme", f"expected one of {opts}, got {_show(scheme)}")
         dwell_default = 300.0 if scheme == "indexing" else d.dwell_s
+        c = _limits()
         rot = Rotation(
             scheme=scheme,
-            rate_deg_s=self.positive("rotation", t, "rate_deg_s", d.rate_deg_s),
-            accel_deg_s2=self.positive("rotation", t, "accel_deg_s2", d.accel_deg_s2),
+            rate_deg_s=self.positive_at_most(
+                "rotation", t, "rate_deg_s", d.rate_deg_s, c.MAX_TABLE_RATE_DEG_S, " deg/s"
+            ),
+            accel_deg_s2=self.positive_at_most("rotation", t, "accel_deg_s2", d.accel_deg_s2, c.MAX_TABLE_ACCEL_DEG_S2),
             span_deg=self.span(t, d.span_deg),
             positions_deg=self.vector("rotation", t, "positions_deg", d.positions_deg, None),
             dwell_s=self.non_negative("rotation", t, "dwell_s", dwell_default),
@@ -506,11 +549,12 @@ class _Validator:
         v = table.get("span_deg", default)
         if isinstance(v, str):
             if v != BALANCED:
-                raise self.fail("rotation", "span_deg", f'expected a number > 0 or "{BALANCED}", got {v!r}')
+                raise self.fail("rotation", "span_deg", f'expected a number > 0 or "{BALANCED}", got {_show(v)}')
             return v
         if isinstance(v, bool) or not isinstance(v, (int, float)):
-            raise self.fail("rotation", "span_deg", f'expected a number > 0 or "{BALANCED}", got {_type_name(v)} {v!r}')
-        return self.positive("rotation", table, "span_deg", default)
+            got = f"{_type_name(v)} {_show(v)}"
+            raise self.fail("rotation", "span_deg", f'expected a number > 0 or "{BALANCED}", got {got}')
+        return self.positive_at_most("rotation", table, "span_deg", default, _limits().MAX_SPAN_DEG, " deg")
 
     def gyro(self, data) -> Gyro:
         t, d = self.section(data, "gyro", Gyro), Gyro()
@@ -572,26 +616,39 @@ class _Validator:
 
     def attitude(self, data) -> Attitude:
         t, d = self.section(data, "attitude", Attitude), Attitude()
+        c = _limits()
         return Attitude(
-            pitch_deg=self.in_range("attitude", t, "pitch_deg", d.pitch_deg, -90.0, 90.0, open_interval=True),
-            roll_deg=self.in_range("attitude", t, "roll_deg", d.roll_deg, -180.0, 180.0),
-            yaw_deg=self.in_range("attitude", t, "yaw_deg", d.yaw_deg, -360.0, 360.0),
+            pitch_deg=self.in_range(
+                "attitude", t, "pitch_deg", d.pitch_deg, -c.MAX_PITCH_DEG, c.MAX_PITCH_DEG, open_interval=True
+            ),
+            roll_deg=self.in_range("attitude", t, "roll_deg", d.roll_deg, -c.MAX_ROLL_DEG, c.MAX_ROLL_DEG),
+            yaw_deg=self.in_range("attitude", t, "yaw_deg", d.yaw_deg, -c.MAX_YAW_DEG, c.MAX_YAW_DEG),
         )
 
     def read_series_csv(self, value: Any) -> tuple[tuple[float, ...], tuple[float, ...]]:
         sec, key = "temperature", "series_csv"
         if not isinstance(value, str):
-            raise self.fail(sec, key, f"expected a file name, got {_type_name(value)} {value!r}")
+            raise self.fail(sec, key, f"expected a file name, got {_type_name(value)} {_show(value)}")
         path = Path(value)
         if not path.is_absolute():
             path = self.base_dir / path
         try:
             with open(path, newline="", encoding="utf-8") as fh:
-                rows = list(csv.DictReader(fh))
+                rows = []
+                for row in csv.DictReader(fh):
+                    if len(rows) == MAX_SERIES_ROWS:
+                        raise self.fail(sec, key, f"{path}: more than {MAX_SERIES_ROWS} rows")
+                    rows.append(row)
         except FileNotFoundError:
             raise self.fail(sec, key, f"{path}: no such file") from None
+        except IsADirectoryError:
+            raise self.fail(sec, key, f"{path}: is a folder, expected a CSV file") from None
         except OSError as exc:
             raise self.fail(sec, key, f"{path}: cannot read: {exc.strerror or exc}") from None
+        except UnicodeDecodeError as exc:
+            raise self.fail(sec, key, f"{path}: not UTF-8 text (byte {exc.start} of a block)") from None
+        except csv.Error as exc:
+            raise self.fail(sec, key, f"{path}: not a CSV table: {exc}") from None
         if not rows or "t_h" not in rows[0] or "temp_c" not in rows[0]:
             raise self.fail(sec, key, f"{path}: expected columns t_h, temp_c and at least one row")
         ts, cs = [], []
@@ -605,6 +662,72 @@ class _Validator:
             ts.append(tv)
             cs.append(cv)
         return tuple(ts), tuple(cs)
+
+
+def _finite(v: int | float) -> float | None:
+    """`v` as a finite float, or None (NaN, infinity, or an integer beyond the float range)."""
+    try:
+        f = float(v)
+    except OverflowError:
+        return None
+    return f if math.isfinite(f) else None
+
+
+def _show(v: Any) -> str:
+    """`v` for a message: its repr, cut to 60 characters (an integer of thousands of digits is described)."""
+    if isinstance(v, int) and not isinstance(v, bool) and v.bit_length() > 200:
+        return f"an integer of about {int(v.bit_length() * 0.30103) + 1} digits"
+    try:
+        r = repr(v)
+    except (ValueError, RecursionError):
+        return f"a {_type_name(v)}"
+    return r if len(r) <= 60 else r[:57] + "..."
+
+
+def _limits():
+    """The core's limits (`gyrodrift._core`, gyrodrift-core `limits`), imported when a scenario is validated."""
+    from gyrodrift import _core
+
+    return _core
+
+
+_CORE_KEYS = {
+    "lat_rad": ("site", "lat_deg"),
+    "lon_rad": ("site", "lon_deg"),
+    "height_m": ("site", "height_m"),
+    "rate_hz": ("run", "rate_hz"),
+    "duration_s": ("run", "duration_h"),
+    "seed": ("run", "seed"),
+    "pitch_rad": ("attitude", "pitch_deg"),
+    "roll_rad": ("attitude", "roll_deg"),
+    "yaw_rad": ("attitude", "yaw_deg"),
+    "rotation_scheme": ("rotation", "scheme"),
+    "rotation_rate_rad_s": ("rotation", "rate_deg_s"),
+    "rotation_accel_rad_s2": ("rotation", "accel_deg_s2"),
+    "reciprocating_span_rad": ("rotation", "span_deg"),
+    "positions_rad": ("rotation", "positions_deg"),
+    "dwell_s": ("rotation", "dwell_s"),
+    "gyro_bias_rad_s": ("gyro", "bias_deg_h"),
+    "gyro_arw_rad_rts": ("gyro", "arw_deg_rth"),
+    "gyro_bias_instability_rad_s": ("gyro", "bias_instability_deg_h"),
+    "gyro_correlation_s": ("gyro", "correlation_s"),
+    "gyro_rrw_rad_s_rts": ("gyro", "rrw_deg_h_rth"),
+    "gyro_scale": ("gyro", "scale_ppm"),
+    "gyro_misalignment_rad": ("gyro", "misalignment_arcsec"),
+    "accel_bias_m_s2": ("accel", "bias_ug"),
+    "accel_vrw_m_s_rts": ("accel", "vrw_ug_rthz"),
+    "accel_scale": ("accel", "scale_ppm"),
+    "temp_start_c": ("temperature", "start_c"),
+    "temp_end_c": ("temperature", "end_c"),
+    "temp_tau_s": ("temperature", "tau_h"),
+    "temp_series_t_s": ("temperature", "series_t_h"),
+    "temp_series_c": ("temperature", "series_temp_c"),
+    "drift_t0_c": ("temperature", "t0_c"),
+    "drift_k1_rad_s_per_c": ("temperature", "k1_deg_h_per_c"),
+    "drift_k2_rad_s_per_c2": ("temperature", "k2_deg_h_per_c2"),
+    "drift_k3_rad_s_per_c_per_s": ("temperature", "k3_deg_h_per_c_per_h"),
+}
+"""The TOML section and key of each keyword of `gyrodrift._core.SimulatorConfig` (for the core's refusals)."""
 
 
 def _fmt(v: float) -> str:
