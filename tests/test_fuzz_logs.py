@@ -9,6 +9,7 @@ deadline (file I/O).
 from __future__ import annotations
 
 import io
+import json
 import os
 import tempfile
 
@@ -148,3 +149,24 @@ def test_a_csv_log_with_any_cell_gives_data_or_a_log_error(cell, row, column):
 @pytest.mark.parametrize("suffix", [".csv", ".parquet"])
 def test_an_empty_file_is_a_log_error(suffix):
     assert _read(b"", suffix) == -1
+
+
+JSON = st.recursive(
+    st.none() | st.booleans() | st.floats() | st.integers(-(10**30), 10**30) | st.text(max_size=8),
+    lambda inner: st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=8), inner, max_size=3),
+    max_leaves=8,
+)
+
+
+@FUZZ
+@given(
+    key=st.sampled_from(["gyrodrift.rate_hz", "gyrodrift.site", "gyrodrift.scenario"]),
+    value=st.one_of(JSON.map(json.dumps), st.text(max_size=20)),
+    as_site=st.booleans(),
+)
+def test_any_gyrodrift_metadata_gives_data_or_a_log_error(key, value, as_site):
+    if as_site:  # the value in every key of a site table: {"lat_deg": v, "lon_deg": v, "height_m": v}
+        value = json.dumps(dict.fromkeys(("lat_deg", "lon_deg", "height_m"), value))
+    buf = io.BytesIO()
+    pq.write_table(pa.table(_columns()).replace_schema_metadata({key: value}), buf)
+    _read(buf.getvalue(), ".parquet")
