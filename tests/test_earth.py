@@ -27,3 +27,17 @@ def test_normal_gravity_rejects_mismatched_lengths():
 
     with pytest.raises(ValueError, match="lat_rad has 2 values but height_m has 1"):
         _core.normal_gravity(np.zeros(2), np.zeros(1))
+
+
+def test_radii_of_curvature_come_from_the_core():
+    lat = np.deg2rad(np.array([[0.0, 28.222], [60.0, 89.0]]))
+    r_m, r_n = earth.radii_of_curvature(lat)
+    assert r_m.shape == r_n.shape == (2, 2)
+    a, f = earth.WGS84_A_M, earth.WGS84_F
+    e2 = f * (2 - f)
+    # Closed forms: at the equator R_M = a (1 - e^2), R_N = a; the formulas everywhere, to rounding.
+    assert r_m[0, 0] == pytest.approx(a * (1 - e2), rel=1e-15) and r_n[0, 0] == pytest.approx(a, rel=1e-15)
+    d = 1 - e2 * np.sin(lat) ** 2
+    np.testing.assert_allclose(r_m, a * (1 - e2) / d**1.5, rtol=1e-14)
+    np.testing.assert_allclose(r_n, a / np.sqrt(d), rtol=1e-14)
+    assert earth.radii_of_curvature(0.5)[0].shape == ()

@@ -52,6 +52,31 @@ fn normal_gravity<'py>(
     earth_map(py, &lat_rad, &height_m, earth::normal_gravity)
 }
 
+/// `f(lat)` over a float64 array of latitude [rad], GIL released.
+fn lat_map<'py>(
+    py: Python<'py>,
+    lat_rad: &PyReadonlyArray1<'py, f64>,
+    f: fn(f64) -> f64,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let lat = lat_rad
+        .as_slice()
+        .map_err(|_| arg_err("lat_rad", "expected a contiguous array"))?;
+    let out: Vec<f64> = py.detach(|| lat.iter().map(|&l| f(l)).collect());
+    Ok(PyArray1::from_vec(py, out))
+}
+
+/// WGS-84 meridian radius of curvature R_M [m] for an array of geodetic latitude [rad].
+#[pyfunction]
+fn meridian_radius<'py>(py: Python<'py>, lat_rad: PyReadonlyArray1<'py, f64>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    lat_map(py, &lat_rad, earth::meridian_radius)
+}
+
+/// WGS-84 prime-vertical (transverse) radius of curvature R_N [m] for an array of geodetic latitude [rad].
+#[pyfunction]
+fn transverse_radius<'py>(py: Python<'py>, lat_rad: PyReadonlyArray1<'py, f64>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    lat_map(py, &lat_rad, earth::transverse_radius)
+}
+
 pyo3::import_exception!(gyrodrift.errors, CoreError);
 
 /// The one mapping of the core's error to Python: `gyrodrift.errors.CoreError` with the message, and the
@@ -446,6 +471,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
         m.add("MAX_CHUNK_SAMPLES", gyrodrift_core::simulator::MAX_CHUNK_SAMPLES)?;
     }
     m.add_function(wrap_pyfunction!(normal_gravity, m)?)?;
+    m.add_function(wrap_pyfunction!(meridian_radius, m)?)?;
+    m.add_function(wrap_pyfunction!(transverse_radius, m)?)?;
     m.add_function(wrap_pyfunction!(balanced_reciprocating_span_rad, m)?)?;
     m.add_class::<SimulatorConfig>()?;
     m.add_class::<NavigatorConfig>()?;

@@ -2,28 +2,18 @@
 
 Sign: every error is computed minus true. Horizontal position error: north = dlat R_M(lat_true),
 east = dlon R_N(lat_true) cos(lat_true) (WGS-84 radii on the ellipsoid, where the nautical mile is
-measured), total = hypot(north, east) / 1852 m.
+measured; `radii_of_curvature` is the Rust core's, re-exported from `gyrodrift.earth`),
+total = hypot(north, east) / 1852 m.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from gyrodrift.earth import NMI_M, WGS84_A_M, WGS84_F
+from gyrodrift.earth import NMI_M, radii_of_curvature
 from gyrodrift.units import ARCSEC
 
 __all__ = ["radii_of_curvature", "wrap_pi", "position_errors", "attitude_errors_arcsec"]
-
-_E2 = WGS84_F * (2.0 - WGS84_F)
-
-
-def radii_of_curvature(lat_rad):
-    """WGS-84 meridian R_M and prime-vertical R_N radii of curvature [m] at geodetic latitude [rad]."""
-    s2 = np.sin(np.asarray(lat_rad, dtype=float)) ** 2
-    d = 1.0 - _E2 * s2
-    r_n = WGS84_A_M / np.sqrt(d)
-    r_m = WGS84_A_M * (1.0 - _E2) / (d * np.sqrt(d))
-    return r_m, r_n
 
 
 def wrap_pi(x):
