@@ -322,11 +322,17 @@ def test_stdout_on_a_full_device_is_one_line(inputs, tmp_path):
         except (PermissionError, OSError):
             pytest.skip("no full device")
         device = tmp_path / "full"
-    with open(device, "w") as out:
-        proc = _gyrodrift("predict", inputs.model, PAPER_RUNS, "--lat0-deg", 28.222, stdout=out)
-        err = proc.communicate(timeout=60)[1].decode()
-    assert proc.returncode == 1
-    assert err.strip() == "Error: standard output: no space left on the device", err
+    commands = [  # predict writes its table itself; fit's summary line goes through click.echo
+        ["predict", inputs.model, PAPER_RUNS, "--lat0-deg", 28.222],
+        ["fit", PAPER_RUNS, "--lat0-deg", 28.222, "--split", "train", "--gamma", 10, "--sigma", 1]
+        + ["--out", tmp_path / "m.json"],
+    ]
+    for args in commands:
+        with open(device, "w") as out:
+            proc = _gyrodrift(*args, stdout=out)
+            err = proc.communicate(timeout=60)[1].decode()
+        assert proc.returncode == 1, (args[0], err)
+        assert err.strip() == "Error: standard output: no space left on the device", (args[0], err)
 
 
 def test_stdout_closed_by_its_reader_ends_quietly(inputs):

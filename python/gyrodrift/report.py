@@ -79,17 +79,15 @@ def _png(fig) -> bytes:
 
 def make_figures(results: dict) -> dict[str, bytes]:
     """The report's PNG figures, {name: PNG bytes} for the names in `REPORT_FIGURES`."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure  # object API: no pyplot state, the caller's backend untouched
 
     claims = results["paper_claims"]
     true = np.array(results["data"]["test_true_deg_h"])
     runs = results["data"]["test_runs"]
     out = {}
 
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+    fig = Figure(figsize=(11, 4))
+    axes = fig.subplots(1, 2)
     for m in results["methods"]:
         if m["family"] == "cpso_paper":
             axes[0].semilogy(np.arange(1, len(m["fitness_history"]) + 1), m["fitness_history"], label=m["encoding"])
@@ -107,10 +105,10 @@ def make_figures(results: dict) -> dict[str, bytes]:
     axes[1].legend(fontsize=7)
     fig.tight_layout()
     out["fitness_curve"] = _png(fig)
-    plt.close(fig)
 
     shown = key_methods(results)
-    fig, ax = plt.subplots(figsize=(5.5, 5))
+    fig = Figure(figsize=(5.5, 5))
+    ax = fig.subplots()
     lim = 1.15 * max(np.abs(true).max(), max(np.abs(m["test_pred_deg_h"]).max() for m in shown))
     ax.plot([-lim, lim], [-lim, lim], color="0.6", lw=1)
     ax.scatter(true, claims["test_pred_deg_h"], marker="x", color="k", label="paper's Table 3 (claimed)")
@@ -126,9 +124,9 @@ def make_figures(results: dict) -> dict[str, bytes]:
     ax.legend(fontsize=7)
     fig.tight_layout()
     out["pred_vs_true"] = _png(fig)
-    plt.close(fig)
 
-    fig, ax = plt.subplots(figsize=(10, 4))
+    fig = Figure(figsize=(10, 4))
+    ax = fig.subplots()
     width = 0.8 / (len(shown) + 1)
     x = np.arange(len(runs))
     true_minus_claim = true - np.array(claims["test_pred_deg_h"])
@@ -142,7 +140,6 @@ def make_figures(results: dict) -> dict[str, bytes]:
     ax.legend(fontsize=7, ncol=2)
     fig.tight_layout()
     out["error_per_run"] = _png(fig)
-    plt.close(fig)
     return out
 
 

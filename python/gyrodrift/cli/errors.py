@@ -49,11 +49,26 @@ def _silence_stdout() -> None:
         pass
 
 
+def _raised_by_echo_to_stdout(exc: BaseException) -> bool:
+    """True if `exc` came out of ``click.echo`` writing to standard output (its stream is fd 1 or "<stdout>")."""
+    tb = exc.__traceback__
+    while tb is not None:
+        code = tb.tb_frame.f_code
+        if code.co_name == "echo" and os.path.join("click", "utils.py") in code.co_filename:
+            stream = tb.tb_frame.f_locals.get("file")
+            try:
+                return stream is not None and (getattr(stream, "name", None) == "<stdout>" or stream.fileno() == 1)
+            except (OSError, ValueError):
+                return False
+        tb = tb.tb_next
+    return False
+
+
 def stdout_failure(exc: OSError | None = None) -> OSError | None:
-    """If standard output cannot be written (flushing it fails now, or `exc` is a broken pipe), silence it and
-    return the error to report: an `OSError` naming standard output, with ``errno`` EPIPE when the reader
-    went away. None if stdout is fine."""
-    failure = exc if exc is not None and exc.errno == errno.EPIPE else None
+    """If standard output cannot be written (`exc` came from writing it, or flushing it fails now), silence
+    it and return the error to report: an `OSError` naming standard output, with ``errno`` EPIPE when the
+    reader went away. None if stdout is fine."""
+    failure = exc if exc is not None and (exc.errno == errno.EPIPE or _raised_by_echo_to_stdout(exc)) else None
     if failure is None:
         try:
             sys.stdout.flush()
