@@ -339,15 +339,7 @@ class RunFeatures:
 
     def row(self) -> dict[str, Any]:
         """The run-table row (``RUN_TABLE_COLUMNS``, plus ``drift_deg_h`` when known)."""
-        r = {
-            "run": self.run,
-            "lat_deg": self.lat_deg,
-            "lat0_deg": self.lat0_deg,
-            "temp_min_c": self.temp_min_c,
-            "temp_max_c": self.temp_max_c,
-            "temp_start_c": self.temp_start_c,
-            "temp_end_c": self.temp_end_c,
-        }
+        r = {column: getattr(self, column) for column in RUN_TABLE_COLUMNS}
         if math.isfinite(self.drift_deg_h):
             r["drift_deg_h"] = self.drift_deg_h
         return r

@@ -46,7 +46,7 @@ CURVES_COLUMNS = ("run", "t_h", "lat_err_arcsec")
 RUN_TABLE_RECOGNISER = recognise_header(",".join(RUN_TABLE_COLUMNS) + ",", ",".join(RUN_TABLE_COLUMNS) + "\n")
 """Recognises a run table written by `write_features_csv` (the only kind of file it replaces)."""
 CURVES_RECOGNISER = recognise_header(",".join(CURVES_COLUMNS) + "\n")
-"""Recognises a curves table written by `write_curves_csv`."""
+"""Recognises a curves table written by `write_features_csv` (``curves=``)."""
 
 
 def _paths(stage: Stage, names: Iterable[str]) -> dict[str, Path]:
