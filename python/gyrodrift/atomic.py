@@ -269,7 +269,7 @@ def check_output_file(
     *,
     inputs: Iterable[str | os.PathLike[str]] = (),
     recognise: Callable[[bytes], bool] | None = None,
-    what: str = "output",
+    what: str = "file",
 ) -> Path:
     """Check that `path` may receive an output file, before any work; return the real destination.
 
@@ -328,7 +328,7 @@ def atomic_write(
     *,
     inputs: Iterable[str | os.PathLike[str]] = (),
     recognise: Callable[[bytes], bool] | None = None,
-    what: str = "output",
+    what: str = "file",
 ) -> Iterator[IO[Any]]:
     """Open a temporary file for writing; on a clean exit it atomically replaces `path`.
 

@@ -266,10 +266,9 @@ def navigate(
         raise OptionError(f"navigate: --compensate-drift-deg-h must be finite, got {compensate_drift_deg_h!r}")
     gyro_est[2] += float(compensate_drift_deg_h)
     accel_est = _vector3("accel_bias_ug", accel_bias_ug)
-    if out_dir is not None:
-        out_dir = output_folder(
-            out_dir, "navigate", NAV_FILES, inputs=[imu] if isinstance(imu, (str, os.PathLike)) else ()
-        )
+    if out_dir is not None:  # checked before any work; the log itself is never one of the outputs
+        source_path = imu if isinstance(imu, (str, os.PathLike)) else getattr(imu, "path", None)
+        out_dir = output_folder(out_dir, "navigate", NAV_FILES, inputs=[source_path] if source_path else ())
     log = as_log(imu, site=site)
     rate = log.rate_hz
     source, init = _initial_from(initial, log)
