@@ -28,25 +28,25 @@ use crate::strapdown::{Navigator, NavigatorConfig, Vertical};
 pub const MICRO_G: f64 = 9.806_65e-6;
 /// One deg/h [rad/s].
 pub const DEG_PER_HOUR: f64 = std::f64::consts::PI / 180.0 / 3600.0;
-/// Default total alignment span, coarse plus fine [s] (4 h).
+/// Default total alignment span, coarse plus fine \[s\] (4 h).
 pub const DEFAULT_TOTAL_S: f64 = 14_400.0;
 
 /// Settings of an alignment (SI). Keys of the contract in brackets.
 #[derive(Clone, Debug, PartialEq)]
 pub struct AlignerConfig {
-    /// Known static site: latitude [rad] (`lat_rad`), longitude [rad] (`lon_rad`), height [m] (`height_m`).
+    /// Known static site: latitude \[rad\] (`lat_rad`), longitude \[rad\] (`lon_rad`), height \[m\] (`height_m`).
     pub lat: f64,
     pub lon: f64,
     pub height: f64,
-    /// IMU sample rate [Hz] (`rate_hz`).
+    /// IMU sample rate \[Hz\] (`rate_hz`).
     pub rate_hz: f64,
-    /// Coarse alignment span [s] (`coarse_s`, default 300).
+    /// Coarse alignment span \[s\] (`coarse_s`, default 300).
     pub coarse_s: f64,
-    /// Fine alignment span after the coarse one [s] (`fine_s`, default 14400 - coarse_s).
+    /// Fine alignment span after the coarse one \[s\] (`fine_s`, default 14400 - coarse_s).
     pub fine_s: f64,
-    /// Zero-velocity measurement interval [s] (`update_s`, default 1).
+    /// Zero-velocity measurement interval \[s\] (`update_s`, default 1).
     pub update_s: f64,
-    /// Initial attitude error 1-sigma E, N, U [rad] (`att_sigma_rad`); None: `coarse_attitude_sigma`.
+    /// Initial attitude error 1-sigma E, N, U \[rad\] (`att_sigma_rad`); None: `coarse_attitude_sigma`.
     pub att_sigma: Option<Vec3>,
     /// Initial gyro bias 1-sigma, body x y z [rad/s] (`gyro_bias_sigma_rad_s`, default 0.01 deg/h).
     pub gyro_bias_sigma: Vec3,
@@ -58,7 +58,7 @@ pub struct AlignerConfig {
     pub accel_vrw: f64,
     /// Zero-velocity measurement noise 1-sigma [m/s] (`zupt_sigma_m_s`, default 0.001).
     pub zupt_sigma: f64,
-    /// Interval of the covariance history [s] (`history_s`, default 60).
+    /// Interval of the covariance history \[s\] (`history_s`, default 60).
     pub history_s: f64,
 }
 
@@ -84,7 +84,7 @@ impl AlignerConfig {
         }
     }
 
-    /// The default fine span [s] after a coarse span of `coarse_s` [s]: the rest of `DEFAULT_TOTAL_S`.
+    /// The default fine span \[s\] after a coarse span of `coarse_s` \[s\]: the rest of `DEFAULT_TOTAL_S`.
     pub fn default_fine_s(coarse_s: f64) -> f64 {
         (DEFAULT_TOTAL_S - coarse_s).max(0.0)
     }
@@ -159,7 +159,7 @@ impl AlignerConfig {
     }
 }
 
-/// Default initial attitude 1-sigma after the coarse alignment, E, N, U [rad], from its closed-form error
+/// Default initial attitude 1-sigma after the coarse alignment, E, N, U \[rad\], from its closed-form error
 /// budget without the help of the rotation (so conservative): levelling ~ horizontal accelerometer bias / g
 /// plus VRW averaged over the span, heading ~ (horizontal gyro bias + ARW averaged over the span)
 /// / (w_ie cos lat), each noise term tripled for the two-epoch (not least-squares) solution, with floors of
@@ -180,7 +180,7 @@ pub fn coarse_attitude_sigma(cfg: &AlignerConfig) -> Vec3 {
 /// Everything the alignment reports (SI; contract `result()`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct AlignmentResult {
-    /// End of the alignment [s] from the first sample.
+    /// End of the alignment \[s\] from the first sample.
     pub t_s: f64,
     /// Attitude at the end.
     pub attitude: Euler,
@@ -192,11 +192,11 @@ pub struct AlignmentResult {
     /// Their 1-sigma at the end.
     pub gyro_bias_std: Vec3,
     pub accel_bias_std: Vec3,
-    /// Attitude error 1-sigma E, N, U [rad] at the end.
+    /// Attitude error 1-sigma E, N, U \[rad\] at the end.
     pub att_std: Vec3,
     /// Attitude given by the coarse alignment at t = coarse_s.
     pub coarse_attitude: Euler,
-    /// Times of the covariance history [s] (the start of the fine alignment, then every `history_s`, and the end).
+    /// Times of the covariance history \[s\] (the start of the fine alignment, then every `history_s`, and the end).
     pub hist_t: Vec<f64>,
     /// 1-sigma of every state (order `kalman::STATE_NAMES`) at those times.
     pub hist_std: Vec<[f64; N_STATES]>,
@@ -282,7 +282,7 @@ impl Aligner {
         self.fine.as_ref().map(|f| f.filter.covariance())
     }
 
-    /// Consume samples given as flat row-major (n x 3) slices of raw increments (dtheta [rad], dv [m/s], body
+    /// Consume samples given as flat row-major (n x 3) slices of raw increments (dtheta \[rad\], dv [m/s], body
     /// frame); stops at the end of the alignment span. Returns how many samples were used.
     ///
     /// The samples are checked first (`limits::check_increments`); a refused chunk changes nothing. An
@@ -498,7 +498,7 @@ impl FineAlignment {
     }
 }
 
-/// Attitude error of `estimate` against `truth` as the correction phi of the filter (E, N, U) [rad]:
+/// Attitude error of `estimate` against `truth` as the correction phi of the filter (E, N, U) \[rad\]:
 /// C_b^n(truth) = (I + [phi x]) C_b^n(estimate) to first order, computed exactly as a rotation vector.
 pub fn attitude_error(estimate: Euler, truth: Euler) -> Vec3 {
     use crate::attitude::{euler_to_quat, quat_conj, quat_to_rotvec};

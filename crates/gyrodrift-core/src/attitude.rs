@@ -99,19 +99,19 @@ pub fn transpose(m: &Mat3) -> Mat3 {
     ]
 }
 
-/// Rotation about x by angle a [rad] (active, right-handed).
+/// Rotation about x by angle a \[rad\] (active, right-handed).
 pub fn rot_x(a: f64) -> Mat3 {
     let (s, c) = a.sin_cos();
     [[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]]
 }
 
-/// Rotation about y by angle a [rad] (active, right-handed).
+/// Rotation about y by angle a \[rad\] (active, right-handed).
 pub fn rot_y(a: f64) -> Mat3 {
     let (s, c) = a.sin_cos();
     [[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]
 }
 
-/// Rotation about z by angle a [rad] (active, right-handed; positive counter-clockwise seen from +z).
+/// Rotation about z by angle a \[rad\] (active, right-handed; positive counter-clockwise seen from +z).
 pub fn rot_z(a: f64) -> Mat3 {
     let (s, c) = a.sin_cos();
     [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]
@@ -119,7 +119,7 @@ pub fn rot_z(a: f64) -> Mat3 {
 
 // ---------------------------------------------------------------- Euler angles
 
-/// Attitude as Euler angles [rad]: C_b^n = Rz(yaw) Rx(pitch) Ry(roll) (PSINS order), yaw CCW about Up.
+/// Attitude as Euler angles \[rad\]: C_b^n = Rz(yaw) Rx(pitch) Ry(roll) (PSINS order), yaw CCW about Up.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct Euler {
     pub pitch: f64,
@@ -267,7 +267,7 @@ pub fn dcm_to_quat(c: &Mat3) -> Quat {
 
 // ---------------------------------------------------------------- rotation vectors
 
-/// Quaternion of a rotation vector phi [rad] (PSINS `rv2q`), exact:
+/// Quaternion of a rotation vector phi \[rad\] (PSINS `rv2q`), exact:
 /// q = [cos(|phi|/2), phi sin(|phi|/2)/|phi|].
 /// For |phi| < 0.05 rad the Taylor series of cos(x) and sin(x)/x (x = |phi|/2) to x^6 is used; its truncation
 /// error is below 5e-18, i.e. exact in double precision, and it needs no trigonometric call (the navigator

@@ -89,7 +89,7 @@ pub struct InertialCoarseAlignment {
 pub const MODULATION_THRESHOLD: f64 = 0.5;
 /// Largest number of rounds of the two-epoch / bias-fit alternation.
 pub const ALTERNATIONS: usize = 50;
-/// The alternation stops when the attitude changes by less than this [rad] in one round.
+/// The alternation stops when the attitude changes by less than this \[rad\] in one round.
 pub const CONVERGED_RAD: f64 = 1e-9;
 
 /// Polynomial terms of the trend per axis (1, tau, tau^2, tau^3 with tau = t / span).
@@ -160,7 +160,7 @@ impl BiasFitSums {
 }
 
 impl InertialCoarseAlignment {
-    /// A span of `n_samples` (at least 2) samples at `rate_hz` [Hz] at latitude `lat` [rad], height `height` [m].
+    /// A span of `n_samples` (at least 2) samples at `rate_hz` \[Hz\] at latitude `lat` \[rad\], height `height` \[m\].
     pub fn new(lat: f64, height: f64, rate_hz: f64, n_samples: u64) -> Result<Self, CoreError> {
         check(
             n_samples >= 2,
@@ -194,7 +194,7 @@ impl InertialCoarseAlignment {
         self.k
     }
 
-    /// One sample of raw increments (dtheta [rad], dv [m/s], body frame). Ignored once the span is complete.
+    /// One sample of raw increments (dtheta \[rad\], dv [m/s], body frame). Ignored once the span is complete.
     pub fn step(&mut self, dtheta: Vec3, dv: Vec3) {
         if self.is_complete() {
             return;
@@ -273,7 +273,7 @@ fn bias_velocity(m: &Mat3, b: [f64; 2]) -> Vec3 {
     std::array::from_fn(|i| m[i][0] * b[0] + m[i][1] * b[1])
 }
 
-/// C_n^i0(t): the rotation of the n frame in inertial space after `t` [s] on a static base, the rotation by
+/// C_n^i0(t): the rotation of the n frame in inertial space after `t` \[s\] on a static base, the rotation by
 /// w_ie t about the Earth axis u = (0, cos lat, sin lat) (ENU coordinates at t0), by Rodrigues' formula
 /// R = cos a I + (1 - cos a) u u' + sin a [u x].
 pub fn earth_rotation(lat: f64, t: f64) -> Mat3 {

@@ -3,13 +3,13 @@
 //! Frames: navigation frame is local-level East-North-Up (ENU). Latitude `lat` in rad, height `h` in m
 //! above the ellipsoid.
 
-/// Semi-major axis a [m].
+/// Semi-major axis a \[m\].
 pub const A: f64 = 6_378_137.0;
 /// Flattening f [-].
 pub const F: f64 = 1.0 / 298.257_223_563;
 /// First eccentricity squared e^2 = f (2 - f) [-].
 pub const E2: f64 = F * (2.0 - F);
-/// Semi-minor axis b = a (1 - f) [m].
+/// Semi-minor axis b = a (1 - f) \[m\].
 pub const B: f64 = A * (1.0 - F);
 /// Earth rotation rate w_ie [rad/s].
 pub const OMEGA_IE: f64 = 7.292_115_146_7e-5;
@@ -23,23 +23,23 @@ pub const GAMMA_P: f64 = 9.832_184_937_8;
 pub const SOMIGLIANA_K: f64 = (B * GAMMA_P) / (A * GAMMA_E) - 1.0;
 /// m = w_ie^2 a^2 b / GM, used in the height correction [-].
 pub const M_RATIO: f64 = OMEGA_IE * OMEGA_IE * A * A * B / GM;
-/// One nautical mile [m] (1852 m exactly; never 1853).
+/// One nautical mile \[m\] (1852 m exactly; never 1853).
 pub const NMI: f64 = 1852.0;
 
-/// Meridian radius of curvature R_M(lat) [m].
+/// Meridian radius of curvature R_M(lat) \[m\].
 pub fn meridian_radius(lat: f64) -> f64 {
     let s = lat.sin();
     let d = 1.0 - E2 * s * s;
     A * (1.0 - E2) / (d * d.sqrt())
 }
 
-/// Prime-vertical (transverse) radius of curvature R_N(lat) [m].
+/// Prime-vertical (transverse) radius of curvature R_N(lat) \[m\].
 pub fn transverse_radius(lat: f64) -> f64 {
     let s = lat.sin();
     A / (1.0 - E2 * s * s).sqrt()
 }
 
-/// Normal gravity magnitude [m/s^2] at geodetic latitude `lat` [rad] and height `h` [m].
+/// Normal gravity magnitude [m/s^2] at geodetic latitude `lat` \[rad\] and height `h` \[m\].
 ///
 /// Somigliana's closed formula on the ellipsoid, with the usual second-order height correction
 /// (NIMA TR8350.2 eq. 4-3):
@@ -51,7 +51,7 @@ pub fn normal_gravity(lat: f64, h: f64) -> f64 {
     g0 * (1.0 - 2.0 / A * (1.0 + F + M_RATIO - 2.0 * F * s2) * h + 3.0 * h * h / (A * A))
 }
 
-/// Earth rotation rate resolved in ENU at latitude `lat` [rad]: (0, w cos lat, w sin lat) [rad/s].
+/// Earth rotation rate resolved in ENU at latitude `lat` \[rad\]: (0, w cos lat, w sin lat) [rad/s].
 pub fn earth_rate_enu(lat: f64) -> [f64; 3] {
     [0.0, OMEGA_IE * lat.cos(), OMEGA_IE * lat.sin()]
 }

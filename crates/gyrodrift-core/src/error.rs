@@ -20,7 +20,7 @@ pub enum CoreError {
         index: usize,
         message: String,
     },
-    /// An estimate or the navigated state left its physical range at `t_s` [s] from the start: the data do
+    /// An estimate or the navigated state left its physical range at `t_s` \[s\] from the start: the data do
     /// not fit the model (e.g. a log that is not a static base).
     Diverged {
         key: &'static str,

@@ -10,8 +10,8 @@
 //!     b_rrw: random walk over the same slow step, b(t + h) = b(t) + N(0, rrw^2 h), b(0) = 0;
 //!     b_T:   temperature-dependent axial drift on gyro z only,
 //!            b_T = k1 (T - T0) + k2 (T - T0)^2 + k3 dT/dt, evaluated at the middle of the sample.
-//! M_g holds the misalignments: m_xy = M[0][1], m_xz = M[0][2], m_yx = M[1][0], m_yz = M[1][2],
-//! m_zx = M[2][0], m_zy = M[2][1] (contract order xy, xz, yx, yz, zx, zy).
+//! M_g holds the misalignments: m_xy = M\[0\]\[1\], m_xz = M\[0\]\[2\], m_yx = M\[1\]\[0\], m_yz = M\[1\]\[2\],
+//! m_zx = M\[2\]\[0\], m_zy = M\[2\]\[1\] (contract order xy, xz, yx, yz, zx, zy).
 //! Accelerometer (m/s^2, increments m/s): dv_meas = (I + diag(s_a)) dv_true + b_a dt + n_vrw,
 //! n_vrw ~ N(0, (vrw^2 dt) I).
 //! The slowly varying biases b_gm and b_rrw live on a coarser exact grid of N samples (the slow step
@@ -46,13 +46,13 @@ pub struct ImuErrorParams {
     pub gyro_arw: f64,
     /// Gauss-Markov bias instability, stationary sigma [rad/s].
     pub gyro_bias_instability: f64,
-    /// Gauss-Markov correlation time [s].
+    /// Gauss-Markov correlation time \[s\].
     pub gyro_correlation: f64,
     /// Rate random walk [rad/s/sqrt(s)].
     pub gyro_rrw: f64,
     /// Gyro scale-factor errors [-].
     pub gyro_scale: Vec3,
-    /// Gyro misalignments [rad], order xy, xz, yx, yz, zx, zy.
+    /// Gyro misalignments \[rad\], order xy, xz, yx, yz, zx, zy.
     pub gyro_misalignment: [f64; 6],
     /// Constant accelerometer biases [m/s^2].
     pub accel_bias: Vec3,
@@ -239,7 +239,7 @@ pub fn slow_step_samples(p: &ImuErrorParams, dt: f64) -> u32 {
 }
 
 impl ImuErrorModel {
-    /// A model for sample interval `dt` [s], noise seeded by `seed`.
+    /// A model for sample interval `dt` \[s\], noise seeded by `seed`.
     pub fn new(p: ImuErrorParams, dt: f64, seed: u64) -> Result<Self, CoreError> {
         p.validate()?;
         let m = p.gyro_misalignment;

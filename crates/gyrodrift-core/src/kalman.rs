@@ -1,7 +1,7 @@
 //! The 12-state error-state Kalman filter of the zero-velocity fine alignment (static base, ENU).
 //!
 //! State x (this order everywhere, `STATE_NAMES`):
-//!   0..3   phi = (phi_E, phi_N, phi_U) [rad], the attitude error (phi angle) of the computed n frame;
+//!   0..3   phi = (phi_E, phi_N, phi_U) \[rad\], the attitude error (phi angle) of the computed n frame;
 //!   3..6   dv = (dv_E, dv_N, dv_U) [m/s], velocity error, computed minus true;
 //!   6..9   eps = (eps_x, eps_y, eps_z) [rad/s], residual gyro bias in the BODY frame (measured minus
 //!          true rate after the current estimate is subtracted);
@@ -73,7 +73,7 @@ pub struct ErrorModel {
 }
 
 impl ErrorModel {
-    /// The model at latitude `lat` [rad] and height `height` [m].
+    /// The model at latitude `lat` \[rad\] and height `height` \[m\].
     pub fn new(lat: f64, height: f64) -> Self {
         ErrorModel {
             w_ie: earth::earth_rate_enu(lat),
@@ -106,14 +106,14 @@ impl ErrorModel {
         f
     }
 
-    /// Transition matrix over `t` [s]: Phi = I + F t + (F t)^2 / 2.
+    /// Transition matrix over `t` \[s\]: Phi = I + F t + (F t)^2 / 2.
     pub fn transition(&self, c_bn: &Mat3, t: f64) -> StateMatrix {
         let ft = self.system_matrix(c_bn) * t;
         StateMatrix::identity() + ft + ft * ft * 0.5
     }
 }
 
-/// Discrete process noise over `t` [s] (module docs): gyro white noise `arw` [rad/sqrt(s)] into phi,
+/// Discrete process noise over `t` \[s\] (module docs): gyro white noise `arw` [rad/sqrt(s)] into phi,
 /// accelerometer white noise `vrw` [m/s/sqrt(s)] into the horizontal velocity.
 pub fn process_noise(phi: &StateMatrix, arw: f64, vrw: f64, t: f64) -> StateMatrix {
     let mut qc = StateMatrix::zeros();

@@ -22,23 +22,23 @@
 use crate::attitude::Euler;
 use crate::error::{check, in_range, CoreError, Unit, STANDARD_GRAVITY};
 
-/// Largest |latitude| [deg] (module docs).
+/// Largest |latitude| \[deg\] (module docs).
 pub const MAX_LAT_DEG: f64 = 89.0;
-/// Largest |longitude| [deg].
+/// Largest |longitude| \[deg\].
 pub const MAX_LON_DEG: f64 = 360.0;
-/// Lowest and highest height above the ellipsoid [m].
+/// Lowest and highest height above the ellipsoid \[m\].
 pub const MIN_HEIGHT_M: f64 = -1000.0;
 pub const MAX_HEIGHT_M: f64 = 20_000.0;
-/// Lowest and highest IMU sample rate [Hz].
+/// Lowest and highest IMU sample rate \[Hz\].
 pub const MIN_RATE_HZ: f64 = 1.0;
 pub const MAX_RATE_HZ: f64 = 100_000.0;
-/// Longest simulated run [s].
+/// Longest simulated run \[s\].
 pub const MAX_DURATION_S: f64 = 1e7;
-/// Largest |pitch| (exclusive), |roll|, |yaw| [deg].
+/// Largest |pitch| (exclusive), |roll|, |yaw| \[deg\].
 pub const MAX_PITCH_DEG: f64 = 90.0;
 pub const MAX_ROLL_DEG: f64 = 180.0;
 pub const MAX_YAW_DEG: f64 = 360.0;
-/// Largest angular rate [deg/s] and specific force [g] of a sample (per-axis magnitude of the mean over the
+/// Largest angular rate [deg/s] and specific force \[g\] of a sample (per-axis magnitude of the mean over the
 /// sample: increment / dt).
 pub const MAX_ANGULAR_RATE_DEG_S: f64 = 1000.0;
 pub const MAX_SPECIFIC_FORCE_G: f64 = 100.0;
@@ -65,7 +65,7 @@ pub fn check_rate(rate_hz: f64) -> Result<(), CoreError> {
     )
 }
 
-/// Check of a run length [s] at `rate_hz` (at least one sample).
+/// Check of a run length \[s\] at `rate_hz` (at least one sample).
 pub fn check_duration(duration_s: f64, rate_hz: f64) -> Result<(), CoreError> {
     check(
         duration_s.is_finite() && duration_s > 0.0 && duration_s <= MAX_DURATION_S,
@@ -104,8 +104,8 @@ pub fn check_attitude(e: Euler) -> Result<(), CoreError> {
     in_range("yaw_rad", "yaw", e.yaw, -y, y, Unit::Deg)
 }
 
-/// Checks of streamed increments given as flat row-major (n x 3) slices (dtheta [rad], dv [m/s]) at sample
-/// interval `dt` [s]: equal whole lengths, every value finite, rate and specific force within the limits.
+/// Checks of streamed increments given as flat row-major (n x 3) slices (dtheta \[rad\], dv [m/s]) at sample
+/// interval `dt` \[s\]: equal whole lengths, every value finite, rate and specific force within the limits.
 /// Returns n.
 pub fn check_increments(dtheta: &[f64], dv: &[f64], dt: f64) -> Result<usize, CoreError> {
     check_shape(dtheta.len() % 3 == 0, "dtheta_rad", dtheta.len())?;

@@ -31,13 +31,13 @@ use crate::turntable::{RotationScheme, TableCursor, Turntable};
 /// Everything that defines a simulated static run (SI units).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ImuSimulatorConfig {
-    /// Geodetic latitude [rad], longitude [rad], height above the ellipsoid [m].
+    /// Geodetic latitude \[rad\], longitude \[rad\], height above the ellipsoid \[m\].
     pub lat: f64,
     pub lon: f64,
     pub height: f64,
-    /// Sample rate [Hz].
+    /// Sample rate \[Hz\].
     pub rate_hz: f64,
-    /// Length of the run [s]; the run has round(duration_s * rate_hz) samples.
+    /// Length of the run \[s\]; the run has round(duration_s * rate_hz) samples.
     pub duration_s: f64,
     /// Seed of the single random generator.
     pub seed: u64,
@@ -115,17 +115,17 @@ fn check_period(table: &Turntable, dt: f64) -> Result<(), CoreError> {
 /// A chunk of simulated samples (flat buffers, reused between calls).
 #[derive(Clone, Debug, Default)]
 pub struct ImuChunk {
-    /// End time of each sample [s].
+    /// End time of each sample \[s\].
     pub t_s: Vec<f64>,
-    /// Angle increments [rad], body x y z, flattened row-major (n x 3).
+    /// Angle increments \[rad\], body x y z, flattened row-major (n x 3).
     pub dtheta: Vec<f64>,
     /// Velocity increments [m/s], body x y z, flattened row-major (n x 3).
     pub dv: Vec<f64>,
     /// Temperature at the end of each sample [deg C].
     pub temp_c: Vec<f64>,
-    /// Table angle at the end of each sample [rad] (unwrapped, CCW about body Up).
+    /// Table angle at the end of each sample \[rad\] (unwrapped, CCW about body Up).
     pub table_angle: Vec<f64>,
-    /// True attitude at the end of each sample [rad].
+    /// True attitude at the end of each sample \[rad\].
     pub pitch: Vec<f64>,
     pub roll: Vec<f64>,
     pub yaw: Vec<f64>,
@@ -306,7 +306,7 @@ impl ImuSimulator {
         &self.table
     }
 
-    /// Sample interval [s].
+    /// Sample interval \[s\].
     pub fn dt(&self) -> f64 {
         self.dt
     }

@@ -126,7 +126,7 @@ impl NavigatorConfig {
 /// Navigation state at one instant.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NavState {
-    /// Time since the start of the run [s] (samples processed / rate).
+    /// Time since the start of the run \[s\] (samples processed / rate).
     pub t: f64,
     pub lat: f64,
     pub lon: f64,
@@ -179,7 +179,7 @@ impl EarthTerms {
 }
 
 /// Coning and sculling, one-plus-previous-sample algorithm (PSINS `cnscl` with one sample).
-/// Returns (phi [rad], dv_b [m/s]): the body rotation vector and the rotation- and sculling-compensated
+/// Returns (phi \[rad\], dv_b [m/s]): the body rotation vector and the rotation- and sculling-compensated
 /// velocity increment, both in the body frame at the start of the sample.
 #[inline(always)]
 pub fn coning_sculling(dtheta: Vec3, dv: Vec3, dtheta_prev: Vec3, dv_prev: Vec3) -> (Vec3, Vec3) {
@@ -288,7 +288,7 @@ impl Navigator {
 
     /// Closed-loop correction by an estimated navigation error (feedback of an error-state filter).
     ///
-    /// `phi` (E, N, U) [rad] is the phi angle of the computed navigation frame, the sign of PSINS `qdelphi` and
+    /// `phi` (E, N, U) \[rad\] is the phi angle of the computed navigation frame, the sign of PSINS `qdelphi` and
     /// of `kalman`: the computed C_b^n' = (I - [phi x]) C_b^n, so the true attitude is
     /// C_b^n = (I + [phi x]) C_b^n' to first order, and the correction is q <- q(phi) o q with q(phi) the exact
     /// rotation-vector quaternion. `dv` (E, N, U) [m/s] is the velocity error, computed minus true: v <- v - dv

@@ -1,4 +1,4 @@
-//! Temperature of the IMU [deg C] as a function of time [s]: the input of the temperature-dependent
+//! Temperature of the IMU [deg C] as a function of time \[s\]: the input of the temperature-dependent
 //! axial drift (see `imu_error`).
 
 use crate::error::{check, CoreError};
@@ -13,7 +13,7 @@ pub enum TemperatureProfile {
     Series { t_s: Vec<f64>, temp_c: Vec<f64> },
 }
 
-/// Default temperature of a warm-up's start [deg C] and its time constant [s].
+/// Default temperature of a warm-up's start [deg C] and its time constant \[s\].
 pub const DEFAULT_TEMP_C: f64 = 20.0;
 pub const DEFAULT_TAU_S: f64 = 3600.0;
 
@@ -91,7 +91,7 @@ impl TemperatureProfile {
         }
     }
 
-    /// Temperature [deg C] and its rate dT/dt [deg C/s] at time t [s].
+    /// Temperature [deg C] and its rate dT/dt [deg C/s] at time t \[s\].
     #[inline]
     pub fn at(&self, t: f64) -> (f64, f64) {
         match self {

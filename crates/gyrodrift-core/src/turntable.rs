@@ -1,6 +1,6 @@
 //! Turntable: the single-axis rotation schemes of the IMU about body Up.
 //!
-//! The table angle alpha(t) [rad] is positive counter-clockwise about body Up, and alpha(0) = 0 for every
+//! The table angle alpha(t) \[rad\] is positive counter-clockwise about body Up, and alpha(0) = 0 for every
 //! scheme, so with the body attitude C_b0^n at table angle zero the true attitude is
 //! C_b^n(t) = C_b0^n Rz(alpha(t)); with zero pitch and roll, yaw(t) = yaw0 + alpha(t).
 //!
@@ -18,8 +18,8 @@
 //! - `Continuous`: ramp up to the cruise rate (its sign is the direction), then rotate for ever.
 //! - `Reciprocating`: move +span, dwell, move -span, dwell, repeat (span signed by the rate's sign). The angle
 //!   is periodic and stays in [0, span]; `dwell` may be zero (direct reversal).
-//! - `Indexing`: from 0 move to positions[0], dwell, move to positions[1], dwell, ..., move from the last
-//!   position back to positions[0] and repeat. Moves go by the numeric difference of the (unwrapped)
+//! - `Indexing`: from 0 move to positions\[0\], dwell, move to positions\[1\], dwell, ..., move from the last
+//!   position back to positions\[0\] and repeat. Moves go by the numeric difference of the (unwrapped)
 //!   positions, so the table never accumulates net turns: e.g. [0, 90, 180, 270] deg slews +90, +90, +90 and
 //!   then -270 back. The cruise rate's magnitude is used for every slew.
 
@@ -48,7 +48,7 @@ pub enum RotationScheme {
     },
 }
 
-/// Table state at one time: angle [rad], rate [rad/s], acceleration [rad/s^2], all about body Up (CCW +).
+/// Table state at one time: angle \[rad\], rate [rad/s], acceleration [rad/s^2], all about body Up (CCW +).
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct TableState {
     pub angle: f64,
@@ -181,12 +181,12 @@ pub const DEFAULT_TABLE_RATE_RAD_S: f64 = 6.0 * std::f64::consts::PI / 180.0;
 /// Default peak acceleration of starts, stops and reversals [rad/s^2] (100 deg/s^2: a ramp to 6 deg/s takes
 /// 0.12 s and a 360 deg reciprocating span leaves 0.2 % of a horizontal error un-modulated).
 pub const DEFAULT_TABLE_ACCEL_RAD_S2: f64 = 100.0 * std::f64::consts::PI / 180.0;
-/// Default reciprocating span [rad] (one turn).
+/// Default reciprocating span \[rad\] (one turn).
 pub const DEFAULT_RECIPROCATING_SPAN_RAD: f64 = TAU;
 /// Names of the schemes, as the binding and the scenario files spell them.
 pub const SCHEME_NAMES: [&str; 4] = ["none", "continuous", "reciprocating", "indexing"];
 
-/// Default indexing positions [rad]: 0, 90, 180, 270, 360, 270, 180, 90 deg, an order whose slews mirror each
+/// Default indexing positions \[rad\]: 0, 90, 180, 270, 360, 270, 180, 90 deg, an order whose slews mirror each
 /// other, so the modulation residual cancels exactly.
 pub fn default_indexing_positions() -> Vec<f64> {
     use std::f64::consts::PI;
@@ -242,7 +242,7 @@ pub fn scheme_from_settings(
     })
 }
 
-/// Largest reciprocating span [rad] (about 159 turns).
+/// Largest reciprocating span \[rad\] (about 159 turns).
 pub const MAX_SPAN_RAD: f64 = 1000.0;
 
 fn check_span(span: f64) -> Result<(), CoreError> {
@@ -258,7 +258,7 @@ fn check_span(span: f64) -> Result<(), CoreError> {
 }
 
 /// A stretch of constant table rate (see [`Turntable::uniform_at`]): angle(t) = angle0 + rate (t - start)
-/// for start <= t <= end (absolute times [s], angle [rad], rate [rad/s]).
+/// for start <= t <= end (absolute times \[s\], angle \[rad\], rate [rad/s]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct UniformSegment {
     pub rate: f64,
@@ -477,7 +477,7 @@ impl Turntable {
         &self.scheme
     }
 
-    /// Period of the profile [s] (0 for `None` and `Continuous`).
+    /// Period of the profile \[s\] (0 for `None` and `Continuous`).
     pub fn period(&self) -> f64 {
         self.period
     }
@@ -487,7 +487,7 @@ impl Turntable {
         self.segments.is_empty()
     }
 
-    /// Angle [rad], rate [rad/s] and acceleration [rad/s^2] at time t >= 0 [s].
+    /// Angle \[rad\], rate [rad/s] and acceleration [rad/s^2] at time t >= 0 \[s\].
     #[inline]
     pub fn state(&self, t: f64) -> TableState {
         if self.segments.is_empty() {
@@ -504,7 +504,7 @@ impl Turntable {
         segs[i].eval(tt)
     }
 
-    /// State at time t [s] using `cursor` to find the segment: O(1) for non-decreasing times, identical in
+    /// State at time t \[s\] using `cursor` to find the segment: O(1) for non-decreasing times, identical in
     /// value to [`Turntable::state`] up to rounding of the period offset. Use one cursor per time stream.
     #[inline]
     pub fn state_at(&self, cursor: &mut TableCursor, t: f64) -> TableState {
@@ -567,7 +567,7 @@ impl Turntable {
         }
     }
 
-    /// Angle [rad] at time t [s].
+    /// Angle \[rad\] at time t \[s\].
     #[inline]
     pub fn angle(&self, t: f64) -> f64 {
         self.state(t).angle
