@@ -405,6 +405,18 @@ def test_stale_temporaries_are_cleaned_and_nothing_else(tmp_path):
     assert clean_stale_temporaries(folder) == []
 
 
+def test_a_killed_runs_temporaries_go_when_the_next_publication_starts(tmp_path):
+    folder = tmp_path / "sim"
+    _publish(folder, "simulate", {"imu.parquet": "1"})
+    stale = folder / f".imu.parquet.gyrodrift-tmp-{atomic._HOST}-{_dead_pid()}-{'e' * 12}"
+    stale.write_bytes(b"x" * 10000)  # what a SIGKILLed 72 h simulate leaves (1 GB in real life)
+    OutputFolder(folder, "simulate", ["imu.parquet"])  # a stale temporary is no foreign file
+    with OutputFolder(folder, "simulate", ["imu.parquet"]).publish() as stage:
+        assert not stale.exists()  # gone before this run writes its own
+        stage.file("imu.parquet").write_text("2")
+    assert _leftovers(folder) == []
+
+
 def _torn(folder, monkeypatch):
     """Publish n2/s2 over n1/s1, 'killed' after nav.parquet is renamed: no recovery, no cleanup."""
     _publish(folder, "navigate", {"nav.parquet": "n1", "summary.json": "s1"})

@@ -753,6 +753,7 @@ class OutputFolder:
                 created.append(missing)
                 missing = missing.parent
             folder.mkdir(parents=True, exist_ok=True)
+        clean_stale_temporaries(folder)  # a killed run's gigabytes go before this run adds its own
         stage = Stage(folder)
         try:
             with _naming(folder, stage):
