@@ -187,7 +187,7 @@ def clean_stale_temporaries(folder: str | os.PathLike[str], keep: Iterable[str] 
         pending = (_read_manifest(folder) or {}).get("pending")
         if isinstance(pending, dict):
             keep.update(str(e.get("tmp")) for e in pending.get("files", {}).values() if isinstance(e, dict))
-    removed = []
+    removed: list[str] = []
     now = time.time()
     try:
         names = os.listdir(folder)
@@ -515,11 +515,10 @@ def _write_manifest(folder: Path, doc: dict[str, Any]) -> None:
             fh.flush()
             os.fsync(fh.fileno())
         os.replace(tmp, folder / MANIFEST_NAME)
-        tmp = None
-    finally:
-        if tmp is not None:
-            with contextlib.suppress(OSError):
-                os.unlink(tmp)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
     _fsync_directory(folder)
 
 
