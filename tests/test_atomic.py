@@ -227,7 +227,10 @@ def test_a_failing_write_is_one_error_naming_the_file_and_leaves_the_old_one(tmp
     assert _leftovers(tmp_path) == []
 
 
-@pytest.mark.parametrize("code, reason", [(errno.ENOSPC, "no space left"), (errno.EROFS, "read-only file system")])
+@pytest.mark.parametrize(
+    "code, reason",
+    [(errno.ENOSPC, "no space left"), (errno.EROFS, "read-only file system"), (errno.EACCES, "permission denied")],
+)
 def test_a_failing_rename_or_create_leaves_everything_as_it_was(tmp_path, monkeypatch, code, reason):
     path = tmp_path / "m.json"
     atomic_write_json({"v": 1}, path)
