@@ -294,10 +294,10 @@ def test_duplicated_parquet_column_is_refused(tmp_path):
 @pytest.mark.parametrize(
     ("value", "message"),
     [
-        ("1e400", r"gyrodrift\.rate_hz metadata must be in \(0, 1e\+06\] Hz, got inf"),
+        ("1e400", r"gyrodrift\.rate_hz metadata must be in \[1, 100000\] Hz, got inf"),
         ("[5]", r"gyrodrift\.rate_hz metadata must be a number in Hz, got \[5\]"),
         ("true", r"gyrodrift\.rate_hz metadata must be a number in Hz, got True"),
-        ("-10", r"gyrodrift\.rate_hz metadata must be in \(0, 1e\+06\] Hz, got -10"),
+        ("-10", r"gyrodrift\.rate_hz metadata must be in \[1, 100000\] Hz, got -10"),
         ("{", r"unreadable gyrodrift\.rate_hz metadata"),
     ],
 )
@@ -397,6 +397,19 @@ def test_the_rate_limit_is_the_same_for_every_source(tmp_path):
 def test_non_finite_site_values_name_the_option(sim_parquet, site, flag):
     with pytest.raises(OptionError, match=rf"{flag} \(\w+\): expected a finite number"):
         open_log(sim_parquet, site=site)
+
+
+def test_the_site_must_lie_within_the_cores_limits(sim_parquet, tmp_path):
+    """The reader refuses the sites the core would refuse, naming the option or the file (not a core key)."""
+    with pytest.raises(OptionError, match=r"--lat0-deg \(lat_deg\): 89\.5 deg is outside \[-89, 89\] deg"):
+        open_log(sim_parquet, site={"lat_deg": 89.5})
+    with pytest.raises(OptionError, match=r"--height-m \(height_m\): 50000\.0 m is outside \[-1000, 20000\] m"):
+        open_log(sim_parquet, site={"height_m": 50000.0})
+    table = pq.read_table(sim_parquet)
+    meta = {**table.schema.metadata, b"gyrodrift.site": b'{"lat_deg": 89.5, "lon_deg": 0, "height_m": 0}'}
+    pq.write_table(table.replace_schema_metadata(meta), tmp_path / "polar.parquet")
+    with pytest.raises(LogError, match=r"polar\.parquet: the site's lat_deg 89\.5 deg is outside \[-89, 89\] deg"):
+        open_log(tmp_path / "polar.parquet")
 
 
 def test_one_site_class_for_scenarios_and_logs(sim_parquet):

@@ -32,7 +32,7 @@ Columns (order free, extra columns ignored):
   types; a bool or text column is refused); a name given twice is refused.
 
 Sample rate: the ``gyrodrift.rate_hz`` metadata of a Parquet file (a JSON number), otherwise 1 / median(dt)
-over the first 1000 intervals; it must lie in (0, `MAX_RATE_HZ`]. Every chunk is checked while it streams (a
+over the first 1000 intervals; it must lie in [`MIN_RATE_HZ`, `MAX_RATE_HZ`]. Every chunk is checked while it streams (a
 log is never loaded whole; an 88 h log at 200 Hz is 63 million rows), and the first problem raises `LogError`
 naming the file, row and column:
 
@@ -68,6 +68,7 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 
+from gyrodrift import _core
 from gyrodrift.errors import InputError, OptionError
 from gyrodrift.runs import TEMPERATURE_LIMITS_C
 from gyrodrift.site import Site
@@ -84,6 +85,7 @@ __all__ = [
     "TRUTH_COLUMNS",
     "MAX_RATE_DEG_S",
     "MAX_SPECIFIC_FORCE_G",
+    "MIN_RATE_HZ",
     "MAX_RATE_HZ",
     "GAP_TOLERANCE",
     "DEFAULT_CHUNK_SAMPLES",
@@ -95,18 +97,25 @@ RATE_COLUMNS = ("gyro_x_rad_s", "gyro_y_rad_s", "gyro_z_rad_s", "accel_x_m_s2", 
 """Rate columns: angular rate [rad/s] then specific force [m/s^2], body x y z."""
 TRUTH_COLUMNS = ("true_pitch_deg", "true_roll_deg", "true_yaw_deg")
 """Optional true attitude at the end of each sample [deg] (simulated logs)."""
-MAX_RATE_DEG_S = 1000.0
-"""Largest plausible angular rate [deg/s] on any axis."""
-MAX_SPECIFIC_FORCE_G = 100.0
-"""Largest plausible specific force [g = 9.80665 m/s^2] on any axis."""
-MAX_RATE_HZ = 1.0e6
-"""Largest accepted sample rate [Hz]."""
+MAX_RATE_DEG_S = float(_core.MAX_ANGULAR_RATE_DEG_S)
+"""Largest plausible angular rate [deg/s] on any axis (the core's limit: one limit for every reader and the core)."""
+MAX_SPECIFIC_FORCE_G = float(_core.MAX_SPECIFIC_FORCE_G)
+"""Largest plausible specific force [g = 9.80665 m/s^2] on any axis (the core's limit)."""
+MIN_RATE_HZ = float(_core.MIN_RATE_HZ)
+"""Smallest accepted sample rate [Hz] (the core's limit)."""
+MAX_RATE_HZ = float(_core.MAX_RATE_HZ)
+"""Largest accepted sample rate [Hz] (the core's limit)."""
 GAP_TOLERANCE = 0.01
 """Largest relative deviation of a time step from the nominal 1 / rate_hz."""
 DEFAULT_CHUNK_SAMPLES = 100_000
 """Samples per chunk: 1000 s at 100 Hz, about 7 MB of float64 columns."""
 
-_G0 = 9.80665
+_G0 = float(_core.STANDARD_GRAVITY_M_S2)
+_SITE_LIMITS = {  # key: (low, high, option, unit), inclusive, the core's limits
+    "lat_deg": (-float(_core.MAX_LAT_DEG), float(_core.MAX_LAT_DEG), "--lat0-deg", "deg"),
+    "lon_deg": (-float(_core.MAX_LON_DEG), float(_core.MAX_LON_DEG), "--lon0-deg", "deg"),
+    "height_m": (float(_core.MIN_HEIGHT_M), float(_core.MAX_HEIGHT_M), "--height-m", "m"),
+}
 _RATE_PROBE = 1000
 
 
@@ -734,8 +743,8 @@ def _check_rate(rate: Any, label: str, what: str = "sample rate") -> float:
         r = float(rate)
     except OverflowError:
         r = math.inf
-    if not (math.isfinite(r) and 0.0 < r <= MAX_RATE_HZ):
-        raise LogError(f"{label}: {what} must be in (0, {MAX_RATE_HZ:g}] Hz, got {rate!r}")
+    if not (math.isfinite(r) and MIN_RATE_HZ <= r <= MAX_RATE_HZ):
+        raise LogError(f"{label}: {what} must be in [{MIN_RATE_HZ:g}, {MAX_RATE_HZ:g}] Hz, got {rate!r}")
     return r
 
 
@@ -793,7 +802,12 @@ def _rate_from_times(t: np.ndarray, label: str) -> float:
 
 
 def _merge_site(given: Site | Mapping[str, float] | None, from_file: Site | None, label: str) -> Site | None:
-    """A `Site` replaces the file's; a mapping overrides only the keys it has (lon 0, height 0 by default)."""
+    """A `Site` replaces the file's; a mapping overrides only the keys it has (lon 0, height 0 by default).
+
+    Every value must lie within the core's limits (`_SITE_LIMITS`): `OptionError` naming the option for a
+    given value, `LogError` naming the file for the file's own.
+    """
+    given_keys: set[str] = set()
     if given is None:
         site = from_file
         if site is None:
@@ -808,20 +822,25 @@ def _merge_site(given: Site | Mapping[str, float] | None, from_file: Site | None
                 raise OptionError(f"{flags[k]} ({k}): expected a finite number, got {v!r}")
         if "lat_deg" not in given and from_file is None:
             raise LogError(f"{label}: the log carries no site; give its latitude (--lat0-deg / site=)")
+        given_keys = set(given)
         base = from_file or Site(math.nan, 0.0, 0.0)
         site = Site(
             float(given.get("lat_deg", base.lat_deg)),
             float(given.get("lon_deg", base.lon_deg)),
             float(given.get("height_m", base.height_m)),
         )
-    elif all(hasattr(given, k) for k in ("lat_deg", "lon_deg", "height_m")):
+    elif all(hasattr(given, k) for k in _SITE_LIMITS):
         site = Site(float(given.lat_deg), float(given.lon_deg), float(given.height_m))
+        given_keys = set(_SITE_LIMITS)
     else:
         raise OptionError(f"site: expected a gyrodrift.site.Site or a mapping, got {type(given).__name__}")
-    if not (-90.0 < site.lat_deg < 90.0):
-        raise OptionError(f"{label}: site latitude (--lat0-deg) must be strictly within +-90 deg, got {site.lat_deg!r}")
-    if not (math.isfinite(site.lon_deg) and math.isfinite(site.height_m)):
-        raise OptionError(f"{label}: site {site} is not a valid static position (finite longitude and height)")
+    for key, (low, high, flag, unit) in _SITE_LIMITS.items():
+        v = getattr(site, key)
+        if math.isfinite(v) and low <= v <= high:
+            continue
+        if key in given_keys:
+            raise OptionError(f"{flag} ({key}): {v!r} {unit} is outside [{low:g}, {high:g}] {unit}")
+        raise LogError(f"{label}: the site's {key} {v!r} {unit} is outside [{low:g}, {high:g}] {unit}")
     return site
 
 
