@@ -91,65 +91,48 @@ impl AlignerConfig {
 
     /// Range checks; errors name the contract key.
     pub fn validate(&self) -> Result<(), CoreError> {
+        use crate::error::{all_positive_at_most, in_range, sig, Unit, ARCSEC, DEG_PER_RTH, MICRO_G, MICRO_G_PER_RTHZ};
         check_site(self.lat, self.lon, self.height, self.rate_hz)?;
-        let in_range = |x: f64, lo: f64, hi: f64| x.is_finite() && x >= lo && x <= hi;
+        let s = Unit::Si("s");
+        in_range("coarse_s", "coarse span", self.coarse_s, 10.0, 86_400.0, s)?;
+        in_range("fine_s", "fine span", self.fine_s, 0.0, 604_800.0, s)?;
+        all_positive_at_most("update_s", "update interval", &[self.update_s], 60.0, s)?;
         check(
-            in_range(self.coarse_s, 10.0, 86_400.0),
-            "coarse_s",
-            format!("must be in [10, 86400] s, got {}", self.coarse_s),
-        )?;
-        check(
-            in_range(self.fine_s, 0.0, 604_800.0),
-            "fine_s",
-            format!("must be in [0, 604800] s, got {}", self.fine_s),
-        )?;
-        check(
-            in_range(self.update_s, 0.0, 60.0) && (self.update_s * self.rate_hz).round() >= 1.0,
+            (self.update_s * self.rate_hz).round() >= 1.0,
             "update_s",
             format!(
-                "must be in (0, 60] s and hold at least one sample, got {}",
-                self.update_s
+                "update interval {} s holds no sample at {} Hz",
+                sig(self.update_s),
+                sig(self.rate_hz)
             ),
         )?;
-        if let Some(s) = self.att_sigma {
-            check(
-                s.iter().all(|&x| x > 0.0 && x <= 0.2),
-                "att_sigma_rad",
-                format!("must be in (0, 0.2] rad, got {s:?}"),
-            )?;
+        if let Some(a) = self.att_sigma {
+            all_positive_at_most("att_sigma_rad", "initial attitude sigma", &a, 0.2, ARCSEC)?;
         }
-        let g = self.gyro_bias_sigma;
-        check(
-            g.iter().all(|&x| x > 0.0 && x <= 0.1),
-            "gyro_bias_sigma_rad_s",
-            format!("must be in (0, 0.1] rad/s, got {g:?}"),
-        )?;
-        let a = self.accel_bias_sigma;
-        check(
-            a.iter().all(|&x| x > 0.0 && x <= 10.0),
-            "accel_bias_sigma_m_s2",
-            format!("must be in (0, 10] m/s^2, got {a:?}"),
-        )?;
-        check(
-            in_range(self.gyro_arw, 0.0, 0.1),
+        let gyro = &self.gyro_bias_sigma;
+        all_positive_at_most("gyro_bias_sigma_rad_s", "gyro bias sigma", gyro, 0.1, Unit::DegPerH)?;
+        let acc = &self.accel_bias_sigma;
+        all_positive_at_most("accel_bias_sigma_m_s2", "accelerometer bias sigma", acc, 10.0, MICRO_G)?;
+        in_range(
             "gyro_arw_rad_rts",
-            format!("must be in [0, 0.1] rad/sqrt(s), got {}", self.gyro_arw),
+            "angle random walk",
+            self.gyro_arw,
+            0.0,
+            0.1,
+            DEG_PER_RTH,
         )?;
-        check(
-            in_range(self.accel_vrw, 0.0, 1.0),
+        let vrw = self.accel_vrw;
+        in_range(
             "accel_vrw_m_s_rts",
-            format!("must be in [0, 1] m/s/sqrt(s), got {}", self.accel_vrw),
+            "velocity random walk",
+            vrw,
+            0.0,
+            1.0,
+            MICRO_G_PER_RTHZ,
         )?;
-        check(
-            self.zupt_sigma > 0.0 && self.zupt_sigma <= 10.0,
-            "zupt_sigma_m_s",
-            format!("must be in (0, 10] m/s, got {}", self.zupt_sigma),
-        )?;
-        check(
-            self.history_s > 0.0 && self.history_s <= 1e6,
-            "history_s",
-            format!("must be in (0, 1e6] s, got {}", self.history_s),
-        )
+        let zupt = [self.zupt_sigma];
+        all_positive_at_most("zupt_sigma_m_s", "zero-velocity sigma", &zupt, 10.0, Unit::Si("m/s"))?;
+        all_positive_at_most("history_s", "history interval", &[self.history_s], 1e6, s)
     }
 
     /// Samples of the coarse span, of the fine span, and per update.

@@ -204,6 +204,29 @@ pub(crate) fn all_in_range(
     )
 }
 
+/// Check that every element of `v` (SI) is finite, positive and at most `hi`; the message shows all of them.
+pub(crate) fn all_positive_at_most(
+    key: &'static str,
+    quantity: &str,
+    v: &[f64],
+    hi: f64,
+    unit: Unit,
+) -> Result<(), CoreError> {
+    check(
+        v.iter().all(|x| x.is_finite() && *x > 0.0 && *x <= hi),
+        key,
+        format!(
+            "{quantity} {} is outside (0, {}]{}",
+            show_all(v, unit),
+            sig(unit.convert(hi)),
+            match unit.name() {
+                "" => String::new(),
+                n => format!(" {n}"),
+            }
+        ),
+    )
+}
+
 /// A number with 6 significant digits, without trailing zeros (90 not 90.00000, 1e-300 in exponent form).
 pub(crate) fn sig(x: f64) -> String {
     if !x.is_finite() {

@@ -175,3 +175,23 @@ fn filter_and_coarse_alignment_refuse_instead_of_panicking() {
         "coarse_s"
     );
 }
+
+#[test]
+fn aligner_settings_are_refused_in_user_units() {
+    let base = AlignerConfig::new(0.5, 0.0, 0.0, RATE_HZ);
+    let e = Aligner::new(AlignerConfig {
+        gyro_bias_sigma: [1.0; 3],
+        ..base.clone()
+    })
+    .unwrap_err();
+    assert_eq!(e.key(), "gyro_bias_sigma_rad_s");
+    assert!(e.to_string().contains("deg/h"), "{e}");
+    let e = Aligner::new(AlignerConfig {
+        accel_bias_sigma: [f64::NAN, 1e-4, 1e-4],
+        ..base.clone()
+    })
+    .unwrap_err();
+    assert!(e.to_string().contains("ug"), "{e}");
+    let e = Aligner::new(AlignerConfig { update_s: 0.01, ..base }).unwrap_err();
+    assert!(e.to_string().contains("holds no sample at 10 Hz"), "{e}");
+}
