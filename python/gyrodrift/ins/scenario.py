@@ -21,7 +21,7 @@ import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 from gyrodrift.errors import InputError
 from gyrodrift.site import Site
@@ -440,6 +440,10 @@ class _Validator:
             out.append(f)
         return tuple(out)
 
+    def vector3(self, sec, table, key, default: tuple[float, float, float]) -> tuple[float, float, float]:
+        """Three numbers (body x, y, z)."""
+        return cast("tuple[float, float, float]", self.vector(sec, table, key, default, 3))
+
     def section(self, data: Mapping[str, Any], name: str, cls: type) -> Mapping[str, Any]:
         table = data.get(name, {})
         if not isinstance(table, Mapping):
@@ -478,8 +482,9 @@ class _Validator:
         try:
             scenario.to_core_config()
         except CoreError as exc:
-            key = getattr(exc, "key", None)
-            section, toml_key = _CORE_KEYS.get(key, (None, None))
+            key = str(getattr(exc, "key", "") or "")
+            where = _CORE_KEYS.get(key)
+            section, toml_key = where if where is not None else (None, None)
             if toml_key in ("series_t_h", "series_temp_c") and "series_csv" in data.get("temperature", {}):
                 toml_key = "series_csv"
             msg = str(exc)
@@ -559,21 +564,24 @@ class _Validator:
     def gyro(self, data) -> Gyro:
         t, d = self.section(data, "gyro", Gyro), Gyro()
         return Gyro(
-            bias_deg_h=self.vector("gyro", t, "bias_deg_h", d.bias_deg_h, 3),
+            bias_deg_h=self.vector3("gyro", t, "bias_deg_h", d.bias_deg_h),
             arw_deg_rth=self.non_negative("gyro", t, "arw_deg_rth", d.arw_deg_rth),
             bias_instability_deg_h=self.non_negative("gyro", t, "bias_instability_deg_h", d.bias_instability_deg_h),
             correlation_s=self.positive("gyro", t, "correlation_s", d.correlation_s),
             rrw_deg_h_rth=self.non_negative("gyro", t, "rrw_deg_h_rth", d.rrw_deg_h_rth),
-            scale_ppm=self.vector("gyro", t, "scale_ppm", d.scale_ppm, 3),
-            misalignment_arcsec=self.vector("gyro", t, "misalignment_arcsec", d.misalignment_arcsec, 6),
+            scale_ppm=self.vector3("gyro", t, "scale_ppm", d.scale_ppm),
+            misalignment_arcsec=cast(
+                "tuple[float, float, float, float, float, float]",
+                self.vector("gyro", t, "misalignment_arcsec", d.misalignment_arcsec, 6),
+            ),
         )
 
     def accel(self, data) -> Accel:
         t, d = self.section(data, "accel", Accel), Accel()
         return Accel(
-            bias_ug=self.vector("accel", t, "bias_ug", d.bias_ug, 3),
+            bias_ug=self.vector3("accel", t, "bias_ug", d.bias_ug),
             vrw_ug_rthz=self.non_negative("accel", t, "vrw_ug_rthz", d.vrw_ug_rthz),
-            scale_ppm=self.vector("accel", t, "scale_ppm", d.scale_ppm, 3),
+            scale_ppm=self.vector3("accel", t, "scale_ppm", d.scale_ppm),
         )
 
     def temperature(self, data) -> Temperature:
@@ -634,7 +642,7 @@ class _Validator:
             path = self.base_dir / path
         try:
             with open(path, newline="", encoding="utf-8") as fh:
-                rows = []
+                rows: list[dict[str, str]] = []
                 for row in csv.DictReader(fh):
                     if len(rows) == MAX_SERIES_ROWS:
                         raise self.fail(sec, key, f"{path}: more than {MAX_SERIES_ROWS} rows")
