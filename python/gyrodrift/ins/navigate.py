@@ -385,30 +385,35 @@ class _Run:
 
 
 def _columns(track: Track, true_deg: np.ndarray | None, site: Site | None) -> dict[str, np.ndarray]:
-    """nav.parquet columns from the kept states (user units), with errors against the site and true attitude."""
+    """nav.parquet columns from the kept states (user units), with errors against the site and true attitude.
+
+    The angles are converted in place (the errors are computed from the radians first), so the kept arrays
+    become the columns without a second copy of the output.
+    """
     k = track.kept
-    cols: dict[str, np.ndarray] = {
-        "t_s": k["t_s"],
-        "lat_deg": np.rad2deg(k["lat_rad"]),
-        "lon_deg": np.rad2deg(k["lon_rad"]),
-        "height_m": k["height_m"],
-        "vel_e_m_s": k["vel_enu_m_s"][:, 0],
-        "vel_n_m_s": k["vel_enu_m_s"][:, 1],
-        "vel_u_m_s": k["vel_enu_m_s"][:, 2],
-        "pitch_deg": np.rad2deg(k["pitch_rad"]),
-        "roll_deg": np.rad2deg(k["roll_rad"]),
-        "yaw_deg": np.rad2deg(k["yaw_rad"]),
-    }
+    errors: dict[str, np.ndarray] = {}
     if site is not None:
         pe = position_errors(k["lat_rad"], k["lon_rad"], site.lat_deg * DEG, site.lon_deg * DEG)
-        cols["lat_err_arcsec"] = pe["lat_err_arcsec"]
-        cols["lon_err_arcsec"] = pe["lon_err_arcsec"]
-        cols["pos_err_nmi"] = pe["pos_err_nmi"]
+        errors = {name: pe[name] for name in ("lat_err_arcsec", "lon_err_arcsec", "pos_err_nmi")}
         if true_deg is not None:
-            tr = np.deg2rad(true_deg)
-            cols.update(
+            tr = np.deg2rad(true_deg, out=true_deg)
+            errors.update(
                 attitude_errors_arcsec(k["pitch_rad"], k["roll_rad"], k["yaw_rad"], tr[:, 0], tr[:, 1], tr[:, 2])
             )
+    vel = k["vel_enu_m_s"]
+    cols: dict[str, np.ndarray] = {
+        "t_s": k["t_s"],
+        "lat_deg": np.rad2deg(k["lat_rad"], out=k["lat_rad"]),
+        "lon_deg": np.rad2deg(k["lon_rad"], out=k["lon_rad"]),
+        "height_m": k["height_m"],
+        "vel_e_m_s": vel[:, 0],
+        "vel_n_m_s": vel[:, 1],
+        "vel_u_m_s": vel[:, 2],
+        "pitch_deg": np.rad2deg(k["pitch_rad"], out=k["pitch_rad"]),
+        "roll_deg": np.rad2deg(k["roll_rad"], out=k["roll_rad"]),
+        "yaw_deg": np.rad2deg(k["yaw_rad"], out=k["yaw_rad"]),
+    }
+    cols.update(errors)
     return cols
 
 
