@@ -41,7 +41,7 @@ def test_fit_then_predict_csv_and_jsonl(tmp_path, paper_csv):
     assert "fitted on 22 runs" in r.output and model.exists()
     r = runner.invoke(main, ["predict", str(model), str(paper_csv), "--split", "test", "--lat0-deg", "28.222"])
     assert r.exit_code == 0, r.output
-    rows = list(csv.DictReader(io.StringIO(r.output)))
+    rows = list(csv.DictReader(io.StringIO(r.stdout)))
     assert [row["run"] for row in rows] == [str(i) for i in range(23, 33)]
     for row in rows:
         assert float(row["error_deg_h"]) == pytest.approx(

@@ -94,7 +94,7 @@ def test_predict_command_prints_the_interval(tmp_path):
         ],
     )
     assert r.exit_code == 0, r.output
-    rows = [json.loads(line) for line in r.output.splitlines()]
+    rows = [json.loads(line) for line in r.stdout.splitlines()]
     for row in rows:
         assert row["drift_lo_deg_h"] < row["drift_identified_deg_h"] < row["drift_hi_deg_h"]
     r = CliRunner().invoke(

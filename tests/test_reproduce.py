@@ -10,7 +10,16 @@ from gyrodrift.cli import main
 from gyrodrift.reproduce import reproduce
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
-FAMILIES = {"cpso_paper", "cpso_loo", "pso_loo", "grid_loo", "physics_inversion", "latitude_line", "paper_params"}
+FAMILIES = {
+    "physics_encoding",
+    "cpso_paper",
+    "cpso_loo",
+    "pso_loo",
+    "grid_loo",
+    "physics_inversion",
+    "latitude_line",
+    "paper_params",
+}
 
 
 @pytest.fixture(scope="module")

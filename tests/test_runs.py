@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from gyrodrift.baselines import physics_inversion
 from gyrodrift.datasets import load_paper
 from gyrodrift.encodings import ENCODINGS, encode, feature_names
 from gyrodrift.runs import RunTableError, parse_temp_range, read_runs_csv
@@ -28,7 +29,9 @@ def test_encodings_columns():
     for enc in ENCODINGS:
         X = encode(d.train, enc)
         assert X.shape == (22, len(feature_names(enc)))
-        np.testing.assert_allclose(X[:, 0], d.train.lat_err_arcsec)
+        first = physics_inversion(d.train) if enc.startswith("physics") else d.train.lat_err_arcsec
+        np.testing.assert_allclose(X[:, 0], first)
+    np.testing.assert_allclose(encode(d.train, "physics_lat")[:, 3], d.train.lat0_deg)
     np.testing.assert_allclose(encode(d.train, "temp_span")[:, 1], d.train.temp_max_c - d.train.temp_min_c)
     np.testing.assert_allclose(encode(d.train, "temp_mean")[:, 1], (d.train.temp_max_c + d.train.temp_min_c) / 2)
     with pytest.raises(ValueError, match="unknown encoding 'bogus'"):

@@ -21,9 +21,25 @@ METHODS = ("cpso", "pso", "grid")
 """Tuning methods: chaos PSO, plain PSO, log grid."""
 
 ENCODINGS: dict[str, tuple[str, ...]] = {
+    "physics": ("drift_equiv_deg_h", "temp_min_c", "temp_max_c"),
+    "physics_lat": ("drift_equiv_deg_h", "temp_min_c", "temp_max_c", "lat0_deg"),
     "temp_range": ("lat_err_arcsec", "temp_min_c", "temp_max_c"),
     "temp_mean": ("lat_err_arcsec", "temp_mean_c"),
     "temp_span": ("lat_err_arcsec", "temp_span_c"),
     "lat_only": ("lat_err_arcsec",),
 }
 """Run encodings: name -> feature names (units in the names); implemented in `gyrodrift.encodings`."""
+
+PAPER_ENCODINGS = ("temp_range", "temp_mean", "temp_span", "lat_only")
+"""The readings of the paper's inputs (raw 12 h latitude error in arcsec): kept for `reproduce`."""
+
+DEFAULT_ENCODING = "physics"
+"""The encoding of `fit` and `identify`: the 12 h latitude error as its drift equivalent at the run's own
+latitude (deg/h, latitude-free), with the temperature range."""
+
+TARGETS = ("drift", "residual")
+"""What the learner is fitted on: the drift itself, or the residual drift minus a physics estimate (hybrid)."""
+
+PHYSICS_COLUMNS = ("drift_inversion_deg_h", "drift_curvefit_deg_h", "drift_smoother_deg_h")
+"""Physics estimates a hybrid model can start from: the 12 h inversion (computed from ``lat_deg`` and
+``lat0_deg``), or a run-table column (the 12 h curve fit; a smoother over the whole log)."""

@@ -78,6 +78,22 @@ class FeatureExpression:
     functions: tuple[str, ...] = ()
 
 
+def _drift_equiv_template() -> str:
+    """C/Rust template of the drift equivalent of the 12 h latitude error (`physics_inversion`)."""
+    from gyrodrift.earth import OMEGA_IE_RAD_S
+    from gyrodrift.units import ARCSEC, DEG, DEG_PER_H, HOUR
+
+    w = OMEGA_IE_RAD_S
+    one_minus_cos = 1.0 - math.cos(w * 12.0 * HOUR)
+    lit = lambda x: format(float(x), ".17g")  # noqa: E731 - reads back as the same float64
+    return (
+        f"{lit(w)} * (({{lat_deg}} - {{lat0_deg}}) * 3600.0 * {lit(ARCSEC)}) / "
+        f"({{cos}}({{lat0_deg}} * {lit(DEG)}) * {lit(one_minus_cos)}) / {lit(DEG_PER_H)}"
+    )
+
+
+_DRIFT_EQUIV = _drift_equiv_template()
+
 FEATURE_EXPRESSIONS: dict[str, FeatureExpression] = {
     "lat_err_arcsec": FeatureExpression(
         ("lat_deg", "lat0_deg"), "({lat_deg} - {lat0_deg}) * 3600.0", "({lat_deg} - {lat0_deg}) * 3600.0", "arcsec"
@@ -93,6 +109,9 @@ FEATURE_EXPRESSIONS: dict[str, FeatureExpression] = {
     "temp_span_c": FeatureExpression(
         ("temp_min_c", "temp_max_c"), "{temp_max_c} - {temp_min_c}", "{temp_max_c} - {temp_min_c}", "deg C"
     ),
+    "lat0_deg": FeatureExpression(("lat0_deg",), "{lat0_deg}", "{lat0_deg}", "deg"),
+    # gyrodrift.baselines.physics_inversion at 12 h, operation for operation (its constants as 17-digit literals)
+    "drift_equiv_deg_h": FeatureExpression(("lat_deg", "lat0_deg"), _DRIFT_EQUIV, _DRIFT_EQUIV, "deg/h", ("cos",)),
 }
 """Every feature name of every encoding, as generated C and Rust (tests/test_export.py checks that none is
 missing: a new encoding must add its features here)."""
@@ -152,6 +171,11 @@ def export_spec(model, *, model_sha256: str | None = None) -> ExportSpec:
     ``model_sha256`` (the SHA-256 of the model file's bytes, if known) is recorded in the provenance.
     Raises `InputError` if a feature of the model's encoding has no entry in `FEATURE_EXPRESSIONS`.
     """
+    if getattr(model, "target", "drift") != "drift":
+        raise InputError(
+            "a hybrid model (target residual: physics estimate + learned correction) cannot be exported yet; "
+            "refit it with --target drift to export"
+        )
     names = tuple(model.feature_names)
     missing = [name for name in names if name not in FEATURE_EXPRESSIONS]
     if missing:

@@ -24,6 +24,23 @@ pseudo-inverted. Consequences used below:
 
 Sign convention everywhere in this module: a residual is observed minus predicted, ``y - f``.
 
+Weighted LS-SVM (Suykens et al. 2002, per-sample regularisation): with sample weights ``w_i > 0`` the primal
+is ``min 1/2 |w|^2 + gamma/2 sum_i w_i e_i^2``, i.e. ``C_i = gamma w_i``; eliminating ``e_i = a_i / (gamma w_i)``
+gives the same bordered system with ``H = K + diag(1 / (gamma w_i))``. Everything above holds with that ``H``:
+removing sample ``i`` still removes row and column ``i`` of the bordered matrix, so the closed-form LOO
+residuals keep their form (tests compare both with brute-force weighted solves and refits). For drift labels
+with 1-sigma ``s_i``, ``w_i = mean(s^2) / s_i^2`` (``gyrodrift.model.label_weights``).
+
+Predictive scale (the LSSVM read as a Gaussian process with prior covariance ``K``, noise ``1/(gamma w_i)``
+and a flat prior on the bias; Rasmussen & Williams 2006, sec. 2.7): the predictive variance of a new
+observation at ``x`` (weight 1), in units of the prior variance, is
+
+    v(x)^2 = k(x, x) - k' H^-1 k + (1 - 1'H^-1 k)^2 / s + 1/gamma,     k = K(X_train, x),
+
+and the leave-one-out predictive variance of training sample ``i`` is ``1 / ((H^-1)_ii - p_i^2 / s)``, the
+denominator of its LOO residual. ``LSSVR.predictive_scale`` returns ``v``; ``loo_scale_`` the LOO one. Far
+from the training inputs ``k -> 0`` and ``v`` grows to its prior value: the interval widens there.
+
 If the Cholesky factorisation fails (``H`` not numerically positive definite, e.g. an enormous gamma with
 a singular kernel matrix - duplicated training points - or an indefinite polynomial kernel with
 ``coef0 < 0``) the functions raise :class:`NotPositiveDefiniteError` (a ``numpy.linalg.LinAlgError``,
@@ -182,11 +199,32 @@ def _inverse_diagonal(U: np.ndarray) -> np.ndarray:
     return np.einsum("ik,ik->i", Uinv, Uinv)
 
 
-def _h_matrix(K: np.ndarray, gamma: float, copy: bool = True) -> np.ndarray:
-    """``H = K + I/gamma`` (a new array unless ``copy`` is False)."""
+def _h_matrix(K: np.ndarray, gamma: float, copy: bool = True, weights: np.ndarray | None = None) -> np.ndarray:
+    """``H = K + I/gamma`` or, with sample ``weights``, ``K + diag(1/(gamma w))`` (a new array unless ``copy``
+    is False)."""
     H = np.array(K, dtype=float, copy=copy)
-    H.flat[:: H.shape[0] + 1] += 1.0 / gamma
+    H.flat[:: H.shape[0] + 1] += 1.0 / gamma if weights is None else 1.0 / (gamma * weights)
     return H
+
+
+def check_sample_weight(sample_weight, n: int, *, allow_zero: bool = False) -> np.ndarray | None:
+    """Sample weights as a float array of shape (n,), each finite and > 0 (``allow_zero``: >= 0, not all 0),
+    or None; else ``ValueError``."""
+    if sample_weight is None:
+        return None
+    w = np.asarray(sample_weight, dtype=float)
+    if w.ndim == 0:
+        w = np.full(n, float(w))
+    if w.shape != (n,):
+        raise ValueError(f"sample_weight must have shape ({n},), got {w.shape}")
+    if allow_zero and np.all(np.isfinite(w)) and np.all(w >= 0) and np.any(w > 0):
+        return w
+    if not np.all(np.isfinite(w)) or not np.all(w > 0):
+        raise ValueError(
+            "sample weights must be finite numbers > 0 (a zero weight would make a sample's regularisation "
+            "infinite: leave the sample out instead)"
+        )
+    return w
 
 
 def _solve_factored(U: np.ndarray, y: np.ndarray):
@@ -313,7 +351,7 @@ def lssvr_loo_residuals(K, y, gamma) -> np.ndarray:
     return _loo_from_factor(U, alpha, p, s)
 
 
-def rbf_batch_errors(sqdist, y, gammas, sigmas, kind: str = "train") -> np.ndarray:
+def rbf_batch_errors(sqdist, y, gammas, sigmas, kind: str = "train", weights=None) -> np.ndarray:
     """Per-sample errors of m RBF-LSSVMs (one per (gamma, sigma) candidate) on one training set.
 
     The tuner's workhorse: the squared distances are computed once (:func:`gyrodrift.kernels.
@@ -334,6 +372,8 @@ def rbf_batch_errors(sqdist, y, gammas, sigmas, kind: str = "train") -> np.ndarr
         ``"train"``: ``y_i - f(x_i)`` on the training points (``= alpha_i / gamma``); the paper's fitness
         (Yu et al. 2013, eq. 16) is ``mean(abs(errors), axis=1)``. ``"loo"``: the exact leave-one-out
         residuals ``y_i - f_(-i)(x_i)`` (see :func:`lssvr_loo_residuals`).
+    weights : array_like, shape (n,), optional
+        Sample weights of a weighted LS-SVM (module docstring): ``H = K + diag(1/(gamma w))``.
 
     Returns
     -------
@@ -400,26 +440,27 @@ def rbf_batch_errors(sqdist, y, gammas, sigmas, kind: str = "train") -> np.ndarr
         if bad.size:
             raise ValueError(f"{name}[{bad[0]}] must be a finite number > 0, got {float(values[bad[0]])!r}")
 
+    w = check_sample_weight(weights, n)
     if n <= _STACKED_MAX_N:
         try:
-            return _rbf_batch_stacked(D, y, g, sg, kind)
+            return _rbf_batch_stacked(D, y, g, sg, kind, w)
         except np.linalg.LinAlgError:
             pass  # a non-PD candidate spoils the whole stack: redo candidate by candidate
-    return _rbf_batch_loop(D, y, g, sg, kind)
+    return _rbf_batch_loop(D, y, g, sg, kind, w)
 
 
 #: Largest n for which :func:`rbf_batch_errors` stacks the candidates (see its Notes).
 _STACKED_MAX_N = 32
 
 
-def _rbf_batch_stacked(D, y, g, sg, kind):
+def _rbf_batch_stacked(D, y, g, sg, kind, w=None):
     """All candidates at once: ``np.linalg.cholesky`` and a triangular inverse on an (m, n, n) stack.
 
     Raises ``LinAlgError`` if any candidate is not positive definite.
     """
     n = D.shape[0]
     H = rbf_from_squared_distances(D, sg[:, None, None])
-    H[:, np.arange(n), np.arange(n)] += 1.0 / g[:, None]
+    H[:, np.arange(n), np.arange(n)] += 1.0 / g[:, None] if w is None else 1.0 / (g[:, None] * w[None, :])
     anorm = np.abs(H).sum(axis=1).max(axis=1)  # ||H||_1 (H symmetric)
     L = np.linalg.cholesky(H)  # lower, H = L L'
     # No stacked triangular inverse in numpy: inv() of the triangular factor (LU, O(n^3) like dtrtri
@@ -431,7 +472,7 @@ def _rbf_batch_stacked(D, y, g, sg, kind):
     s = p.sum(axis=1, keepdims=True)
     alpha = q - (q.sum(axis=1, keepdims=True) / s) * p
     if kind == "train":
-        out = alpha / g[:, None]
+        out = alpha / g[:, None] if w is None else alpha / (g[:, None] * w[None, :])
     else:
         hinv_diag = np.einsum("mki,mki->mi", Linv, Linv)
         out = alpha / (hinv_diag - p * p / s)
@@ -442,7 +483,7 @@ def _rbf_batch_stacked(D, y, g, sg, kind):
     return out
 
 
-def _rbf_batch_loop(D, y, g, sg, kind):
+def _rbf_batch_loop(D, y, g, sg, kind, w=None):
     """Candidate by candidate with LAPACK ``dpotrf``/``dpotrs``/``dtrtri``; non-PD rows are +inf."""
     n = D.shape[0]
     out = np.empty((g.size, n))
@@ -450,7 +491,7 @@ def _rbf_batch_loop(D, y, g, sg, kind):
     diag = np.arange(n) * (n + 1)
     for j in range(g.size):
         H = rbf_from_squared_distances(D, sg[j])
-        H.flat[diag] += 1.0 / g[j]
+        H.flat[diag] += 1.0 / g[j] if w is None else 1.0 / (g[j] * w)
         anorm = _one_norm(H)
         U = _cholesky_upper(H)
         if U is None or not _condition_number(U, anorm) < COND_REFUSE:  # as LSSVR.fit refuses it
@@ -461,7 +502,7 @@ def _rbf_batch_loop(D, y, g, sg, kind):
         s = p.sum()
         alpha = q - (q.sum() / s) * p
         if kind == "train":
-            out[j] = alpha / g[j]
+            out[j] = alpha / g[j] if w is None else alpha / (g[j] * w)
         else:
             out[j] = _loo_from_factor(U, alpha, p, s)
     return out
@@ -562,8 +603,8 @@ class LSSVR(RegressorMixin, BaseEstimator):
     def _describe(self) -> str:
         return f"gamma={self.gamma!r}, sigma={self.sigma!r}, kernel={self.kernel!r}"
 
-    def fit(self, X, y):
-        """Fit the LSSVM.
+    def fit(self, X, y, sample_weight=None):
+        """Fit the LSSVM (weighted with ``sample_weight``: ``H = K + diag(1/(gamma w))``, module docstring).
 
         Parameters
         ----------
@@ -571,6 +612,8 @@ class LSSVR(RegressorMixin, BaseEstimator):
             Training inputs (scaled by the caller), n_samples >= 2, finite.
         y : array_like, shape (n_samples,) or (n_samples, n_targets)
             Targets, finite (deg/h for drift targets).
+        sample_weight : array_like, shape (n_samples,), optional
+            Per-sample weights > 0 (regularisation ``C_i = gamma w_i``); None: all 1.
 
         Returns
         -------
@@ -597,6 +640,9 @@ class LSSVR(RegressorMixin, BaseEstimator):
             self, X, y, dtype=np.float64, multi_output=True, y_numeric=True, ensure_min_samples=2, copy=True
         )  # X_fit_ must not alias the caller's X
         y = np.asarray(y, dtype=np.float64)
+        weights = check_sample_weight(sample_weight, X.shape[0], allow_zero=True)
+        if weights is not None and np.any(weights == 0):
+            return self._fit_without_zero_weights(X, y, weights)
         n = X.shape[0]
         check_matrix_memory(n, n, _FIT_MATRICES, "fitting the LSSVR", unit="samples")
         K = self._kernel(X)
@@ -605,7 +651,7 @@ class LSSVR(RegressorMixin, BaseEstimator):
                 f"LSSVR: the kernel matrix is not finite for {self._describe()} (overflow); scale the inputs "
                 "or change sigma"
             )
-        H = _h_matrix(K, gamma, copy=False)  # K is ours: overwrite it
+        H = _h_matrix(K, gamma, copy=False, weights=weights)  # K is ours: overwrite it
         anorm = _one_norm(H)
         U = _cholesky_upper(H)
         if U is None:
@@ -618,11 +664,15 @@ class LSSVR(RegressorMixin, BaseEstimator):
         check_condition(cond, f"for {self._describe()}")
         alpha, intercept, _, _ = _solve_factored(U, y)
         p = _cho_solve(U, np.ones(n))
-        loo = _loo_from_factor(U, alpha, p, p.sum())
+        denom = _inverse_diagonal(U) - p * p / p.sum()
+        loo = alpha / (denom if alpha.ndim == 1 else denom[:, None])
         if not (np.all(np.isfinite(alpha)) and np.all(np.isfinite(intercept)) and np.all(np.isfinite(loo))):
             raise NonFiniteResultError(f"LSSVR: the solution is not finite for {self._describe()}")
         self.alpha_, self.intercept_ = alpha, intercept
         self.loo_residuals_ = loo
+        self.loo_scale_ = 1.0 / np.sqrt(np.maximum(denom, np.finfo(float).tiny))
+        self.factor_ = U
+        self.sample_weight_ = np.ones(n) if weights is None else weights
         self.condition_number_ = cond
         self.X_fit_ = X
         return self
@@ -658,6 +708,40 @@ class LSSVR(RegressorMixin, BaseEstimator):
                 "outside the training data?)"
             )
         return out
+
+    def _fit_without_zero_weights(self, X, y, weights):
+        """A zero weight leaves its sample out: fit on the others; the left-out samples' "leave-one-out"
+        residuals and scales are those of plain predictions (they were never in)."""
+        keep = weights > 0
+        if keep.sum() < 2:
+            raise ValueError("the LSSVM needs at least 2 samples with a non-zero weight")
+        self.fit(X[keep], y[keep], sample_weight=weights[keep])
+        loo = np.empty_like(y)
+        loo[keep] = self.loo_residuals_
+        loo[~keep] = y[~keep] - self.predict(X[~keep])
+        scale = np.empty(len(y))
+        scale[keep] = self.loo_scale_
+        scale[~keep] = self.predictive_scale(X[~keep])
+        self.loo_residuals_, self.loo_scale_, self.sample_weight_ = loo, scale, weights
+        return self
+
+    def predictive_scale(self, X) -> np.ndarray:
+        """``v(x)``, the predictive standard deviation of a new observation (weight 1) at each row of ``X`` in
+        units of the prior (kernel) standard deviation (module docstring); dimensionless, >= 1/sqrt(gamma).
+
+        Multiply by a scale fitted on the leave-one-out residuals (``r_i / loo_scale_[i]``) to get deg/h.
+        """
+        check_is_fitted(self, ("alpha_", "factor_", "X_fit_"))
+        X = _validate_data(self, X, dtype=np.float64, reset=False)
+        check_matrix_memory(X.shape[0], self.X_fit_.shape[0], 3, "predicting with the LSSVR", unit="samples")
+        k = self._kernel(self.X_fit_, X)  # (n_train, m)
+        kxx = np.array([float(self._kernel(x[None, :])[0, 0]) for x in X]) if self.kernel != "rbf" else 1.0
+        U = self.factor_
+        hk = _cho_solve(U, k)
+        p = _cho_solve(U, np.ones(U.shape[0]))
+        s = p.sum()
+        var = kxx - np.einsum("ij,ij->j", k, hk) + (1.0 - p @ k) ** 2 / s
+        return np.sqrt(np.maximum(var, 0.0) + 1.0 / float(self.gamma))
 
     def loo_residuals(self) -> np.ndarray:
         """A copy of :attr:`loo_residuals_`, the exact leave-one-out residuals of the fitted model."""

@@ -13,6 +13,24 @@ so ``clone``, ``cross_val_score`` and ``GridSearchCV`` work on the whole model (
 ``encode__encoding`` or ``lssvr__objective``). :func:`make_drift_model` builds one; :func:`fit_drift_model` is
 what ``gyrodrift fit`` and ``gyrodrift reproduce`` call (build, fit, with a progress bar). Predictions are axial
 drifts in deg/h, the total constant to subtract from the z-gyro output (measured - estimate).
+
+Three parameters of the model itself (not of a step):
+
+* ``target``: ``"drift"`` (the LSSVR learns the drift) or ``"residual"`` (hybrid: the LSSVR learns the label
+  minus a physics estimate, and the prediction is physics + learned correction, so the learner models only
+  what physics cannot, e.g. how the drift over the next 72 h follows temperature);
+* ``physics_column``: the physics estimate of the hybrid, ``"drift_inversion_deg_h"`` (the 12 h inversion,
+  computed from the table's latitudes) or a run-table column such as ``"drift_curvefit_deg_h"`` or
+  ``"drift_smoother_deg_h"`` (``gyrodrift.choices.PHYSICS_COLUMNS``);
+* ``label_weighting``: ``"auto"`` weights the runs by their label 1-sigma when the table has a
+  ``drift_std_deg_h`` column (weighted LS-SVM, ``C_i = gamma w_i``, ``w_i = mean(s^2) / s_i^2``), ``"none"``
+  never does.
+
+Uncertainty (``predict_interval``, ``check_inputs``): the interval is a normalised jackknife, its half-width
+``q v(x)`` where ``v`` is the LSSVR's Gaussian-process predictive scale (``LSSVR.predictive_scale``, larger
+away from the training inputs) and ``q`` the conformal quantile of the leave-one-out residuals divided by their
+own leave-one-out scale. ``check_inputs`` flags runs whose inputs lie outside the training runs' range, per
+input and jointly (Mahalanobis distance of the scaled inputs beyond the largest among the training runs).
 """
 
 from __future__ import annotations
@@ -22,6 +40,7 @@ import json
 import math
 import warnings
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -30,7 +49,8 @@ from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import MinMaxScaler, StandardScaler
 from sklearn.utils.validation import check_is_fitted
 
-from gyrodrift.choices import SCALINGS
+from gyrodrift.baselines import physics_inversion
+from gyrodrift.choices import PHYSICS_COLUMNS, SCALINGS, TARGETS
 from gyrodrift.encodings import encode, feature_names
 from gyrodrift.errors import InputError, OptionError
 from gyrodrift.lssvr import LSSVR, _validate_data, condition_warning_message
@@ -48,6 +68,9 @@ from gyrodrift.tuning import (
 
 __all__ = [
     "DriftModel",
+    "InputCheck",
+    "label_weights",
+    "physics_estimate",
     "RunEncoder",
     "TunedLSSVR",
     "fit_drift_model",
@@ -82,16 +105,48 @@ def scaling_name(scaler) -> str:
 
 
 def training_digest(runs: RunTable) -> str:
-    """SHA-256 of the training runs' values (run, latitudes, temperatures, drift), order included."""
-    canon = json.dumps(
-        [
-            [str(r), repr(float(a)), repr(float(b)), repr(float(c)), repr(float(d)), repr(float(e))]
-            for r, a, b, c, d, e in zip(
-                runs.run, runs.lat_deg, runs.lat0_deg, runs.temp_min_c, runs.temp_max_c, runs.drift_deg_h, strict=False
-            )
-        ]
-    )
-    return hashlib.sha256(canon.encode()).hexdigest()
+    """SHA-256 of the training runs' values (run, latitudes, temperatures, drift, then any optional columns
+    by name), order included. A table without optional columns has the digest of gyrodrift 0.2."""
+    rows = [
+        [str(r), repr(float(a)), repr(float(b)), repr(float(c)), repr(float(d)), repr(float(e))]
+        for r, a, b, c, d, e in zip(
+            runs.run, runs.lat_deg, runs.lat0_deg, runs.temp_min_c, runs.temp_max_c, runs.drift_deg_h, strict=False
+        )
+    ]
+    for name, values in runs.extra.items():
+        for row, v in zip(rows, values, strict=True):
+            row.append(f"{name}={float(v)!r}")
+    return hashlib.sha256(json.dumps(rows).encode()).hexdigest()
+
+
+def label_weights(std_deg_h) -> np.ndarray:
+    """Weights of runs whose labels have 1-sigma ``std_deg_h`` [deg/h]: ``w_i = mean(s^2) / s_i^2``.
+
+    The weighted LS-SVM's per-run regularisation is then ``C_i = gamma w_i = gamma / (s_i^2 / mean(s^2))``:
+    a run twice as uncertain as the average counts a quarter, and equal sigmas give the unweighted model."""
+    s2 = np.asarray(std_deg_h, float) ** 2
+    if s2.size == 0 or not np.all(np.isfinite(s2)) or not np.all(s2 > 0):
+        raise InputError("label 1-sigmas (drift_std_deg_h) must be finite and > 0 for every training run")
+    return s2.mean() / s2
+
+
+def physics_estimate(runs: RunTable, column: str = "drift_inversion_deg_h") -> np.ndarray:
+    """The physics estimate of each run's drift [deg/h] named by ``column`` (``PHYSICS_COLUMNS``).
+
+    ``"drift_inversion_deg_h"`` is the 12 h inversion of the latitude error (`physics_inversion`); any other
+    name is an optional run-table column, which every run must have (else an ``InputError`` naming it)."""
+    if column not in PHYSICS_COLUMNS:
+        raise OptionError(f"unknown physics column {column!r}; expected one of {', '.join(PHYSICS_COLUMNS)}")
+    if column == "drift_inversion_deg_h":
+        return physics_inversion(runs, t_h=12.0)
+    values = runs.column(column)
+    if not np.all(np.isfinite(values)):
+        missing = [str(r) for r, v in zip(runs.run, values, strict=True) if not np.isfinite(v)]
+        raise InputError(
+            f"{runs.source}: column {column} (the hybrid model's physics estimate) is missing for run(s) "
+            f"{', '.join(missing[:5])}{' ...' if len(missing) > 5 else ''}"
+        )
+    return np.asarray(values, float)
 
 
 def _check_coverage(coverage) -> float:
@@ -242,11 +297,12 @@ class TunedLSSVR(RegressorMixin, BaseEstimator):
         self.random_state = random_state
         self.callback = callback
 
-    def fit(self, X, y, *, tuning: TuningResult | None = None) -> TunedLSSVR:
+    def fit(self, X, y, *, tuning: TuningResult | None = None, sample_weight=None) -> TunedLSSVR:
         """Tune (unless fixed) and fit.
 
         ``tuning``, a :class:`~gyrodrift.tuning.TuningResult` of an earlier fit on the same data (a model
         file's record), skips the search and uses its gamma and sigma: how a saved model is rebuilt.
+        ``sample_weight`` (> 0 per sample) weights the LS-SVM and the tuning fitness (``gyrodrift.lssvr``).
         """
         X, y = _validate_data(self, X, y, dtype=np.float64, y_numeric=True, ensure_min_samples=2)
         if (self.gamma is None) != (self.sigma is None):
@@ -273,6 +329,7 @@ class TunedLSSVR(RegressorMixin, BaseEstimator):
                     n_folds=self.n_folds,
                     rng=self.random_state,
                     callback=self.callback,
+                    sample_weight=sample_weight,
                 )
             gamma, sigma = tuning.gamma, tuning.sigma
             on_bound = on_search_bound(gamma, sigma, check_bounds(tuning.bounds))
@@ -280,7 +337,7 @@ class TunedLSSVR(RegressorMixin, BaseEstimator):
                 warnings.warn(
                     search_bound_message(on_bound, gamma, sigma, tuning.bounds), SearchBoundWarning, stacklevel=2
                 )
-        self.lssvr_ = LSSVR(gamma=gamma, sigma=sigma).fit(X, y)
+        self.lssvr_ = LSSVR(gamma=gamma, sigma=sigma).fit(X, y, sample_weight=sample_weight)
         self.gamma_, self.sigma_ = float(gamma), float(sigma)
         self.tuning_ = tuning
         self.on_search_bound_ = on_bound
@@ -311,17 +368,88 @@ class TunedLSSVR(RegressorMixin, BaseEstimator):
 # --------------------------------------------------------------------------------------------------
 
 
+@dataclass(frozen=True)
+class InputCheck:
+    """Where runs lie relative to a model's training runs (:meth:`DriftModel.check_inputs`).
+
+    Attributes
+    ----------
+    outside : ndarray of bool, shape (n_runs,)
+        True for a run outside the training range (any input, or jointly).
+    outside_inputs : list of tuple of str
+        Per run, the names of the inputs outside the training runs' [min, max].
+    mahalanobis : ndarray, shape (n_runs,)
+        Mahalanobis distance of the scaled inputs from the training runs' mean (their covariance).
+    mahalanobis_limit : float
+        The largest such distance among the training runs: beyond it a run is outside jointly.
+    """
+
+    outside: np.ndarray
+    outside_inputs: list
+    mahalanobis: np.ndarray
+    mahalanobis_limit: float
+
+    def messages(self, runs: RunTable) -> list[str]:
+        """One line per run outside the training range (empty when none is)."""
+        out = []
+        for i in np.flatnonzero(self.outside):
+            what = ", ".join(self.outside_inputs[i]) if self.outside_inputs[i] else "no single input"
+            out.append(
+                f"run {runs.run[i]}: outside the training runs' range ({what}; Mahalanobis distance "
+                f"{self.mahalanobis[i]:.2f}, training maximum {self.mahalanobis_limit:.2f}): an extrapolation"
+            )
+        return out
+
+
 class DriftModel(Pipeline):
     """A drift model: ``encode`` (RunEncoder) -> ``scale`` -> ``lssvr`` (TunedLSSVR), a scikit-learn Pipeline.
 
     Build it with :func:`make_drift_model`. ``fit(runs)`` takes the targets from ``runs.drift_deg_h`` when
     ``y`` is not given. The properties below read the steps; ``training_`` (set by ``fit``) describes the
-    training runs: ``n_runs``, ``sha256`` (``training_digest``), ``source``, and ``runs`` (the table itself,
-    kept so that a model file can hold its training data).
+    training runs: ``n_runs``, ``sha256`` (``training_digest``), ``source``, ``weighted`` (whether the label
+    1-sigmas weighted the fit), and ``runs`` (the table itself, kept so that a model file can hold its
+    training data). ``target``, ``physics_column`` and ``label_weighting``: see the module docstring.
     """
 
+    def __init__(
+        self,
+        steps,
+        *,
+        transform_input=None,
+        memory=None,
+        verbose=False,
+        target: str = "drift",
+        physics_column: str = "drift_inversion_deg_h",
+        label_weighting: str = "auto",
+    ) -> None:
+        super().__init__(steps, transform_input=transform_input, memory=memory, verbose=verbose)
+        self.target = target
+        self.physics_column = physics_column
+        self.label_weighting = label_weighting
+
+    def _check_options(self) -> None:
+        if self.target not in TARGETS:
+            raise OptionError(f"unknown target {self.target!r}; expected one of {', '.join(TARGETS)}")
+        if self.physics_column not in PHYSICS_COLUMNS:
+            raise OptionError(
+                f"unknown physics column {self.physics_column!r}; expected one of {', '.join(PHYSICS_COLUMNS)}"
+            )
+        if self.label_weighting not in ("auto", "none"):
+            raise OptionError(f"unknown label weighting {self.label_weighting!r}; expected auto or none")
+
+    def _base(self, runs: RunTable) -> np.ndarray:
+        """What the LSSVR's output is added to [deg/h]: the physics estimate (residual target) or 0."""
+        if self.target == "residual":
+            return physics_estimate(runs, self.physics_column)
+        return np.zeros(len(runs))
+
     def fit(self, X, y=None, **params) -> DriftModel:
-        """Fit on runs (RunTable or structured array) and drifts ``y`` [deg/h] (default: the runs' own)."""
+        """Fit on runs (RunTable or structured array) and drifts ``y`` [deg/h] (default: the runs' own).
+
+        With ``label_weighting="auto"`` and a ``drift_std_deg_h`` value for every run the LS-SVM is weighted
+        by ``label_weights``; with ``target="residual"`` it is fitted on ``y`` minus the physics estimate.
+        """
+        self._check_options()
         runs = as_run_table(X)
         if y is None:
             if not runs.has_truth:
@@ -331,14 +459,38 @@ class DriftModel(Pipeline):
             trained = _with_drift(runs, y)
         if len(runs) < 3:
             raise InputError(f"{runs.source}: need at least 3 training runs, got {len(runs)}")
-        super().fit(X, trained.drift_deg_h, **params)
+        weighted = self.label_weighting == "auto" and trained.has_column("drift_std_deg_h")
+        if weighted:
+            params = {**params, "lssvr__sample_weight": label_weights(trained.column("drift_std_deg_h"))}
+        super().fit(runs, trained.drift_deg_h - self._base(trained), **params)
         self.training_: dict[str, Any] = {
             "n_runs": len(trained),
             "sha256": training_digest(trained),
             "source": trained.source,
+            "weighted": bool(weighted),
             "runs": trained,
         }
+        Z = self[:-1].transform(runs)
+        encoded = self.named_steps["encode"].transform(runs)
+        self.input_min_, self.input_max_ = encoded.min(axis=0), encoded.max(axis=0)
+        self.input_mean_ = Z.mean(axis=0)
+        cov = np.atleast_2d(np.cov(Z, rowvar=False))
+        self.input_precision_ = np.linalg.pinv(cov)
+        self.mahalanobis_limit_ = float(self._mahalanobis(Z).max())
         return self
+
+    def predict(self, X, **params) -> np.ndarray:
+        """Identified drift [deg/h] of each run: the LSSVR's output (plus the physics estimate for a hybrid)."""
+        runs = as_run_table(X)
+        return super().predict(runs, **params) + self._base(runs)
+
+    def score(self, X, y=None, sample_weight=None, **params) -> float:
+        """R^2 of the identified drifts (``predict``) against ``y`` (default: the runs' drifts)."""
+        from sklearn.metrics import r2_score
+
+        runs = as_run_table(X)
+        y = runs.drift_deg_h if y is None else y
+        return float(r2_score(y, self.predict(runs), sample_weight=sample_weight))
 
     @property
     def encoding(self) -> str:
@@ -362,7 +514,7 @@ class DriftModel(Pipeline):
 
     @property
     def training(self) -> dict:
-        """``n_runs``, ``sha256`` and ``source`` of the training runs."""
+        """``n_runs``, ``sha256``, ``source`` and ``weighted`` of the training runs."""
         check_is_fitted(self, "training_")
         return {k: v for k, v in self.training_.items() if k != "runs"}
 
@@ -374,7 +526,9 @@ class DriftModel(Pipeline):
     def loo_residuals_deg_h(self) -> np.ndarray:
         """Closed-form leave-one-out residuals on the training runs [deg/h] (true minus left-out prediction).
 
-        The scaler is not refitted per left-out run; with 20+ runs its effect on the residuals is small.
+        The scaler is not refitted per left-out run; with 20+ runs its effect on the residuals is small. For a
+        hybrid the physics estimate of a run does not depend on the others, so these are the residuals of the
+        drift too.
         """
         return self.named_steps["lssvr"].loo_residuals_
 
@@ -386,17 +540,59 @@ class DriftModel(Pipeline):
         """What fitting warned about: tuned values on the edge of their search box, ill-conditioning."""
         return self.named_steps["lssvr"].fit_warnings()
 
-    def predict_interval(self, runs, coverage: float = 0.9) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Identified drift and its jackknife interval [deg/h]: ``(pred, lo, hi)``.
+    def normalised_loo_residuals(self) -> np.ndarray:
+        """Leave-one-out residuals divided by their own predictive scale (``LSSVR.loo_scale_``) [deg/h]."""
+        lssvr = self.lssvr
+        return np.asarray(lssvr.loo_residuals_, float) / lssvr.loo_scale_
 
-        An empirical interval from the model's leave-one-out residuals (``jackknife_half_width``), valid for
-        runs exchangeable with the training runs; it is not a Bayesian posterior (the LSSVR has none). When
-        gamma and sigma were tuned on the LOO error, the same residuals were minimised by the tuning, so the
-        interval is slightly optimistic (tests/test_intervals.py measures about nominal coverage with 40 runs).
+    def predict_std_scale(self, runs) -> np.ndarray:
+        """The LSSVR's predictive scale ``v(x)`` of each run (dimensionless; ``LSSVR.predictive_scale``)."""
+        return self.lssvr.predictive_scale(self[:-1].transform(as_run_table(runs)))
+
+    def predict_interval(self, runs, coverage: float = 0.9) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Identified drift and its interval [deg/h]: ``(pred, lo, hi)``.
+
+        A normalised jackknife interval: half-width ``q v(x)``, with ``v`` the LSSVR's Gaussian-process
+        predictive scale at the run's inputs (it grows away from the training inputs) and ``q`` the
+        ``jackknife_half_width`` of the leave-one-out residuals divided by their own leave-one-out scale. For
+        runs exchangeable with the training runs it covers about ``coverage`` of them (tests/test_intervals.py);
+        it is not a Bayesian posterior. When gamma and sigma were tuned on the LOO error, the same residuals
+        were minimised by the tuning, so it is slightly optimistic.
         """
-        half = jackknife_half_width(self.loo_residuals(), coverage)
+        q = jackknife_half_width(self.normalised_loo_residuals(), coverage)
+        runs = as_run_table(runs)
         pred = self.predict(runs)
+        half = q * self.predict_std_scale(runs) if math.isfinite(q) else np.full(len(runs), math.inf)
         return pred, pred - half, pred + half
+
+    def _mahalanobis(self, Z: np.ndarray) -> np.ndarray:
+        d = Z - self.input_mean_
+        return np.sqrt(np.maximum(np.einsum("ij,jk,ik->i", d, self.input_precision_, d), 0.0))
+
+    def check_inputs(self, runs, *, rtol: float = 1e-9) -> InputCheck:
+        """Flag runs whose inputs lie outside the training runs' range, per input ([min, max] of the encoded
+        inputs, with a relative tolerance ``rtol`` of the range) and jointly (Mahalanobis distance of the
+        scaled inputs beyond the largest among the training runs)."""
+        check_is_fitted(self, "input_min_")
+        runs = as_run_table(runs)
+        encoded = self.named_steps["encode"].transform(runs)
+        slack = rtol * np.maximum(self.input_max_ - self.input_min_, np.abs(self.input_max_))
+        low = encoded < self.input_min_ - slack
+        high = encoded > self.input_max_ + slack
+        names = self.feature_names
+        per = [
+            tuple(
+                f"{names[j]} {'below' if low[i, j] else 'above'} the training range"
+                for j in np.flatnonzero(low[i] | high[i])
+            )
+            for i in range(len(runs))
+        ]
+        maha = self._mahalanobis(self[:-1].transform(runs))
+        joint = maha > self.mahalanobis_limit_ * (1.0 + 1e-9)
+        outside = np.array([bool(p) for p in per]) | joint
+        return InputCheck(
+            outside=outside, outside_inputs=per, mahalanobis=maha, mahalanobis_limit=self.mahalanobis_limit_
+        )
 
 
 def _with_drift(runs: RunTable, y) -> RunTable:
@@ -404,34 +600,50 @@ def _with_drift(runs: RunTable, y) -> RunTable:
     y = np.asarray(y, float)
     if y.shape != (len(runs),):
         raise InputError(f"{runs.source}: y has shape {y.shape}, expected ({len(runs)},), one drift per run")
-    return RunTable(
-        run=runs.run,
-        lat_deg=runs.lat_deg,
-        lat0_deg=runs.lat0_deg,
-        temp_min_c=runs.temp_min_c,
-        temp_max_c=runs.temp_max_c,
-        drift_deg_h=y,
-        split=runs.split,
-        source=runs.source,
-    )
+    return runs.replace(drift_deg_h=y)
 
 
 def make_drift_model(
     *,
     encoding: str = "temp_range",
     scaling: str = "standard",
+    target: str = "drift",
+    physics_column: str = "drift_inversion_deg_h",
+    label_weighting: str = "auto",
     **lssvr_params: Any,
 ) -> DriftModel:
-    """An unfitted :class:`DriftModel`: ``RunEncoder(encoding)``, the scaler, ``TunedLSSVR(**lssvr_params)``."""
+    """An unfitted :class:`DriftModel`: ``RunEncoder(encoding)``, the scaler, ``TunedLSSVR(**lssvr_params)``;
+    ``target``, ``physics_column`` and ``label_weighting`` as in the module docstring."""
     feature_names(encoding)
     TunedLSSVR(**lssvr_params)  # unknown names fail here, with scikit-learn's message
-    return DriftModel(
+    model = DriftModel(
         [
             ("encode", RunEncoder(encoding=encoding)),
             ("scale", make_scaler(scaling)),
             ("lssvr", TunedLSSVR(**lssvr_params)),
-        ]
+        ],
+        target=target,
+        physics_column=physics_column,
+        label_weighting=label_weighting,
     )
+    model._check_options()
+    return model
+
+
+DEFAULT_MAX_LABEL_STD_DEG_H = 1e-3
+"""Training runs whose label 1-sigma (``drift_std_deg_h``) exceeds this [deg/h] are left out by
+:func:`select_labelled_runs`: twice the 1 nmi / 72 h budget at mid latitudes (~4.7e-4 deg/h at 40 deg), such a
+label says little about the drift (runs near the equator or a pole)."""
+
+
+def select_labelled_runs(runs: RunTable, max_label_std_deg_h: float | None = DEFAULT_MAX_LABEL_STD_DEG_H):
+    """``(kept, left_out)``: the runs whose label 1-sigma is at most ``max_label_std_deg_h`` [deg/h] (all of
+    them without a ``drift_std_deg_h`` column or with None), and the names of the others."""
+    if max_label_std_deg_h is None or "drift_std_deg_h" not in runs.extra:
+        return runs, []
+    std = runs.column("drift_std_deg_h")
+    bad = std > max_label_std_deg_h  # NaN (unknown) is kept; infinite (unlabelable) is left out
+    return runs.select(~bad), [str(r) for r in runs.run[bad]]
 
 
 def _tick(bar, callback, intermediate_result):
@@ -455,8 +667,16 @@ def fit_drift_model(
     rng=None,
     quiet: bool = True,
     callback=None,
+    target: str = "drift",
+    physics_column: str = "drift_inversion_deg_h",
+    label_weighting: str = "auto",
+    max_label_std_deg_h: float | None = None,
 ) -> DriftModel:
     """Build and fit a drift model on runs with known drift (``make_drift_model`` then ``fit``).
+
+    ``max_label_std_deg_h``: leave out runs whose label 1-sigma exceeds it (``select_labelled_runs``; the
+    model's ``training_["left_out"]`` names them). ``target``, ``physics_column``, ``label_weighting``: the
+    module docstring.
 
     With ``gamma`` and ``sigma`` both given no tuning is done; otherwise they are tuned by ``method``
     (``cpso``, ``pso`` or ``grid``) on ``objective`` (``loo_mae``, ``train_mae``, ``kfold_mae``), with a
@@ -466,6 +686,7 @@ def fit_drift_model(
     """
     if not train.has_truth:
         raise InputError(f"{train.source}: every training run needs drift_deg_h")
+    train, left_out = select_labelled_runs(train, max_label_std_deg_h)
     if len(train) < 3:
         raise InputError(f"{train.source}: need at least 3 training runs, got {len(train)}")
     if (gamma is None) != (sigma is None):
@@ -473,6 +694,9 @@ def fit_drift_model(
     model = make_drift_model(
         encoding=encoding,
         scaling=scaling,
+        target=target,
+        physics_column=physics_column,
+        label_weighting=label_weighting,
         objective=objective,
         method=method,
         gamma=gamma,
@@ -492,4 +716,5 @@ def fit_drift_model(
                 model.set_params(lssvr__callback=None)
     else:
         model.fit(train)
+    model.training_["left_out"] = left_out
     return model

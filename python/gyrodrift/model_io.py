@@ -1,9 +1,10 @@
 """Model files: versioned JSON holding a drift model's parameters and its training runs. Never pickle.
 
-Layout (``schema_version`` 2)::
+Layout (``schema_version`` 3)::
 
-    {"format": "gyrodrift-drift-model", "schema_version": 2, "gyrodrift_version": "...",
-     "encoding": "temp_range", "scaling": "standard", "feature_names": [...],
+    {"format": "gyrodrift-drift-model", "schema_version": 3, "gyrodrift_version": "...",
+     "encoding": "physics", "scaling": "standard", "feature_names": [...],
+     "target": "drift" or "residual", "physics_column": "drift_inversion_deg_h", "label_weighting": "auto",
      "lssvr_params": {"gamma": null, "sigma": null, "objective": "loo_mae", "method": "cpso", "bounds": [...],
                       "n_particles": 30, "max_iter": 100, "w": 0.75, "c1": 2.0, "c2": 2.0, "chaos_steps": 10,
                       "grid_size": 40, "n_folds": 5, "random_state": 0 or null},
@@ -11,7 +12,12 @@ Layout (``schema_version`` 2)::
      "fitted": {"gamma": ..., "sigma": ..., "intercept_deg_h": ..., "condition_number": ...,
                 "on_search_bound": [...], "loo_residuals_deg_h": [...]},
      "warnings": ["...", ...],
-     "training": {"n_runs": ..., "sha256": ..., "source": ..., "runs": [{"run": ..., "lat_deg": ..., ...}, ...]}}
+     "training": {"n_runs": ..., "sha256": ..., "source": ..., "weighted": true/false, "left_out": [...],
+                  "runs": [{"run": ..., "lat_deg": ..., ..., "drift_std_deg_h": ...}, ...]}}
+
+``weighted`` says whether the label 1-sigmas (``drift_std_deg_h``) weighted the LS-SVM; ``left_out`` names the
+runs ``fit`` left out because their label 1-sigma was too large. Schema 2 files (before the hybrid model and
+weighted labels) still load: they are ``target = "drift"`` models with unweighted labels.
 
 Loading rebuilds the model with :func:`gyrodrift.model.make_drift_model` from the parameters and fits it on the
 training runs with the recorded tuning (no search is repeated); nothing is set into fitted scikit-learn
@@ -35,7 +41,7 @@ import numpy as np
 
 from gyrodrift import __version__
 from gyrodrift.atomic import atomic_write_json, recognise_json_format
-from gyrodrift.choices import ENCODINGS, METHODS, OBJECTIVES, SCALINGS
+from gyrodrift.choices import ENCODINGS, METHODS, OBJECTIVES, PHYSICS_COLUMNS, SCALINGS, TARGETS
 from gyrodrift.errors import GyrodriftError, InputError
 from gyrodrift.lssvr import IllConditionedWarning
 from gyrodrift.model import DriftModel, make_drift_model, training_digest
@@ -43,7 +49,8 @@ from gyrodrift.runs import RunTable, RunTableError
 from gyrodrift.tuning import SearchBoundWarning, TuningResult
 
 FORMAT = "gyrodrift-drift-model"
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
+READABLE_SCHEMAS = (2, 3)
 
 #: The TunedLSSVR parameters a model file keeps (``callback`` is not data).
 _PARAMS = (
@@ -116,6 +123,9 @@ def model_to_dict(model: DriftModel) -> dict:
         "encoding": model.encoding,
         "scaling": model.scaling,
         "feature_names": list(model.feature_names),
+        "target": model.target,
+        "physics_column": model.physics_column,
+        "label_weighting": model.label_weighting,
         "lssvr_params": params,
         "tuning": model.tuning.to_dict() if model.tuning is not None else None,
         "fitted": {
@@ -131,6 +141,8 @@ def model_to_dict(model: DriftModel) -> dict:
             "n_runs": int(training["n_runs"]),
             "sha256": training["sha256"],
             "source": training["source"],
+            "weighted": bool(training.get("weighted", False)),
+            "left_out": [str(r) for r in training.get("left_out", [])],
             "runs": runs.records(),
         },
     }
@@ -266,11 +278,21 @@ def model_from_dict(doc: dict, where: str = "<model>") -> DriftModel:
             f"runs), which this version ({__version__}) no longer reads; refit it with `gyrodrift fit` on "
             f"{source} (the same --encoding, --scaling and --seed give the same model)"
         )
-    if version != SCHEMA_VERSION:
+    if isinstance(version, bool) or version not in READABLE_SCHEMAS:
         raise ModelFileError(
             f"{where}: schema_version {version!r} is not supported by gyrodrift {__version__} "
-            f"(expected {SCHEMA_VERSION})"
+            f"(expected one of {', '.join(map(str, READABLE_SCHEMAS))})"
         )
+    hybrid = {"target": "drift", "physics_column": "drift_inversion_deg_h", "label_weighting": "none"}
+    if version >= 3:
+        for key, allowed in (
+            ("target", TARGETS),
+            ("physics_column", PHYSICS_COLUMNS),
+            ("label_weighting", ("auto", "none")),
+        ):
+            hybrid[key] = _need(doc, key, str, where)
+            if hybrid[key] not in allowed:
+                raise ModelFileError(f"{where}: unknown {key} {hybrid[key]!r}; expected one of {', '.join(allowed)}")
     encoding = _need(doc, "encoding", str, where)
     if encoding not in ENCODINGS:
         raise ModelFileError(f"{where}: unknown encoding {encoding!r}")
@@ -289,25 +311,20 @@ def model_from_dict(doc: dict, where: str = "<model>") -> DriftModel:
         runs = RunTable.from_records(_check_runs(_need(tdoc, "runs", list, tw), tw), source=f"{where} [training.runs]")
     except RunTableError as exc:
         raise ModelFileError(str(exc)) from None
-    runs = RunTable(
-        run=runs.run,
-        lat_deg=runs.lat_deg,
-        lat0_deg=runs.lat0_deg,
-        temp_min_c=runs.temp_min_c,
-        temp_max_c=runs.temp_max_c,
-        drift_deg_h=runs.drift_deg_h,
-        split=runs.split,
-        source=source,
-    )
+    runs = runs.replace(source=source)
+    left_out = tdoc.get("left_out", [])
+    if not isinstance(left_out, list) or not all(isinstance(r, str) for r in left_out):
+        raise ModelFileError(f"{tw}: key 'left_out' must be a list of run names")
     if training_digest(runs) != sha:
         raise ModelFileError(f"{where}: the training runs do not match their sha256 (key 'training.sha256'): edited?")
     try:
-        model = make_drift_model(encoding=encoding, scaling=scaling, **params)
+        model = make_drift_model(encoding=encoding, scaling=scaling, **hybrid, **params)
         with warnings.catch_warnings():
             # the file's "warnings" already say so; a loaded model does not repeat them
             warnings.simplefilter("ignore", SearchBoundWarning)
             warnings.simplefilter("ignore", IllConditionedWarning)
             model.fit(runs, lssvr__tuning=tuning)
+            model.training_["left_out"] = list(left_out)
     except GyrodriftError as exc:
         raise ModelFileError(
             f"{where}: the model cannot be rebuilt from its parameters and training runs: {exc}"

@@ -60,6 +60,7 @@ def short_name(m: dict) -> str:
         "pso_loo": "PSO-LOO",
         "grid_loo": "grid-LOO",
         "paper_params": "paper params",
+        "physics_encoding": "CPSO-LOO",
     }
     label = labels.get(m["family"], m["family"])
     return f"{label} ({m['encoding']})" if m.get("encoding") else label

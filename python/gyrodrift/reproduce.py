@@ -11,6 +11,10 @@ Methods (``family`` in the results):
 4. ``grid_loo``: a 40 x 40 log grid on LOO MAE.
 5. ``physics_inversion`` (latitude alone, no training) and ``latitude_line`` (least-squares line on latitude).
 6. ``paper_params``: the LSSVM with the paper's published gamma and sigma, per encoding and scaling.
+7. ``physics_encoding``: CPSO-LSSVM on LOO MAE with the latitude-free encodings of ``gyrodrift fit``
+   (``physics``, ``physics_lat``) and the hybrid model (12 h inversion + learned correction). On the paper's
+   data, all at one site, ``physics`` is a fixed multiple of the arcsec input, so it matches ``temp_range`` up
+   to the swarm's seed. Reported beside the others, never part of the selection below.
 
 The paper does not say how the inputs were encoded or scaled; every plausible encoding is reported and none is
 chosen by looking at test results. Errors are true minus identified (the sign the paper's Table 3 header uses).
@@ -50,6 +54,8 @@ PAPER_GAMMA = 102.124
 PAPER_SIGMA = 0.0221
 PAPER_FITNESS = 5.661e-5
 REPORTED_ENCODINGS = ("temp_range", "temp_mean", "temp_span")
+PHYSICS_VARIANTS = (("physics", "drift"), ("physics_lat", "drift"), ("physics", "residual"))
+"""The latitude-free encodings and the hybrid, reported beside the paper's (family ``physics_encoding``)."""
 SCALING = "standard"
 GRID_SIZE = 40
 
@@ -100,7 +106,7 @@ def _model_entry(name: str, family: str, model: DriftModel, data, **extra) -> di
     if np.all(np.isfinite(loo)):
         _, lo, hi = model.predict_interval(data.test, 0.9)
         true = data.test.drift_deg_h
-        extra["interval_90_half_width_deg_h"] = float((hi[0] - lo[0]) / 2)
+        extra["interval_90_half_width_deg_h"] = float(np.mean(hi - lo) / 2)  # mean: it depends on the run
         extra["test_covered_by_interval_90"] = int(np.sum((lo <= true) & (true <= hi)))
     return score(
         name,
@@ -185,6 +191,23 @@ def _run_reproduction(seed: int, quiet: bool) -> dict:
             methods.append(
                 _model_entry(f"PSO-LSSVM (no chaos), LOO MAE, equal evaluations ({enc})", "pso_loo", m, data)
             )
+    new_seeds = np.random.SeedSequence([seed, 7]).spawn(len(PHYSICS_VARIANTS))  # apart from the paper rows' seeds
+    for k, (enc, target) in enumerate(PHYSICS_VARIANTS):
+        m = fit_drift_model(
+            data.train,
+            encoding=enc,
+            target=target,
+            scaling=SCALING,
+            objective="loo_mae",
+            method="cpso",
+            n_particles=PAPER_SETTINGS["n_particles"],
+            max_iter=PAPER_SETTINGS["max_iter"],
+            chaos_steps=PAPER_SETTINGS["chaos_steps"],
+            rng=np.random.default_rng(new_seeds[k]),
+            quiet=True,
+        )
+        hybrid = ", hybrid: inversion + learned correction" if target == "residual" else ""
+        methods.append(_model_entry(f"CPSO-LSSVM, LOO MAE ({enc}{hybrid})", "physics_encoding", m, data, target=target))
     for enc in REPORTED_ENCODINGS:
         m = fit_drift_model(data.train, encoding=enc, scaling=SCALING, objective="loo_mae", method="grid", quiet=True)
         assert m.tuning is not None
@@ -233,7 +256,7 @@ def _run_reproduction(seed: int, quiet: bool) -> dict:
             "test_true_deg_h": data.test.drift_deg_h.tolist(),
         },
         "input_handling": {
-            "encodings": {e: ENCODING_DESCRIPTIONS[e] for e in REPORTED_ENCODINGS},
+            "encodings": {e: ENCODING_DESCRIPTIONS[e] for e in (*REPORTED_ENCODINGS, "physics", "physics_lat")},
             "scaling": f"{SCALING}: each feature to zero mean and unit variance over the 22 training runs "
             "(the scaler is part of each fitted model); the paper's-parameter rows also try none and minmax",
             "latitude_feature": "latitude error at 12 h, computed minus true, in arcsec",

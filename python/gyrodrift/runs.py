@@ -13,6 +13,16 @@ A run is one initial alignment on a static base. Columns, with their units in th
 ``split``          text    optional ``train``/``test`` marker
 =================  ======  ==========================================================================
 
+Optional numeric columns (``OPTIONAL_COLUMNS``; empty cell or absent = unknown, NaN):
+
+============================  ======  ============================================================
+``drift_std_deg_h``           deg/h   1-sigma of the label ``drift_deg_h`` (weights the training runs)
+``drift_curvefit_deg_h``      deg/h   drift from the 12 h curve fit (`gyrodrift.curve_fit`)
+``drift_curvefit_std_deg_h``  deg/h   its least-squares 1-sigma
+``drift_smoother_deg_h``      deg/h   drift from a smoother over the whole log (a physics base)
+``drift_smoother_std_deg_h``  deg/h   its 1-sigma
+============================  ======  ============================================================
+
 The latitude error used by the models is ``lat_deg - lat0_deg`` (computed minus true).
 """
 
@@ -48,6 +58,17 @@ KNOWN_COLUMNS = (
     "temp_end_c",
 )
 
+OPTIONAL_COLUMNS = (
+    "drift_std_deg_h",
+    "drift_curvefit_deg_h",
+    "drift_curvefit_std_deg_h",
+    "drift_smoother_deg_h",
+    "drift_smoother_std_deg_h",
+)
+"""Optional per-run numbers [deg/h] a table may carry (NaN where unknown); see the module docstring."""
+
+KNOWN_COLUMNS = KNOWN_COLUMNS + OPTIONAL_COLUMNS
+
 
 class RunTableError(InputError):
     """A run table that cannot be read; the message names the file, row and column."""
@@ -73,6 +94,8 @@ class RunTable:
         ``"train"``, ``"test"`` or ``""``.
     source : str
         Where the table came from (file name), for messages.
+    extra : dict of str -> ndarray of float
+        The ``OPTIONAL_COLUMNS`` the table has (NaN where a run has no value); :meth:`column` reads them.
     """
 
     run: np.ndarray
@@ -83,11 +106,20 @@ class RunTable:
     drift_deg_h: np.ndarray
     split: np.ndarray = field(default=None)  # type: ignore[arg-type]  # filled in by __post_init__
     source: str = "<memory>"
+    extra: dict = field(default=None)  # type: ignore[assignment]  # filled in by __post_init__
 
     def __post_init__(self):
         n = len(self.run)
         if self.split is None:
             object.__setattr__(self, "split", np.array([""] * n, dtype=object))
+        extra = {} if self.extra is None else dict(self.extra)
+        for name, values in extra.items():
+            if name not in OPTIONAL_COLUMNS:
+                raise RunTableError(f"{self.source}: unknown optional column {name!r}")
+            extra[name] = np.asarray(values, dtype=float)
+            if extra[name].shape != (n,):
+                raise RunTableError(f"{self.source}: column {name} has {extra[name].size} values, run has {n}")
+        object.__setattr__(self, "extra", {k: extra[k] for k in OPTIONAL_COLUMNS if k in extra})
         for name in ("lat_deg", "lat0_deg", "temp_min_c", "temp_max_c", "drift_deg_h", "split"):
             if len(getattr(self, name)) != n:
                 raise RunTableError(f"{self.source}: column {name} has {len(getattr(self, name))} values, run has {n}")
@@ -118,11 +150,33 @@ class RunTable:
         return self.select(key)
 
     def to_structured(self) -> np.ndarray:
-        """The table as a 1-D numpy structured array (fields ``STRUCTURED_FIELDS``); see :func:`as_run_table`."""
-        out = np.empty(len(self), dtype=STRUCTURED_DTYPE)
+        """The table as a 1-D numpy structured array (fields ``STRUCTURED_FIELDS``, then the optional columns
+        the table has); see :func:`as_run_table`."""
+        dtype = np.dtype(STRUCTURED_DTYPE.descr + [(name, float) for name in self.extra])
+        out = np.empty(len(self), dtype=dtype)
         for name in STRUCTURED_FIELDS:
             out[name] = getattr(self, name)
+        for name, values in self.extra.items():
+            out[name] = values
         return out
+
+    def has_column(self, name: str) -> bool:
+        """True when the table has optional column ``name`` with a value for every run."""
+        return name in self.extra and bool(np.all(np.isfinite(self.extra[name])))
+
+    def column(self, name: str) -> np.ndarray:
+        """An optional column [deg/h] (``OPTIONAL_COLUMNS``): NaN for every run when the table has none."""
+        if name not in OPTIONAL_COLUMNS:
+            raise RunTableError(
+                f"{self.source}: unknown optional column {name!r}; expected one of {', '.join(OPTIONAL_COLUMNS)}"
+            )
+        return self.extra.get(name, np.full(len(self), np.nan))
+
+    def replace(self, **changes) -> RunTable:
+        """A copy with some columns replaced (keyword = attribute name, e.g. ``drift_deg_h=...``)."""
+        values = {name: getattr(self, name) for name in (*STRUCTURED_FIELDS, "source", "extra")}
+        values.update(changes)
+        return RunTable(**values)
 
     @classmethod
     def from_records(cls, records, *, source: str = "<records>") -> RunTable:
@@ -135,11 +189,12 @@ class RunTable:
         if not isinstance(records, list) or not records:
             raise RunTableError(f"{source}: expected a non-empty list of runs")
         cols: dict[str, list] = {name: [] for name in STRUCTURED_FIELDS}
+        extra: dict[str, list] = {}
         for i, rec in enumerate(records, start=1):
             where = f"{source}, run {i}"
             if not isinstance(rec, dict):
                 raise RunTableError(f"{where}: expected an object with the run's values, got {type(rec).__name__}")
-            unknown = sorted(set(rec) - set(STRUCTURED_FIELDS))
+            unknown = sorted(set(rec) - set(STRUCTURED_FIELDS) - set(OPTIONAL_COLUMNS))
             if unknown:
                 raise RunTableError(f"{where}: unknown key {unknown[0]!r}")
             run = rec.get("run", str(i))
@@ -159,6 +214,19 @@ class RunTable:
             cols["split"].append(split)
             for key, value in values.items():
                 cols[key].append(value)
+            for key in OPTIONAL_COLUMNS:
+                if key in rec:
+                    v = rec[key]
+                    value = (
+                        math.nan
+                        if v is None or (isinstance(v, float) and math.isnan(v))
+                        else (_record_number(v, where, key))
+                    )
+                    _check_optional(where, key, value)
+                    extra.setdefault(key, [math.nan] * (i - 1)).append(value)
+            for vals in extra.values():
+                if len(vals) < i:
+                    vals.append(math.nan)
         _check_unique_runs(cols["run"], source)
         return cls(
             run=np.array(cols["run"], dtype=object),
@@ -169,6 +237,7 @@ class RunTable:
             drift_deg_h=np.array(cols["drift_deg_h"], dtype=float),
             split=np.array(cols["split"], dtype=object),
             source=source,
+            extra={k: np.array(v, dtype=float) for k, v in extra.items()},
         )
 
     @property
@@ -192,6 +261,7 @@ class RunTable:
             drift_deg_h=self.drift_deg_h[mask],
             split=self.split[mask],
             source=self.source,
+            extra={k: v[mask] for k, v in self.extra.items()},
         )
 
     def records(self) -> list[dict]:
@@ -209,6 +279,9 @@ class RunTable:
                 rec["drift_deg_h"] = float(self.drift_deg_h[i])
             if self.split[i]:
                 rec["split"] = str(self.split[i])
+            for name, values in self.extra.items():
+                if math.isfinite(values[i]):
+                    rec[name] = float(values[i])
             out.append(rec)
         return out
 
@@ -280,6 +353,18 @@ def _check_run_values(
         )
     if split not in ("", "train", "test"):
         raise RunTableError(f"{where}, key split: expected 'train', 'test' or '', got {split!r}")
+
+
+def _check_optional(where: str, key: str, value: float) -> None:
+    """An optional column's value: NaN (unknown) or a drift-sized number; a 1-sigma must be > 0."""
+    if math.isnan(value):
+        return
+    if abs(value) > 10.0:
+        raise RunTableError(
+            f"{where}, column {key}: |{value}| deg/h is not an RLG drift (expected |value| <= 10 deg/h)"
+        )
+    if key.endswith("_std_deg_h") and not value > 0:
+        raise RunTableError(f"{where}, column {key}: expected a 1-sigma > 0 deg/h, got {value}")
 
 
 def _check_unique_runs(runs: list[str], source: str) -> None:
@@ -390,6 +475,8 @@ def read_runs_csv(path, *, lat0_deg: float | None = None, require_truth: bool = 
         tmin: list[float] = []
         tmax: list[float] = []
         drift: list[float] = []
+        optional = [h for h in header if h in OPTIONAL_COLUMNS]
+        extra: dict[str, list[float]] = {h: [] for h in optional}
         for rownum, row in enumerate(reader, start=2):
             if not row or all(not cell.strip() for cell in row):
                 continue
@@ -442,6 +529,10 @@ def read_runs_csv(path, *, lat0_deg: float | None = None, require_truth: bool = 
             if sp not in ("", "train", "test"):
                 raise RunTableError(f"{where}, column split: expected 'train' or 'test', got {sp!r}")
             split.append(sp)
+            for h in optional:
+                v = math.nan if cell[h] == "" else _parse_float(cell[h], where, h, "a number in deg/h")
+                _check_optional(where, h, v)
+                extra[h].append(v)
     if not runs:
         raise RunTableError(f"{name}: no data rows after the header")
     seen: dict[str, int] = {}
@@ -461,4 +552,5 @@ def read_runs_csv(path, *, lat0_deg: float | None = None, require_truth: bool = 
         drift_deg_h=np.array(drift),
         split=np.array(split, dtype=object),
         source=name,
+        extra={h: np.array(v, dtype=float) for h, v in extra.items()},
     )

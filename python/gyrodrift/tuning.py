@@ -22,7 +22,7 @@ from gyrodrift.choices import METHODS, OBJECTIVES
 from gyrodrift.cpso import minimize_cpso
 from gyrodrift.errors import OptionError
 from gyrodrift.kernels import SIGMA_MAX, SIGMA_MIN, check_matrix_memory, squared_distances
-from gyrodrift.lssvr import lssvr_solve, rbf_batch_errors
+from gyrodrift.lssvr import check_sample_weight, lssvr_solve, rbf_batch_errors
 
 DEFAULT_BOUNDS = ((1e-2, 1e5), (1e-3, 1e2))
 """Default search box ((gamma_lo, gamma_hi), (sigma_lo, sigma_hi)); sigma in the scaled input units."""
@@ -104,8 +104,11 @@ def check_bounds(bounds) -> tuple[tuple[float, float], tuple[float, float]]:
     return (pairs[0], pairs[1])  # type: ignore[return-value]
 
 
-def _kfold_errors(sqdist: np.ndarray, y: np.ndarray, gammas, sigmas, n_folds: int) -> np.ndarray:
-    """Held-out errors y - f(x) of contiguous k-fold CV for each (gamma, sigma): shape (m, n)."""
+def _kfold_errors(sqdist: np.ndarray, y: np.ndarray, gammas, sigmas, n_folds: int, weights=None) -> np.ndarray:
+    """Held-out errors y - f(x) of contiguous k-fold CV for each (gamma, sigma): shape (m, n).
+
+    With sample ``weights`` the fold's ``H = K + diag(1/(gamma w))`` (``lssvr_solve`` adds ``I/gamma``, so the
+    rest of the diagonal is added to its ``K``)."""
     m, n = len(gammas), len(y)
     errors = np.full((m, n), np.inf)
     folds = list(KFold(n_splits=n_folds, shuffle=False).split(np.arange(n)))
@@ -113,17 +116,22 @@ def _kfold_errors(sqdist: np.ndarray, y: np.ndarray, gammas, sigmas, n_folds: in
         K = np.exp(-sqdist / (s * s))
         try:
             for train, test in folds:
-                alpha, b = lssvr_solve(K[np.ix_(train, train)], y[train], g)
+                Kt = K[np.ix_(train, train)]
+                if weights is not None:
+                    Kt = Kt + np.diag(1.0 / (g * weights[train]) - 1.0 / g)
+                alpha, b = lssvr_solve(Kt, y[train], g)
                 errors[j, test] = y[test] - (K[np.ix_(test, train)] @ alpha + b)
         except (np.linalg.LinAlgError, ValueError):
             errors[j] = np.inf
     return errors
 
 
-def make_objective(X, y, objective: str = "loo_mae", *, n_folds: int = 5):
+def make_objective(X, y, objective: str = "loo_mae", *, n_folds: int = 5, sample_weight=None):
     """A vectorised objective ``f(params) -> fitness`` for (gamma, sigma) rows of ``params`` (shape (m, 2)).
 
-    ``X`` is the scaled input matrix (n, d), ``y`` the targets (n,). Failed factorisations give +inf.
+    ``X`` is the scaled input matrix (n, d), ``y`` the targets (n,). Failed factorisations give +inf. With
+    ``sample_weight`` (w_i > 0) the LSSVMs are weighted (``gyrodrift.lssvr``) and the fitness is the weighted
+    mean absolute error ``sum w_i |e_i| / sum w_i``.
     """
     if objective not in OBJECTIVES:
         raise OptionError(f"unknown objective {objective!r}; expected one of {', '.join(OBJECTIVES)}")
@@ -134,15 +142,17 @@ def make_objective(X, y, objective: str = "loo_mae", *, n_folds: int = 5):
     # distances, one candidate's H, its factor and inverse factor; the stacked path (n <= 32) is small
     check_matrix_memory(len(y), len(y), 4, "tuning the LSSVR", unit="samples")
     sqdist = squared_distances(X)
+    w = check_sample_weight(sample_weight, len(y))
 
     def fitness(params: np.ndarray) -> np.ndarray:
         params = np.atleast_2d(np.asarray(params, float))
         gammas, sigmas = params[:, 0], params[:, 1]
         if objective == "kfold_mae":
-            errors = _kfold_errors(sqdist, y, gammas, sigmas, n_folds)
+            errors = _kfold_errors(sqdist, y, gammas, sigmas, n_folds, w)
         else:
-            errors = rbf_batch_errors(sqdist, y, gammas, sigmas, "train" if objective == "train_mae" else "loo")
-        out = np.mean(np.abs(errors), axis=1)
+            kind = "train" if objective == "train_mae" else "loo"
+            errors = rbf_batch_errors(sqdist, y, gammas, sigmas, kind, w)
+        out = np.mean(np.abs(errors), axis=1) if w is None else np.abs(errors) @ w / w.sum()
         return np.where(np.isfinite(out), out, np.inf)
 
     return fitness
@@ -165,18 +175,20 @@ def tune_lssvr(
     n_folds: int = 5,
     rng=None,
     callback=None,
+    sample_weight=None,
 ) -> TuningResult:
     """Tune (gamma, sigma) of an RBF LSSVR on scaled inputs ``X`` (n, d) and targets ``y`` (n,).
 
     ``method="cpso"`` is the paper's chaos PSO (defaults: 30 particles, 100 iterations, w 0.75, c1 = c2 = 2,
     10 chaos steps); ``"pso"`` the same swarm with the chaos search off; ``"grid"`` a ``grid_size`` x
     ``grid_size`` log grid over ``bounds``. ``callback(intermediate_result)`` is passed to the optimiser
-    (called once per iteration); ``rng`` seeds the swarm.
+    (called once per iteration); ``rng`` seeds the swarm; ``sample_weight`` weights the LSSVMs and the
+    fitness (``make_objective``).
     """
     if method not in METHODS:
         raise OptionError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
     bounds = check_bounds(bounds)
-    fun = make_objective(X, y, objective, n_folds=n_folds)
+    fun = make_objective(X, y, objective, n_folds=n_folds, sample_weight=sample_weight)
     if method == "grid":
         if grid_size < 2:
             raise OptionError(f"grid_size must be at least 2, got {grid_size}")

@@ -8,7 +8,16 @@ import json
 
 import click
 
-from gyrodrift.choices import ENCODINGS, METHODS, OBJECTIVES, SCALINGS, SIGMA_RANGE
+from gyrodrift.choices import (
+    DEFAULT_ENCODING,
+    ENCODINGS,
+    METHODS,
+    OBJECTIVES,
+    PHYSICS_COLUMNS,
+    SCALINGS,
+    SIGMA_RANGE,
+    TARGETS,
+)
 from gyrodrift.cli.errors import write_stdout
 from gyrodrift.cli.types import FiniteFloat
 
@@ -66,7 +75,37 @@ _split_option = click.option(
 @click.command()
 @click.argument("data", type=click.Path(dir_okay=False))
 @click.option("--out", "out", required=True, type=click.Path(), help="Model file to write (JSON).")
-@click.option("--encoding", type=click.Choice(list(ENCODINGS)), default="temp_range", show_default=True)
+@click.option(
+    "--encoding",
+    type=click.Choice(list(ENCODINGS)),
+    default=DEFAULT_ENCODING,
+    show_default=True,
+    help="Model inputs: physics (drift equivalent of the 12 h latitude error at the run's latitude, and the "
+    "temperature range), physics_lat (plus the site latitude), or one of the paper's readings (raw arcsec).",
+)
+@click.option(
+    "--target",
+    type=click.Choice(list(TARGETS)),
+    default="residual",
+    show_default=True,
+    help="residual: hybrid model, physics estimate (--physics-column) plus a learned temperature correction; "
+    "drift: the LSSVR learns the drift itself.",
+)
+@click.option(
+    "--physics-column",
+    type=click.Choice(list(PHYSICS_COLUMNS)),
+    default="drift_inversion_deg_h",
+    show_default=True,
+    help="Physics estimate of the hybrid: the 12 h inversion, or a run-table column.",
+)
+@click.option(
+    "--max-label-std-deg-h",
+    type=FiniteFloat(0.0, min_open=True),
+    default=None,
+    help="Leave out runs whose drift_std_deg_h exceeds this [deg/h] (default 0.001); runs with drift_std_deg_h "
+    "are weighted by it (weighted LS-SVM) unless --no-label-weights.",
+)
+@click.option("--no-label-weights", is_flag=True, help="Do not weight the runs by drift_std_deg_h.")
 @click.option("--scaling", type=click.Choice(list(SCALINGS)), default="standard", show_default=True)
 @click.option("--objective", type=click.Choice(list(OBJECTIVES)), default="loo_mae", show_default=True)
 @click.option("--method", type=click.Choice(list(METHODS)), default="cpso", show_default=True)
@@ -83,16 +122,34 @@ _split_option = click.option(
 @_lat0_option
 @_split_option
 @click.option("--quiet", is_flag=True, help="No progress bar.")
-def fit(data, out, encoding, scaling, objective, method, gamma, sigma, seed, lat0_deg, split, quiet):
+def fit(
+    data,
+    out,
+    encoding,
+    target,
+    physics_column,
+    max_label_std_deg_h,
+    no_label_weights,
+    scaling,
+    objective,
+    method,
+    gamma,
+    sigma,
+    seed,
+    lat0_deg,
+    split,
+    quiet,
+):
     """Fit a drift model on DATA.csv (runs with drift_deg_h) and write it to --out.
 
     Warnings (a tuned value on the edge of its search box, an ill-conditioned solve) go to stderr and into the
-    model file's "warnings".
+    model file's "warnings". Runs left out for their label 1-sigma, and the weighting, are said on stderr and
+    kept in the file's "training".
     """
     from gyrodrift.atomic import check_output_file
     from gyrodrift.errors import OptionError
     from gyrodrift.lssvr import IllConditionedError, NotPositiveDefiniteError
-    from gyrodrift.model import fit_drift_model
+    from gyrodrift.model import DEFAULT_MAX_LABEL_STD_DEG_H, fit_drift_model
     from gyrodrift.model_io import MODEL_FILE_RECOGNISER, save_model
 
     if (gamma is None) != (sigma is None):
@@ -118,16 +175,33 @@ def fit(data, out, encoding, scaling, objective, method, gamma, sigma, seed, lat
                 sigma=sigma,
                 rng=seed,
                 quiet=quiet,
+                target=target,
+                physics_column=physics_column,
+                label_weighting="none" if no_label_weights else "auto",
+                max_label_std_deg_h=DEFAULT_MAX_LABEL_STD_DEG_H if max_label_std_deg_h is None else max_label_std_deg_h,
             )
     except (IllConditionedError, NotPositiveDefiniteError) as exc:
         if gamma is None:
             raise
         raise OptionError(f"--gamma {gamma:g} --sigma {sigma:g}: {exc}") from None
+    training = model.training
+    if training.get("left_out"):
+        limit = DEFAULT_MAX_LABEL_STD_DEG_H if max_label_std_deg_h is None else max_label_std_deg_h
+        click.echo(
+            f"note: left out {len(training['left_out'])} run(s) whose drift_std_deg_h exceeds {limit:g} deg/h "
+            f"(too uncertain to label): {', '.join(training['left_out'])}",
+            err=True,
+        )
+    if training["weighted"]:
+        click.echo("note: runs weighted by their label 1-sigma drift_std_deg_h (weighted LS-SVM)", err=True)
+    elif "drift_std_deg_h" in runs.extra and not no_label_weights:
+        click.echo("note: drift_std_deg_h is missing for some runs; the runs are not weighted", err=True)
     save_model(model, out, inputs=[data])
     est = model.lssvr
     loo = model.loo_residuals()
     click.echo(
-        f"fitted on {len(runs)} runs: gamma = {est.gamma:.6g}, sigma = {est.sigma:.6g}, "
+        f"fitted on {training['n_runs']} runs ({encoding}, target {target}): gamma = {est.gamma:.6g}, "
+        f"sigma = {est.sigma:.6g}, "
         f"LOO MAE = {float(abs(loo).mean()):.3e} deg/h -> {out}"
     )
 
@@ -146,7 +220,12 @@ def fit(data, out, encoding, scaling, objective, method, gamma, sigma, seed, lat
 @_lat0_option
 @_split_option
 def predict(model_file, data, fmt, out, coverage, lat0_deg, split):
-    """Identify the axial drift [deg/h] of each run in DATA.csv with MODEL_FILE."""
+    """Identify the axial drift [deg/h] of each run in DATA.csv with MODEL_FILE.
+
+    Runs whose inputs lie outside the training runs' range (per input, or jointly) get
+    outside_training_range = 1 and a warning line on stderr: their drift is an extrapolation, and their
+    interval (--coverage) is wider there.
+    """
     import numpy as np
 
     from gyrodrift.atomic import atomic_write, check_output_file, recognise_header
@@ -173,11 +252,15 @@ def predict(model_file, data, fmt, out, coverage, lat0_deg, split):
             )
     else:
         pred = model.predict(runs)
+    check = model.check_inputs(runs)
+    for line in check.messages(runs):
+        click.echo(f"warning: {line}", err=True)
     rows = []
     for i, rec in enumerate(runs.records()):
         row = {"run": rec["run"], "drift_identified_deg_h": float(pred[i])}
         if coverage is not None:
             row["drift_lo_deg_h"], row["drift_hi_deg_h"] = float(lo[i]), float(hi[i])
+        row["outside_training_range"] = int(check.outside[i])
         if "drift_deg_h" in rec:
             row["drift_deg_h"] = rec["drift_deg_h"]
             row["error_deg_h"] = rec["drift_deg_h"] - float(pred[i])
