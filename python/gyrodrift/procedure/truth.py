@@ -192,7 +192,8 @@ def find_true_drift(
     verified = bool(verify_nmi[1] <= verify_nmi[0] and verify_nmi[1] <= verify_nmi[2])
     grid = d_star + np.linspace(-grid_half_width_deg_h, grid_half_width_deg_h, grid_points)
     off = grid - ref_d
-    grid_nmi = criterion_value(ref_n + off[:, None] * gn, ref_e + off[:, None] * ge, criterion)
+    # One curve at a time: the (grid_points, samples) matrix would cost memory in proportion to the hours.
+    grid_nmi = np.array([criterion_value(ref_n + o * gn, ref_e + o * ge, criterion) for o in off])
     predicted = float(criterion_value(ref_n + (d_star - ref_d) * gn, ref_e + (d_star - ref_d) * ge, criterion))
     return TrueDrift(
         run=log.name,
