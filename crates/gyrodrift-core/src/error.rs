@@ -44,6 +44,20 @@ impl CoreError {
     }
 }
 
+impl CoreError {
+    /// The same error with a sample index counted `by` samples later (a block's index made the call's).
+    pub(crate) fn offset(self, by: usize) -> Self {
+        match self {
+            CoreError::Sample { key, index, message } => CoreError::Sample {
+                key,
+                index: index + by,
+                message,
+            },
+            other => other,
+        }
+    }
+}
+
 impl fmt::Display for CoreError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {

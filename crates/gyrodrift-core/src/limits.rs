@@ -108,17 +108,9 @@ pub fn check_attitude(e: Euler) -> Result<(), CoreError> {
 /// interval `dt` \[s\]: equal whole lengths, every value finite, rate and specific force within the limits.
 /// Returns n.
 pub fn check_increments(dtheta: &[f64], dv: &[f64], dt: f64) -> Result<usize, CoreError> {
-    check_shape(dtheta.len() % 3 == 0, "dtheta_rad", dtheta.len())?;
-    check_shape(dv.len() % 3 == 0, "dv_m_s", dv.len())?;
-    if dtheta.len() != dv.len() {
-        return Err(CoreError::Shape {
-            key: "dv_m_s",
-            message: format!("has {} rows but dtheta_rad has {}", dv.len() / 3, dtheta.len() / 3),
-        });
-    }
+    check_lengths(dtheta, dv)?;
     // Bounds on the increments: |x| <= limit is false for NaN, so one comparison per value checks both.
-    let max_dth = MAX_ANGULAR_RATE_DEG_S.to_radians() * dt;
-    let max_dv = MAX_SPECIFIC_FORCE_G * STANDARD_GRAVITY * dt;
+    let (max_dth, max_dv) = increment_bounds(dt);
     let ok = |v: &[f64], lim: f64| v.iter().fold(true, |acc, x| acc & (x.abs() <= lim));
     if ok(dtheta, max_dth) && ok(dv, max_dv) {
         return Ok(dtheta.len() / 3);
@@ -140,6 +132,28 @@ pub fn check_increments(dtheta: &[f64], dv: &[f64], dt: f64) -> Result<usize, Co
     }
     // Invariant: the fold above found a value failing the same bound, so the loop has returned.
     unreachable!("some value failed the bound above")
+}
+
+/// The largest |dtheta| [rad] and |dv| [m/s] of one sample of `dt` [s]: the rate and specific-force limits
+/// times dt (one computation for every check of increments).
+pub fn increment_bounds(dt: f64) -> (f64, f64) {
+    (
+        MAX_ANGULAR_RATE_DEG_S.to_radians() * dt,
+        MAX_SPECIFIC_FORCE_G * STANDARD_GRAVITY * dt,
+    )
+}
+
+/// The length checks of `check_increments` alone: whole rows of 3, as many in `dv` as in `dtheta`.
+pub fn check_lengths(dtheta: &[f64], dv: &[f64]) -> Result<(), CoreError> {
+    check_shape(dtheta.len() % 3 == 0, "dtheta_rad", dtheta.len())?;
+    check_shape(dv.len() % 3 == 0, "dv_m_s", dv.len())?;
+    if dtheta.len() != dv.len() {
+        return Err(CoreError::Shape {
+            key: "dv_m_s",
+            message: format!("has {} rows but dtheta_rad has {}", dv.len() / 3, dtheta.len() / 3),
+        });
+    }
+    Ok(())
 }
 
 fn check_shape(ok: bool, key: &'static str, len: usize) -> Result<(), CoreError> {

@@ -195,3 +195,28 @@ fn aligner_settings_are_refused_in_user_units() {
     let e = Aligner::new(AlignerConfig { update_s: 0.01, ..base }).unwrap_err();
     assert!(e.to_string().contains("holds no sample at 10 Hz"), "{e}");
 }
+
+#[test]
+fn navigator_refusal_in_a_later_block_restores_the_state() {
+    let mut nav = Navigator::new(NavigatorConfig {
+        rate_hz: RATE_HZ,
+        ..Default::default()
+    })
+    .unwrap();
+    let (dth, mut dv) = constant_force([0.0, 0.0, STANDARD_GRAVITY], 10_000);
+    nav.process(&dth[..300], &dv[..300], 7, |_| {}).unwrap();
+    let before = nav.clone();
+    dv[3 * 9_001] = f64::NAN;
+    let mut outputs = 0;
+    let e = nav.process(&dth, &dv, 7, |_| outputs += 1).unwrap_err();
+    assert!(matches!(e, CoreError::Sample { index: 9_001, .. }), "{e}");
+    assert!(outputs > 0, "the blocks before the bad one were navigated");
+    assert_eq!(nav.state(), before.state());
+    assert_eq!(nav.samples_done(), 100);
+    // And it goes on exactly as if the refused call had not happened.
+    let (mut a, mut b) = (Vec::new(), Vec::new());
+    nav.process(&dth[..600], &dv[..600], 7, |s| a.push(*s)).unwrap();
+    let mut twin = before;
+    twin.process(&dth[..600], &dv[..600], 7, |s| b.push(*s)).unwrap();
+    assert_eq!(a, b);
+}
