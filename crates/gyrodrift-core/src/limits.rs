@@ -134,7 +134,7 @@ pub fn check_increments(dtheta: &[f64], dv: &[f64], dt: f64) -> Result<usize, Co
     unreachable!("some value failed the bound above")
 }
 
-/// The largest |dtheta| [rad] and |dv| [m/s] of one sample of `dt` [s]: the rate and specific-force limits
+/// The largest |dtheta| \[rad\] and |dv| [m/s] of one sample of `dt` \[s\]: the rate and specific-force limits
 /// times dt (one computation for every check of increments).
 pub fn increment_bounds(dt: f64) -> (f64, f64) {
     (
