@@ -302,3 +302,22 @@ def test_navigate_takes_any_log_and_says_where_the_initial_state_came_from(tmp_p
     assert bare.summary["final_pos_err_nmi"] == pytest.approx(csv_summary["final_pos_err_nmi"], rel=1e-9)
     own = navigate(sim, hours=0.3)
     assert own.summary["initial_source"] == "truth" and own.summary["start_s"] == 0.0
+
+
+def test_navigate_starts_from_the_true_attitude_columns_without_scenario_metadata(tmp_path):
+    """A log with the true attitude columns and a site but no scenario: the attitude at the end of the first
+    sample, navigation from the second; the result is as close to the truth as from the scenario's t = 0."""
+    scn = Scenario.from_dict({"run": {"duration_h": 0.2, "rate_hz": 10.0}, "gyro": {"bias_deg_h": [0, 0, 0.01]}})
+    sim = simulate(scn, out_dir=tmp_path / "sim")
+    table = pq.read_table(sim)
+    meta = {k: v for k, v in table.schema.metadata.items() if k != b"gyrodrift.scenario"}
+    pq.write_table(table.replace_schema_metadata(meta), tmp_path / "noscn.parquet")
+    own = navigate(sim)
+    cols = navigate(tmp_path / "noscn.parquet")
+    assert cols.summary["initial_source"] == "truth" and cols.summary["start_s"] == pytest.approx(0.1)
+    assert cols.summary["n_samples"] == own.summary["n_samples"] - 1
+    assert cols.summary["initial"]["yaw_deg"] == pytest.approx(table.column("true_yaw_deg")[0].as_py())
+    assert cols.summary["final_pos_err_nmi"] == pytest.approx(own.summary["final_pos_err_nmi"], rel=0.05)
+    # The heading error is the z bias integrated (0.01 deg/h over 0.2 h = 7.2 arcsec) from either start.
+    assert cols["yaw_err_arcsec"][-1] == pytest.approx(own["yaw_err_arcsec"][-1], abs=0.1)
+    assert abs(cols["yaw_err_arcsec"][0]) < 0.1

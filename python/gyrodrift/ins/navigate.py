@@ -136,32 +136,46 @@ def _vector3(name: str, value: Sequence[float] | None) -> list[float]:
 _STATE_KEYS = ("lat_deg", "lon_deg", "height_m", "pitch_deg", "roll_deg", "yaw_deg")
 
 
-def _initial_from(initial: str | Mapping[str, Any], log: ImuLog) -> tuple[str, dict[str, Any]]:
-    """(source, state) where source is "given", "truth" or "alignment" (the state then comes later)."""
-    truth = None
-    if log.truth is not None and log.site is not None:
-        s, t = log.site, log.truth
-        truth = {
-            "lat_deg": s.lat_deg,
-            "lon_deg": s.lon_deg,
-            "height_m": s.height_m,
-            "pitch_deg": t.pitch_deg,
-            "roll_deg": t.roll_deg,
-            "yaw_deg": t.yaw_deg,
-        }
+def _true_start(log: ImuLog) -> tuple[dict[str, Any], int] | None:
+    """The true state the log says and the sample navigation starts at, or None.
+
+    The ``gyrodrift.scenario`` metadata gives the attitude at t = 0 (navigation from the first sample); else the
+    true attitude columns give it at the end of the first sample (navigation from the second). Both need the site.
+    """
+    if log.site is None:
+        return None
+    if log.truth is not None:
+        att, start = (log.truth.pitch_deg, log.truth.roll_deg, log.truth.yaw_deg), 0
+    elif log.has_truth_columns:
+        first = next(log.chunks(1, stop=1))
+        att, start = tuple(float(c[0]) for c in first.truth), 1
+    else:
+        return None
+    s = log.site
+    state = {"lat_deg": s.lat_deg, "lon_deg": s.lon_deg, "height_m": s.height_m}
+    state.update(zip(("pitch_deg", "roll_deg", "yaw_deg"), att, strict=True))
+    return state, start
+
+
+def _initial_from(initial: str | Mapping[str, Any], log: ImuLog) -> tuple[str, dict[str, Any], int]:
+    """(source, state, start sample): source "given", "truth" or "alignment" (the state then comes later)."""
     if isinstance(initial, str):
         if initial not in INITIAL_SOURCES:
             raise OptionError(
                 f"navigate: --initial must be one of {', '.join(INITIAL_SOURCES)} or a mapping, got {initial!r}"
             )
-        if initial == "alignment" or (initial == "auto" and truth is None):
-            return "alignment", {}
-        if truth is None:
+        found = None if initial == "alignment" else _true_start(log)
+        if initial == "alignment" or (initial == "auto" and found is None):
+            return "alignment", {}, 0
+        if found is None:
             raise LogError(
-                f"{log.label}: the log carries no true initial state (no gyrodrift.scenario metadata, or no site); "
-                "use --initial alignment (or give the initial state)"
+                f"{log.label}: the log carries no true initial state (no gyrodrift.scenario metadata or true "
+                "attitude columns, or no site); use --initial alignment (or give the initial state)"
             )
-        return "truth", {**truth, "vel_enu_m_s": [0.0, 0.0, 0.0]}
+        return "truth", {**found[0], "vel_enu_m_s": [0.0, 0.0, 0.0]}, found[1]
+    truth = None
+    if log.truth is not None and log.site is not None:
+        truth = _true_start(log)[0]
     unknown = set(initial) - set(_STATE_KEYS) - {"vel_enu_m_s"}
     if unknown:
         raise OptionError(
@@ -179,7 +193,7 @@ def _initial_from(initial: str | Mapping[str, Any], log: ImuLog) -> tuple[str, d
         else:
             raise OptionError(f"navigate: {log.label} carries no truth; initial must give {k}")
     out["vel_enu_m_s"] = _vector3("initial vel_enu_m_s", initial.get("vel_enu_m_s"))
-    return "given", out
+    return "given", out, 0
 
 
 def navigate(
@@ -271,9 +285,8 @@ def navigate(
         out_dir = output_folder(out_dir, "navigate", NAV_FILES, inputs=[source_path] if source_path else ())
     log = as_log(imu, site=site)
     rate = log.rate_hz
-    source, init = _initial_from(initial, log)
+    source, init, start = _initial_from(initial, log)
     dec = max(1, int(round(decimation_s * rate)))
-    start = 0
     if source == "alignment":
         from gyrodrift.procedure.align import align_log
         from gyrodrift.procedure.timeline import DEFAULT_TIMELINE
@@ -299,7 +312,7 @@ def navigate(
         gyro_est = [gyro_est[0] + al.gyro_bias_deg_h[0], gyro_est[1] + al.gyro_bias_deg_h[1], gyro_est[2]]
         accel_est = [a + b for a, b in zip(accel_est, al.accel_bias_ug, strict=True)]
     available = log.n_samples - start
-    after = f" after the {start / rate / HOUR:g} h alignment" if start else ""
+    after = f" after the {start / rate / HOUR:g} h alignment" if source == "alignment" else ""
     if hours is None:
         n_total = available
     else:
