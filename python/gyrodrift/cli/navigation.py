@@ -49,7 +49,7 @@ def simulate_command(scenario_toml: Path, out_dir: Path, quiet: bool) -> None:
 
 
 _INITIAL_WORDS = {
-    "truth": "the true initial state in the log's scenario metadata",
+    "truth": "the log's truth (scenario metadata or true attitude columns)",
     "alignment": "an alignment of the log's first hours (navigation starts at its end)",
     "given": "the given values",
 }
