@@ -83,6 +83,10 @@ def _error(tmp_path: Path, text: str | bytes) -> str:
         ("[gyro]\nbias_deg_h = [1e5, 0, 0]\n", "[gyro] bias_deg_h: gyro bias (100000, 0, 0) deg/h is outside"),
         ("[accel]\nbias_ug = [2e6, 0, 0]\n", "[accel] bias_ug: accelerometer bias (2000000, 0, 0) ug is outside"),
         ("[site]\nheight_m = 1e5\n", "[site] height_m: must be between -1000 and 20000"),
+        (
+            '[rotation]\nscheme = "indexing"\npositions_deg = [' + ", ".join(["0, 57000"] * 600) + "]\n",
+            "[rotation] positions_deg: 1200 positions, expected 1 to 1000",
+        ),
         ("[site]\nlat_deg = 89.5\n", "[site] lat_deg: must be between -89 and 89"),
     ],
 )

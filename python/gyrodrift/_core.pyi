@@ -37,6 +37,7 @@ MAX_TABLE_ACCEL_DEG_S2: Final[float]
 MAX_SPAN_DEG: Final[float]
 MIN_SAMPLES_PER_PERIOD: Final[float]
 MAX_CHUNK_SAMPLES: Final[int]
+MAX_INDEX_POSITIONS: Final[int]
 
 def normal_gravity(lat_rad: FloatArray, height_m: FloatArray) -> FloatArray: ...
 def meridian_radius(lat_rad: FloatArray) -> FloatArray: ...

@@ -242,6 +242,10 @@ pub fn scheme_from_settings(
     })
 }
 
+/// Most positions of an indexing cycle (real tables index through a handful; the profile and its modulation
+/// residual cost grows with the number).
+pub const MAX_INDEX_POSITIONS: usize = 1000;
+
 /// Largest reciprocating span \[rad\] (about 159 turns).
 pub const MAX_SPAN_RAD: f64 = 1000.0;
 
@@ -431,9 +435,13 @@ impl Turntable {
             } => {
                 check_rate_accel(*rate, *accel)?;
                 check(
-                    !positions.is_empty(),
+                    !positions.is_empty() && positions.len() <= MAX_INDEX_POSITIONS,
                     "positions_rad",
-                    "must hold at least one position",
+                    format!(
+                        "{} positions, expected 1 to {MAX_INDEX_POSITIONS} (the cycle's profile and its modulation \
+                         residual grow with their number)",
+                        positions.len()
+                    ),
                 )?;
                 check(
                     positions.iter().all(|p| p.is_finite() && p.abs() <= 1000.0),

@@ -469,6 +469,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
             m.add(name, value)?;
         }
         m.add("MAX_CHUNK_SAMPLES", gyrodrift_core::simulator::MAX_CHUNK_SAMPLES)?;
+        m.add("MAX_INDEX_POSITIONS", t::MAX_INDEX_POSITIONS)?;
     }
     m.add_function(wrap_pyfunction!(normal_gravity, m)?)?;
     m.add_function(wrap_pyfunction!(meridian_radius, m)?)?;
