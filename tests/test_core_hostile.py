@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from gyrodrift import _core
 from gyrodrift.errors import CoreError
@@ -248,3 +250,42 @@ def test_the_type_stub_names_what_the_extension_has():
         block = stub.split(f"class {cls}:")[1].split("\nclass ")[0]
         for attr in re.findall(r"def ([a-z_0-9]+)\(", block):
             assert hasattr(getattr(_core, cls), attr), f"{cls}.{attr}"
+
+
+_DTYPES = [np.float64, np.float32, np.int64, np.int8, np.uint16, np.complex128, np.bool_]
+
+
+@st.composite
+def _hostile_arrays(draw):
+    rows = draw(st.integers(0, 12))
+    cols = draw(st.sampled_from([3, 3, 3, 1, 4]))
+    dtype = draw(st.sampled_from(_DTYPES))
+    values = draw(
+        st.lists(
+            st.sampled_from([0.0, 1e-3, -2e-3, 0.0981, 1e300, -1e300, np.nan, np.inf, 5.0]),
+            min_size=rows * cols,
+            max_size=rows * cols,
+        )
+    )
+    with np.errstate(invalid="ignore", over="ignore"):
+        a = np.asarray(values, dtype=float).reshape(rows, cols).astype(dtype)
+    if draw(st.booleans()) and rows > 1:
+        a = a[::2]
+    if draw(st.booleans()):
+        a = np.asfortranarray(a)
+    return a
+
+
+@settings(max_examples=60, deadline=None)
+@given(dth=_hostile_arrays(), dv=_hostile_arrays(), which=st.sampled_from(["aligner", "navigator"]))
+def test_any_array_gives_a_result_or_a_core_error(dth, dv, which):
+    obj = _aligner() if which == "aligner" else _navigator()
+    try:
+        obj.process(dth, dv)
+    except CoreError:
+        assert obj.samples_done == 0
+        return
+    # Accepted: real numbers of shape (n, 3), equal rows, finite and within the sensor limits.
+    assert dth.shape == dv.shape and dth.ndim == 2 and dth.shape[1] == 3
+    assert dth.dtype.kind in "fiu" and dv.dtype.kind in "fiu"
+    assert obj.samples_done == len(dth)
