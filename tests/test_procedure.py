@@ -304,11 +304,12 @@ def test_identification_on_held_out_runs(fleet, fleet_features, model):
     assert np.mean(np.abs(err)) < np.mean(np.abs(phys_err))
     h = held[0]
     assert h.model_std_deg_h is None and "jackknife interval" in h.uncertainty_note
-    for x in held:  # the interval is centred on the prediction, with the half-width of the LOO residuals
+    # the interval is centred on the prediction; its half-width is the normalised LOO quantile times the
+    # LSSVR's predictive scale at the run (docs/identification.md, "Intervals and extrapolation")
+    q = np.sort(np.abs(m.normalised_loo_residuals()))[math.ceil(11 * 0.9) - 1]
+    for x, v in zip(held, m.predict_std_scale(test), strict=True):
         lo, hi = x.interval_deg_h
-        assert lo < x.drift_deg_h < hi and (hi - lo) / 2 == pytest.approx(
-            np.sort(np.abs(m.loo_residuals()))[math.ceil(11 * 0.9) - 1], rel=1e-12
-        )
+        assert lo < x.drift_deg_h < hi and (hi - lo) / 2 == pytest.approx(q * v, rel=1e-12)
     assert h.physics_drift_deg_h == pytest.approx(physics_inversion(test)[0])
     assert h.alignment_z_drift_std_deg_h > 0.0005
     np.testing.assert_allclose([x.drift_deg_h for x in held], m.predict(test), rtol=0, atol=1e-12)

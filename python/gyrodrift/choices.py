@@ -23,6 +23,7 @@ METHODS = ("cpso", "pso", "grid")
 ENCODINGS: dict[str, tuple[str, ...]] = {
     "physics": ("drift_equiv_deg_h", "temp_min_c", "temp_max_c"),
     "physics_lat": ("drift_equiv_deg_h", "temp_min_c", "temp_max_c", "lat0_deg"),
+    "temperature": ("temp_min_c", "temp_max_c"),
     "temp_range": ("lat_err_arcsec", "temp_min_c", "temp_max_c"),
     "temp_mean": ("lat_err_arcsec", "temp_mean_c"),
     "temp_span": ("lat_err_arcsec", "temp_span_c"),

@@ -26,6 +26,7 @@ from gyrodrift.runs import RunTable
 ENCODING_DESCRIPTIONS = {
     "physics": "drift equivalent of the latitude error at the site latitude (deg/h), and the temperature range",
     "physics_lat": "as physics, plus the site latitude lat0_deg",
+    "temperature": "the temperature range alone (for a hybrid model's correction: physics gives the drift)",
     "temp_range": "latitude error and the temperature range as two inputs (min, max)",
     "temp_mean": "latitude error and the mid-range temperature (min + max) / 2",
     "temp_span": "latitude error and the temperature change max - min",

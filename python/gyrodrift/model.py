@@ -53,7 +53,7 @@ from gyrodrift.baselines import physics_inversion
 from gyrodrift.choices import PHYSICS_COLUMNS, SCALINGS, TARGETS
 from gyrodrift.encodings import encode, feature_names
 from gyrodrift.errors import InputError, OptionError
-from gyrodrift.lssvr import LSSVR, _validate_data, condition_warning_message
+from gyrodrift.lssvr import LSSVR, _validate_data, check_sample_weight, condition_warning_message
 from gyrodrift.progress import progress
 from gyrodrift.runs import RunTable, as_run_table
 from gyrodrift.tuning import (
@@ -313,9 +313,11 @@ class TunedLSSVR(RegressorMixin, BaseEstimator):
             tuning = None
         else:
             if tuning is None:
+                w = check_sample_weight(sample_weight, len(y), allow_zero=True)
+                keep = slice(None) if w is None else w > 0  # a zero weight leaves its sample out
                 tuning = tune_lssvr(
-                    X,
-                    y,
+                    X[keep],
+                    y[keep],
                     objective=self.objective,
                     method=self.method,
                     bounds=self.bounds,
@@ -329,7 +331,7 @@ class TunedLSSVR(RegressorMixin, BaseEstimator):
                     n_folds=self.n_folds,
                     rng=self.random_state,
                     callback=self.callback,
-                    sample_weight=sample_weight,
+                    sample_weight=None if w is None else w[keep],
                 )
             gamma, sigma = tuning.gamma, tuning.sigma
             on_bound = on_search_bound(gamma, sigma, check_bounds(tuning.bounds))

@@ -245,6 +245,8 @@ def identify_command(log, model_path, lat0_deg, lon0_deg, height_m, out_dir, as_
         click.echo(json.dumps(doc, indent=2))
         return
     f = res.features
+    for line in res.range_warnings:
+        click.echo(f"warning: {line}", err=True)
     click.echo(f"{res.run}: identified axial drift {res.drift_deg_h:.6f} deg/h (model {model_path})")
     if res.interval_deg_h is not None:
         lo, hi = res.interval_deg_h
@@ -256,6 +258,10 @@ def identify_command(log, model_path, lat0_deg, lon0_deg, height_m, out_dir, as_
     click.echo(
         f"  physics inversion of the 12 h latitude error ({f.lat_err_arcsec:.3f} arcsec): "
         f"{res.physics_drift_deg_h:.6f} deg/h"
+    )
+    click.echo(
+        f"  12 h curve fit of the latitude and longitude errors: {res.curvefit_drift_deg_h:.6f} +- "
+        f"{res.curvefit_drift_std_deg_h:.6f} deg/h (1-sigma)"
     )
     click.echo(
         f"  alignment z estimate: {res.alignment_z_drift_deg_h:.6f} +- {res.alignment_z_drift_std_deg_h:.6f} "

@@ -4,11 +4,14 @@ After alignment (``Timeline.align_h``, 4 h), the log is navigated ``Timeline.fea
 alignment's x/y gyro and accelerometer biases compensated and the z gyro NOT compensated. The features are
 the latitude at navigation hour 12 (exact state after the sample at 12 h), the hourly latitude error curve
 (hours 0-12, computed minus true, arcsec), and the system temperature over the same 12 h: at the first and
-the last navigation sample, the lowest and the highest.
+the last navigation sample, the lowest and the highest. The 12 h curve fit (`gyrodrift.curve_fit`) of the
+same navigation's latitude and longitude error curves (every 60 s) gives ``drift_curvefit_deg_h`` and its
+1-sigma ``drift_curvefit_std_deg_h``.
 
 A row of the run table (``gyrodrift.runs``): ``run`` (the log's stem), ``lat_deg``, ``lat0_deg`` (the true
-site latitude), ``temp_min_c``, ``temp_max_c``, ``temp_start_c``, ``temp_end_c`` and, when the truth is
-asked, ``drift_deg_h`` (`gyrodrift.procedure.truth`, found over 72 h in the same first read).
+site latitude), ``temp_min_c``, ``temp_max_c``, ``temp_start_c``, ``temp_end_c``, ``drift_curvefit_deg_h``,
+``drift_curvefit_std_deg_h`` and, when the truth is asked, ``drift_deg_h`` (`gyrodrift.procedure.truth`, found
+over 72 h in the same first read).
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ import math
 
 import numpy as np
 
+from gyrodrift.curve_fit import fit_error_curves
 from gyrodrift.errors import OptionError
 from gyrodrift.logs import ImuLog
 from gyrodrift.procedure.align import align_log
@@ -44,6 +48,7 @@ def _from_curve(
         raise OptionError(f"{log.label}: the features need whole hours of navigation, got {hours!r}")
     lat = float(curve.hourly_lat_deg[k])
     lat0 = float(alignment.site.lat_deg if lat0_deg is None else lat0_deg)
+    cf = fit_error_curves(curve.t_h * HOUR, curve.lat_err_arcsec, curve.lon_err_arcsec, lat0, hours=hours)
     return RunFeatures(
         run=log.name,
         lat_deg=lat,
@@ -57,6 +62,8 @@ def _from_curve(
         hours=float(hours),
         alignment=alignment,
         truth=truth,
+        drift_curvefit_deg_h=cf.drift_deg_h,
+        drift_curvefit_std_deg_h=cf.drift_std_deg_h,
     )
 
 
@@ -128,4 +135,8 @@ def features_run_table(features: list[RunFeatures], source: str = "<features>") 
         temp_max_c=np.array([f.temp_max_c for f in features], dtype=float),
         drift_deg_h=np.array([f.drift_deg_h for f in features], dtype=float),
         source=source,
+        extra={
+            name: np.array([getattr(f, name) for f in features], dtype=float)
+            for name in ("drift_curvefit_deg_h", "drift_curvefit_std_deg_h")
+        },
     )

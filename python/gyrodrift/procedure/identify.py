@@ -1,13 +1,15 @@
 """Identification of the axial drift of one run: alignment + 12 h navigation + the drift model.
 
-The model (`gyrodrift.model.DriftModel`, an LSSVR) maps the run's features (latitude at 12 h, temperature
-over the 12 h) to the axial drift [deg/h], the total constant to subtract from the z gyro. Beside it the
-result carries the physics inversion of the same latitude error (`gyrodrift.baselines.physics_inversion`)
-and the alignment's own z-drift estimate with its 1-sigma. The LSSVR has no predictive (Bayesian)
-uncertainty, so ``model_std_deg_h`` is None; instead the result carries an empirical jackknife interval
-built from the model's leave-one-out residuals on its training runs (``DriftModel.predict_interval``,
-default coverage 90 %), valid for runs exchangeable with the training runs, and the leave-one-out MAE.
-Models whose file has no residuals fall back to the fitness their tuning reached, with no interval.
+The model (`gyrodrift.model.DriftModel`: an LSSVR, or a hybrid of a physics estimate and an LSSVR correction)
+maps the run's features (latitude at 12 h, temperature over the 12 h) to the axial drift [deg/h], the total
+constant to subtract from the z gyro. Beside it the result carries the physics inversion of the same latitude
+error (`gyrodrift.baselines.physics_inversion`), the 12 h curve fit of the latitude and longitude error curves
+with its 1-sigma (`gyrodrift.curve_fit`) and the alignment's own z-drift estimate with its 1-sigma. The
+model's interval is a normalised jackknife interval (``DriftModel.predict_interval``, default coverage 90 %):
+the leave-one-out residuals of its training runs scaled by the LSSVR's predictive scale, wider where the run's
+inputs are far from the training runs'. A run outside the training runs' range (per input or jointly,
+``DriftModel.check_inputs``) is flagged (``outside_training_range``, ``range_warnings``): its drift is an
+extrapolation. ``model_std_deg_h`` stays None: the interval is empirical, not a Gaussian 1-sigma.
 """
 
 from __future__ import annotations
@@ -28,8 +30,8 @@ __all__ = ["identify", "NO_UNCERTAINTY_NOTE", "INTERVAL_NOTE"]
 
 NO_UNCERTAINTY_NOTE = "the LSSVR gives a point estimate, no predictive uncertainty"
 INTERVAL_NOTE = (
-    "jackknife interval from the model's leave-one-out residuals on its {n} training runs (empirical, for runs "
-    "like the training runs); the LSSVR itself gives no predictive uncertainty"
+    "normalised jackknife interval from the model's leave-one-out residuals on its {n} training runs, scaled by "
+    "the LSSVR's predictive scale at this run (empirical; wider away from the training runs)"
 )
 
 
@@ -93,6 +95,7 @@ def identify(
                 f"jackknife interval (needs at least {min_runs_for_coverage(coverage)})"
             )
     physics = float(physics_inversion(table, t_h=features.hours)[0])
+    check = model.check_inputs(table)
     err, kind = _training_error(model)
     al = features.alignment
     return Identification(
@@ -108,4 +111,8 @@ def identify(
         training_error_deg_h=err,
         training_error_kind=kind,
         features=features,
+        curvefit_drift_deg_h=features.drift_curvefit_deg_h,
+        curvefit_drift_std_deg_h=features.drift_curvefit_std_deg_h,
+        outside_training_range=bool(check.outside[0]),
+        range_warnings=tuple(check.messages(table)),
     )

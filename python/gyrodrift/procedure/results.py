@@ -291,7 +291,17 @@ class TrueDrift:
         }
 
 
-RUN_TABLE_COLUMNS = ("run", "lat_deg", "lat0_deg", "temp_min_c", "temp_max_c", "temp_start_c", "temp_end_c")
+RUN_TABLE_COLUMNS = (
+    "run",
+    "lat_deg",
+    "lat0_deg",
+    "temp_min_c",
+    "temp_max_c",
+    "temp_start_c",
+    "temp_end_c",
+    "drift_curvefit_deg_h",
+    "drift_curvefit_std_deg_h",
+)
 """Columns written by `gyrodrift features` (plus ``drift_deg_h`` with the truth)."""
 
 
@@ -313,6 +323,9 @@ class RunFeatures:
         Temperature over the 12 h [deg C].
     drift_deg_h : float
         The true drift when asked (`with_truth`), else NaN [deg/h].
+    drift_curvefit_deg_h, drift_curvefit_std_deg_h : float
+        The drift from the 12 h curve fit of the latitude and longitude error curves and its 1-sigma [deg/h]
+        (`gyrodrift.curve_fit`).
     hours : float
         Navigation hours of the features (12).
     alignment : Alignment
@@ -331,6 +344,8 @@ class RunFeatures:
     hours: float = 12.0
     alignment: Alignment | None = field(default=None, repr=False)
     truth: TrueDrift | None = field(default=None, repr=False)
+    drift_curvefit_deg_h: float = math.nan
+    drift_curvefit_std_deg_h: float = math.nan
 
     @property
     def lat_err_arcsec(self) -> float:
@@ -417,6 +432,12 @@ class Identification:
     training_error_kind : str or None
         ``"loo_mae"``, or the tuning objective (``"loo_mae"``, ``"train_mae"``, ``"kfold_mae"``).
     features : RunFeatures
+    curvefit_drift_deg_h, curvefit_drift_std_deg_h : float
+        The 12 h curve fit's drift and 1-sigma [deg/h] (`gyrodrift.curve_fit`).
+    outside_training_range : bool
+        The run's inputs lie outside the model's training runs' range (per input or jointly): an extrapolation.
+    range_warnings : tuple of str
+        What lies outside, one line each.
     """
 
     run: str
@@ -431,6 +452,10 @@ class Identification:
     training_error_deg_h: float | None
     training_error_kind: str | None
     features: RunFeatures = field(repr=False)
+    curvefit_drift_deg_h: float = math.nan
+    curvefit_drift_std_deg_h: float = math.nan
+    outside_training_range: bool = False
+    range_warnings: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         f = self.features
@@ -439,6 +464,10 @@ class Identification:
             "run": self.run,
             "drift_deg_h": self.drift_deg_h,
             "physics_drift_deg_h": self.physics_drift_deg_h,
+            "curvefit_drift_deg_h": self.curvefit_drift_deg_h,
+            "curvefit_drift_std_deg_h": self.curvefit_drift_std_deg_h,
+            "outside_training_range": self.outside_training_range,
+            "range_warnings": list(self.range_warnings),
             "alignment_z_drift_deg_h": self.alignment_z_drift_deg_h,
             "alignment_z_drift_std_deg_h": self.alignment_z_drift_std_deg_h,
             "model_std_deg_h": self.model_std_deg_h,

@@ -115,7 +115,8 @@ def features_csv_text(features: Sequence[RunFeatures]) -> str:
     w.writerow(cols)
     for f in features:
         r = f.row()
-        w.writerow([r[c] if c == "run" else repr(float(r[c])) for c in cols])
+        # an unknown value (NaN: e.g. no curve fit) is an empty cell, which read_runs_csv reads as unknown
+        w.writerow([r[c] if c == "run" else repr(float(r[c])) if math.isfinite(r[c]) else "" for c in cols])
     return buf.getvalue()
 
 
