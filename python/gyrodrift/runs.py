@@ -45,7 +45,16 @@ TEMPERATURE_LIMITS_C = (-100.0, 200.0)
 """Plausible system temperatures [deg C], inclusive: every reader (run tables, IMU logs) refuses the rest (a
 kelvin value such as 303, or 1e6)."""
 
-KNOWN_COLUMNS = (
+OPTIONAL_COLUMNS = (
+    "drift_std_deg_h",
+    "drift_curvefit_deg_h",
+    "drift_curvefit_std_deg_h",
+    "drift_smoother_deg_h",
+    "drift_smoother_std_deg_h",
+)
+"""Optional per-run numbers [deg/h] a table may carry (NaN where unknown); see the module docstring."""
+
+KNOWN_COLUMNS: tuple[str, ...] = (
     "run",
     "split",
     "lat_deg",
@@ -56,18 +65,8 @@ KNOWN_COLUMNS = (
     "drift_deg_h",
     "temp_start_c",
     "temp_end_c",
+    *OPTIONAL_COLUMNS,
 )
-
-OPTIONAL_COLUMNS = (
-    "drift_std_deg_h",
-    "drift_curvefit_deg_h",
-    "drift_curvefit_std_deg_h",
-    "drift_smoother_deg_h",
-    "drift_smoother_std_deg_h",
-)
-"""Optional per-run numbers [deg/h] a table may carry (NaN where unknown); see the module docstring."""
-
-KNOWN_COLUMNS = KNOWN_COLUMNS + OPTIONAL_COLUMNS
 
 
 class RunTableError(InputError):
@@ -106,7 +105,7 @@ class RunTable:
     drift_deg_h: np.ndarray
     split: np.ndarray = field(default=None)  # type: ignore[arg-type]  # filled in by __post_init__
     source: str = "<memory>"
-    extra: dict = field(default=None)  # type: ignore[assignment]  # filled in by __post_init__
+    extra: dict = field(default=None)  # type: ignore[arg-type]  # filled in by __post_init__
 
     def __post_init__(self):
         n = len(self.run)
