@@ -239,6 +239,24 @@ def test_features_of_a_run(fleet, fleet_features):
     assert math.isnan(f.drift_deg_h)
 
 
+def test_the_same_features_from_the_file_from_memory_and_from_the_scenario_on_the_fly(fleet, fleet_features):
+    """One engine, any source: the scenario simulated again chunk by chunk (nothing stored) and the file's
+    columns in memory give the file's features exactly."""
+    from gyrodrift.logs import ImuLog
+
+    table = pq.read_table(fleet[0][0])
+    scn = Scenario.from_dict(json.loads(table.schema.metadata[b"gyrodrift.scenario"]))
+    on_the_fly = extract_features(ImuLog.from_scenario(scn))
+    in_memory = extract_features(
+        ImuLog.from_arrays(
+            {c: table.column(c).to_numpy() for c in table.column_names}, rate_hz=scn.run.rate_hz, site=scn.site
+        )
+    )
+    for f in (on_the_fly, in_memory):
+        assert f.lat_deg == fleet_features[0].lat_deg
+        assert (f.temp_min_c, f.temp_max_c) == (fleet_features[0].temp_min_c, fleet_features[0].temp_max_c)
+
+
 def test_features_command_writes_a_run_table(fleet, fleet_features, tmp_path):
     out = tmp_path / "runs.csv"
     r = CliRunner().invoke(
