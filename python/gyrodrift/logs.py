@@ -32,9 +32,9 @@ Columns (order free, extra columns ignored):
   types; a bool or text column is refused); a name given twice is refused.
 
 Sample rate: the ``gyrodrift.rate_hz`` metadata of a Parquet file (a JSON number), otherwise 1 / median(dt)
-over the first 1000 intervals; it must lie in [`MIN_RATE_HZ`, `MAX_RATE_HZ`]. Every chunk is checked while it streams (a
-log is never loaded whole; an 88 h log at 200 Hz is 63 million rows), and the first problem raises `LogError`
-naming the file, row and column:
+over the first 1000 intervals, rounded to 9 significant digits; it must lie in [`MIN_RATE_HZ`, `MAX_RATE_HZ`].
+Every chunk is checked while it streams (a log is never loaded whole; an 88 h log at 200 Hz is 63 million
+rows), and the first problem raises `LogError` naming the file, row and column:
 
 * time not strictly increasing (duplicated or going back), a gap (an interval off the nominal
   1 / rate_hz by more than 1 %), NaN or empty cells, infinite values, impossible magnitudes (|rate| >
@@ -810,7 +810,9 @@ def _rate_from_times(t: np.ndarray, label: str) -> float:
     med = float(np.median(dt))
     if not med > 0.0:
         raise LogError(f"{label}: cannot tell the sample rate (time stamps do not increase)")
-    return _check_rate(1.0 / med, label, "the sample rate of the time stamps")
+    # 9 significant digits: differences of decimal time stamps make 9.99999999999998 Hz of a 10 Hz log, and the
+    # navigation would then differ (by 1e-13 deg) from the same log whose metadata says 10.
+    return _check_rate(float(f"{1.0 / med:.9g}"), label, "the sample rate of the time stamps")
 
 
 def _merge_site(given: Site | Mapping[str, float] | None, from_file: Site | None, label: str) -> Site | None:
