@@ -274,3 +274,56 @@ def test_fit_warns_on_the_search_box_edge(tmp_path):
     assert r.exit_code == 0, r.output
     assert "warning: tuned value on the edge of its search box" in r.stderr
     assert json.loads((tmp_path / "m.json").read_text())["warnings"]
+
+
+# ------------------------------------------------------------------ bad input: one line naming where
+
+
+@pytest.mark.parametrize(
+    ("cell", "message"),
+    [
+        ("-0.0002", "runs.csv, row 3, column drift_std_deg_h: expected a 1-sigma > 0 deg/h"),
+        ("abc", "runs.csv, row 3, column drift_std_deg_h: expected a number in deg/h, got 'abc'"),
+        ("50", "runs.csv, row 3, column drift_std_deg_h: |50.0| deg/h is not an RLG drift"),
+    ],
+)
+def test_bad_optional_cells_name_file_row_and_column(tmp_path, cell, message):
+    runs = _synthetic_runs(4, seed=14)
+    data = tmp_path / "runs.csv"
+    _write_csv(data, runs, np.full(4, 2e-4))
+    lines = data.read_text().splitlines()
+    lines[2] = lines[2].rsplit(",", 1)[0] + "," + cell
+    data.write_text("\n".join(lines) + "\n")
+    r = CliRunner().invoke(main, ["fit", str(data), "--out", str(tmp_path / "m.json"), "--quiet"])
+    assert r.exit_code == 1 and message in r.output and "Traceback" not in r.output
+
+
+def test_hybrid_on_a_missing_column_is_one_line(tmp_path):
+    data = tmp_path / "runs.csv"
+    _write_csv(data, _synthetic_runs(6, seed=15))
+    r = CliRunner().invoke(
+        main,
+        ["fit", str(data), "--out", str(tmp_path / "m.json"), "--physics-column", "drift_curvefit_deg_h", "--quiet"],
+    )
+    assert r.exit_code == 1 and "column drift_curvefit_deg_h" in r.output and "missing for run" in r.output
+    assert len(r.output.strip().splitlines()) == 1 and not (tmp_path / "m.json").exists()
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "message"),
+    [
+        ("target", "bogus", "unknown target 'bogus'"),
+        ("physics_column", "drift_deg_h", "unknown physics_column 'drift_deg_h'"),
+        ("label_weighting", 3, "key 'label_weighting' has the wrong type"),
+    ],
+)
+def test_edited_model_files_name_the_key(key, value, message):
+    model = fit_drift_model(_synthetic_runs(8, seed=16), encoding="physics", gamma=10.0, sigma=1.0)
+    doc = model_to_dict(model)
+    doc[key] = value
+    with pytest.raises(ValueError, match=message):
+        model_from_dict(doc, "m.json")
+    doc = model_to_dict(model)
+    doc["training"]["left_out"] = [1]
+    with pytest.raises(ValueError, match="left_out"):
+        model_from_dict(doc, "m.json")

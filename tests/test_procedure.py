@@ -342,6 +342,7 @@ def test_identify_command(fleet, model, tmp_path):
     assert doc["run"] == "run11" and doc["model_std_deg_h"] is None
     assert doc["interval_coverage"] == 0.9 and doc["interval_deg_h"][0] < doc["drift_deg_h"] < doc["interval_deg_h"][1]
     assert abs(doc["drift_deg_h"] - fleet[1][11]) < 3e-4
+    assert isinstance(doc["outside_training_range"], bool) and abs(doc["curvefit_drift_deg_h"] - fleet[1][11]) < 1e-3
     assert set(doc) >= {
         "physics_drift_deg_h",
         "alignment_z_drift_deg_h",
@@ -354,7 +355,7 @@ def test_identify_command(fleet, model, tmp_path):
     r = CliRunner().invoke(main, ["identify", str(fleet[0][11]), "--model", str(model[1]), "--quiet"])
     assert r.exit_code == 0
     assert "identified axial drift" in r.output and "90 % interval: [" in r.output
-    assert "alignment z estimate" in r.output and "physics inversion" in r.output
+    assert "alignment z estimate" in r.output and "physics inversion" in r.output and "12 h curve fit" in r.output
     assert "error on its training runs (loo_mae)" in r.output
 
 
