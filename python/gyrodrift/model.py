@@ -395,7 +395,9 @@ class InputCheck:
         """One line per run outside the training range (empty when none is)."""
         out = []
         for i in np.flatnonzero(self.outside):
-            what = ", ".join(self.outside_inputs[i]) if self.outside_inputs[i] else "no single input"
+            what = (
+                ", ".join(self.outside_inputs[i]) if self.outside_inputs[i] else "jointly: each input within its range"
+            )
             out.append(
                 f"run {runs.run[i]}: outside the training runs' range ({what}; Mahalanobis distance "
                 f"{self.mahalanobis[i]:.2f}, training maximum {self.mahalanobis_limit:.2f}): an extrapolation"
