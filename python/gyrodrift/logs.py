@@ -156,7 +156,7 @@ class LogChunk:
     dtheta_rad: np.ndarray
     dv_m_s: np.ndarray
     temp_c: np.ndarray | None = None
-    truth: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+    truth: tuple[np.ndarray, ...] | None = None
 
     def __len__(self) -> int:
         return len(self.t_s)
@@ -585,7 +585,7 @@ def _where(log: ImuLog, index: int, column: str | None = None) -> str:
     return f"{log.label}, row {row}" + ("" if column is None else f", column {column}")
 
 
-def _short(exc: BaseException) -> str:
+def _short(exc: BaseException | str) -> str:
     text = " ".join(str(exc).split())
     return text if len(text) <= 200 else text[:197] + "..."
 
@@ -932,6 +932,7 @@ def _csv_problem(log: ImuLog, message: str) -> LogError:
     label = log.label
     used = set(log._wanted())
     try:
+        assert log.path is not None  # only file logs are CSV
         reader = csv.reader(_csv_lines(log.path, label))
         header = [h.strip() for h in next(reader)]
         for row in reader:

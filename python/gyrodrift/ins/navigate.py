@@ -144,11 +144,13 @@ def _true_start(log: ImuLog) -> tuple[dict[str, Any], int] | None:
     """
     if log.site is None:
         return None
+    att: tuple[float, ...]
     if log.truth is not None:
         att, start = (log.truth.pitch_deg, log.truth.roll_deg, log.truth.yaw_deg), 0
     elif log.has_truth_columns:
-        first = next(log.chunks(1, stop=1))
-        att, start = tuple(float(c[0]) for c in first.truth), 1
+        first = next(log.chunks(1, stop=1)).truth
+        assert first is not None  # has_truth_columns: every chunk carries them
+        att, start = tuple(float(c[0]) for c in first), 1
     else:
         return None
     s = log.site
@@ -173,9 +175,8 @@ def _initial_from(initial: str | Mapping[str, Any], log: ImuLog) -> tuple[str, d
                 "attitude columns, or no site); use --initial alignment (or give the initial state)"
             )
         return "truth", {**found[0], "vel_enu_m_s": [0.0, 0.0, 0.0]}, found[1]
-    truth = None
-    if log.truth is not None and log.site is not None:
-        truth = _true_start(log)[0]
+    found = _true_start(log) if log.truth is not None else None  # the scenario's t = 0 state only
+    truth = None if found is None else found[0]
     unknown = set(initial) - set(_STATE_KEYS) - {"vel_enu_m_s"}
     if unknown:
         raise OptionError(
@@ -208,7 +209,7 @@ def navigate(
     timeline: Any = None,
     decimation_s: float = 1.0,
     vertical: str = "fixed",
-    out_dir: str | os.PathLike[str] | None = None,
+    out_dir: str | os.PathLike[str] | OutputFolder | None = None,
     chunk_samples: int = DEFAULT_CHUNK_SAMPLES,
     quiet: bool = True,
 ) -> NavResult:
@@ -350,6 +351,7 @@ def navigate(
     def keep_truth(piece, done: int) -> None:  # the true attitude at the kept samples (copied)
         first = (dec - 1 - done) % dec
         k = len(range(first, len(piece), dec))
+        assert true_deg is not None and piece.truth is not None  # only observed when the log has them
         for j, column in enumerate(piece.truth):
             true_deg[(done + first) // dec : (done + first) // dec + k, j] = column[first::dec]
 

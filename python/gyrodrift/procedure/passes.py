@@ -165,7 +165,7 @@ def navigate_after_alignment(
             )
         )
     temperature_stats = None
-    if n_temp is not None:
+    if temperature_hours is not None:
         temperature_stats = TemperatureStats(
             float(temperature_hours), temp["start"], temp["end"], float(temp["min"]), float(temp["max"])
         )
