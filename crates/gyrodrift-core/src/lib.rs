@@ -10,6 +10,8 @@
 //! - [`simulator`]: exact IMU increments of a static base with a turntable, plus the error model.
 //! - [`strapdown`]: the strapdown navigator (coning/sculling, velocity, position, attitude).
 //! - [`coarse_alignment`], [`kalman`], [`alignment`]: the static-base alignment (coarse, 12-state filter, driver).
+//! - [`smoother`]: forward filter + RTS smoother over a whole static log (the axial drift with its 1-sigma), and
+//!   the covariance analysis of the true-drift label.
 //! - [`limits`]: the ranges of the shared quantities (site, rate, attitude, samples), checked in one place.
 //! - [`error`]: [`error::CoreError`], the one error type; library code does not panic on data.
 //!
@@ -25,6 +27,7 @@ pub mod imu_error;
 pub mod kalman;
 pub mod limits;
 pub mod simulator;
+pub mod smoother;
 pub mod strapdown;
 pub mod temperature;
 pub mod turntable;

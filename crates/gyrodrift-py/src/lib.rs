@@ -4,6 +4,7 @@
 
 mod alignment;
 mod config;
+mod smoother;
 
 use config::{AlignerConfig, NavigatorConfig, SimulatorConfig};
 
@@ -481,5 +482,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<ImuSimulator>()?;
     m.add_class::<Navigator>()?;
     m.add_class::<alignment::Aligner>()?;
+    m.add_class::<smoother::SmootherConfig>()?;
+    m.add_class::<smoother::Smoother>()?;
+    m.add_function(wrap_pyfunction!(smoother::label_sigma, m)?)?;
     Ok(())
 }

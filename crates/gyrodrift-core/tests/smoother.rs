@@ -1,0 +1,175 @@
+//! The full-information smoother against the simulator: the drift of noise-free logs, the consistency of its
+//! 1-sigma over seeds, and the label covariance analysis against its closed-form latitude law.
+
+use gyrodrift_core::alignment::{DEG_PER_HOUR, MICRO_G};
+use gyrodrift_core::attitude::Euler;
+use gyrodrift_core::imu_error::ImuErrorParams;
+use gyrodrift_core::simulator::{ImuChunk, ImuSimulator, ImuSimulatorConfig};
+use gyrodrift_core::smoother::{label_sigma, LabelConfig, Smoother, SmootherConfig, SmootherResult};
+use gyrodrift_core::turntable::RotationScheme;
+use std::f64::consts::PI;
+
+const DEG: f64 = PI / 180.0;
+const RATE_HZ: f64 = 5.0;
+const SPAN_S: f64 = 8.0 * 3600.0;
+const ARW: f64 = 0.0005 * DEG / 60.0;
+const VRW: f64 = 5.0 * MICRO_G;
+
+fn sim(lat_deg: f64, drift_deg_h: f64, scheme: RotationScheme, seed: u64, noise: bool) -> ImuSimulatorConfig {
+    ImuSimulatorConfig {
+        lat: lat_deg * DEG,
+        rate_hz: RATE_HZ,
+        duration_s: SPAN_S,
+        seed,
+        attitude: Euler {
+            pitch: 0.2 * DEG,
+            roll: -0.1 * DEG,
+            yaw: 30.0 * DEG,
+        },
+        scheme,
+        errors: ImuErrorParams {
+            gyro_bias: [0.004 * DEG_PER_HOUR, -0.003 * DEG_PER_HOUR, drift_deg_h * DEG_PER_HOUR],
+            accel_bias: [20.0 * MICRO_G, -10.0 * MICRO_G, 5.0 * MICRO_G],
+            gyro_arw: if noise { ARW } else { 0.0 },
+            accel_vrw: if noise { VRW } else { 0.0 },
+            ..Default::default()
+        },
+        ..Default::default()
+    }
+}
+
+fn smooth(sim_cfg: ImuSimulatorConfig) -> SmootherResult {
+    let mut cfg = SmootherConfig::new(sim_cfg.lat, sim_cfg.lon, sim_cfg.height, sim_cfg.rate_hz);
+    cfg.span_s = SPAN_S;
+    let mut s = ImuSimulator::new(sim_cfg).unwrap();
+    let mut sm = Smoother::new(cfg).unwrap();
+    let mut ch = ImuChunk::default();
+    while !sm.done() && s.next_chunk(50_000, &mut ch) > 0 {
+        sm.process(&ch.dtheta, &ch.dv).unwrap();
+    }
+    sm.result().unwrap()
+}
+
+fn reciprocating() -> RotationScheme {
+    RotationScheme::Reciprocating {
+        rate: 6.0 * DEG,
+        accel: 10.0 * DEG,
+        span: 2.0 * PI,
+        dwell: 0.0,
+    }
+}
+
+#[test]
+fn noise_free_logs_give_the_simulated_drift() {
+    let schemes = [
+        reciprocating(),
+        RotationScheme::Continuous {
+            rate: 6.0 * DEG,
+            accel: 10.0 * DEG,
+        },
+    ];
+    for scheme in schemes {
+        for lat in [20.0, 40.0, 60.0] {
+            for drift in [0.003, 0.05] {
+                let r = smooth(sim(lat, drift, scheme.clone(), 1, false));
+                let err = r.drift / DEG_PER_HOUR - drift;
+                println!(
+                    "{scheme:?} {lat} deg, {drift} deg/h: error {err:.1e} deg/h, 1-sigma {:.1e}, largest attitude \
+                     correction after 1 h {:.1e} rad, velocity {:.1e} m/s, position {:.3} m",
+                    r.drift_std / DEG_PER_HOUR,
+                    r.max_attitude_correction,
+                    r.max_velocity_correction,
+                    r.max_position_error
+                );
+                assert!(err.abs() < 1e-5, "{err}");
+                // The linear regime: arcsecond-free corrections, mm/s, centimetres.
+                assert!(r.max_attitude_correction < 1e-6 && r.max_position_error < 1.0);
+                assert!((r.drift_end - r.drift).abs() < 1e-12 * DEG_PER_HOUR + 1e-3 * r.drift_std);
+                // The smoothed history of a constant is that constant.
+                for (d, s) in r.hist_drift.iter().zip(&r.hist_drift_std) {
+                    assert!((d - r.drift).abs() < 0.01 * r.drift_std, "{d} {}", r.drift);
+                    assert!((s / r.drift_std - 1.0).abs() < 1e-3);
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn white_noise_z_scores_have_unit_rms() {
+    // 12 seeds (the 30-seed runs are in benchmarks/bench_smoother.py and docs/identification.md).
+    let mut z2 = 0.0;
+    let n = 12;
+    for seed in 0..n {
+        let r = smooth(sim(40.0, 0.003, reciprocating(), 100 + seed, true));
+        let z = (r.drift / DEG_PER_HOUR - 0.003) / (r.drift_std / DEG_PER_HOUR);
+        z2 += z * z;
+    }
+    let rms = (z2 / n as f64).sqrt();
+    println!("z-score rms over {n} seeds: {rms:.2}");
+    assert!((0.6..1.5).contains(&rms), "{rms}");
+}
+
+#[test]
+fn label_sigma_follows_one_over_sin_cos_latitude() {
+    let at = |lat_deg: f64| {
+        label_sigma(&LabelConfig {
+            lat: lat_deg * DEG,
+            height: 0.0,
+            span_s: 72.0 * 3600.0,
+            step_s: 60.0,
+            gyro_arw: ARW,
+            accel_vrw: VRW,
+            att_sigma: [0.0; 3],
+            vel_sigma: 0.0,
+            rms: false,
+        })
+        .unwrap()
+    };
+    let s45 = at(45.0).drift_std;
+    for lat in [10.0, 80.0] {
+        let law = s45 * (0.5 / ((lat * DEG).sin() * (lat * DEG).cos()));
+        let ratio = at(lat).drift_std / law;
+        println!(
+            "{lat} deg: {:.2e} deg/h, {ratio:.3} of the 1/(sin L cos L) law",
+            at(lat).drift_std / DEG_PER_HOUR
+        );
+        assert!((0.8..1.25).contains(&ratio), "{ratio}");
+    }
+    // method.md: 1.5-1.7e-4 deg/h at 40 deg for this grade (ARW 0.0005 deg/sqrt(h), 72 h).
+    let s40 = at(40.0).drift_std / DEG_PER_HOUR;
+    assert!((1.0e-4..2.5e-4).contains(&s40), "{s40}");
+    assert!(label_sigma(&LabelConfig {
+        gyro_arw: f64::NAN,
+        ..LabelConfig {
+            lat: 0.5,
+            height: 0.0,
+            span_s: 3600.0,
+            step_s: 60.0,
+            gyro_arw: 0.0,
+            accel_vrw: 0.0,
+            att_sigma: [0.0; 3],
+            vel_sigma: 0.0,
+            rms: true
+        }
+    })
+    .is_err());
+}
+
+#[test]
+fn settings_are_checked_and_results_wait_for_the_span() {
+    let mut cfg = SmootherConfig::new(0.7, 0.0, 0.0, 10.0);
+    cfg.update_s = 0.5;
+    assert_eq!(Smoother::new(cfg.clone()).unwrap_err().key(), "update_s");
+    cfg.update_s = 10.0;
+    cfg.gyro_arw = 0.0;
+    assert_eq!(Smoother::new(cfg.clone()).unwrap_err().key(), "gyro_arw_rad_rts");
+    cfg.gyro_arw = ARW;
+    cfg.span_s = 100.0;
+    assert_eq!(Smoother::new(cfg.clone()).unwrap_err().key(), "span_s");
+    cfg.span_s = 3600.0;
+    let mut sm = Smoother::new(cfg).unwrap();
+    assert!(sm.result().is_err());
+    assert!(sm.process(&[f64::NAN, 0.0, 0.0], &[0.0, 0.0, 9.8]).is_err());
+    assert_eq!(sm.samples_done(), 0);
+}
