@@ -43,16 +43,24 @@ class _OneLineErrors(click.Group):
             raise click.ClickException(one_line_message(exc)) from None
 
 
-@click.group(cls=_OneLineErrors)
+@click.group(
+    cls=_OneLineErrors,
+    epilog="Example: gyrodrift simulate examples/scenarios/tour.toml --out sim && gyrodrift truth sim/imu.parquet "
+    "(the whole tour: README.md; the conventions shared by every command: docs/cli.md)",
+)
 @click.version_option(__version__, prog_name="gyrodrift")
 def main() -> None:
-    """Identify the axial gyro drift of single-axis rotation RLG inertial navigation systems."""
+    """Identify the axial gyro drift of single-axis rotation RLG inertial navigation systems.
+
+    Every command reads its inputs as arguments and options in SI-with-unit names (--drift-deg-h, --hours),
+    writes with --out, prints JSON with --json and stays silent with --quiet.
+    """
 
 
 def _register_commands() -> None:
-    from gyrodrift.cli import export, learning, navigation, procedure, sensors
+    from gyrodrift.cli import campaign, export, learning, navigation, procedure, sensors
 
-    for module in (learning, navigation, procedure, sensors, export):
+    for module in (learning, navigation, procedure, sensors, export, campaign):
         for command in module.COMMANDS:
             main.add_command(command)
 

@@ -1,0 +1,882 @@
+"""Fleet campaigns: a campaign file -> many simulated runs, processed in workers, stored run by run (issue 11).
+
+A campaign file (TOML, docs/campaigns.md) holds
+
+- ``[campaign]``: ``name``, ``count`` (runs), ``seed`` (integer >= 0);
+- ``[base]``: a scenario (the sections and keys of docs/scenarios.md) every run starts from;
+- ``[grades.NAME]``: optional noise grades, each a table of noise keys (``arw_deg_rth``, ``vrw_ug_rthz``,
+  ``bias_instability_deg_h``, ``correlation_s``, ``rrw_deg_h_rth``) set on the run's gyro/accel;
+- ``[vary."SECTION.KEY"]`` or ``[vary."SECTION.KEY[i]"]`` (one element of a vector key) and ``[vary.grade]``:
+  a distribution, ``dist`` = ``uniform`` (``low``, ``high``), ``normal`` (``mean``, ``std``), ``log_uniform``
+  (``low`` > 0, ``high``) or ``choice`` (``values``, a list).
+
+Run ``i`` (0-based) draws its parameters and its simulator seed from ``numpy.random.SeedSequence(seed,
+spawn_key=(i,))`` (the i-th child of ``SeedSequence(seed).spawn``): any run is regenerated alone, whatever the
+count, the order of completion or the workers (`Campaign.scenario`).
+
+Per run (`process_run`, in the worker; nothing written there): the scenario is simulated on the fly
+(`gyrodrift.logs.ImuLog.from_scenario`), aligned, navigated for the 12 h features and the 72 h truth
+(`extract_features` with the truth: one read for both), the 12 h curve fit; the linear 72 h error curves
+(north/east error of the uncompensated navigation and their sensitivity per deg/h of compensated drift, the
+secant between two navigated drifts), from which the position error after compensating any drift ``d`` is
+``hypot(n0 + d gn, e0 + d ge)`` without navigating again; the smoother estimate (when
+`gyrodrift.procedure.smoother` exists); and the simulated effective drift, the truth of the run's noise-free
+twin (same scenario and seed, ARW/VRW/bias instability/RRW off). A run that fails is a row with its error.
+
+The store (`CampaignStore`, folder ``DIR``): ``DIR/campaign.toml`` (the campaign file as given),
+``DIR/campaign.json`` (its resolved content and hash), ``DIR/runs/run-NNNNNN.parquet`` (one row per run,
+each written atomically by `gyrodrift.atomic.atomic_write`). A run is done when its file exists; a rerun
+skips it, so an interrupted campaign (SIGINT, kill -9 of the client or of a worker) resumes without duplicates
+or half-written runs. The results are one Parquet dataset (`read_runs`, ``pyarrow.dataset`` over ``DIR/runs``).
+"""
+
+from __future__ import annotations
+
+import concurrent.futures
+import hashlib
+import importlib.util
+import json
+import math
+import multiprocessing
+import os
+import re
+import socket
+import time
+import tomllib
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from gyrodrift.errors import InputError, OptionError, OutputError
+
+__all__ = [
+    "CAMPAIGN_FORMAT",
+    "Campaign",
+    "CampaignError",
+    "CampaignRuns",
+    "CampaignStore",
+    "CampaignSummary",
+    "Distribution",
+    "NOISE_KEYS",
+    "linear_error_nmi",
+    "load_campaign",
+    "process_run",
+    "read_runs",
+    "run_campaign",
+    "run_table",
+    "write_run_table",
+]
+
+CAMPAIGN_FORMAT = "gyrodrift-campaign/1"
+DISTRIBUTIONS = {
+    "uniform": ("low", "high"),
+    "normal": ("mean", "std"),
+    "log_uniform": ("low", "high"),
+    "choice": ("values",),
+}
+NOISE_KEYS = {
+    "arw_deg_rth": "gyro",
+    "bias_instability_deg_h": "gyro",
+    "correlation_s": "gyro",
+    "rrw_deg_h_rth": "gyro",
+    "vrw_ug_rthz": "accel",
+}
+"""Noise-grade keys and the scenario section each sets; the noise-free twin sets every one but correlation_s to 0."""
+TWIN_OFF = ("arw_deg_rth", "bias_instability_deg_h", "rrw_deg_h_rth", "vrw_ug_rthz")
+TIMELINE_KEYS = ("align_h", "features_h", "truth_h")
+"""`[options]` keys shortening the procedure's time line (tests and quick looks; default 4 h, 12 h, 72 h)."""
+_PATH_RE = re.compile(r"^(?P<section>[a-z_]+)\.(?P<key>[a-z0-9_]+)(?:\[(?P<index>[0-9]+)\])?$")
+_RUN_FILE_RE = re.compile(r"^run-(?P<index>[0-9]{6})\.parquet$")
+CURVE_COLUMNS = ("curve_t_h", "curve_north0_m", "curve_east0_m", "curve_north_per_deg_h", "curve_east_per_deg_h")
+"""The linear 72 h error curves of a run (float32 lists): time since the end of alignment [h], uncompensated
+north/east position error [m], and their change per deg/h of compensated z drift [m/(deg/h)]."""
+
+
+class CampaignError(InputError):
+    """A campaign file or folder that cannot be used (the message names the file and key)."""
+
+
+@dataclass(frozen=True)
+class Distribution:
+    """One parameter's distribution: ``kind`` in ``DISTRIBUTIONS`` and its arguments."""
+
+    kind: str
+    args: tuple[Any, ...]
+
+    def sample(self, rng: np.random.Generator) -> Any:
+        """One draw (a float, or one of the ``choice`` values)."""
+        if self.kind == "uniform":
+            return float(rng.uniform(self.args[0], self.args[1]))
+        if self.kind == "normal":
+            return float(rng.normal(self.args[0], self.args[1]))
+        if self.kind == "log_uniform":
+            return float(math.exp(rng.uniform(math.log(self.args[0]), math.log(self.args[1]))))
+        values = self.args[0]
+        return values[int(rng.integers(len(values)))]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"dist": self.kind, **dict(zip(DISTRIBUTIONS[self.kind], self.args, strict=True))}
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """What defines run ``index``: its id, simulator seed, sampled parameters and scenario mapping."""
+
+    index: int
+    run: str
+    seed: int
+    params: dict[str, Any]
+    grade: str | None
+    scenario: dict[str, dict[str, Any]]
+
+
+@dataclass(frozen=True)
+class Campaign:
+    """A validated campaign (`load_campaign`). ``source`` names the file in error messages."""
+
+    name: str
+    count: int
+    seed: int
+    base: dict[str, dict[str, Any]]
+    vary: dict[str, Distribution]
+    grades: dict[str, dict[str, float]] = field(default_factory=dict)
+    source: str = "<campaign>"
+    options: dict[str, Any] = field(default_factory=dict)
+
+    def resolved(self) -> dict[str, Any]:
+        """The content that defines the runs (JSON-able); two campaigns with the same one give the same runs."""
+        return {
+            "format": CAMPAIGN_FORMAT,
+            "name": self.name,
+            "count": self.count,
+            "seed": self.seed,
+            "base": self.base,
+            "grades": self.grades,
+            "vary": {k: v.to_dict() for k, v in sorted(self.vary.items())},
+            "options": self.options,
+        }
+
+    def digest(self) -> str:
+        """SHA-256 of `resolved` (canonical JSON): what a store compares to refuse another campaign."""
+        text = json.dumps(self.resolved(), sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(text.encode()).hexdigest()
+
+    @property
+    def param_names(self) -> list[str]:
+        """The varied parameters in sampling order (sorted paths; ``grade`` last)."""
+        return sorted(k for k in self.vary if k != "grade") + (["grade"] if "grade" in self.vary else [])
+
+    def spec(self, index: int) -> RunSpec:
+        """Run `index`: parameters drawn from ``SeedSequence(seed, spawn_key=(index,))``."""
+        if not 0 <= index < self.count:
+            raise OptionError(f"run {index} is not in this campaign (0 .. {self.count - 1})")
+        ss = np.random.SeedSequence(self.seed, spawn_key=(index,))
+        params_ss, noise_ss = ss.spawn(2)
+        rng = np.random.default_rng(params_ss)
+        seed = int(noise_ss.generate_state(1, np.uint64)[0] >> np.uint64(1))  # 63 bits: an int64 column
+        scenario = json.loads(json.dumps(self.base))
+        scenario.setdefault("run", {})["seed"] = seed
+        params: dict[str, Any] = {}
+        grade = None
+        for name in self.param_names:
+            value = self.vary[name].sample(rng)
+            params[name] = value
+            if name == "grade":
+                grade = str(value)
+                for key, v in self.grades[grade].items():
+                    scenario.setdefault(NOISE_KEYS[key], {})[key] = v
+            else:
+                _set_path(scenario, name, value, self.base_defaults())
+        return RunSpec(index, run_id(index), seed, params, grade, scenario)
+
+    def base_defaults(self) -> dict[str, dict[str, Any]]:
+        from gyrodrift.ins.scenario import Scenario
+
+        return Scenario().to_toml_dict()
+
+    def scenario(self, index: int, *, noise: bool = True):
+        """The `gyrodrift.ins.Scenario` of run `index`; ``noise=False`` is its noise-free twin."""
+        from gyrodrift.ins.scenario import Scenario
+
+        data = self.spec(index).scenario
+        if not noise:
+            for key in TWIN_OFF:
+                data.setdefault(NOISE_KEYS[key], {})[key] = 0.0
+        return Scenario.from_dict(data, source=f"{self.source} run {index}")
+
+
+def run_id(index: int) -> str:
+    """The run's id in tables and file names: ``r000042``."""
+    return f"r{index:06d}"
+
+
+def _set_path(scenario: dict, path: str, value: Any, defaults: Mapping[str, Mapping[str, Any]]) -> None:
+    m = _PATH_RE.match(path)
+    assert m is not None  # checked by load_campaign
+    sec, key, index = m["section"], m["key"], m["index"]
+    table = scenario.setdefault(sec, {})
+    if index is None:
+        table[key] = value
+    else:
+        vec = list(table.get(key, defaults[sec][key]))
+        vec[int(index)] = value
+        table[key] = vec
+
+
+def _fail(source: str, key: str, msg: str) -> CampaignError:
+    return CampaignError(f"{source}: {key}: {msg}")
+
+
+def _number(source: str, where: str, v: Any) -> float:
+    if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+        raise _fail(source, where, f"expected a finite number, got {v!r}")
+    return float(v)
+
+
+def _distribution(source: str, where: str, table: Any) -> Distribution:
+    if not isinstance(table, dict):
+        raise _fail(source, where, f"expected a table with dist = one of {', '.join(DISTRIBUTIONS)}")
+    kind = table.get("dist")
+    if kind not in DISTRIBUTIONS:
+        raise _fail(source, f"{where}.dist", f"expected one of {', '.join(DISTRIBUTIONS)}, got {kind!r}")
+    names = DISTRIBUTIONS[kind]
+    unknown = sorted(set(table) - {"dist", *names})
+    missing = [n for n in names if n not in table]
+    if unknown or missing:
+        raise _fail(
+            source,
+            where,
+            f"dist = {kind!r} takes {', '.join(names)}" + (f"; unknown {unknown[0]!r}" if unknown else ""),
+        )
+    if kind == "choice":
+        values = table["values"]
+        if not isinstance(values, list) or not values:
+            raise _fail(source, f"{where}.values", "expected a non-empty list")
+        return Distribution(kind, (tuple(values),))
+    a, b = (_number(source, f"{where}.{n}", table[n]) for n in names)
+    if kind == "normal" and not b >= 0:
+        raise _fail(source, f"{where}.std", f"must be >= 0, got {b:g}")
+    if kind in ("uniform", "log_uniform") and not a <= b:
+        raise _fail(source, f"{where}.high", f"must be >= low ({a:g}), got {b:g}")
+    if kind == "log_uniform" and not a > 0:
+        raise _fail(source, f"{where}.low", f"must be > 0 for log_uniform, got {a:g}")
+    return Distribution(kind, (a, b))
+
+
+def parse_campaign(data: Mapping[str, Any], source: str = "<campaign>") -> Campaign:
+    """Validate a TOML-shaped mapping into a `Campaign` (every error names `source` and the key)."""
+    from gyrodrift.ins.scenario import Scenario
+
+    unknown = sorted(set(data) - {"campaign", "base", "vary", "grades", "options"})
+    if unknown:
+        raise _fail(source, f"[{unknown[0]}]", "unknown section (expected campaign, base, vary, grades, options)")
+    head = data.get("campaign", {})
+    if not isinstance(head, dict):
+        raise _fail(source, "[campaign]", "expected a table")
+    bad = sorted(set(head) - {"name", "count", "seed"})
+    if bad:
+        raise _fail(source, f"[campaign] {bad[0]}", "unknown key (expected name, count, seed)")
+    count, seed = head.get("count"), head.get("seed", 0)
+    for key, v in (("count", count), ("seed", seed)):
+        if isinstance(v, bool) or not isinstance(v, int) or v < (1 if key == "count" else 0):
+            raise _fail(source, f"[campaign] {key}", f"expected an integer >= {1 if key == 'count' else 0}, got {v!r}")
+    if count > 1_000_000:
+        raise _fail(source, "[campaign] count", f"at most 1000000 runs, got {count}")
+    name = head.get("name", Path(source).stem)
+    if not isinstance(name, str):
+        raise _fail(source, "[campaign] name", f"expected a string, got {name!r}")
+    base = data.get("base", {})
+    if not isinstance(base, dict):
+        raise _fail(source, "[base]", "expected a scenario table (docs/scenarios.md)")
+    Scenario.from_dict(base, source=f"{source}: [base]")  # scenario errors name the file and key
+    defaults = Scenario().to_toml_dict()
+    grades: dict[str, dict[str, float]] = {}
+    for gname, g in (data.get("grades") or {}).items():
+        if not isinstance(g, dict) or not g:
+            raise _fail(source, f"[grades.{gname}]", f"expected a table of {', '.join(NOISE_KEYS)}")
+        for key, v in g.items():
+            if key not in NOISE_KEYS:
+                raise _fail(
+                    source, f"[grades.{gname}] {key}", f"unknown noise key (expected one of {', '.join(NOISE_KEYS)})"
+                )
+            _number(source, f"[grades.{gname}] {key}", v)
+        grades[gname] = {k: float(v) for k, v in g.items()}
+    vary: dict[str, Distribution] = {}
+    for path, table in (data.get("vary") or {}).items():
+        where = f'[vary."{path}"]'
+        dist = _distribution(source, where, table)
+        if path == "grade":
+            if dist.kind != "choice":
+                raise _fail(source, f"{where}.dist", "the noise grade takes dist = 'choice' over [grades] names")
+            for v in dist.args[0]:
+                if v not in grades:
+                    raise _fail(
+                        source, f"{where}.values", f"unknown grade {v!r} (defined: {', '.join(grades) or 'none'})"
+                    )
+        else:
+            m = _PATH_RE.match(path)
+            if m is None or m["section"] not in defaults or m["key"] not in defaults[m["section"]]:
+                raise _fail(source, where, "expected a scenario key SECTION.KEY or SECTION.KEY[i] of docs/scenarios.md")
+            if m["key"] == "seed":
+                raise _fail(source, where, "the seed of each run derives from [campaign] seed; it is not varied")
+            default = defaults[m["section"]][m["key"]]
+            if isinstance(default, list) != (m["index"] is not None):
+                raise _fail(
+                    source,
+                    where,
+                    f"{'a vector key takes an index [i]' if isinstance(default, list) else 'not a vector key'}",
+                )
+            if m["index"] is not None and int(m["index"]) >= len(default):
+                raise _fail(source, where, f"index out of range (the key has {len(default)} elements)")
+        vary[path] = dist
+    if grades and "grade" not in vary:
+        raise _fail(source, "[vary.grade]", "grades are defined but no [vary.grade] chooses among them")
+    options = dict(data.get("options") or {})
+    bad = sorted(set(options) - {"smoother", *TIMELINE_KEYS})
+    if bad:
+        raise _fail(source, f"[options] {bad[0]}", f"unknown key (expected smoother, {', '.join(TIMELINE_KEYS)})")
+    if "smoother" in options and not isinstance(options["smoother"], bool):
+        raise _fail(source, "[options] smoother", f"expected true or false, got {options['smoother']!r}")
+    for key in TIMELINE_KEYS:
+        if key in options:
+            v = _number(source, f"[options] {key}", options[key])
+            if not v > 0 or (key == "features_h" and v != int(v)):
+                raise _fail(
+                    source,
+                    f"[options] {key}",
+                    f"expected {'whole ' if key == 'features_h' else ''}hours > 0, got {v:g}",
+                )
+    try:
+        _timeline(options)
+    except ValueError as exc:
+        raise _fail(source, "[options]", str(exc)) from None
+    campaign = Campaign(name, count, seed, base, vary, grades, source, options)
+    campaign.scenario(0)  # a sampled run must be a valid scenario too (errors name the run)
+    return campaign
+
+
+def load_campaign(path: str | os.PathLike[str]) -> Campaign:
+    """Read and validate a campaign file (TOML); `CampaignError` naming the file and key otherwise."""
+    p = Path(path)
+    try:
+        data = tomllib.loads(p.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        raise CampaignError(f"{p}: not a valid TOML file: {exc}") from None
+    except UnicodeDecodeError:
+        raise CampaignError(f"{p}: not a UTF-8 text file") from None
+    return parse_campaign(data, source=str(p))
+
+
+# --- per-run processing (in the worker) ------------------------------------------------------------------
+
+
+def _timeline(options: Mapping[str, Any]):
+    from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
+
+    d = DEFAULT_TIMELINE
+    return Timeline(
+        align_h=float(options.get("align_h", d.align_h)),
+        features_h=float(options.get("features_h", d.features_h)),
+        truth_h=float(options.get("truth_h", d.truth_h)),
+        coarse_s=d.coarse_s,
+    )
+
+
+def smoother_available() -> bool:
+    """True once `gyrodrift.procedure.smoother` exists (the 16 h Kalman smoother, issue 10 item 2)."""
+    return importlib.util.find_spec("gyrodrift.procedure.smoother") is not None
+
+
+def _smoother_step(log, scenario, timeline) -> tuple[float, float]:
+    """The 16 h smoother's z drift and 1-sigma [deg/h] with the scenario's noise model (NaN, NaN when the module
+    is absent)."""
+    if not smoother_available():
+        return math.nan, math.nan
+    from gyrodrift.procedure.smoother import smooth_log
+
+    data = scenario.to_toml_dict()
+    noise = {"gyro": data["gyro"], "accel": data["accel"]}
+    res = smooth_log(log, timeline=timeline, noise=noise)
+    return float(res.drift_deg_h), float(res.drift_std_deg_h)
+
+
+def linear_error_nmi(north0_m, east0_m, north_per_deg_h, east_per_deg_h, drift_deg_h) -> np.ndarray:
+    """Position error [nmi] after compensating `drift_deg_h` [deg/h], from linear error curves (north/east [m]
+    and their sensitivities [m/(deg/h)]; numpy broadcasting)."""
+    from gyrodrift.earth import NMI_M
+
+    n = np.asarray(north0_m, float) + drift_deg_h * np.asarray(north_per_deg_h, float)
+    e = np.asarray(east0_m, float) + drift_deg_h * np.asarray(east_per_deg_h, float)
+    return np.hypot(n, e) / NMI_M
+
+
+def process_run(campaign: Campaign, index: int, *, chunk_samples: int = 100_000) -> dict[str, Any]:
+    """Everything the study needs about run `index`, as one row (see the module docstring); never raises for a
+    failing run (the row carries ``error``)."""
+    spec = campaign.spec(index)
+    row: dict[str, Any] = {"run": spec.run, "index": index, "seed": spec.seed, "grade": spec.grade}
+    row.update({param_column(k): v for k, v in spec.params.items() if k != "grade"})
+    row["worker"] = f"{socket.gethostname()}-{os.getpid()}"
+    t_start = time.perf_counter()
+    try:
+        row.update(_measure(campaign, index, chunk_samples))
+        row["error"] = None
+    except Exception as exc:  # a failed run is a row with its error; the campaign goes on
+        row["error"] = f"{type(exc).__name__}: {' '.join(str(exc).split())}"[:2000]
+    row["t_total_s"] = time.perf_counter() - t_start
+    return row
+
+
+def param_column(name: str) -> str:
+    """The run-table column of a varied parameter: ``site.lat_deg`` -> ``param_site_lat_deg``."""
+    return "param_" + re.sub(r"[^a-z0-9_]+", "_", name).strip("_")
+
+
+def _measure(campaign: Campaign, index: int, chunk_samples: int) -> dict[str, Any]:
+    from gyrodrift.logs import ImuLog
+    from gyrodrift.procedure import align_log, extract_features, find_true_drift, navigate_after_alignment
+
+    out: dict[str, Any] = {}
+    scn = campaign.scenario(index)
+    out["arw_deg_rth"] = scn.gyro.arw_deg_rth
+    out["vrw_ug_rthz"] = scn.accel.vrw_ug_rthz
+    log = ImuLog.from_scenario(scn)
+    timeline = _timeline(campaign.options)
+    t = time.perf_counter()
+    alignment = align_log(log, timeline=timeline, chunk_samples=chunk_samples)
+    out["t_align_s"] = time.perf_counter() - t
+    t = time.perf_counter()
+    f = extract_features(log, with_truth=True, timeline=timeline, alignment=alignment, chunk_samples=chunk_samples)
+    truth = f.truth
+    assert truth is not None
+    base, opt = truth.base, truth.optimum
+    d_star = truth.drift_deg_h
+    if abs(d_star) >= 2e-4:  # the secant 0 -> d*: exact at both ends, estimates fall between or near them
+        lo, hi, dd = base, opt, d_star
+    else:  # too close to 0 for a secant: one more pass 0.001 deg/h away from d*
+        extra = navigate_after_alignment(log, alignment, [d_star + 1e-3], truth.hours, chunk_samples=chunk_samples)
+        lo, hi, dd = opt, extra.curves[0], 1e-3
+        base_shift = d_star  # express the curves about d = 0
+    gn = (hi.north_m - lo.north_m) / dd
+    ge = (hi.east_m - lo.east_m) / dd
+    n0, e0 = base.north_m, base.east_m
+    if abs(d_star) < 2e-4:
+        n0, e0 = opt.north_m - base_shift * gn, opt.east_m - base_shift * ge
+    out["t_passes_s"] = time.perf_counter() - t
+    out.update(
+        lat0_deg=f.lat0_deg,
+        lat_deg=f.lat_deg,
+        temp_start_c=f.temp_start_c,
+        temp_end_c=f.temp_end_c,
+        temp_min_c=f.temp_min_c,
+        temp_max_c=f.temp_max_c,
+        drift_deg_h=d_star,
+        drift_std_deg_h=float(getattr(truth, "drift_std_deg_h", math.nan) or math.nan),
+        truth_verified=bool(truth.verified),
+        drift_curvefit_deg_h=f.drift_curvefit_deg_h,
+        drift_curvefit_std_deg_h=f.drift_curvefit_std_deg_h,
+        drift_align_deg_h=alignment.gyro_bias_deg_h[2],
+        drift_align_std_deg_h=alignment.gyro_bias_std_deg_h[2],
+        uncompensated_final_nmi=truth.uncompensated_nmi,
+        hours_truth=truth.hours,
+    )
+    out.update(
+        curve_t_h=np.asarray(base.t_h, np.float32).tolist(),
+        curve_north0_m=np.asarray(n0, np.float32).tolist(),
+        curve_east0_m=np.asarray(e0, np.float32).tolist(),
+        curve_north_per_deg_h=np.asarray(gn, np.float32).tolist(),
+        curve_east_per_deg_h=np.asarray(ge, np.float32).tolist(),
+    )
+    # --- the 16 h smoother: one more step when gyrodrift.procedure.smoother exists (issue 10 item 2) ---
+    t = time.perf_counter()
+    out["drift_smoother_deg_h"], out["drift_smoother_std_deg_h"] = math.nan, math.nan
+    out["smoother_error"] = None
+    if campaign.options.get("smoother", True):
+        try:  # a smoother failure is recorded beside the run's other results, which stay valid
+            out["drift_smoother_deg_h"], out["drift_smoother_std_deg_h"] = _smoother_step(log, scn, timeline)
+        except Exception as exc:
+            out["smoother_error"] = f"{type(exc).__name__}: {' '.join(str(exc).split())}"[:2000]
+    out["t_smoother_s"] = time.perf_counter() - t
+    t = time.perf_counter()
+    twin = ImuLog.from_scenario(campaign.scenario(index, noise=False))
+    out["drift_effective_deg_h"] = find_true_drift(twin, timeline=timeline, chunk_samples=chunk_samples).drift_deg_h
+    out["t_twin_s"] = time.perf_counter() - t
+    return out
+
+
+# --- the store -----------------------------------------------------------------------------------------
+
+
+def _schema(campaign: Campaign):
+    import pyarrow as pa
+
+    f64, s = pa.float64(), pa.string()
+    fields = [("run", s), ("index", pa.int64()), ("seed", pa.int64()), ("grade", s)]
+    for name in campaign.param_names:
+        if name == "grade":
+            continue
+        kind = campaign.vary[name]
+        numeric = kind.kind != "choice" or all(
+            isinstance(v, int | float) and not isinstance(v, bool) for v in kind.args[0]
+        )
+        fields.append((param_column(name), f64 if numeric else s))
+    fields += [(c, f64) for c in ("arw_deg_rth", "vrw_ug_rthz", "lat0_deg", "lat_deg")]
+    fields += [(c, f64) for c in ("temp_start_c", "temp_end_c", "temp_min_c", "temp_max_c")]
+    fields += [
+        (c, f64)
+        for c in (
+            "drift_deg_h",
+            "drift_std_deg_h",
+            "drift_effective_deg_h",
+            "drift_curvefit_deg_h",
+            "drift_curvefit_std_deg_h",
+            "drift_smoother_deg_h",
+            "drift_smoother_std_deg_h",
+            "drift_align_deg_h",
+            "drift_align_std_deg_h",
+            "uncompensated_final_nmi",
+            "hours_truth",
+        )
+    ]
+    fields.append(("truth_verified", pa.bool_()))
+    fields += [(c, f64) for c in ("t_align_s", "t_passes_s", "t_smoother_s", "t_twin_s", "t_total_s")]
+    fields += [("error", s), ("smoother_error", s), ("worker", s)]
+    fields += [(c, pa.list_(pa.float32())) for c in CURVE_COLUMNS]
+    return pa.schema(fields)
+
+
+def _parquet_recogniser(head: bytes) -> bool:
+    return head.startswith(b"PAR1")
+
+
+@dataclass
+class CampaignSummary:
+    """What a `run_campaign` call did: runs total, already done before, done now, failed now, seconds."""
+
+    total: int
+    skipped: int
+    done: int
+    failed: int
+    lost: int
+    elapsed_s: float
+
+
+class CampaignStore:
+    """The campaign folder: ``campaign.toml``, ``campaign.json`` and ``runs/run-NNNNNN.parquet``."""
+
+    def __init__(self, path: str | os.PathLike[str]):
+        self.path = Path(path)
+        self.runs_dir = self.path / "runs"
+
+    @classmethod
+    def create_or_open(cls, path: str | os.PathLike[str], campaign: Campaign, text: str) -> CampaignStore:
+        """Open the store of `campaign` at `path`, creating it if new or empty; refuse a folder holding another
+        campaign or anything else (`OutputError`)."""
+        from gyrodrift.atomic import atomic_write, atomic_write_json, recognise_json_format
+
+        store = cls(path)
+        p = store.path
+        if p.exists() and not p.is_dir():
+            raise OutputError(f"{p}: is a file, not a folder; give a new or empty folder to --out")
+        manifest = p / "campaign.json"
+        if manifest.exists():
+            doc = store.manifest()
+            if doc.get("digest") != campaign.digest():
+                raise OutputError(
+                    f"{p}: holds campaign {doc.get('name')!r} ({doc.get('source')}), not {campaign.source}; give "
+                    "another --out folder (a campaign resumes only into its own folder)"
+                )
+            return store
+        if p.exists() and any(p.iterdir()):
+            raise OutputError(f"{p}: is not empty and holds no campaign; give a new or empty --out folder")
+        store.runs_dir.mkdir(parents=True, exist_ok=True)
+        with atomic_write(p / "campaign.toml", what="campaign file") as fh:
+            fh.write(text)
+        doc = {
+            "format": CAMPAIGN_FORMAT,
+            "name": campaign.name,
+            "source": campaign.source,
+            "digest": campaign.digest(),
+            "resolved": campaign.resolved(),
+        }
+        atomic_write_json(doc, manifest, recognise=recognise_json_format(CAMPAIGN_FORMAT), what="campaign manifest")
+        return store
+
+    def manifest(self) -> dict[str, Any]:
+        p = self.path / "campaign.json"
+        try:
+            doc = json.loads(p.read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            raise InputError(f"{self.path}: not a campaign folder (no campaign.json)") from None
+        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+            raise InputError(f"{p}: not a campaign manifest: {exc}") from None
+        if not isinstance(doc, dict) or doc.get("format") != CAMPAIGN_FORMAT:
+            raise InputError(f"{p}: not a campaign manifest (format {CAMPAIGN_FORMAT} expected)")
+        return doc
+
+    def campaign(self) -> Campaign:
+        """The campaign of this folder (from its ``campaign.toml``)."""
+        self.manifest()
+        return load_campaign(self.path / "campaign.toml")
+
+    def run_path(self, index: int) -> Path:
+        return self.runs_dir / f"run-{index:06d}.parquet"
+
+    def done(self) -> set[int]:
+        """Indices of the committed runs (a file is there only once completely written)."""
+        if not self.runs_dir.is_dir():
+            return set()
+        return {int(m["index"]) for e in os.listdir(self.runs_dir) if (m := _RUN_FILE_RE.match(e))}
+
+    def write(self, row: Mapping[str, Any], schema) -> None:
+        """Commit one run atomically (temporary, fsync, rename): a kill leaves the run absent or whole."""
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        from gyrodrift.atomic import atomic_write
+
+        path = self.run_path(int(row["index"]))
+        table = pa.Table.from_pylist([{k: row.get(k) for k in schema.names}], schema=schema)
+        with atomic_write(path, "wb", recognise=_parquet_recogniser, what="campaign run") as fh:
+            pq.write_table(table, fh, compression="zstd")
+
+
+@dataclass
+class CampaignRuns:
+    """The committed runs of a campaign as columns (`read_runs`), sorted by run index.
+
+    ``columns``: one numpy array per scalar column (strings and missing values as object arrays);
+    ``curves``: the linear error curves (``CURVE_COLUMNS``) as float64 arrays of shape (runs, points), or None.
+    """
+
+    columns: dict[str, np.ndarray]
+    curves: dict[str, np.ndarray] | None = None
+
+    def __len__(self) -> int:
+        return len(self.columns["index"])
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self.columns[name]
+
+    def numbers(self, name: str) -> np.ndarray:
+        """A numeric column as float64 (missing = NaN)."""
+        return np.array([math.nan if v is None else v for v in self.columns[name]], dtype=float)
+
+    @property
+    def ok(self) -> np.ndarray:
+        """Mask of the runs that finished without an error."""
+        return np.array([e is None for e in self.columns["error"]], dtype=bool)
+
+    def select(self, which) -> CampaignRuns:
+        """The runs at indices or mask `which` (a new object)."""
+        which = np.asarray(which)
+        curves = None if self.curves is None else {k: v[which] for k, v in self.curves.items()}
+        return CampaignRuns({k: v[which] for k, v in self.columns.items()}, curves)
+
+    def errors_nmi(self, drift_deg_h) -> np.ndarray:
+        """Position error [nmi], shape (runs, points), after compensating `drift_deg_h` [deg/h] per run, from the
+        linear curves: ``hypot(n0 + d gn, e0 + d ge)`` (a static base: the error is linear in the drift)."""
+        if self.curves is None:
+            raise ValueError("the runs were read without their curves")
+        d = np.asarray(drift_deg_h, float).reshape(-1, 1)
+        c = self.curves
+        return linear_error_nmi(
+            c["curve_north0_m"], c["curve_east0_m"], c["curve_north_per_deg_h"], c["curve_east_per_deg_h"], d
+        )
+
+
+def read_runs(path: str | os.PathLike[str], *, curves: bool = True) -> CampaignRuns:
+    """All committed runs of a campaign folder (one Parquet dataset over ``DIR/runs``), sorted by run index;
+    ``curves=False`` leaves out the linear error curves. ``pyarrow.dataset.dataset(DIR / "runs")`` reads the
+    same rows with any Parquet tool (pandas, polars)."""
+    import pyarrow as pa
+    import pyarrow.compute as pc
+    import pyarrow.dataset as ds
+
+    store = CampaignStore(path)
+    store.manifest()
+    dataset = ds.dataset(store.runs_dir, format="parquet")
+    names = [n for n in dataset.schema.names if n not in CURVE_COLUMNS]
+    table = dataset.to_table(columns=names + (list(CURVE_COLUMNS) if curves else []))
+    table = table.take(pc.sort_indices(table, [("index", "ascending")]))
+    cols: dict[str, np.ndarray] = {}
+    for n in names:
+        col = table.column(n)
+        t = col.type
+        if col.null_count == 0 and (pa.types.is_floating(t) or pa.types.is_integer(t) or pa.types.is_boolean(t)):
+            cols[n] = col.to_numpy()
+        else:
+            cols[n] = np.array(col.to_pylist(), dtype=object)
+    curve_arrays = None
+    if curves:
+        curve_arrays = {}
+        for n in CURVE_COLUMNS:
+            lists = table.column(n).to_pylist()
+            width = max((len(x) for x in lists if x is not None), default=0)
+            arr = np.full((len(lists), width), np.nan)
+            for i, x in enumerate(lists):
+                if x is not None:
+                    arr[i, : len(x)] = x
+            curve_arrays[n] = arr
+    return CampaignRuns(cols, curve_arrays)
+
+
+def run_table(runs: CampaignRuns, source: str = "<campaign>"):
+    """The successful `runs` as a `gyrodrift.runs.RunTable` (labels: the 72 h truth; optional columns when known)."""
+    from gyrodrift.runs import OPTIONAL_COLUMNS, RunTable
+
+    ok = runs.select(runs.ok)
+    base = ("lat_deg", "lat0_deg", "temp_min_c", "temp_max_c", "drift_deg_h")
+    num = {k: ok.numbers(k) for k in base + tuple(c for c in OPTIONAL_COLUMNS if c in ok.columns)}
+    records = []
+    for i, run in enumerate(ok["run"]):
+        rec: dict[str, Any] = {"run": str(run)}
+        rec.update({k: float(v[i]) for k, v in num.items() if k in base or math.isfinite(v[i])})
+        records.append(rec)
+    return RunTable.from_records(records, source=source)
+
+
+def write_run_table(
+    runs: CampaignRuns, path: str | os.PathLike[str], *, inputs: Iterable[str | os.PathLike[str]] = ()
+) -> int:
+    """Write the successful `runs` as a run table `gyrodrift fit` reads (``gyrodrift.runs``); returns its rows."""
+    import csv
+    import io
+
+    from gyrodrift.atomic import atomic_write
+    from gyrodrift.procedure.results import RUN_TABLE_COLUMNS
+    from gyrodrift.procedure.writers import RUN_TABLE_RECOGNISER
+
+    ok = runs.select(runs.ok)
+    optional = ("drift_std_deg_h", "drift_smoother_deg_h", "drift_smoother_std_deg_h")
+    cols = list(RUN_TABLE_COLUMNS) + ["drift_deg_h"] + [c for c in optional if np.isfinite(ok.numbers(c)).any()]
+    values = {c: ok.numbers(c) for c in cols if c != "run"}
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(cols)
+    for i, run in enumerate(ok["run"]):
+        w.writerow(
+            [run if c == "run" else repr(float(values[c][i])) if math.isfinite(values[c][i]) else "" for c in cols]
+        )
+    with atomic_write(path, inputs=inputs, recognise=RUN_TABLE_RECOGNISER, what="run table") as fh:
+        fh.write(buf.getvalue())
+    return len(ok)
+
+
+# --- running ---------------------------------------------------------------------------------------------
+
+
+def _pool_map(campaign, todo, workers, on_row: Callable[[dict], None]) -> int:
+    """Process `todo` on a local process pool; a worker killed mid-run breaks the pool: a new pool takes the
+    runs not yet committed (at most 3 times). Returns the number of runs lost to broken pools."""
+    remaining = list(todo)
+    ctx = multiprocessing.get_context("spawn")
+    for _attempt in range(4):
+        if not remaining:
+            return 0
+        finished: set[int] = set()
+        pool = concurrent.futures.ProcessPoolExecutor(max_workers=workers, mp_context=ctx)
+        try:
+            futures = {pool.submit(process_run, campaign, i): i for i in remaining}
+            try:
+                for fut in concurrent.futures.as_completed(futures):
+                    on_row(fut.result())
+                    finished.add(futures[fut])
+            except concurrent.futures.process.BrokenProcessPool:
+                pass
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
+        remaining = [i for i in remaining if i not in finished]
+    return len(remaining)
+
+
+def _dask_map(campaign, todo, client, on_row: Callable[[dict], None]) -> int:
+    from dask.distributed import as_completed
+
+    futures = [
+        client.submit(process_run, campaign, i, pure=False, key=f"campaign-{campaign.digest()[:8]}-{i}") for i in todo
+    ]
+    lost = 0
+    for fut in as_completed(futures):
+        try:
+            row = fut.result()
+        except Exception:  # the infrastructure failed (a worker killed too often): not the run's error
+            lost += 1
+            continue
+        on_row(row)
+    return lost
+
+
+def run_campaign(
+    campaign: Campaign,
+    out: str | os.PathLike[str],
+    *,
+    text: str | None = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    dask_workers: int | None = None,
+    connect_timeout_s: float | None = None,
+    quiet: bool = True,
+    limit: int | None = None,
+) -> CampaignSummary:
+    """Process every run of `campaign` not yet committed in `out`, committing each as it finishes.
+
+    Parameters
+    ----------
+    campaign : Campaign
+    out : path-like
+        The campaign folder (new, empty, or this campaign's: then finished runs are skipped).
+    text : str, optional
+        The campaign file's text, copied to ``out/campaign.toml`` (default: re-read from ``campaign.source``).
+    workers : int, optional
+        Local processes (default: the CPU count); exclusive with `scheduler`/`dask_workers`.
+    scheduler : str, optional
+        Address of a running dask scheduler (`gyrodrift.cluster.dask_client`, `connect_timeout_s`).
+    dask_workers : int, optional
+        A dask LocalCluster with this many workers instead (benchmarks, tests).
+    limit : int, optional
+        Process at most this many of the pending runs (lowest indices first).
+    quiet : bool
+        Hide the progress bar (runs done, failures, rate, time left).
+    """
+    from gyrodrift.cluster import DEFAULT_CONNECT_TIMEOUT_S, dask_client
+    from gyrodrift.progress import progress
+
+    if workers is not None and (scheduler is not None or dask_workers is not None):
+        raise OptionError("give --workers or --scheduler, not both")
+    if workers is not None and workers < 1:
+        raise OptionError(f"--workers must be >= 1, got {workers}")
+    if text is None:
+        text = Path(campaign.source).read_text(encoding="utf-8")
+    store = CampaignStore.create_or_open(out, campaign, text)
+    schema = _schema(campaign)
+    done = store.done()
+    todo = [i for i in range(campaign.count) if i not in done]
+    if limit is not None:
+        todo = todo[:limit]
+    t0 = time.perf_counter()
+    counts = {"done": 0, "failed": 0}
+    with progress(len(todo), f"campaign {campaign.name}", quiet, unit="run") as bar:
+
+        def on_row(row: dict) -> None:
+            store.write(row, schema)
+            counts["done"] += 1
+            counts["failed"] += row.get("error") is not None
+            bar.set_postfix(failed=counts["failed"], refresh=False)
+            bar.update(1)
+
+        if not todo:
+            lost = 0
+        elif scheduler is not None or dask_workers is not None:
+            with dask_client(
+                workers=dask_workers,
+                scheduler=scheduler,
+                connect_timeout_s=DEFAULT_CONNECT_TIMEOUT_S if connect_timeout_s is None else connect_timeout_s,
+            ) as client:
+                lost = _dask_map(campaign, todo, client, on_row)
+        else:
+            lost = _pool_map(campaign, todo, workers or os.cpu_count() or 1, on_row)
+    return CampaignSummary(campaign.count, len(done), counts["done"], counts["failed"], lost, time.perf_counter() - t0)
