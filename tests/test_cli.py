@@ -34,12 +34,13 @@ def test_fit_then_predict_csv_and_jsonl(tmp_path, paper_csv):
             "28.222",
             "--method",
             "grid",
-            "--quiet",
         ],
     )
     assert r.exit_code == 0, r.output
-    assert "fitted on 22 runs" in r.output and model.exists()
-    r = runner.invoke(main, ["predict", str(model), str(paper_csv), "--split", "test", "--lat0-deg", "28.222"])
+    assert f"wrote {model} (fitted on 22 runs" in r.output and model.exists()
+    r = runner.invoke(
+        main, ["predict", str(paper_csv), "--model", str(model), "--split", "test", "--lat0-deg", "28.222"]
+    )
     assert r.exit_code == 0, r.output
     rows = list(csv.DictReader(io.StringIO(r.stdout)))
     assert [row["run"] for row in rows] == [str(i) for i in range(23, 33)]
@@ -49,11 +50,12 @@ def test_fit_then_predict_csv_and_jsonl(tmp_path, paper_csv):
         )
     out = tmp_path / "pred.jsonl"
     r = runner.invoke(
-        main, ["predict", str(model), str(paper_csv), "--lat0-deg", "28.222", "--format", "jsonl", "--out", str(out)]
+        main, ["predict", str(paper_csv), "--model", str(model), "--lat0-deg", "28.222", "--json", "--out", str(out)]
     )
     assert r.exit_code == 0, r.output
     lines = [json.loads(line) for line in out.read_text().splitlines()]
     assert len(lines) == 32 and {"run", "drift_identified_deg_h"} <= set(lines[0])
+    assert r.stdout == f"wrote {out} (32 run(s))\n"
 
 
 def test_fit_with_fixed_parameters_needs_both(tmp_path, paper_csv):
@@ -75,7 +77,7 @@ def test_bad_data_file_is_named(tmp_path):
 def test_bad_model_file_is_named(tmp_path, paper_csv):
     bad = tmp_path / "model.json"
     bad.write_text("{not json")
-    r = CliRunner().invoke(main, ["predict", str(bad), str(paper_csv), "--lat0-deg", "28.222"])
+    r = CliRunner().invoke(main, ["predict", str(paper_csv), "--model", str(bad), "--lat0-deg", "28.222"])
     assert r.exit_code == 1 and "model.json: corrupted JSON" in r.output
 
 

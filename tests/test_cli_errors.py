@@ -73,7 +73,7 @@ COMMANDS = {
         + ["--out", loc / "model.json"]
     ),
     "predict --out": lambda i, loc: (
-        ["predict", i.model, PAPER_RUNS, "--lat0-deg", 28.222, "--split", "train", "--out", loc / "pred.csv"]
+        ["predict", PAPER_RUNS, "--model", i.model, "--lat0-deg", 28.222, "--split", "train", "--out", loc / "pred.csv"]
     ),
     "reproduce": lambda i, loc: ["reproduce", "--out", loc / "repro", "--quiet"],
     "simulate": lambda i, loc: ["simulate", i.scenario, "--out", loc / "sim", "--quiet"],
@@ -85,7 +85,7 @@ COMMANDS = {
     "evaluate": lambda i, loc: ["evaluate", i.log, "--drift-deg-h", 0.003, "--hours", 0.5, "--out", loc / "eval"],
     "identify --out": lambda i, loc: ["identify", i.log, "--model", i.model, "--out", loc / "ident", "--quiet"],
     "allan": lambda i, loc: ["allan", i.static_log, "--out", loc / "allan", "--quiet"],
-    "export": lambda i, loc: ["export", i.model, "--lang", "c", "--out", loc / "export"],
+    "export": lambda i, loc: ["export", "--model", i.model, "--lang", "c", "--out", loc / "export"],
 }
 
 
@@ -226,7 +226,7 @@ def test_an_output_that_is_an_input_is_refused_and_the_input_kept(inputs, tmp_pa
     (tmp_path / "link.csv").symlink_to(runs)
     _refused(_run(*fit, tmp_path / "link.csv"), "is also an input")
     for out in (model, runs):
-        _refused(_run("predict", model, runs, "--lat0-deg", 28.222, "--out", out), "is also an input")
+        _refused(_run("predict", runs, "--model", model, "--lat0-deg", 28.222, "--out", out), "is also an input")
     log = tmp_path / "x.parquet"
     os.link(inputs.log, log)
     _refused(_run("features", log, "--out", log, "--quiet"), "x.parquet: is also an input")
@@ -240,7 +240,7 @@ def test_devices_fifos_folders_and_foreign_files_are_refused(inputs, tmp_path):
     fit = ["fit", PAPER_RUNS, "--lat0-deg", 28.222, "--gamma", 10, "--sigma", 1, "--out"]
     _refused(_run(*fit, "/proc/version"), "/proc/version: exists and is not a model file written by gyrodrift")
     (tmp_path / "dir.csv").mkdir()
-    predict = ["predict", inputs.model, PAPER_RUNS, "--lat0-deg", 28.222, "--out"]
+    predict = ["predict", PAPER_RUNS, "--model", inputs.model, "--lat0-deg", 28.222, "--out"]
     _refused(_run(*predict, tmp_path / "dir.csv"), "dir.csv: is a directory")
     os.mkfifo(tmp_path / "fifo")
     _refused(_run(*predict, tmp_path / "fifo"), "fifo: is a FIFO")
@@ -326,7 +326,7 @@ def test_stdout_on_a_full_device_is_one_line(inputs, tmp_path):
             pytest.skip("no full device")
         device = tmp_path / "full"
     commands = [  # predict writes its table itself; fit's summary line goes through click.echo
-        ["predict", inputs.model, PAPER_RUNS, "--lat0-deg", 28.222, "--split", "train"],
+        ["predict", PAPER_RUNS, "--model", inputs.model, "--lat0-deg", 28.222, "--split", "train"],
         ["fit", PAPER_RUNS, "--lat0-deg", 28.222, "--split", "train", "--gamma", 10, "--sigma", 1]
         + ["--out", tmp_path / "m.json"],
     ]
@@ -339,7 +339,7 @@ def test_stdout_on_a_full_device_is_one_line(inputs, tmp_path):
 
 
 def test_stdout_closed_by_its_reader_ends_quietly(inputs):
-    proc = _gyrodrift("predict", inputs.model, PAPER_RUNS, "--lat0-deg", 28.222, stdout=subprocess.PIPE)
+    proc = _gyrodrift("predict", PAPER_RUNS, "--model", inputs.model, "--lat0-deg", 28.222, stdout=subprocess.PIPE)
     proc.stdout.close()  # | head -0
     err = proc.communicate(timeout=60)[1].decode()
     assert proc.returncode == 1 and "Traceback" not in err and "Exception ignored" not in err, err

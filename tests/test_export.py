@@ -463,7 +463,7 @@ def model_file(tmp_path_factory, fitted):
 def test_cli_writes_c_and_rust_into_one_folder(model_file, tmp_path):
     out = tmp_path / "nav"
     for lang in ("c", "rust"):
-        r = CliRunner().invoke(main, ["export", str(model_file), "--lang", lang, "--out", str(out)])
+        r = CliRunner().invoke(main, ["export", "--model", str(model_file), "--lang", lang, "--out", str(out)])
         assert r.exit_code == 0, r.output
     names = sorted(p.name for p in out.iterdir() if not p.name.startswith("."))
     assert names == ["gyrodrift_model.c", "gyrodrift_model.h", "gyrodrift_model.rs"]
@@ -472,7 +472,7 @@ def test_cli_writes_c_and_rust_into_one_folder(model_file, tmp_path):
     digest = hashlib.sha256(model_file.read_bytes()).hexdigest()
     before = {n: (out / n).read_bytes() for n in names}
     assert all(digest.encode() in b for b in before.values())
-    r = CliRunner().invoke(main, ["export", str(model_file), "--lang", "c", "--out", str(out)])
+    r = CliRunner().invoke(main, ["export", "--model", str(model_file), "--lang", "c", "--out", str(out)])
     assert r.exit_code == 0, r.output
     assert {n: (out / n).read_bytes() for n in names} == before  # same model, same bytes; Rust file kept
 
@@ -494,7 +494,7 @@ def test_cli_bad_inputs_are_one_line_errors(problem, model_file, tmp_path):
         out.mkdir()
         (out / "notes.txt").write_text("mine")
         expected = "notes.txt"
-    r = CliRunner().invoke(main, ["export", model, "--lang", lang, "--out", str(out)])
+    r = CliRunner().invoke(main, ["export", "--model", model, "--lang", lang, "--out", str(out)])
     assert r.exit_code == 1, r.output
     assert r.output.count("\n") == 1 and r.output.startswith("Error: ") and expected in r.output, r.output
     assert "Traceback" not in r.output

@@ -250,7 +250,7 @@ def test_fit_says_what_it_weighted_and_left_out_and_predict_flags(tmp_path):
     assert doc["encoding"] == "physics" and doc["target"] == "residual"
     hot = tmp_path / "hot.csv"
     _write_csv(hot, _synthetic_runs(3, seed=12, temp_shift=30.0))
-    r = CliRunner().invoke(main, ["predict", str(model), str(hot), "--coverage", "0.9"])
+    r = CliRunner().invoke(main, ["predict", str(hot), "--model", str(model), "--coverage", "0.9"])
     assert r.exit_code == 0, r.output
     assert r.stderr.count("outside the training runs' range") == 3
     rows = r.stdout.splitlines()

@@ -54,7 +54,7 @@ def test_more_hours_than_the_file_holds(imu, tmp_path):
         (["--hours", "1e400"], "Invalid value for '--hours': '1e400' is not a finite number"),
         (["--hours", "1e308"], "--hours 1e+308: 1e+308 h asked but the IMU data hold 0.05 h"),
         (["--hours", "1e-9"], "--hours 1e-09 h is 0 sample(s), shorter than one output step (1 s = 10 samples)"),
-        (["--compensate-drift-deg-h", "nan"], "Invalid value for '--compensate-drift-deg-h': 'nan'"),
+        (["--drift-deg-h", "nan"], "Invalid value for '--drift-deg-h': 'nan'"),
         (["--lat0-deg", "nan"], "Invalid value for '--lat0-deg': 'nan' is not a finite number"),
         (["--lat0-deg", "90"], "Invalid value for '--lat0-deg': '90' is not in (-90, 90)"),
     ],

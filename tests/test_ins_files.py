@@ -161,7 +161,7 @@ def test_cli_simulate_then_navigate(tmp_path, small_toml):
     assert (out / "imu.parquet").exists() and (out / "scenario.resolved.toml").exists()
     r = runner.invoke(
         main,
-        ["navigate", str(out / "imu.parquet"), "--hours", "1", "--compensate-drift-deg-h", "0.003", "--out", str(out)],
+        ["navigate", str(out / "imu.parquet"), "--hours", "1", "--drift-deg-h", "0.003", "--out", str(out)],
     )
     assert r.exit_code == 0, r.output
     assert "final position error" in r.output

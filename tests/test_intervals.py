@@ -81,16 +81,16 @@ def test_predict_command_prints_the_interval(tmp_path):
         main,
         [
             "predict",
-            str(tmp_path / "m.json"),
             str(csv_path),
+            "--model",
+            str(tmp_path / "m.json"),
             "--lat0-deg",
             "28.222",
             "--split",
             "test",
             "--coverage",
             "0.8",
-            "--format",
-            "jsonl",
+            "--json",
         ],
     )
     assert r.exit_code == 0, r.output
@@ -98,7 +98,8 @@ def test_predict_command_prints_the_interval(tmp_path):
     for row in rows:
         assert row["drift_lo_deg_h"] < row["drift_identified_deg_h"] < row["drift_hi_deg_h"]
     r = CliRunner().invoke(
-        main, ["predict", str(tmp_path / "m.json"), str(csv_path), "--lat0-deg", "28.222", "--coverage", "1.5"]
+        main,
+        ["predict", str(csv_path), "--model", str(tmp_path / "m.json"), "--lat0-deg", "28.222", "--coverage", "1.5"],
     )
     assert r.exit_code == 2 and "--coverage" in r.output
 
@@ -112,7 +113,7 @@ def test_too_few_runs_for_the_coverage_is_said_not_printed_as_infinity(tmp_path)
     save_model(fit_drift_model(small, gamma=30.0, sigma=1.5), tmp_path / "small.json")
     csv_path = tmp_path / "paper.csv"
     csv_path.write_bytes(paper_csv_path().read_bytes())
-    args = ["predict", str(tmp_path / "small.json"), str(csv_path), "--lat0-deg", "28.222", "--format", "jsonl"]
+    args = ["predict", str(csv_path), "--model", str(tmp_path / "small.json"), "--lat0-deg", "28.222", "--json"]
     r = CliRunner().invoke(main, args + ["--coverage", "0.9"])
     assert (
         r.exit_code == 1 and "5 training runs are too few for a 90 % jackknife interval (needs at least 9)" in r.output
@@ -128,7 +129,7 @@ def test_predict_refuses_a_coverage_that_is_not_a_probability(tmp_path, bad):
     csv_path = tmp_path / "paper.csv"
     csv_path.write_bytes(paper_csv_path().read_bytes())
     r = CliRunner().invoke(
-        main, ["predict", str(tmp_path / "m.json"), str(csv_path), "--lat0-deg", "28.222", "--coverage", bad]
+        main, ["predict", str(csv_path), "--model", str(tmp_path / "m.json"), "--lat0-deg", "28.222", "--coverage", bad]
     )
     assert r.exit_code == 2 and "Invalid value for '--coverage'" in r.output and "NaN" not in r.output
     from gyrodrift.errors import OptionError

@@ -6,29 +6,37 @@ from pathlib import Path
 
 import click
 
+from gyrodrift.cli.options import json_option, print_json, quiet_option, say_wrote
 
-@click.command("export")
-@click.argument("model_file", metavar="MODEL.json", type=click.Path(path_type=Path))
+
+@click.command("export", epilog="Example: gyrodrift export --model model.json --lang c --out nav")
+@click.option(
+    "--model",
+    "model_file",
+    required=True,
+    type=click.Path(dir_okay=False, path_type=Path),
+    help="Drift model file (JSON, from `gyrodrift fit`). Required.",
+)
 @click.option(
     "--lang",
     required=True,
     metavar="c|rust",
-    help="c: gyrodrift_model.h and gyrodrift_model.c (C99); rust: gyrodrift_model.rs (a no_std module).",
+    help="c: gyrodrift_model.h and gyrodrift_model.c (C99); rust: gyrodrift_model.rs (a no_std module). Required.",
 )
 @click.option(
     "--out",
     "out_dir",
     required=True,
     type=click.Path(path_type=Path),
-    help="Folder for the generated files: new, empty, or holding only gyrodrift's outputs (docs/outputs.md).",
+    help="Folder for the generated files: new, empty, or holding only gyrodrift's outputs (docs/outputs.md). Required.",
 )
-def export_command(model_file: Path, lang: str, out_dir: Path) -> None:
-    """Write MODEL.json as source code computing the identified drift [deg/h] on a navigation computer.
+@json_option
+@quiet_option
+def export_command(model_file: Path, lang: str, out_dir: Path, as_json: bool, quiet: bool) -> None:
+    """Write the --model file as source code computing the identified drift [deg/h] on a navigation computer.
 
     The code carries the model's provenance and the training ranges of its inputs, with a function saying
     whether an input lies within them (docs/export.md).
-
-    Example: gyrodrift export model.json --lang c --out nav/
     """
     import hashlib
 
@@ -44,7 +52,10 @@ def export_command(model_file: Path, lang: str, out_dir: Path) -> None:
     with out.publish() as stage:
         for name, text in files.items():
             stage.file(name).write_text(text, encoding="utf-8")
-    click.echo(f"{', '.join(str(out_dir / name) for name in names)} ({model.encoding}, {model.lssvr.kernel})")
+    paths = [out_dir / name for name in names]
+    if as_json:
+        print_json({"files": [str(p) for p in paths], "encoding": model.encoding, "kernel": model.lssvr.kernel})
+    say_wrote(paths, quiet=quiet, as_json=as_json, detail=f"{model.encoding}, {model.lssvr.kernel}")
 
 
 COMMANDS = (export_command,)

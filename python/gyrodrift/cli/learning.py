@@ -19,6 +19,7 @@ from gyrodrift.choices import (
     TARGETS,
 )
 from gyrodrift.cli.errors import write_stdout
+from gyrodrift.cli.options import json_option, print_json, quiet_option, say_wrote
 from gyrodrift.cli.types import FiniteFloat
 
 PREDICTIONS_HEADERS = ("run,drift_identified_deg_h", '{"run": ')
@@ -65,16 +66,25 @@ _lat0_option = click.option(
     "--lat0-deg",
     type=FiniteFloat(-90.0, 90.0),
     default=None,
-    help="Site latitude [deg] for tables without a lat0_deg column.",
+    help="True site latitude [deg] of every run, for tables without a lat0_deg column. Default: the table's.",
 )
 _split_option = click.option(
-    "--split", type=click.Choice(["train", "test"]), default=None, help="Use only rows with this split value."
+    "--split",
+    type=click.Choice(["train", "test"]),
+    default=None,
+    help="Use only the rows whose split column has this value. Default: every row.",
 )
 
 
-@click.command()
+@click.command(epilog="Example: gyrodrift fit runs.csv --split train --out model.json")
 @click.argument("data", type=click.Path(dir_okay=False))
-@click.option("--out", "out", required=True, type=click.Path(), help="Model file to write (JSON).")
+@click.option(
+    "--out",
+    "out",
+    required=True,
+    type=click.Path(),
+    help="Model file to write (JSON, atomically; replaces only a model file gyrodrift wrote). Required.",
+)
 @click.option(
     "--encoding",
     type=click.Choice(list(ENCODINGS)),
@@ -102,26 +112,51 @@ _split_option = click.option(
     "--max-label-std-deg-h",
     type=FiniteFloat(0.0, min_open=True),
     default=None,
-    help="Leave out runs whose drift_std_deg_h exceeds this [deg/h] (default 0.001); runs with drift_std_deg_h "
-    "are weighted by it (weighted LS-SVM) unless --no-label-weights.",
+    help="Leave out runs whose drift_std_deg_h exceeds this [deg/h]; runs with drift_std_deg_h are weighted by it "
+    "(weighted LS-SVM) unless --no-label-weights. Default: 0.001.",
 )
-@click.option("--no-label-weights", is_flag=True, help="Do not weight the runs by drift_std_deg_h.")
-@click.option("--scaling", type=click.Choice(list(SCALINGS)), default="standard", show_default=True)
-@click.option("--objective", type=click.Choice(list(OBJECTIVES)), default="loo_mae", show_default=True)
-@click.option("--method", type=click.Choice(list(METHODS)), default="cpso", show_default=True)
+@click.option("--no-label-weights", is_flag=True, help="Do not weight the runs by drift_std_deg_h. Default: weighted.")
 @click.option(
-    "--gamma", type=FiniteFloat(0.0, min_open=True), default=None, help="Fix gamma (with --sigma) instead of tuning."
+    "--scaling",
+    type=click.Choice(list(SCALINGS)),
+    default="standard",
+    show_default=True,
+    help="Scaling of the encoded inputs before the kernel.",
+)
+@click.option(
+    "--objective",
+    type=click.Choice(list(OBJECTIVES)),
+    default="loo_mae",
+    show_default=True,
+    help="What the tuning minimises (leave-one-out MAE [deg/h], ...).",
+)
+@click.option(
+    "--method",
+    type=click.Choice(list(METHODS)),
+    default="cpso",
+    show_default=True,
+    help="Tuner of gamma and sigma (chaos PSO, plain PSO, grid, ...).",
+)
+@click.option(
+    "--gamma",
+    type=FiniteFloat(0.0, min_open=True),
+    default=None,
+    help="Fix the regularisation gamma [-] (with --sigma) instead of tuning. Default: tuned.",
 )
 @click.option(
     "--sigma",
     type=FiniteFloat(*SIGMA_RANGE),
     default=None,
-    help="Fix sigma (scaled input units; its square must be a normal float64) instead of tuning.",
+    help="Fix the RBF width sigma [scaled input units] (its square must be a normal float64) instead of tuning. "
+    "Default: tuned.",
 )
-@click.option("--seed", type=int, default=0, show_default=True)
+@click.option(
+    "--seed", type=int, default=0, show_default=True, help="Seed of the swarm (an integer); same seed, same model."
+)
 @_lat0_option
 @_split_option
-@click.option("--quiet", is_flag=True, help="No progress bar.")
+@json_option
+@quiet_option
 def fit(
     data,
     out,
@@ -138,6 +173,7 @@ def fit(
     seed,
     lat0_deg,
     split,
+    as_json,
     quiet,
 ):
     """Fit a drift model on DATA.csv (runs with drift_deg_h) and write it to --out.
@@ -157,7 +193,7 @@ def fit(
 
     check_output_file(out, inputs=[data], recognise=MODEL_FILE_RECOGNISER, what="model file")
     runs = _read_runs(data, lat0_deg, True, split)
-    if split is None and any(runs.split):
+    if split is None and any(runs.split) and not quiet:
         click.echo(
             f"note: {data} has a split column; training on all {len(runs)} rows "
             "(--split train uses the training rows only)",
@@ -185,42 +221,80 @@ def fit(
             raise
         raise OptionError(f"--gamma {gamma:g} --sigma {sigma:g}: {exc}") from None
     training = model.training
-    if training.get("left_out"):
+    if training.get("left_out") and not quiet:
         limit = DEFAULT_MAX_LABEL_STD_DEG_H if max_label_std_deg_h is None else max_label_std_deg_h
         click.echo(
             f"note: left out {len(training['left_out'])} run(s) whose drift_std_deg_h exceeds {limit:g} deg/h "
             f"(too uncertain to label): {', '.join(training['left_out'])}",
             err=True,
         )
-    if training["weighted"]:
+    if quiet:
+        pass
+    elif training["weighted"]:
         click.echo("note: runs weighted by their label 1-sigma drift_std_deg_h (weighted LS-SVM)", err=True)
     elif "drift_std_deg_h" in runs.extra and not no_label_weights:
         click.echo("note: drift_std_deg_h is missing for some runs; the runs are not weighted", err=True)
     save_model(model, out, inputs=[data])
     est = model.lssvr
     loo = model.loo_residuals()
-    click.echo(
-        f"fitted on {training['n_runs']} runs ({encoding}, target {target}): gamma = {est.gamma:.6g}, "
-        f"sigma = {est.sigma:.6g}, "
-        f"LOO MAE = {float(abs(loo).mean()):.3e} deg/h -> {out}"
+    loo_mae = float(abs(loo).mean())
+    if as_json:
+        print_json(
+            {
+                "model": str(out),
+                "n_runs": training["n_runs"],
+                "encoding": encoding,
+                "target": target,
+                "gamma": float(est.gamma),
+                "sigma": float(est.sigma),
+                "loo_mae_deg_h": loo_mae,
+                "warnings": list(model.fit_warnings()),
+            }
+        )
+    say_wrote(
+        [out],
+        quiet=quiet,
+        as_json=as_json,
+        detail=f"fitted on {training['n_runs']} runs, {encoding}, target {target}: gamma = {est.gamma:.6g}, "
+        f"sigma = {est.sigma:.6g}, LOO MAE = {loo_mae:.3e} deg/h",
     )
 
 
-@click.command()
-@click.argument("model_file", type=click.Path(dir_okay=False))
+@click.command(epilog="Example: gyrodrift predict runs.csv --model model.json --coverage 0.9")
 @click.argument("data", type=click.Path(dir_okay=False))
-@click.option("--format", "fmt", type=click.Choice(["csv", "jsonl"]), default="csv", show_default=True)
-@click.option("--out", type=click.Path(), default=None, help="Write here (atomically) instead of stdout.")
+@click.option(
+    "--model",
+    "model_file",
+    required=True,
+    type=click.Path(dir_okay=False),
+    help="Drift model file (JSON, from `gyrodrift fit`). Required.",
+)
+@click.option(
+    "--out",
+    type=click.Path(),
+    default=None,
+    help="Also save the predictions in this file (atomically; replaces only a predictions file gyrodrift wrote). "
+    "Default: print them on stdout.",
+)
 @click.option(
     "--coverage",
     type=FiniteFloat(0.0, 1.0, min_open=True, max_open=True),
     default=None,
-    help="Add a jackknife interval of this coverage (e.g. 0.9) from the model's leave-one-out residuals.",
+    help="Add a jackknife interval of this coverage [-] (e.g. 0.9) from the model's leave-one-out residuals. "
+    "Default: no interval.",
 )
 @_lat0_option
 @_split_option
-def predict(model_file, data, fmt, out, coverage, lat0_deg, split):
-    """Identify the axial drift [deg/h] of each run in DATA.csv with MODEL_FILE.
+@click.option(
+    "--json",
+    "as_json",
+    is_flag=True,
+    help="JSON lines (one object per run) instead of CSV. Default: CSV.",
+)
+@click.option("--format", "fmt", type=click.Choice(["csv", "jsonl"]), default=None, hidden=True)
+@quiet_option
+def predict(data, model_file, out, coverage, lat0_deg, split, as_json, fmt, quiet):
+    """Identify the axial drift [deg/h] of each run in DATA.csv with the --model file.
 
     Runs whose inputs lie outside the training runs' range (per input, or jointly) get
     outside_training_range = 1 and a warning line on stderr: their drift is an extrapolation, and their
@@ -233,6 +307,9 @@ def predict(model_file, data, fmt, out, coverage, lat0_deg, split):
     from gyrodrift.model import min_runs_for_coverage
     from gyrodrift.model_io import load_model
 
+    if fmt is not None:
+        click.echo("warning: --format is deprecated; CSV is the default and --json gives JSON lines", err=True)
+        as_json = as_json or fmt == "jsonl"
     target = {
         "inputs": [model_file, data],
         "recognise": recognise_header(*PREDICTIONS_HEADERS),
@@ -266,7 +343,7 @@ def predict(model_file, data, fmt, out, coverage, lat0_deg, split):
             row["error_deg_h"] = rec["drift_deg_h"] - float(pred[i])
         rows.append(row)
     buf = io.StringIO()
-    if fmt == "jsonl":
+    if as_json:
         for row in rows:
             buf.write(json.dumps(row) + "\n")
     else:
@@ -280,9 +357,10 @@ def predict(model_file, data, fmt, out, coverage, lat0_deg, split):
     else:
         with atomic_write(out, **target) as handle:
             handle.write(buf.getvalue())
+        say_wrote([out], quiet=quiet, detail=f"{len(rows)} run(s)")
 
 
-@click.command()
+@click.command(epilog="Example: gyrodrift reproduce --out paper --seed 1")
 @click.option(
     "--out",
     "out_dir",
@@ -292,18 +370,29 @@ def predict(model_file, data, fmt, out, coverage, lat0_deg, split):
     help="Folder for results.json, report.md, report.html and the figures: new, empty, or holding only "
     "gyrodrift's outputs (published together; docs/outputs.md).",
 )
-@click.option("--seed", type=int, default=0, show_default=True, help="Seeds every swarm; same seed, same results.")
-@click.option("--quiet", is_flag=True, help="No progress bar and no summary.")
-def reproduce(out_dir, seed, quiet):
+@click.option(
+    "--seed", type=int, default=0, show_default=True, help="Seeds every swarm (an integer); same seed, same results."
+)
+@json_option
+@quiet_option
+def reproduce(out_dir, seed, as_json, quiet):
     """Reproduce the paper's experiment on its embedded data, with baselines and a report."""
     from gyrodrift.report import summary_lines
     from gyrodrift.reproduce import reproduce as run
 
     results = run(out_dir, seed=seed, quiet=quiet)  # checks out_dir before the work
-    if not quiet:
+    if as_json:
+        print_json(results)
+    elif not quiet:
         for line in summary_lines(results):
             click.echo(line)
-        click.echo(f"report: {out_dir}/report.html ({results['elapsed_s']:.1f} s)")
+    names = ("report.html", "report.md", "results.json")
+    say_wrote(
+        [f"{out_dir}/{name}" for name in names],
+        quiet=quiet,
+        as_json=as_json,
+        detail=f"and the figures; {results['elapsed_s']:.1f} s",
+    )
 
 
 COMMANDS = (fit, predict, reproduce)

@@ -6,13 +6,24 @@ from pathlib import Path
 
 import click
 
-from gyrodrift.cli.options import site_from_options, site_options
+from gyrodrift.cli.options import (
+    json_option,
+    log_format_option,
+    print_json,
+    quiet_option,
+    say_wrote,
+    site_from_options,
+    site_options,
+)
 from gyrodrift.cli.types import FiniteFloat
 
 __all__ = ["simulate_command", "navigate_command"]
 
 
-@click.command("simulate")
+@click.command(
+    "simulate",
+    epilog="Example: gyrodrift simulate examples/scenarios/tour.toml --seed 2 --duration-h 20 --out sim",
+)
 @click.argument("scenario_toml", metavar="SCENARIO.toml", type=click.Path(path_type=Path))
 @click.option(
     "--out",
@@ -20,32 +31,80 @@ __all__ = ["simulate_command", "navigate_command"]
     required=True,
     type=click.Path(path_type=Path),
     help="Folder receiving imu.parquet and scenario.resolved.toml: new, empty, or holding only gyrodrift's "
-    "outputs (docs/outputs.md).",
+    "outputs (docs/outputs.md). Required.",
 )
-@click.option("--quiet", is_flag=True, help="No progress bar.")
-def simulate_command(scenario_toml: Path, out_dir: Path, quiet: bool) -> None:
-    """Simulate the IMU of a static-base rotation INS described by SCENARIO.toml."""
+@click.option(
+    "--duration-h",
+    type=FiniteFloat(min=0.0, min_open=True),
+    default=None,
+    help="Length of the simulated log [h], over [run] duration_h. Default: the scenario's.",
+)
+@click.option(
+    "--seed",
+    type=click.IntRange(min=0),
+    default=None,
+    help="Seed of the sensor noise (an integer >= 0), over [run] seed. Default: the scenario's.",
+)
+@click.option(
+    "--rate-hz",
+    type=FiniteFloat(min=0.0, min_open=True),
+    default=None,
+    help="IMU sample rate [Hz], over [run] rate_hz. Default: the scenario's.",
+)
+@json_option
+@quiet_option
+def simulate_command(
+    scenario_toml: Path,
+    out_dir: Path,
+    duration_h: float | None,
+    seed: int | None,
+    rate_hz: float | None,
+    as_json: bool,
+    quiet: bool,
+) -> None:
+    """Simulate the IMU of a static-base rotation INS described by SCENARIO.toml.
+
+    --duration-h, --seed and --rate-hz replace the scenario's [run] values; they are checked as the file's keys
+    are and recorded in scenario.resolved.toml.
+    """
     from gyrodrift.atomic import OutputFolder
-    from gyrodrift.ins.scenario import ScenarioError, load_scenario
+    from gyrodrift.ins.scenario import Scenario, load_scenario
     from gyrodrift.ins.simulate import SIMULATION_FILES, rotation_summary, simulate
 
     out = OutputFolder(out_dir, "simulate", SIMULATION_FILES, inputs=[scenario_toml])
-    try:
-        scenario = load_scenario(scenario_toml)
-    except ScenarioError as exc:
-        raise click.ClickException(str(exc)) from None
+    scenario = load_scenario(scenario_toml)
+    overrides = {"duration_h": duration_h, "seed": seed, "rate_hz": rate_hz}
+    given = {k: v for k, v in overrides.items() if v is not None}
+    if given:
+        data = scenario.to_toml_dict()
+        data["run"].update(given)
+        flags = " ".join(f"--{k.replace('_', '-')} {v:g}" for k, v in given.items())
+        scenario = Scenario.from_dict(data, source=f"{scenario_toml} with {flags}", base_dir=scenario_toml.parent)
     try:
         path = simulate(scenario, out_dir=out, quiet=quiet)
     except ValueError as exc:  # the core refused the configuration
         raise click.ClickException(f"{scenario_toml}: {exc}") from None
-    if not quiet:
-        rot = rotation_summary(scenario)
-        span = f", span {rot['span_deg']:.4f} deg" if rot["span_deg"] is not None else ""
-        click.echo(
-            f"wrote {path} ({scenario.n_samples} samples) and {out_dir / 'scenario.resolved.toml'}; "
-            f"{scenario.rotation.scheme} rotation{span}, modulation residual "
-            f"{100 * rot['modulation_residual']:.3f} % of the horizontal sensor errors"
+    rot = rotation_summary(scenario)
+    resolved = out_dir / "scenario.resolved.toml"
+    if as_json:
+        print_json(
+            {
+                "imu": str(path),
+                "scenario": str(resolved),
+                "n_samples": scenario.n_samples,
+                "run": scenario.to_toml_dict()["run"],
+                "rotation": {"scheme": scenario.rotation.scheme, **rot},
+            }
         )
+    span = f", span {rot['span_deg']:.4f} deg" if rot["span_deg"] is not None else ""
+    say_wrote(
+        [path, resolved],
+        quiet=quiet,
+        as_json=as_json,
+        detail=f"{scenario.n_samples} samples, {scenario.run.duration_h:g} h at {scenario.run.rate_hz:g} Hz, seed "
+        f"{scenario.run.seed}; {scenario.rotation.scheme} rotation{span}, modulation residual "
+        f"{100 * rot['modulation_residual']:.3f} % of the horizontal sensor errors",
+    )
 
 
 _INITIAL_WORDS = {
@@ -55,20 +114,31 @@ _INITIAL_WORDS = {
 }
 
 
-@click.command("navigate")
+@click.command(
+    "navigate",
+    epilog="Example: gyrodrift navigate sim/imu.parquet --hours 12 --drift-deg-h 0.0038 --out nav",
+)
 @click.argument("log", metavar="LOG", type=click.Path(path_type=Path))
 @click.option(
     "--hours",
     type=FiniteFloat(min=0.0, min_open=True),
     default=None,
-    help="Navigate only H hours [h] from the start of navigation (default: to the end of the log).",
+    help="Hours of free navigation [h], counted from the start of navigation (the end of the alignment when the "
+    "initial state comes from one). Default: to the end of the log.",
+)
+@click.option(
+    "--drift-deg-h",
+    type=FiniteFloat(),
+    default=None,
+    help="Axial drift estimate [deg/h] subtracted from the z gyro (measured - estimate). Default: 0.",
 )
 @click.option(
     "--compensate-drift-deg-h",
+    "old_drift_deg_h",
     type=FiniteFloat(),
-    default=0.0,
-    show_default=True,
-    help="Axial drift estimate [deg/h] subtracted from the z gyro (measured - estimate).",
+    default=None,
+    hidden=True,
+    help="Deprecated name of --drift-deg-h [deg/h].",
 )
 @click.option(
     "--initial",
@@ -79,24 +149,37 @@ _INITIAL_WORDS = {
     "the end of it), or auto (truth when the log carries it, else alignment).",
 )
 @site_options
+@log_format_option
 @click.option(
     "--out",
     "out_dir",
     required=True,
     type=click.Path(path_type=Path),
     help="Folder receiving nav.parquet and summary.json: new, empty, or holding only gyrodrift's outputs, "
-    "e.g. the simulation's own folder (docs/outputs.md).",
+    "e.g. the simulation's own folder (docs/outputs.md). Required.",
 )
-@click.option("--quiet", is_flag=True, help="No progress bar and no summary line.")
+@click.option(
+    "--plot",
+    is_flag=True,
+    help="Also write navigation.png into --out: position error [nmi] with the 1 nmi line, latitude/longitude "
+    "errors [arcsec] and, for logs with the true attitude, pitch/roll/yaw errors [arcsec] vs time [h]. "
+    "Default: off.",
+)
+@json_option
+@quiet_option
 def navigate_command(
     log: Path,
     hours: float | None,
-    compensate_drift_deg_h: float,
+    drift_deg_h: float | None,
+    old_drift_deg_h: float | None,
     initial: str,
     lat0_deg: float | None,
     lon0_deg: float | None,
     height_m: float | None,
+    log_format: Path | None,
     out_dir: Path,
+    plot: bool,
+    as_json: bool,
     quiet: bool,
 ) -> None:
     """Navigate LOG (any IMU log: Parquet or CSV) and report the position error against the static site.
@@ -104,30 +187,43 @@ def navigate_command(
     The initial state comes from the log's truth (simulated logs), else from an alignment of the log; the
     summary line and summary.json (initial_source) say which.
     """
+    from gyrodrift.errors import OptionError
     from gyrodrift.ins.navigate import navigate
 
+    if old_drift_deg_h is not None:
+        if drift_deg_h is not None:
+            raise OptionError("give --drift-deg-h only (--compensate-drift-deg-h is its deprecated name)")
+        click.echo("warning: --compensate-drift-deg-h is deprecated; use --drift-deg-h", err=True)
+        drift_deg_h = old_drift_deg_h
+    site = site_from_options(lat0_deg, lon0_deg, height_m)
+    if log_format is not None:
+        from gyrodrift.logs import open_log
+
+        imu = open_log(log, site=site, format=log_format, require_temperature=False)
+        site = None  # given to the log
     result = navigate(
-        log,
+        log if log_format is None else imu,
         hours=hours,
-        compensate_drift_deg_h=compensate_drift_deg_h,
+        compensate_drift_deg_h=0.0 if drift_deg_h is None else drift_deg_h,
         initial=initial,
-        site=site_from_options(lat0_deg, lon0_deg, height_m),
+        site=site,
         out_dir=out_dir,
+        plot=plot,
         quiet=quiet,
     )
-    if not quiet:
-        s = result.summary
-        source = f"initial state from {_INITIAL_WORDS[s['initial_source']]}"
-        if s["final_pos_err_nmi"] is not None:
-            click.echo(
-                f"{s['hours_navigated']:.3f} h ({source}): final position error {s['final_pos_err_nmi']:.4f} nmi, "
-                f"max {s['max_pos_err_nmi']:.4f} nmi; wrote {out_dir / 'nav.parquet'}, {out_dir / 'summary.json'}"
-            )
-        else:
-            click.echo(
-                f"{s['hours_navigated']:.3f} h ({source}); wrote {out_dir / 'nav.parquet'}, "
-                f"{out_dir / 'summary.json'} (no site known: no position errors)"
-            )
+    s = result.summary
+    if as_json:
+        print_json(s)
+    written = [out_dir / "nav.parquet", out_dir / "summary.json"]
+    source = f"initial state from {_INITIAL_WORDS[s['initial_source']]}"
+    if s["final_pos_err_nmi"] is not None:
+        detail = (
+            f"{s['hours_navigated']:.3f} h, {source}: final position error {s['final_pos_err_nmi']:.4f} nmi, "
+            f"max {s['max_pos_err_nmi']:.4f} nmi"
+        )
+    else:
+        detail = f"{s['hours_navigated']:.3f} h, {source}; no site known: no position errors"
+    say_wrote(written, quiet=quiet, as_json=as_json, detail=detail)
 
 
 COMMANDS = (simulate_command, navigate_command)

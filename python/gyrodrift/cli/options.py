@@ -1,4 +1,8 @@
-"""Options shared by the commands that read IMU logs: the static site (--lat0-deg, --lon0-deg, --height-m)."""
+"""Options and output lines shared by the commands (the conventions of docs/cli.md).
+
+The static site of the commands that read IMU logs (``--lat0-deg``, ``--lon0-deg``, ``--height-m``), ``--json``,
+``--quiet``, and the one ``wrote ...`` line of every command that writes files.
+"""
 
 from __future__ import annotations
 
@@ -6,7 +10,15 @@ import click
 
 from gyrodrift.cli.types import FiniteFloat
 
-__all__ = ["site_options", "site_from_options"]
+__all__ = [
+    "site_options",
+    "site_from_options",
+    "log_format_option",
+    "json_option",
+    "quiet_option",
+    "print_json",
+    "say_wrote",
+]
 
 
 def site_options(f):
@@ -15,19 +27,19 @@ def site_options(f):
         "--height-m",
         type=FiniteFloat(-1e4, 1e5),
         default=None,
-        help="Site height above the ellipsoid [m] (default: the log's, else 0).",
+        help="Site height above the ellipsoid [m]. Default: the log's, else 0.",
     )(f)
     f = click.option(
         "--lon0-deg",
         type=FiniteFloat(-360.0, 360.0),
         default=None,
-        help="Site longitude [deg] (default: the log's, else 0).",
+        help="Site longitude [deg]. Default: the log's, else 0.",
     )(f)
     f = click.option(
         "--lat0-deg",
         type=FiniteFloat(-90.0, 90.0, min_open=True, max_open=True),
         default=None,
-        help="True site latitude [deg]; required for logs that carry no site (CSV).",
+        help="True site latitude [deg]; needed for logs that carry no site (CSV). Default: the log's.",
     )(f)
     return f
 
@@ -42,3 +54,71 @@ def site_from_options(lat0_deg: float | None, lon0_deg: float | None, height_m: 
     if height_m is not None:
         site["height_m"] = height_m
     return site or None
+
+
+def log_format_option(f):
+    """Add ``--format FILE``: the log format description of a log with its own columns (`gyrodrift.log_format`)."""
+    from pathlib import Path
+
+    return click.option(
+        "--format",
+        "log_format",
+        type=click.Path(dir_okay=False, path_type=Path),
+        default=None,
+        help="Log format file (TOML) describing the log's own columns, units, axes, time stamps and CSV "
+        "delimiter (docs/procedure.md, 'Logs in their own format'; examples/logs/). Default: the native columns "
+        "(t_s, dtheta_x_rad, ...).",
+    )(f)
+
+
+def json_option(f):
+    """Add ``--json``: print the result as one JSON document on stdout (human lines go to stderr)."""
+    return click.option(
+        "--json",
+        "as_json",
+        is_flag=True,
+        help="Print the result as JSON on stdout (the 'wrote ...' line goes to stderr). Default: text.",
+    )(f)
+
+
+def quiet_option(f):
+    """Add ``--quiet``: no progress bar, notes or 'wrote ...' line (a result asked for on stdout still prints)."""
+    return click.option(
+        "--quiet",
+        is_flag=True,
+        help="No progress bar, notes or 'wrote ...' line; a result with no other place (stdout, --json) still "
+        "prints. Default: off.",
+    )(f)
+
+
+def print_json(doc) -> None:
+    """Print `doc` as indented JSON on stdout (NaN refused: not JSON)."""
+    import json
+
+    from gyrodrift.cli.errors import write_stdout
+
+    write_stdout(json.dumps(_finite(doc), indent=2, allow_nan=False, default=str) + "\n")
+
+
+def _finite(x):
+    """`x` with every NaN or infinity replaced by None (JSON has no such numbers)."""
+    import math
+
+    if isinstance(x, float):
+        return x if math.isfinite(x) else None
+    if isinstance(x, dict):
+        return {k: _finite(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_finite(v) for v in x]
+    if hasattr(x, "tolist") and not isinstance(x, str):  # numpy scalars and arrays
+        return _finite(x.tolist())
+    return x
+
+
+def say_wrote(paths, *, quiet: bool, as_json: bool = False, detail: str = "") -> None:
+    """The one ``wrote PATH, PATH (detail)`` line of a command that wrote files: stdout, or stderr with --json so
+    that stdout stays one JSON document; nothing with --quiet."""
+    if quiet:
+        return
+    text = "wrote " + ", ".join(str(p) for p in paths) + (f" ({detail})" if detail else "")
+    click.echo(text, err=as_json)

@@ -2,67 +2,101 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import click
 
-from gyrodrift.cli.options import site_from_options, site_options
+from gyrodrift.cli.options import (
+    json_option,
+    log_format_option,
+    print_json,
+    quiet_option,
+    say_wrote,
+    site_from_options,
+    site_options,
+)
 from gyrodrift.cli.types import FiniteFloat
 
 __all__ = ["features_command", "truth_command", "evaluate_command", "identify_command"]
 
 
-def _open(path, site):
+def _open(path, site, log_format=None):
     from gyrodrift.logs import LogError, open_log
 
-    log = open_log(path, site=site)
+    log = open_log(path, site=site, format=log_format)
     if log.site is None:
         raise LogError(f"{path}: the log carries no site; give its latitude (--lat0-deg)")
     return log
 
 
-@click.command("features")
+@click.command(
+    "features",
+    epilog="Example: gyrodrift features fleet/*/imu.parquet --with-truth --out runs.csv",
+)
 @click.argument("logs", nargs=-1, required=True, type=click.Path(path_type=Path))
 @click.option(
     "--out",
     "out",
     required=True,
     type=click.Path(path_type=Path),
-    help="Run table to write (CSV, atomically).",
+    help="Run table to write (CSV, atomically; replaces only a run table gyrodrift wrote). Required.",
 )
 @site_options
-@click.option("--with-truth", is_flag=True, help="Also find the true drift (logs >= 76 h) -> drift_deg_h column.")
+@log_format_option
+@click.option(
+    "--with-truth",
+    is_flag=True,
+    help="Also find each log's true drift [deg/h] (logs >= 76 h) -> drift_deg_h column. Default: off.",
+)
 @click.option(
     "--criterion",
     type=click.Choice(["final", "rms", "max"]),
     default="final",
     show_default=True,
-    help="Criterion of the true drift.",
+    help="Criterion of the true drift (with --with-truth): the 72 h position error at its end, RMS, or maximum.",
 )
 @click.option(
     "--workers",
     type=click.IntRange(min=1),
     default=None,
-    help="Process the logs on a local dask cluster with N workers (needs the 'dask' extra).",
+    help="Process the logs on a local dask cluster with N worker processes (needs the 'dask' extra). "
+    "Default: one process, no dask.",
 )
-@click.option("--scheduler", default=None, help="Address of a running dask scheduler (tcp://host:8786).")
+@click.option(
+    "--scheduler",
+    default=None,
+    help="Address of a running dask scheduler (tcp://host:8786). Default: none (see --workers).",
+)
 @click.option(
     "--connect-timeout-s",
     type=FiniteFloat(min=0.0, max=3600.0, min_open=True),
     default=10.0,
     show_default=True,
-    help="Seconds to wait for --scheduler to answer before giving up.",
+    help="Time [s] to wait for --scheduler to answer before giving up.",
 )
 @click.option(
     "--curves",
     type=click.Path(path_type=Path),
     default=None,
-    help="Also write the hourly latitude-error curves (run, t_h, lat_err_arcsec) to this CSV.",
+    help="Also write the hourly latitude-error curves (run, t_h, lat_err_arcsec) to this CSV. Default: none.",
 )
-@click.option("--quiet", is_flag=True, help="No progress bar and no summary line.")
+@json_option
+@quiet_option
 def features_command(
-    logs, out, lat0_deg, lon0_deg, height_m, with_truth, criterion, workers, scheduler, connect_timeout_s, curves, quiet
+    logs,
+    out,
+    lat0_deg,
+    lon0_deg,
+    height_m,
+    log_format,
+    with_truth,
+    criterion,
+    workers,
+    scheduler,
+    connect_timeout_s,
+    curves,
+    as_json,
+    quiet,
 ):
     """Align each LOG, navigate 12 h and write one run-table row per log to --out.
 
@@ -78,6 +112,7 @@ def features_command(
     rows = features_table(
         [str(p) for p in logs],
         site=site_from_options(lat0_deg, lon0_deg, height_m),
+        log_format=log_format,
         with_truth=with_truth,
         criterion=criterion,
         workers=workers,
@@ -86,11 +121,12 @@ def features_command(
         quiet=quiet,
     )
     write_features_csv(rows, out, curves=curves, inputs=logs)
-    if not quiet:
-        click.echo(f"wrote {len(rows)} run(s) to {out}")
+    if as_json:
+        print_json([row.row() for row in rows])
+    say_wrote([p for p in (out, curves) if p is not None], quiet=quiet, as_json=as_json, detail=f"{len(rows)} run(s)")
 
 
-@click.command("truth")
+@click.command("truth", epilog="Example: gyrodrift truth sim/imu.parquet --criterion final --out truth")
 @click.argument("log", type=click.Path(path_type=Path))
 @click.option(
     "--criterion",
@@ -104,34 +140,39 @@ def features_command(
     type=FiniteFloat(min=0.0, min_open=True),
     default=72.0,
     show_default=True,
-    help="Navigation hours after the 4 h alignment.",
+    help="Hours of free navigation [h], counted from the end of the 4 h alignment.",
 )
 @site_options
+@log_format_option
 @click.option(
     "--out",
     "out_dir",
     type=click.Path(path_type=Path),
     default=None,
-    help="Folder for true_drift.json, criterion.png, alignment.json and alignment_z_sigma.png: new, empty, or "
-    "holding only gyrodrift's outputs (docs/outputs.md).",
+    help="Also save the result: folder for true_drift.json, criterion.png, alignment.json and "
+    "alignment_z_sigma.png, new, empty, or holding only gyrodrift's outputs (docs/outputs.md). Default: print only.",
 )
-@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
-@click.option("--quiet", is_flag=True, help="No progress bar.")
-def truth_command(log, criterion, hours, lat0_deg, lon0_deg, height_m, out_dir, as_json, quiet):
+@json_option
+@quiet_option
+def truth_command(log, criterion, hours, lat0_deg, lon0_deg, height_m, log_format, out_dir, as_json, quiet):
     """Find the z-gyro drift [deg/h] minimising the position error of the navigation after alignment."""
     from gyrodrift.atomic import OutputFolder
     from gyrodrift.procedure.truth import find_true_drift
     from gyrodrift.procedure.writers import ALIGNMENT_FILES, TRUTH_FILES, write_alignment, write_truth
 
     out = None if out_dir is None else OutputFolder(out_dir, "truth", TRUTH_FILES + ALIGNMENT_FILES, inputs=[log])
-    imu = _open(log, site_from_options(lat0_deg, lon0_deg, height_m))
+    imu = _open(log, site_from_options(lat0_deg, lon0_deg, height_m), log_format)
     res = find_true_drift(imu, criterion=criterion, hours=hours, quiet=quiet)
     if out is not None:
         with out.publish() as stage:
             write_truth(res, stage)
             write_alignment(res.alignment, stage)
+    if out is not None:
+        say_wrote([out_dir / name for name in TRUTH_FILES + ALIGNMENT_FILES], quiet=quiet, as_json=True)
     if as_json:
-        click.echo(json.dumps(res.to_dict(), indent=2))
+        print_json(res.to_dict())
+        return
+    if quiet and out is not None:
         return
     v = res.verify_nmi
     click.echo(f"{res.run}: true drift {res.drift_deg_h:.7f} deg/h ({criterion} criterion over {hours:g} h)")
@@ -147,15 +188,21 @@ def truth_command(log, criterion, hours, lat0_deg, lon0_deg, height_m, out_dir, 
     )
 
 
-@click.command("evaluate")
+@click.command("evaluate", epilog="Example: gyrodrift evaluate sim/imu.parquet --model model.json --out eval")
 @click.argument("log", type=click.Path(path_type=Path))
-@click.option("--drift-deg-h", type=FiniteFloat(), default=None, help="Axial drift [deg/h] to compensate.")
+@click.option(
+    "--drift-deg-h",
+    type=FiniteFloat(),
+    default=None,
+    help="Axial drift estimate [deg/h] to compensate (subtracted from the z gyro). Default: none; give it or --model.",
+)
 @click.option(
     "--model",
     "model_path",
     type=click.Path(dir_okay=False, path_type=Path),
     default=None,
-    help="Identify the drift with this model (JSON) instead.",
+    help="Drift model file (JSON, from `gyrodrift fit`) identifying the drift to compensate. Default: none; give it "
+    "or --drift-deg-h.",
 )
 @click.option(
     "--out",
@@ -163,18 +210,22 @@ def truth_command(log, criterion, hours, lat0_deg, lon0_deg, height_m, out_dir, 
     required=True,
     type=click.Path(path_type=Path),
     help="Folder for evaluation.json and position_error.png: new, empty, or holding only gyrodrift's outputs "
-    "(docs/outputs.md).",
+    "(docs/outputs.md). Required.",
 )
 @click.option(
     "--hours",
     type=FiniteFloat(min=0.0, min_open=True),
     default=72.0,
     show_default=True,
-    help="Navigation hours after the 4 h alignment.",
+    help="Hours of free navigation [h], counted from the end of the 4 h alignment.",
 )
 @site_options
-@click.option("--quiet", is_flag=True, help="No progress bar and no summary line.")
-def evaluate_command(log, drift_deg_h, model_path, out_dir, hours, lat0_deg, lon0_deg, height_m, quiet):
+@log_format_option
+@json_option
+@quiet_option
+def evaluate_command(
+    log, drift_deg_h, model_path, out_dir, hours, lat0_deg, lon0_deg, height_m, log_format, as_json, quiet
+):
     """Navigate LOG 72 h after alignment without and with compensating the axial drift; plot both errors."""
     from gyrodrift.atomic import OutputFolder
     from gyrodrift.procedure.evaluate import evaluate_compensation
@@ -184,43 +235,48 @@ def evaluate_command(log, drift_deg_h, model_path, out_dir, hours, lat0_deg, lon
     if (drift_deg_h is None) == (model_path is None):
         raise click.UsageError("give exactly one of --drift-deg-h or --model")
     out = OutputFolder(out_dir, "evaluate", EVALUATION_FILES, inputs=[p for p in (log, model_path) if p is not None])
-    imu = _open(log, site_from_options(lat0_deg, lon0_deg, height_m))
+    imu = _open(log, site_from_options(lat0_deg, lon0_deg, height_m), log_format)
     alignment = None
     source = "given"
     if model_path is not None:
         ident = identify(imu, model_path, quiet=quiet)
         drift_deg_h, alignment, source = ident.drift_deg_h, ident.features.alignment, str(model_path)
     ev = evaluate_compensation(imu, drift_deg_h, hours=hours, alignment=alignment, source=source, quiet=quiet)
-    write_evaluation(ev, out)
-    if not quiet:
-        click.echo(
-            f"{ev.run}: compensating {ev.drift_deg_h:.6f} deg/h: {hours:g} h position error "
-            f"{ev.before.final_nmi:.3f} -> {ev.after.final_nmi:.3f} nmi (final), "
-            f"{ev.before.max_nmi:.3f} -> {ev.after.max_nmi:.3f} nmi (max); wrote {out_dir}"
-        )
+    paths = write_evaluation(ev, out)
+    if as_json:
+        print_json(ev.to_dict())
+    say_wrote(
+        list(paths.values()),
+        quiet=quiet,
+        as_json=as_json,
+        detail=f"{ev.run}: compensating {ev.drift_deg_h:.6f} deg/h: {hours:g} h position error "
+        f"{ev.before.final_nmi:.3f} -> {ev.after.final_nmi:.3f} nmi (final), "
+        f"{ev.before.max_nmi:.3f} -> {ev.after.max_nmi:.3f} nmi (max)",
+    )
 
 
-@click.command("identify")
+@click.command("identify", epilog="Example: gyrodrift identify sim/imu.parquet --model model.json --out ident")
 @click.argument("log", type=click.Path(path_type=Path))
 @click.option(
     "--model",
     "model_path",
     required=True,
     type=click.Path(dir_okay=False, path_type=Path),
-    help="Drift model (JSON, from `gyrodrift fit`).",
+    help="Drift model file (JSON, from `gyrodrift fit`). Required.",
 )
 @site_options
+@log_format_option
 @click.option(
     "--out",
     "out_dir",
     type=click.Path(path_type=Path),
     default=None,
-    help="Folder for identification.json, alignment.json and alignment_z_sigma.png: new, empty, or holding only "
-    "gyrodrift's outputs (docs/outputs.md).",
+    help="Also save the result: folder for identification.json, alignment.json and alignment_z_sigma.png, new, "
+    "empty, or holding only gyrodrift's outputs (docs/outputs.md). Default: print only.",
 )
-@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
-@click.option("--quiet", is_flag=True, help="No progress bar.")
-def identify_command(log, model_path, lat0_deg, lon0_deg, height_m, out_dir, as_json, quiet):
+@json_option
+@quiet_option
+def identify_command(log, model_path, lat0_deg, lon0_deg, height_m, log_format, out_dir, as_json, quiet):
     """Align LOG, navigate 12 h and identify its axial drift with the model."""
     from gyrodrift.atomic import OutputFolder
     from gyrodrift.procedure.identify import identify
@@ -234,15 +290,18 @@ def identify_command(log, model_path, lat0_deg, lon0_deg, height_m, out_dir, as_
 
     files = IDENTIFICATION_FILES + ALIGNMENT_FILES
     out = None if out_dir is None else OutputFolder(out_dir, "identify", files, inputs=[log, model_path])
-    imu = _open(log, site_from_options(lat0_deg, lon0_deg, height_m))
+    imu = _open(log, site_from_options(lat0_deg, lon0_deg, height_m), log_format)
     res = identify(imu, model_path, quiet=quiet)
     doc = identification_document(res)
     if out is not None:
         with out.publish() as stage:
             write_identification(res, stage)
             write_alignment(res.features.alignment, stage)
+        say_wrote([out_dir / name for name in files], quiet=quiet, as_json=True)
     if as_json:
-        click.echo(json.dumps(doc, indent=2))
+        print_json(doc)
+        return
+    if quiet and out is not None:
         return
     f = res.features
     for line in res.range_warnings:
