@@ -24,10 +24,10 @@ __all__ = ["COMMANDS", "campaign_command", "study_command"]
     type=click.Path(path_type=Path),
     default=None,
     help="With a campaign file: the campaign folder (new, empty, or this campaign's: finished runs are skipped). "
-    "With --export-log: the folder for the run's imu.parquet and scenario.resolved.toml.",
+    "With --export-log: the folder for the run's imu.parquet and scenario.resolved.toml. Default: none.",
 )
 @click.option("--workers", type=click.IntRange(min=1), default=None, help="Local processes (default: one per CPU).")
-@click.option("--scheduler", default=None, help="Address of a running dask scheduler (tcp://host:8786).")
+@click.option("--scheduler", default=None, help="Address of a running dask scheduler (tcp://host:8786). Default: none.")
 @click.option(
     "--connect-timeout-s",
     type=FiniteFloat(min=0.0, max=3600.0, min_open=True),
@@ -35,19 +35,21 @@ __all__ = ["COMMANDS", "campaign_command", "study_command"]
     show_default=True,
     help="Time [s] to wait for --scheduler to answer before giving up.",
 )
-@click.option("--limit", type=click.IntRange(min=1), default=None, help="Process at most this many pending runs.")
+@click.option(
+    "--limit", type=click.IntRange(min=1), default=None, help="Process at most this many pending runs. Default: all."
+)
 @click.option(
     "--run-table",
     type=click.Path(dir_okay=False, path_type=Path),
     default=None,
-    help="SOURCE is a campaign folder: write its successful runs as a run table `gyrodrift fit` reads.",
+    help="SOURCE is a campaign folder: write its successful runs as a run table `gyrodrift fit` reads. Default: none.",
 )
 @click.option(
     "--export-log",
     "export_run",
     type=click.IntRange(min=0),
     default=None,
-    help="SOURCE is a campaign folder (or file): simulate run N alone and write its log into --out.",
+    help="SOURCE is a campaign folder (or file): simulate run N alone and write its log into --out. Default: none.",
 )
 @json_option
 @quiet_option
@@ -137,7 +139,7 @@ def _export(campaign, index: int, out, quiet: bool, as_json: bool) -> None:
     type=FiniteFloat(min=0.0, max=1.0, min_open=True, max_open=True),
     default=0.3,
     show_default=True,
-    help="Share of the runs held out (chosen by run, seeded).",
+    help="Share of the runs held out [fraction of 1] (chosen by run, seeded).",
 )
 @click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Seed of the split and tuners.")
 @click.option(
