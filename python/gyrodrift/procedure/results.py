@@ -6,6 +6,7 @@ neither, nor matplotlib, nor the file system: the dependency runs one way, algor
 
 - `Alignment` (`align_log`): attitude, biases and their 1-sigma at the end of alignment.
 - `NavCurve`, `TemperatureStats`, `PassResult` (`navigate_after_alignment`): the error curves of one read.
+- `SmootherEstimate` (`smooth_log`): the 16 h smoother's drift, its 1-sigma and history.
 - `TrueDrift` (`find_true_drift`), `RunFeatures` (`extract_features`; `RUN_TABLE_COLUMNS` is its run-table row),
   `Evaluation` (`evaluate_compensation`), `Identification` (`identify`).
 """
@@ -35,6 +36,7 @@ __all__ = [
     "RunFeatures",
     "Evaluation",
     "Identification",
+    "SmootherEstimate",
 ]
 
 
@@ -241,6 +243,15 @@ class TrueDrift:
         The verification navigation at ``d*``.
     temperature : TemperatureStats or None
         Temperature over the features window of the first read (when asked).
+    drift_std_deg_h : float
+        1-sigma of the label from the linear covariance analysis at the log's noise level [deg/h] (NaN when not
+        computed); ``max`` takes the ``rms`` value (an approximation).
+    flagged : bool
+        The 72 h sensitivity is too low to label the run: the label's 1-sigma exceeds the 1 nmi / 72 h budget
+        (`gyrodrift.procedure.truth.label_budget_deg_h`); ``flag_reason`` says why.
+    flag_reason : str
+    noise : dict or None
+        The noise model of the covariance analysis (`SensorNoise.to_dict`).
     """
 
     run: str
@@ -262,6 +273,10 @@ class TrueDrift:
     base: NavCurve | None = field(default=None, repr=False)
     optimum: NavCurve | None = field(default=None, repr=False)
     temperature: Any = field(default=None, repr=False)
+    drift_std_deg_h: float = math.nan
+    flagged: bool = False
+    flag_reason: str = ""
+    noise: dict | None = field(default=None, repr=False)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary (user units)."""
@@ -269,6 +284,10 @@ class TrueDrift:
             "format": "gyrodrift-true-drift/1",
             "run": self.run,
             "drift_deg_h": self.drift_deg_h,
+            "drift_std_deg_h": None if not math.isfinite(self.drift_std_deg_h) else self.drift_std_deg_h,
+            "flagged": bool(self.flagged),
+            "flag_reason": self.flag_reason,
+            "noise": self.noise,
             "criterion": self.criterion,
             "hours": self.hours,
             "trial_deg_h": self.trial_deg_h,
@@ -480,5 +499,83 @@ class Identification:
                 **f.row(),
                 "lat_err_arcsec": f.lat_err_arcsec,
                 "lat_err_curve_arcsec": [float(x) for x in f.lat_err_curve_arcsec],
+            },
+        }
+
+
+@dataclass(frozen=True)
+class SmootherEstimate:
+    """The 16 h smoother's axial drift (`gyrodrift.procedure.smoother.smooth_log`), in user units.
+
+    Attributes
+    ----------
+    run : str
+    span_h : float
+        Hours of the log used, from its first sample.
+    drift_deg_h, drift_std_deg_h : float
+        The constant part of the z-gyro bias (subtract it from the z gyro) and its 1-sigma [deg/h]: the
+        Cramer-Rao line of the linear-Gaussian model.
+    drift_end_deg_h, drift_end_std_deg_h : float
+        The total z-gyro bias at the end of the span (constant + Gauss-Markov + random walk) and its 1-sigma;
+        equal to the constant without bias-drift terms.
+    gyro_bias_deg_h, gyro_bias_std_deg_h : tuple of 3 floats
+        Constant gyro biases, body x y z, and their 1-sigma [deg/h].
+    accel_bias_ug, accel_bias_std_ug : tuple of 3 floats
+        Accelerometer biases and 1-sigma [ug].
+    hist_t_h, hist_drift_deg_h, hist_drift_std_deg_h, hist_filter_std_deg_h : ndarray
+        The smoothed total z drift and its 1-sigma over the span [h from the first sample, deg/h], and the forward
+        filter's 1-sigma at the same times.
+    noise : SensorNoise
+        The noise model the filter used (floored).
+    max_attitude_correction_arcsec, max_velocity_correction_m_s, max_position_error_m : float
+        Linearity check after the first hour: the largest feedback corrections and position error estimate.
+    updates : int
+        Measurement updates of the forward filter.
+    """
+
+    run: str
+    span_h: float
+    drift_deg_h: float
+    drift_std_deg_h: float
+    drift_end_deg_h: float
+    drift_end_std_deg_h: float
+    gyro_bias_deg_h: tuple[float, float, float]
+    gyro_bias_std_deg_h: tuple[float, float, float]
+    accel_bias_ug: tuple[float, float, float]
+    accel_bias_std_ug: tuple[float, float, float]
+    hist_t_h: np.ndarray = field(repr=False)
+    hist_drift_deg_h: np.ndarray = field(repr=False)
+    hist_drift_std_deg_h: np.ndarray = field(repr=False)
+    hist_filter_std_deg_h: np.ndarray = field(repr=False)
+    noise: Any = None
+    max_attitude_correction_arcsec: float = math.nan
+    max_velocity_correction_m_s: float = math.nan
+    max_position_error_m: float = math.nan
+    updates: int = 0
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready summary (user units; the history as lists)."""
+        return {
+            "format": "gyrodrift-smoother/1",
+            "run": self.run,
+            "span_h": self.span_h,
+            "drift_deg_h": self.drift_deg_h,
+            "drift_std_deg_h": self.drift_std_deg_h,
+            "drift_end_deg_h": self.drift_end_deg_h,
+            "drift_end_std_deg_h": self.drift_end_std_deg_h,
+            "gyro_bias_deg_h": list(self.gyro_bias_deg_h),
+            "gyro_bias_std_deg_h": list(self.gyro_bias_std_deg_h),
+            "accel_bias_ug": list(self.accel_bias_ug),
+            "accel_bias_std_ug": list(self.accel_bias_std_ug),
+            "noise": None if self.noise is None else self.noise.to_dict(),
+            "max_attitude_correction_arcsec": self.max_attitude_correction_arcsec,
+            "max_velocity_correction_m_s": self.max_velocity_correction_m_s,
+            "max_position_error_m": self.max_position_error_m,
+            "updates": self.updates,
+            "history": {
+                "t_h": [float(x) for x in self.hist_t_h],
+                "drift_deg_h": [float(x) for x in self.hist_drift_deg_h],
+                "drift_std_deg_h": [float(x) for x in self.hist_drift_std_deg_h],
+                "filter_std_deg_h": [float(x) for x in self.hist_filter_std_deg_h],
             },
         }

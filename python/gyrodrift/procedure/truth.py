@@ -26,9 +26,25 @@ then simulate the compensation and keep the drift that minimises the position er
 
 The drift is the total constant to subtract from the z-gyro output (measured - estimate) [deg/h]; the
 alignment's own z estimate plays no part.
+
+Uncertainty of the label (issue 10): with sensor noise, d* is the constant that best cancels this run's random
+walk, not the sensor's drift. Its 1-sigma ``drift_std_deg_h`` comes from a linear covariance analysis of the 72 h
+navigation with the core's error model (`_core.label_sigma`, gyrodrift-core ``smoother::label_sigma``: attitude,
+velocity and north/east position errors driven by ARW and VRW, from the alignment's final attitude 1-sigma):
+``final``: ``var = g' Cov(e(T)) g / |g|^4`` with g the position response to the drift at hour 72 and e the
+position error it does not explain; ``rms``: the same for the sums over the curve points (an accumulator
+state); ``max`` has no closed form and takes the ``rms`` value (an approximation). ARW and VRW are measured
+from the log's first hour (`gyrodrift.procedure.noise.estimate_white_noise`) unless given. A run is
+``flagged`` when that 1-sigma exceeds `label_budget_deg_h`, the drift error that moves the 72 h position by
+1 nmi at 45 deg (the latitude where a label is best): near the equator or a pole the 72 h error hardly depends
+on the drift, and such a label cannot tell a method within the 1 nmi / 72 h budget from one outside it.
 """
 
 from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 from scipy.optimize import minimize_scalar
@@ -36,12 +52,20 @@ from scipy.optimize import minimize_scalar
 from gyrodrift.earth import NMI_M
 from gyrodrift.logs import ImuLog
 from gyrodrift.procedure.align import align_log
+from gyrodrift.procedure.noise import SensorNoise, estimate_white_noise
 from gyrodrift.procedure.passes import check_navigation_hours, navigate_after_alignment
 from gyrodrift.procedure.results import Alignment, PassResult, TrueDrift
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
-from gyrodrift.units import HOUR
+from gyrodrift.units import ARCSEC, DEG, DEG_PER_H, HOUR
 
-__all__ = ["CRITERIA", "find_true_drift", "criterion_value", "minimise_linear_criterion"]
+__all__ = [
+    "CRITERIA",
+    "find_true_drift",
+    "criterion_value",
+    "minimise_linear_criterion",
+    "label_sigma_deg_h",
+    "label_budget_deg_h",
+]
 
 CRITERIA = ("final", "rms", "max")
 """Position-error criteria over the navigation: at its end, root mean square, maximum."""
@@ -84,6 +108,43 @@ def minimise_linear_criterion(n0, e0, gn, ge, criterion: str) -> float:
     return float(res.x)
 
 
+def label_sigma_deg_h(
+    lat_deg: float,
+    noise: SensorNoise,
+    *,
+    criterion: str = "final",
+    hours: float = 72.0,
+    height_m: float = 0.0,
+    att_std_arcsec: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    decimation_s: float = 60.0,
+) -> tuple[float, float]:
+    """(1-sigma of the label [deg/h], sensitivity of the final position error [nmi per deg/h]) from the core's
+    covariance analysis (module docstring) at latitude `lat_deg` with the noise's ARW and VRW."""
+    from gyrodrift import _core
+
+    if criterion not in CRITERIA:
+        raise ValueError(f"unknown criterion {criterion!r}; expected one of {', '.join(CRITERIA)}")
+    r = _core.label_sigma(
+        lat_rad=float(lat_deg) * DEG,
+        height_m=float(height_m),
+        span_s=float(hours) * HOUR,
+        step_s=float(decimation_s),
+        gyro_arw_rad_rts=noise.arw_rad_rts,
+        accel_vrw_m_s_rts=noise.vrw_m_s_rts,
+        att_sigma_rad=[float(a) * ARCSEC for a in att_std_arcsec],
+        vel_sigma_m_s=0.0,
+        rms=criterion != "final",
+    )
+    return float(r["drift_std_rad_s"]) / DEG_PER_H, float(r["sensitivity_m_per_rad_s"]) * DEG_PER_H / NMI_M
+
+
+def label_budget_deg_h(hours: float = 72.0, decimation_s: float = 60.0) -> float:
+    """The drift error [deg/h] that moves the position at the end of `hours` of navigation by 1 nmi at 45 deg
+    latitude (the 1 nmi / 72 h budget where a label is best; the core's error model: 4.6e-4 deg/h for 72 h)."""
+    _, sensitivity = label_sigma_deg_h(45.0, SensorNoise(), hours=hours, decimation_s=decimation_s)
+    return 1.0 / sensitivity
+
+
 def find_true_drift(
     log: ImuLog,
     *,
@@ -99,6 +160,7 @@ def find_true_drift(
     max_refinements: int = 3,
     decimation_s: float = 60.0,
     temperature_hours: float | None = None,
+    noise: SensorNoise | Mapping[str, Any] | None = None,
     chunk_samples: int = 100_000,
     quiet: bool = True,
 ) -> TrueDrift:
@@ -130,6 +192,8 @@ def find_true_drift(
         Interval of the error curves [s]; ``rms`` and ``max`` are taken over these samples.
     temperature_hours : float, optional
         Also collect the temperature over the first hours of navigation (the features use 12 h).
+    noise : SensorNoise or mapping, optional
+        ARW and VRW of the label's covariance analysis (default: measured from the log's first hour).
     chunk_samples, quiet
         Read size and progress switch.
 
@@ -195,6 +259,27 @@ def find_true_drift(
     # One curve at a time: the (grid_points, samples) matrix would cost memory in proportion to the hours.
     grid_nmi = np.array([criterion_value(ref_n + o * gn, ref_e + o * ge, criterion) for o in off])
     predicted = float(criterion_value(ref_n + (d_star - ref_d) * gn, ref_e + (d_star - ref_d) * ge, criterion))
+    if noise is None:
+        noise = estimate_white_noise(log, chunk_samples=chunk_samples)
+    elif not isinstance(noise, SensorNoise):
+        noise = SensorNoise.from_block(noise)
+    sigma, _ = label_sigma_deg_h(
+        alignment.site.lat_deg,
+        noise,
+        criterion=criterion,
+        hours=hours,
+        height_m=float(alignment.site.height_m),
+        att_std_arcsec=alignment.att_std_arcsec,
+        decimation_s=decimation_s,
+    )
+    budget = label_budget_deg_h(hours, decimation_s)
+    flagged = bool(sigma > budget) or not math.isfinite(sigma)
+    reason = (
+        f"label 1-sigma {sigma:.2g} deg/h exceeds the 1 nmi / {hours:g} h drift budget {budget:.2g} deg/h (at 45 deg): "
+        f"at {alignment.site.lat_deg:g} deg the {hours:g} h position error hardly depends on the drift"
+        if flagged
+        else ""
+    )
     return TrueDrift(
         run=log.name,
         drift_deg_h=float(d_star),
@@ -215,4 +300,8 @@ def find_true_drift(
         base=c0,
         optimum=mid,
         temperature=first.temperature,
+        drift_std_deg_h=sigma,
+        flagged=flagged,
+        flag_reason=reason,
+        noise=noise.to_dict(),
     )

@@ -1,0 +1,120 @@
+"""The 16 h smoother: the axial drift of a run from all of its alignment and navigation hours, with its 1-sigma.
+
+A forward Kalman filter and a Rauch-Tung-Striebel smoother in the Rust core (`_core.Smoother`, gyrodrift-core
+`smoother`; equations in docs/identification.md) run over the log from its first sample to the end of the
+features window (``Timeline.align_h + Timeline.features_h``, 16 h by default): coarse alignment, then the zero
+velocity and the known static position as measurements every 10 s with the table turning. Its z-gyro estimate
+uses every sample the identification may use, and its 1-sigma is the Cramer-Rao line of the linear-Gaussian
+error model: no method identifying the drift from these 16 h can do better on average.
+
+The noise model (`SensorNoise`) is given (a scenario's or `gyrodrift allan`'s ``[gyro]``/``[accel]`` keys) or
+measured from the log (ARW and VRW from the second differences of the increments; no bias drift).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from gyrodrift.logs import ImuLog, LogError
+from gyrodrift.procedure.noise import SensorNoise, estimate_white_noise
+from gyrodrift.procedure.results import SmootherEstimate
+from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
+from gyrodrift.progress import progress
+from gyrodrift.units import ARCSEC, DEG, DEG_PER_H, HOUR, MICRO_G
+
+__all__ = ["smooth_log"]
+
+
+def smooth_log(
+    log: ImuLog,
+    *,
+    timeline: Timeline = DEFAULT_TIMELINE,
+    noise: SensorNoise | Mapping[str, Any] | None = None,
+    hours: float | None = None,
+    options: Mapping[str, Any] | None = None,
+    chunk_samples: int = 100_000,
+    quiet: bool = True,
+) -> SmootherEstimate:
+    """Estimate the axial drift of `log` with the full-information smoother.
+
+    Parameters
+    ----------
+    log : ImuLog
+        Opened log with a known site, at least `hours` long.
+    timeline : Timeline
+        ``coarse_s`` and the default span ``align_h + features_h`` (16 h).
+    noise : SensorNoise or mapping, optional
+        The noise model (`SensorNoise.from_block` keys); default: ARW and VRW measured from the log's first hour.
+        ARW and VRW are floored at `gyrodrift.procedure.noise.NOISE_FLOOR` (a filter needs some process noise).
+    hours : float, optional
+        Span from the first sample [h] (default ``timeline.align_h + timeline.features_h``).
+    options : mapping, optional
+        Other SI keywords of `_core.SmootherConfig` (``update_s``, priors, measurement sigmas).
+    chunk_samples, quiet
+        Read size and progress switch.
+
+    Returns
+    -------
+    SmootherEstimate
+    """
+    from gyrodrift import _core
+
+    if log.site is None:
+        raise LogError(f"{log.label}: the log carries no site; give its latitude (--lat0-deg / site=)")
+    span_h = timeline.align_h + timeline.features_h if hours is None else float(hours)
+    log.require_duration(span_h * HOUR, f"the smoother ({span_h:g} h)")
+    if noise is None:
+        model = estimate_white_noise(log, chunk_samples=chunk_samples)
+    elif isinstance(noise, SensorNoise):
+        model = noise
+    else:
+        model = SensorNoise.from_block(noise)
+    used = model.floored()
+    site = log.site
+    config: dict[str, Any] = {
+        "lat_rad": site.lat_deg * DEG,
+        "lon_rad": site.lon_deg * DEG,
+        "height_m": float(site.height_m),
+        "rate_hz": log.rate_hz,
+        "coarse_s": float(timeline.coarse_s),
+        "span_s": span_h * HOUR,
+        **used.core_keywords(),
+    }
+    config.update(dict(options or {}))
+    sm = _core.Smoother(_core.SmootherConfig(**config))
+    with progress(int(sm.n_samples), f"smooth {log.name}", quiet) as bar:
+        for chunk in log.chunks(chunk_samples, stop=int(sm.n_samples)):
+            k = int(sm.process(np.ascontiguousarray(chunk.dtheta_rad), np.ascontiguousarray(chunk.dv_m_s)))
+            bar.update(k)
+            if sm.done:
+                break
+    r = sm.result()
+
+    def vec(key: str, scale: float) -> tuple[float, float, float]:
+        v = np.asarray(r[key], dtype=float).reshape(3) / scale
+        return (float(v[0]), float(v[1]), float(v[2]))
+
+    return SmootherEstimate(
+        run=log.name,
+        span_h=span_h,
+        drift_deg_h=float(r["drift_rad_s"]) / DEG_PER_H,
+        drift_std_deg_h=float(r["drift_std_rad_s"]) / DEG_PER_H,
+        drift_end_deg_h=float(r["drift_end_rad_s"]) / DEG_PER_H,
+        drift_end_std_deg_h=float(r["drift_end_std_rad_s"]) / DEG_PER_H,
+        gyro_bias_deg_h=vec("gyro_bias_rad_s", DEG_PER_H),
+        gyro_bias_std_deg_h=vec("gyro_bias_std_rad_s", DEG_PER_H),
+        accel_bias_ug=vec("accel_bias_m_s2", MICRO_G),
+        accel_bias_std_ug=vec("accel_bias_std_m_s2", MICRO_G),
+        hist_t_h=np.asarray(r["hist_t_s"], dtype=float) / HOUR,
+        hist_drift_deg_h=np.asarray(r["hist_drift_rad_s"], dtype=float) / DEG_PER_H,
+        hist_drift_std_deg_h=np.asarray(r["hist_drift_std_rad_s"], dtype=float) / DEG_PER_H,
+        hist_filter_std_deg_h=np.asarray(r["hist_filter_std_rad_s"], dtype=float) / DEG_PER_H,
+        noise=used,
+        max_attitude_correction_arcsec=float(r["max_attitude_correction_rad"]) / ARCSEC,
+        max_velocity_correction_m_s=float(r["max_velocity_correction_m_s"]),
+        max_position_error_m=float(r["max_position_error_m"]),
+        updates=int(r["updates"]),
+    )
