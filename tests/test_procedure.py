@@ -187,6 +187,9 @@ def test_truth_needs_76_hours(fleet):
         find_true_drift(log)
     r = CliRunner().invoke(main, ["truth", str(fleet[0][0]), "--quiet"])
     assert r.exit_code == 1 and "takes at least 76 h" in r.output
+    # the message says the fix: a longer simulation, or the navigation hours the 16 h log holds
+    assert "duration_h = 76 in the scenario, or simulate --duration-h 76" in r.output
+    assert "navigate less (--hours 12)" in r.output
 
 
 # ------------------------------------------------------------------------------------------------
@@ -294,6 +297,7 @@ def test_a_bad_log_on_a_cluster_raises_its_own_error(fleet, tmp_path):
     )
     expected = (
         f"{short}: the log lasts 0.003 h; extracting the features (4 h alignment + 12 h navigation) takes at least 16 h"
+        ": simulate >= 16 h (duration_h = 16 in the scenario, or simulate --duration-h 16) or record a longer log"
     )
     with pytest.raises(LogError) as info:
         features_table([fleet[0][0], short], site={"lat_deg": 28.222}, workers=1, processes=False)

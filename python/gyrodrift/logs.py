@@ -401,12 +401,22 @@ class ImuLog:
             raise OptionError(f"{self.label}: a duration of {seconds!r} s is not a finite number of samples")
         return int(round(x))
 
-    def require_duration(self, seconds: float, what: str) -> None:
-        """Raise `LogError` if the log is shorter than `seconds` [s] (what: why that much is needed)."""
+    def require_duration(self, seconds: float, what: str, *, align_h: float | None = None) -> None:
+        """Raise `LogError` if the log is shorter than `seconds` [s] (what: why that much is needed).
+
+        The message says the fix: a longer log (the scenario key and the ``simulate`` option that give one) and,
+        when `align_h` [h] (the alignment before a navigation whose length ``--hours`` sets) is given, the
+        navigation hours the log does hold.
+        """
         if not float(seconds) * self.rate_hz <= self.n_samples + 0.5:
+            need_h = math.ceil(seconds / 3600.0 - 1e-9)
+            fix = f"simulate >= {need_h} h (duration_h = {need_h} in the scenario, or simulate --duration-h {need_h})"
+            fix += " or record a longer log"
+            if align_h is not None and (hold_h := math.floor(self.duration_s / 3600.0 - align_h + 1e-9)) >= 1:
+                fix += f", or navigate less (--hours {hold_h})"
             raise LogError(
                 f"{self.label}: the log lasts {self.duration_s / 3600.0:.3f} h; {what} takes at least "
-                f"{seconds / 3600.0:g} h"
+                f"{seconds / 3600.0:g} h: {fix}"
             )
 
     def require_temperature(self, what: str) -> None:

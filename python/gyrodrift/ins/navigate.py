@@ -298,6 +298,7 @@ def navigate(
             log.require_duration(
                 timeline.log_hours_for(hours) * HOUR,
                 f"navigating --hours {hours:g} h after the {timeline.align_h:g} h alignment",
+                align_h=timeline.align_h,
             )
         al = align_log(log, timeline=timeline, chunk_samples=chunk_samples, quiet=quiet)
         start = al.samples_used

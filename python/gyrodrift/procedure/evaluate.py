@@ -55,6 +55,7 @@ def evaluate_compensation(
     log.require_duration(
         timeline.log_hours_for(hours) * HOUR,
         f"the evaluation ({timeline.align_h:g} h alignment + {hours:g} h navigation)",
+        align_h=timeline.align_h,
     )
     if alignment is None:
         alignment = align_log(log, timeline=timeline, chunk_samples=chunk_samples, quiet=quiet)
