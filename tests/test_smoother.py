@@ -182,3 +182,17 @@ def test_truth_spread_matches_the_label_sigma_and_the_latitude_law():
     budget = label_budget_deg_h()
     assert label_sigma_deg_h(45.0, noise)[0] < budget < label_sigma_deg_h(5.0, noise)[0]
     assert label_sigma_deg_h(85.0, noise)[0] > budget
+
+
+def test_features_write_the_smoother_and_the_label_sigma_into_the_run_table(tmp_path):
+    from gyrodrift.procedure import extract_features, write_features_csv
+    from gyrodrift.runs import read_runs_csv
+
+    log = ImuLog.from_scenario(scenario(40.0, noise=RLG, seed=3, hours=76.0, rate=2.0))
+    f = extract_features(log, with_truth=True)
+    assert abs(f.drift_smoother_deg_h - 0.003) < 4 * f.drift_smoother_std_deg_h
+    assert f.drift_std_deg_h == f.truth.drift_std_deg_h and not f.label_flagged
+    write_features_csv([f], tmp_path / "runs.csv")
+    runs = read_runs_csv(tmp_path / "runs.csv", require_truth=True)
+    for name in ("drift_smoother_deg_h", "drift_smoother_std_deg_h", "drift_std_deg_h"):
+        assert runs.column(name)[0] == getattr(f, name)

@@ -175,7 +175,12 @@ def truth_command(log, criterion, hours, lat0_deg, lon0_deg, height_m, log_forma
     if quiet and out is not None:
         return
     v = res.verify_nmi
-    click.echo(f"{res.run}: true drift {res.drift_deg_h:.7f} deg/h ({criterion} criterion over {hours:g} h)")
+    click.echo(
+        f"{res.run}: true drift {res.drift_deg_h:.7f} +- {res.drift_std_deg_h:.7f} deg/h (1-sigma of the label at the "
+        f"log's noise level; {criterion} criterion over {hours:g} h)"
+    )
+    if res.flagged:
+        click.echo(f"warning: {res.run}: label flagged: {res.flag_reason}", err=True)
     click.echo(
         f"  criterion: {res.uncompensated_nmi:.4f} nmi uncompensated, {v[1]:.4f} nmi at the optimum "
         f"(navigated), {v[0]:.4f} / {v[2]:.4f} nmi at -/+ "
@@ -321,6 +326,10 @@ def identify_command(log, model_path, lat0_deg, lon0_deg, height_m, log_format, 
     click.echo(
         f"  12 h curve fit of the latitude and longitude errors: {res.curvefit_drift_deg_h:.6f} +- "
         f"{res.curvefit_drift_std_deg_h:.6f} deg/h (1-sigma)"
+    )
+    click.echo(
+        f"  16 h smoother (alignment + 12 h, zero velocity and known position): {res.smoother_drift_deg_h:.6f} +- "
+        f"{res.smoother_drift_std_deg_h:.6f} deg/h (1-sigma: the Cramer-Rao line of these 16 h)"
     )
     click.echo(
         f"  alignment z estimate: {res.alignment_z_drift_deg_h:.6f} +- {res.alignment_z_drift_std_deg_h:.6f} "

@@ -6,12 +6,14 @@ the latitude at navigation hour 12 (exact state after the sample at 12 h), the h
 (hours 0-12, computed minus true, arcsec), and the system temperature over the same 12 h: at the first and
 the last navigation sample, the lowest and the highest. The 12 h curve fit (`gyrodrift.curve_fit`) of the
 same navigation's latitude and longitude error curves (every 60 s) gives ``drift_curvefit_deg_h`` and its
-1-sigma ``drift_curvefit_std_deg_h``.
+1-sigma ``drift_curvefit_std_deg_h``. The 16 h smoother (`gyrodrift.procedure.smoother`, one more read of the
+same 16 h) gives ``drift_smoother_deg_h`` and its 1-sigma ``drift_smoother_std_deg_h``.
 
 A row of the run table (``gyrodrift.runs``): ``run`` (the log's stem), ``lat_deg``, ``lat0_deg`` (the true
 site latitude), ``temp_min_c``, ``temp_max_c``, ``temp_start_c``, ``temp_end_c``, ``drift_curvefit_deg_h``,
-``drift_curvefit_std_deg_h`` and, when the truth is asked, ``drift_deg_h`` (`gyrodrift.procedure.truth`, found
-over 72 h in the same first read).
+``drift_curvefit_std_deg_h``, ``drift_smoother_deg_h``, ``drift_smoother_std_deg_h`` and, when the truth is
+asked, ``drift_deg_h`` and its 1-sigma ``drift_std_deg_h`` (`gyrodrift.procedure.truth`, found over 72 h in the
+same first read; ``RunFeatures.label_flagged`` when the label is beyond the 1 nmi / 72 h budget).
 """
 
 from __future__ import annotations
@@ -24,8 +26,10 @@ from gyrodrift.curve_fit import fit_error_curves
 from gyrodrift.errors import OptionError
 from gyrodrift.logs import ImuLog
 from gyrodrift.procedure.align import align_log
+from gyrodrift.procedure.noise import SensorNoise
 from gyrodrift.procedure.passes import navigate_after_alignment
-from gyrodrift.procedure.results import Alignment, NavCurve, RunFeatures, TemperatureStats, TrueDrift
+from gyrodrift.procedure.results import Alignment, NavCurve, RunFeatures, SmootherEstimate, TemperatureStats, TrueDrift
+from gyrodrift.procedure.smoother import smooth_log
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 from gyrodrift.procedure.truth import find_true_drift
 from gyrodrift.runs import RunTable
@@ -42,6 +46,7 @@ def _from_curve(
     alignment: Alignment,
     truth: TrueDrift | None,
     lat0_deg: float | None,
+    smoothed: SmootherEstimate | None,
 ) -> RunFeatures:
     k = int(round(hours))
     if abs(hours - k) > 1e-9 or len(curve.hourly_lat_deg) <= k:
@@ -64,6 +69,11 @@ def _from_curve(
         truth=truth,
         drift_curvefit_deg_h=cf.drift_deg_h,
         drift_curvefit_std_deg_h=cf.drift_std_deg_h,
+        drift_smoother_deg_h=math.nan if smoothed is None else smoothed.drift_deg_h,
+        drift_smoother_std_deg_h=math.nan if smoothed is None else smoothed.drift_std_deg_h,
+        smoother=smoothed,
+        drift_std_deg_h=math.nan if truth is None else truth.drift_std_deg_h,
+        label_flagged=False if truth is None else truth.flagged,
     )
 
 
@@ -75,6 +85,8 @@ def extract_features(
     criterion: str = "final",
     lat0_deg: float | None = None,
     alignment: Alignment | None = None,
+    smoother: bool = True,
+    noise: SensorNoise | None = None,
     chunk_samples: int = 100_000,
     quiet: bool = True,
 ) -> RunFeatures:
@@ -94,6 +106,10 @@ def extract_features(
         True latitude written to the table (default: the site's).
     alignment : Alignment, optional
         Reuse an alignment of this log.
+    smoother : bool
+        Also run the 16 h smoother (`smooth_log`, one more read of the first 16 h).
+    noise : SensorNoise, optional
+        Noise model of the smoother and of the truth's label sigma (default: measured from the log).
     chunk_samples, quiet
         Read size and progress switch.
 
@@ -102,27 +118,35 @@ def extract_features(
     RunFeatures
     """
     hours = timeline.features_h
+    log.require_duration(
+        timeline.log_hours_for(hours) * HOUR,
+        f"extracting the features ({timeline.align_h:g} h alignment + {hours:g} h navigation)",
+    )
+    smoothed = (
+        smooth_log(log, timeline=timeline, noise=noise, chunk_samples=chunk_samples, quiet=quiet) if smoother else None
+    )
     if with_truth:
+        log.require_duration(  # checked here: features have no --hours to offer as a fix
+            timeline.log_hours_for(timeline.truth_h) * HOUR,
+            f"--with-truth (the true drift: {timeline.align_h:g} h alignment + {timeline.truth_h:g} h navigation)",
+        )
         truth = find_true_drift(
             log,
             criterion=criterion,
             timeline=timeline,
             alignment=alignment,
             temperature_hours=hours,
+            noise=noise,
             chunk_samples=chunk_samples,
             quiet=quiet,
         )
-        return _from_curve(log, truth.base, truth.temperature, hours, truth.alignment, truth, lat0_deg)
-    log.require_duration(
-        timeline.log_hours_for(hours) * HOUR,
-        f"extracting the features ({timeline.align_h:g} h alignment + {hours:g} h navigation)",
-    )
+        return _from_curve(log, truth.base, truth.temperature, hours, truth.alignment, truth, lat0_deg, smoothed)
     if alignment is None:
         alignment = align_log(log, timeline=timeline, chunk_samples=chunk_samples, quiet=quiet)
     res = navigate_after_alignment(
         log, alignment, [0.0], hours, temperature_hours=hours, chunk_samples=chunk_samples, quiet=quiet, desc="features"
     )
-    return _from_curve(log, res.curves[0], res.temperature, hours, alignment, None, lat0_deg)
+    return _from_curve(log, res.curves[0], res.temperature, hours, alignment, None, lat0_deg, smoothed)
 
 
 def features_run_table(features: list[RunFeatures], source: str = "<features>") -> RunTable:
@@ -137,6 +161,12 @@ def features_run_table(features: list[RunFeatures], source: str = "<features>") 
         source=source,
         extra={
             name: np.array([getattr(f, name) for f in features], dtype=float)
-            for name in ("drift_curvefit_deg_h", "drift_curvefit_std_deg_h")
+            for name in (
+                "drift_curvefit_deg_h",
+                "drift_curvefit_std_deg_h",
+                "drift_smoother_deg_h",
+                "drift_smoother_std_deg_h",
+                "drift_std_deg_h",
+            )
         },
     )

@@ -4,7 +4,8 @@ The model (`gyrodrift.model.DriftModel`: an LSSVR, or a hybrid of a physics esti
 maps the run's features (latitude at 12 h, temperature over the 12 h) to the axial drift [deg/h], the total
 constant to subtract from the z gyro. Beside it the result carries the physics inversion of the same latitude
 error (`gyrodrift.baselines.physics_inversion`), the 12 h curve fit of the latitude and longitude error curves
-with its 1-sigma (`gyrodrift.curve_fit`) and the alignment's own z-drift estimate with its 1-sigma. The
+with its 1-sigma (`gyrodrift.curve_fit`), the 16 h smoother's drift with its 1-sigma (`gyrodrift.procedure.smoother`:
+the Cramer-Rao line of these 16 h) and the alignment's own z-drift estimate with its 1-sigma. The
 model's interval is a normalised jackknife interval (``DriftModel.predict_interval``, default coverage 90 %):
 the leave-one-out residuals of its training runs scaled by the LSSVR's predictive scale, wider where the run's
 inputs are far from the training runs'. A run outside the training runs' range (per input or jointly,
@@ -113,6 +114,8 @@ def identify(
         features=features,
         curvefit_drift_deg_h=features.drift_curvefit_deg_h,
         curvefit_drift_std_deg_h=features.drift_curvefit_std_deg_h,
+        smoother_drift_deg_h=features.drift_smoother_deg_h,
+        smoother_drift_std_deg_h=features.drift_smoother_std_deg_h,
         outside_training_range=bool(check.outside[0]),
         range_warnings=tuple(check.messages(table)),
     )

@@ -320,8 +320,10 @@ RUN_TABLE_COLUMNS = (
     "temp_end_c",
     "drift_curvefit_deg_h",
     "drift_curvefit_std_deg_h",
+    "drift_smoother_deg_h",
+    "drift_smoother_std_deg_h",
 )
-"""Columns written by `gyrodrift features` (plus ``drift_deg_h`` with the truth)."""
+"""Columns written by `gyrodrift features` (plus ``drift_deg_h`` and ``drift_std_deg_h`` with the truth)."""
 
 
 @dataclass(frozen=True)
@@ -345,10 +347,17 @@ class RunFeatures:
     drift_curvefit_deg_h, drift_curvefit_std_deg_h : float
         The drift from the 12 h curve fit of the latitude and longitude error curves and its 1-sigma [deg/h]
         (`gyrodrift.curve_fit`).
+    drift_smoother_deg_h, drift_smoother_std_deg_h : float
+        The 16 h smoother's drift and its 1-sigma [deg/h] (NaN when not run).
+    drift_std_deg_h : float
+        1-sigma of the truth label (NaN without truth) [deg/h].
+    label_flagged : bool
+        The truth label is beyond the 1 nmi / 72 h budget (``TrueDrift.flagged``).
     hours : float
         Navigation hours of the features (12).
     alignment : Alignment
     truth : TrueDrift or None
+    smoother : SmootherEstimate or None
     """
 
     run: str
@@ -365,6 +374,11 @@ class RunFeatures:
     truth: TrueDrift | None = field(default=None, repr=False)
     drift_curvefit_deg_h: float = math.nan
     drift_curvefit_std_deg_h: float = math.nan
+    drift_smoother_deg_h: float = math.nan
+    drift_smoother_std_deg_h: float = math.nan
+    drift_std_deg_h: float = math.nan
+    label_flagged: bool = False
+    smoother: SmootherEstimate | None = field(default=None, repr=False)
 
     @property
     def lat_err_arcsec(self) -> float:
@@ -372,10 +386,11 @@ class RunFeatures:
         return (self.lat_deg - self.lat0_deg) * 3600.0
 
     def row(self) -> dict[str, Any]:
-        """The run-table row (``RUN_TABLE_COLUMNS``, plus ``drift_deg_h`` when known)."""
+        """The run-table row (``RUN_TABLE_COLUMNS``, plus ``drift_deg_h`` and ``drift_std_deg_h`` when known)."""
         r = {column: getattr(self, column) for column in RUN_TABLE_COLUMNS}
         if math.isfinite(self.drift_deg_h):
             r["drift_deg_h"] = self.drift_deg_h
+            r["drift_std_deg_h"] = self.drift_std_deg_h
         return r
 
 
@@ -453,6 +468,8 @@ class Identification:
     features : RunFeatures
     curvefit_drift_deg_h, curvefit_drift_std_deg_h : float
         The 12 h curve fit's drift and 1-sigma [deg/h] (`gyrodrift.curve_fit`).
+    smoother_drift_deg_h, smoother_drift_std_deg_h : float
+        The 16 h smoother's drift and 1-sigma [deg/h] (`gyrodrift.procedure.smoother`; NaN when not run).
     outside_training_range : bool
         The run's inputs lie outside the model's training runs' range (per input or jointly): an extrapolation.
     range_warnings : tuple of str
@@ -475,6 +492,8 @@ class Identification:
     curvefit_drift_std_deg_h: float = math.nan
     outside_training_range: bool = False
     range_warnings: tuple[str, ...] = ()
+    smoother_drift_deg_h: float = math.nan
+    smoother_drift_std_deg_h: float = math.nan
 
     def to_dict(self) -> dict[str, Any]:
         f = self.features
@@ -485,6 +504,8 @@ class Identification:
             "physics_drift_deg_h": self.physics_drift_deg_h,
             "curvefit_drift_deg_h": self.curvefit_drift_deg_h,
             "curvefit_drift_std_deg_h": self.curvefit_drift_std_deg_h,
+            "smoother_drift_deg_h": self.smoother_drift_deg_h,
+            "smoother_drift_std_deg_h": self.smoother_drift_std_deg_h,
             "outside_training_range": self.outside_training_range,
             "range_warnings": list(self.range_warnings),
             "alignment_z_drift_deg_h": self.alignment_z_drift_deg_h,

@@ -103,13 +103,14 @@ def write_identification(res: Identification, out: str | os.PathLike[str] | Stag
 
 
 def features_csv_text(features: Sequence[RunFeatures]) -> str:
-    """The run table of `features`: ``RUN_TABLE_COLUMNS`` (+ ``drift_deg_h`` when every run has it).
+    """The run table of `features`: ``RUN_TABLE_COLUMNS`` (+ ``drift_deg_h`` and its 1-sigma ``drift_std_deg_h``
+    when every run has a truth).
 
     Floats are written with ``repr`` (shortest exact round trip), so a latitude keeps its 1e-12 deg digits.
     Readable by `gyrodrift.runs.read_runs_csv`.
     """
     with_truth = bool(features) and all(math.isfinite(f.drift_deg_h) for f in features)
-    cols = list(RUN_TABLE_COLUMNS) + (["drift_deg_h"] if with_truth else [])
+    cols = list(RUN_TABLE_COLUMNS) + (["drift_deg_h", "drift_std_deg_h"] if with_truth else [])
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(cols)
