@@ -13,6 +13,7 @@ write_features_csv(rows, path, curves=None)
 find_true_drift(log, criterion="final", hours=72, ...) -> TrueDrift; write_truth(truth, out_dir)
 evaluate_compensation(log, drift_deg_h, hours=72, ...) -> Evaluation; write_evaluation(ev, out_dir)
 identify(log, model, ...) -> Identification; write_identification(res, out_dir)
+smooth_log(log, noise=None, ...) -> SmootherEstimate (the 16 h smoother: drift, 1-sigma, history)
 
 Layers: the result dataclasses live in `gyrodrift.procedure.results`; the algorithms import them (never
 matplotlib or the file writer); `gyrodrift.procedure.figures` draws results and `gyrodrift.procedure.writers`
@@ -26,6 +27,7 @@ from gyrodrift.procedure.evaluate import evaluate_compensation
 from gyrodrift.procedure.features import extract_features, features_run_table
 from gyrodrift.procedure.fleet import DaskMissingError, features_table
 from gyrodrift.procedure.identify import identify
+from gyrodrift.procedure.noise import SensorNoise, estimate_white_noise
 from gyrodrift.procedure.passes import navigate_after_alignment
 from gyrodrift.procedure.results import (
     Alignment,
@@ -34,9 +36,11 @@ from gyrodrift.procedure.results import (
     NavCurve,
     PassResult,
     RunFeatures,
+    SmootherEstimate,
     TemperatureStats,
     TrueDrift,
 )
+from gyrodrift.procedure.smoother import smooth_log
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 from gyrodrift.procedure.truth import CRITERIA, find_true_drift
 from gyrodrift.procedure.writers import (
@@ -57,10 +61,13 @@ __all__ = [
     "NavCurve",
     "PassResult",
     "RunFeatures",
+    "SensorNoise",
+    "SmootherEstimate",
     "TemperatureStats",
     "Timeline",
     "TrueDrift",
     "align_log",
+    "estimate_white_noise",
     "evaluate_compensation",
     "extract_features",
     "features_run_table",
@@ -68,6 +75,7 @@ __all__ = [
     "find_true_drift",
     "identify",
     "navigate_after_alignment",
+    "smooth_log",
     "write_evaluation",
     "write_alignment",
     "write_features_csv",
