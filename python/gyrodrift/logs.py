@@ -6,6 +6,9 @@ source goes through the same checks and yields the same `LogChunk`s:
 * Parquet (``.parquet`` / ``.pq``): the simulator's own ``imu.parquet`` (docs/scenarios.md) or any file with
   the columns below, with or without gyrodrift metadata;
 * CSV (``.csv``): UTF-8, comma separated, one header row (names stripped of surrounding spaces);
+* a log in its own format (own column names, units, axes, delimiter, time stamps): Parquet or CSV with a log
+  format description (`gyrodrift.log_format`, ``open_log(path, format=...)``), converted chunk by chunk into the
+  columns below before the same checks; messages then name the file's line and its own column;
 * in memory: `ImuLog.from_arrays` (a mapping of the same column names to numpy arrays);
 * a scenario simulated on the fly, chunk by chunk, nothing stored: `ImuLog.from_scenario`.
 
@@ -70,6 +73,7 @@ import pyarrow as pa
 
 from gyrodrift import _core
 from gyrodrift.errors import InputError, OptionError
+from gyrodrift.log_format import LogFormat, load_log_format
 from gyrodrift.runs import TEMPERATURE_LIMITS_C
 from gyrodrift.site import Site
 
@@ -235,8 +239,12 @@ class ImuLog:
         name: str | None = None,
         raw_names: Mapping[str, str] | None = None,
         blocks: Callable[[int], Iterator[_Raw]] | None = None,
+        log_format: LogFormat | None = None,
+        t0_ns: int | None = None,
     ):
         self.path = path
+        self.log_format = log_format
+        self._t0_ns = t0_ns
         self.label = label
         self.format = fmt
         self.kind = kind
@@ -470,6 +478,9 @@ class ImuLog:
         return self._csv_blocks(chunk_samples)
 
     def _wanted(self) -> list[str]:
+        """The file's columns to read (their names in the file)."""
+        if self.log_format is not None:
+            return [c.name for c in self.log_format.columns]
         cols = ["t_s", *self._columns]
         if self.has_temperature:
             cols.append("temp_c")
@@ -478,6 +489,8 @@ class ImuLog:
         return cols
 
     def _from_table(self, table: pa.Table | pa.RecordBatch, first: int) -> _Raw:
+        if self.log_format is not None:
+            return self._from_formatted_table(table, first)
         names = self._wanted()
         arrays = {}
         for name in names:
@@ -491,6 +504,35 @@ class ImuLog:
             tuple(arrays[c] for c in self._columns),
             arrays.get("temp_c"),
             tuple(arrays[c] for c in TRUTH_COLUMNS) if self.has_truth_columns else None,
+        )
+
+    def _from_formatted_table(self, table: pa.Table | pa.RecordBatch, first: int) -> _Raw:
+        """The file's columns converted by the log format: time [s], body-frame sensors in SI with the axis
+        mapping and signs applied, temperature [deg C], truth [deg]."""
+        fmt = self.log_format
+        assert fmt is not None
+        values: dict[str, np.ndarray] = {}
+        for spec in fmt.columns:
+            col = table.column(spec.name)
+            if col.null_count:
+                i = int(np.flatnonzero(np.asarray(col.is_null().to_numpy(zero_copy_only=False)))[0])
+                raise LogError(f"{_where(self, first + i, spec.quantity)}: empty or NaN cell")
+            if spec.is_iso_time:
+                ns = _iso_ns(col, lambda i: _where(self, first + i, "time"))
+                values["time"] = (ns - (self._t0_ns or 0)).astype(np.float64) * 1e-9
+            else:
+                values[spec.quantity] = spec.convert(col.to_numpy(zero_copy_only=False))
+        sensors = []
+        for sensor in ("gyro", "accel"):
+            for j in range(3):
+                spec, sign = fmt.body_source(sensor, j)
+                v = values[spec.quantity]
+                sensors.append(-v if sign < 0 else v)
+        return _Raw(
+            values["time"],
+            tuple(sensors),
+            values.get("temperature"),
+            tuple(values[q] for q in ("true_pitch", "true_roll", "true_yaw")) if fmt.has_truth else None,
         )
 
     def _parquet_blocks(self, chunk_samples: int) -> Iterator[_Raw]:
@@ -524,15 +566,37 @@ class ImuLog:
 
         _require_regular(self.path, self.label)
         cols = [self._raw_names.get(c, c) for c in self._wanted()]
+        fmt = self.log_format
+        types = {c: pa.float64() for c in cols}
+        read_options = pcsv.ReadOptions(block_size=1 << 22)
+        parse_options = pcsv.ParseOptions()
+        source: Any = self.path
+        if fmt is not None:
+            time = fmt.column("time")
+            if time is not None and time.is_iso_time:
+                types[time.name] = pa.string()
+            parse_options = pcsv.ParseOptions(delimiter=fmt.delimiter)
+            if fmt.comment is not None:  # pyarrow has no comment lines: a filtered stream drops them
+                assert self.path is not None  # only file logs are CSV
+                source = io.BufferedReader(_SkipLines(self.path, fmt.header_row - 1, fmt.comment), 1 << 20)
+            else:
+                read_options = pcsv.ReadOptions(block_size=1 << 22, skip_rows=fmt.header_row - 1)
         try:
             reader = pcsv.open_csv(
-                self.path,
-                read_options=pcsv.ReadOptions(block_size=1 << 22),
-                convert_options=pcsv.ConvertOptions(column_types={c: pa.float64() for c in cols}, include_columns=cols),
+                source,
+                read_options=read_options,
+                parse_options=parse_options,
+                convert_options=pcsv.ConvertOptions(column_types=types, include_columns=cols),
             )
         except (pa.ArrowException, OSError) as exc:
+            if source is not self.path:
+                source.close()
             raise _csv_problem(self, str(exc)) from None
-        yield from self._recut(reader, chunk_samples, lambda exc, done: _csv_problem(self, str(exc)))
+        try:
+            yield from self._recut(reader, chunk_samples, lambda exc, done: _csv_problem(self, str(exc)))
+        finally:
+            if source is not self.path:
+                source.close()
 
     def _recut(
         self,
@@ -591,8 +655,111 @@ def _cut(raw: _Raw, n: int) -> _Raw:
 
 
 def _where(log: ImuLog, index: int, column: str | None = None) -> str:
-    row = index + (2 if log.format == "csv" else 1)
+    """``file, row R, column C`` for sample `index` (0-based); a formatted log names the file's own column."""
+    if log.log_format is not None and log.format == "csv":
+        row = _csv_line_of(log, index)
+    else:
+        row = index + (2 if log.format == "csv" else 1)
+    if column is not None and log.log_format is not None:
+        column = _format_column_label(log, column)
     return f"{log.label}, row {row}" + ("" if column is None else f", column {column}")
+
+
+_CANONICAL_QUANTITY = {"t_s": "time", "temp_c": "temperature"} | {c: c[: -len("_deg")] for c in TRUTH_COLUMNS}
+
+
+def _format_column_label(log: ImuLog, column: str) -> str:
+    """The file's column behind a reader column name (``gyro_x_rad_s`` = body right) or a format quantity."""
+    fmt = log.log_format
+    assert fmt is not None
+    if column in log._columns:
+        k = log._columns.index(column)
+        src, sign = fmt.body_source("gyro" if k < 3 else "accel", k % 3)
+        body = ("right", "forward", "up")[k % 3]
+        return f"{src.name} ({src.quantity}, {src.unit}; body {body} = {'-' if sign < 0 else '+'}{src.name})"
+    spec = fmt.column(_CANONICAL_QUANTITY.get(column, column))
+    return column if spec is None else spec.describe()
+
+
+def _csv_line_of(log: ImuLog, index: int) -> int:
+    """The 1-based line of the file that holds data row `index` of a formatted CSV log (scans the file: only
+    called for an error message)."""
+    fmt = log.log_format
+    assert fmt is not None and log.path is not None
+    k = -1
+    with open(log.path, "rb") as fh:
+        for line_no, line in enumerate(fh, start=1):
+            if line_no <= fmt.header_row:
+                continue
+            text = line.decode("utf-8", "replace")
+            if not text.strip() or (fmt.comment is not None and text.lstrip().startswith(fmt.comment)):
+                continue
+            k += 1
+            if k == index:
+                return line_no
+    return fmt.header_row + 1 + index
+
+
+class _SkipLines(io.RawIOBase):
+    """A file's bytes without its first `skip` lines and without lines starting with `comment` (for pyarrow's
+    CSV reader, which has no comment lines)."""
+
+    def __init__(self, path: Path, skip: int, comment: str):
+        self._fh = open(path, "rb")  # closed by close()
+        self._skip = skip
+        self._comment = comment.encode("utf-8")
+        self._buf = b""
+
+    def readable(self) -> bool:
+        return True
+
+    def readinto(self, b) -> int:  # type: ignore[override]
+        while len(self._buf) < len(b):
+            line = self._fh.readline()
+            if not line:
+                break
+            if self._skip > 0:
+                self._skip -= 1
+                continue
+            if line.lstrip().startswith(self._comment):
+                continue
+            self._buf += line
+        n = min(len(b), len(self._buf))
+        b[:n] = self._buf[:n]
+        self._buf = self._buf[n:]
+        return n
+
+    def close(self) -> None:
+        self._fh.close()
+        super().close()
+
+
+def _iso_ns(col: Any, where: Callable[[int], str]) -> np.ndarray:
+    """ISO 8601 date-times (text or a timestamp column) as int64 nanoseconds since 1970 (a time without a zone
+    is taken as written, one with a zone or ``Z`` in UTC); `LogError` at the first cell that is not one."""
+    if isinstance(col, pa.ChunkedArray):
+        col = col.combine_chunks()
+    if pa.types.is_timestamp(col.type):
+        return np.asarray(col.cast(pa.int64()).to_numpy(zero_copy_only=False), dtype=np.int64)
+    for ty in (pa.timestamp("ns"), pa.timestamp("ns", tz="UTC")):
+        try:
+            return np.asarray(col.cast(ty).cast(pa.int64()).to_numpy(zero_copy_only=False), dtype=np.int64)
+        except (pa.ArrowInvalid, pa.ArrowNotImplementedError):
+            continue
+    for i, v in enumerate(col.to_pylist()):
+        ok = False
+        for ty in (pa.timestamp("ns"), pa.timestamp("ns", tz="UTC")):
+            try:
+                pa.array([v]).cast(ty)
+                ok = True
+                break
+            except (pa.ArrowInvalid, pa.ArrowNotImplementedError):
+                pass
+        if not ok:
+            raise LogError(
+                f"{where(i)}: expected an ISO 8601 date-time (2024-05-01T12:00:00.010), got {_short(str(v))!r}"
+            )
+    raise LogError(f"{where(0)}: ISO date-times with and without a time zone mixed in one column")
 
 
 def _short(exc: BaseException | str) -> str:
@@ -941,32 +1108,45 @@ def _csv_problem(log: ImuLog, message: str) -> LogError:
     """Find the first bad row of a CSV that pyarrow refused (scans the file): cell count, number, UTF-8."""
     label = log.label
     used = set(log._wanted())
+    fmt = log.log_format
+    iso = None if fmt is None or not fmt.column("time").is_iso_time else fmt.column("time").name  # type: ignore[union-attr]
     try:
         assert log.path is not None  # only file logs are CSV
-        reader = csv.reader(_csv_lines(log.path, label))
+        lines = _csv_lines(log.path, label)
+        skip = 0 if fmt is None else fmt.header_row - 1
+        for _ in range(skip):
+            next(lines)
+        reader = csv.reader(lines, delimiter="," if fmt is None else fmt.delimiter)
         header = [h.strip() for h in next(reader)]
         for row in reader:
-            rownum = reader.line_num
+            rownum = reader.line_num + skip
             if not row or all(not c.strip() for c in row):
+                continue
+            if fmt is not None and fmt.comment is not None and row[0].lstrip().startswith(fmt.comment):
                 continue
             if len(row) != len(header):
                 return LogError(
                     f"{label}, row {rownum}: {len(row)} cells, expected {len(header)} (one per header column)"
                 )
             for name, cell in zip(header, row, strict=True):
-                if name not in used:
+                if name not in used or name == iso:
                     continue
+                shown = name if fmt is None else _format_column_label(log, _quantity_of(fmt, name))
                 try:
                     float(cell)
                 except ValueError:
                     if cell.strip() == "":
-                        return LogError(f"{label}, row {rownum}, column {name}: empty or NaN cell")
-                    return LogError(f"{label}, row {rownum}, column {name}: expected a number, got {_short(cell)!r}")
+                        return LogError(f"{label}, row {rownum}, column {shown}: empty or NaN cell")
+                    return LogError(f"{label}, row {rownum}, column {shown}: expected a number, got {_short(cell)!r}")
     except LogError as exc:
         return exc
     except (csv.Error, StopIteration) as exc:
         return LogError(f"{label}: unreadable CSV ({_short(exc)})")
     return LogError(f"{label}: unreadable CSV ({_short(message)})")
+
+
+def _quantity_of(fmt: LogFormat, name: str) -> str:
+    return next(c.quantity for c in fmt.columns if c.name == name)
 
 
 def _open_csv(p: Path, label: str, site, require_temperature: bool) -> ImuLog:
@@ -1035,11 +1215,192 @@ def _csv_last_time(path: Path, it: int) -> float | None:
         return None
 
 
+def _open_formatted(p: Path, label: str, fmt: LogFormat, site, require_temperature: bool) -> ImuLog:
+    """Open a log whose columns a `LogFormat` describes (CSV with its delimiter, header row and comments, or
+    Parquet); the chunks are converted to the reader's columns and checked like a native log's."""
+    suffix = p.suffix.lower()
+    time = fmt.column("time")
+    assert time is not None
+    if require_temperature and not fmt.has_temperature:
+        raise LogError(
+            f"{label}: the log format {fmt.source} names no temperature column (the features need the system "
+            'temperature; add a [columns.NAME] table with quantity = "temperature")'
+        )
+    names: list[str]
+    if suffix in (".parquet", ".pq"):
+        import pyarrow.parquet as pq
+
+        try:
+            pf = pq.ParquetFile(p, pre_buffer=False)
+            schema = pf.schema_arrow
+            n = pf.metadata.num_rows
+        except (pa.ArrowException, OSError) as exc:
+            raise LogError(f"{label}: not a Parquet file ({_short(exc)})") from None
+        with pf:
+            names = list(schema.names)
+            _check_format_columns(names, fmt, label, 1)
+            for spec in fmt.columns:
+                t = schema.field(spec.name).type
+                ok = (pa.types.is_timestamp(t) or pa.types.is_string(t)) if spec.is_iso_time else _numeric_type(t)
+                if not ok:
+                    want = "ISO date-times (timestamp or text)" if spec.is_iso_time else "numbers"
+                    raise LogError(f"{label}, column {spec.describe()}: expected {want}, got a column of type {t}")
+            meta = {
+                k.decode("utf-8", "replace"): v.decode("utf-8", "replace") for k, v in (schema.metadata or {}).items()
+            }
+            if n < 2:
+                raise LogError(f"{label}: {n} sample(s); a log needs many")
+            try:
+                head = next(pf.iter_batches(batch_size=_RATE_PROBE + 1, columns=[time.name])).column(0)
+            except (pa.ArrowException, OSError, StopIteration) as exc:
+                raise LogError(f"{label}, row 1: damaged Parquet data ({_short(exc)})") from None
+        file_site = _read_site(meta, label)
+        kind = "parquet"
+        first_rows: list[tuple[int, list[str]]] = []
+    elif suffix == ".csv":
+        header, first_rows = _formatted_csv_head(p, label, fmt)
+        names = header
+        _check_format_columns(names, fmt, label, fmt.header_row)
+        it = header.index(time.name)
+        if time.is_iso_time:
+            head = pa.array([row[it].strip() if it < len(row) else "" for _, row in first_rows], pa.string())
+        else:
+            cells = []
+            for line_no, row in first_rows:
+                cell = row[it] if it < len(row) else ""
+                try:
+                    cells.append(float(cell))
+                except ValueError:
+                    raise LogError(
+                        f"{label}, row {line_no}, column {time.describe()}: expected a number, got {_short(cell)!r}"
+                    ) from None
+            head = pa.array(cells, pa.float64())
+        file_site = None
+        kind = "csv"
+        n = 0
+    else:
+        raise LogError(f"{label}: unknown log format {p.suffix!r} (expected .parquet, .pq or .csv)")
+    if len(head) < 2:
+        raise LogError(f"{label}: {len(head)} sample(s); a log needs many")
+    t0_ns = None
+    if time.is_iso_time:
+        lines = [line_no for line_no, _ in first_rows] if kind == "csv" else None
+
+        def where(i: int) -> str:
+            return f"{label}, row {i + 1 if lines is None else lines[i]}, column {time.describe()}"
+
+        ns = _iso_ns(head, where)
+        t0_ns = int(ns[0])
+        t = (ns - t0_ns).astype(np.float64) * 1e-9
+    else:
+        t = time.convert(head.to_numpy(zero_copy_only=False))
+    rate = _rate_from_times(t, label)
+    if kind == "csv":
+        last = _formatted_csv_last_time(p, fmt, names.index(time.name), t0_ns)
+        if last is None or not (math.isfinite(last) and last > t[0]):
+            raise LogError(f"{label}: cannot read the last time stamp of the file")
+        est = (last - t[0]) * rate + 1.0
+        if not est < 1e15:
+            raise LogError(f"{label}: the last time stamp {last!r} s is not plausible for {rate:g} Hz")
+        n = int(round(est))
+    cols = INCREMENT_COLUMNS if fmt.kind == "increments" else RATE_COLUMNS
+    return ImuLog(
+        path=p,
+        label=label,
+        fmt=kind,
+        kind=fmt.kind,
+        columns=cols,
+        rate_hz=rate,
+        n_samples=n,
+        site=_merge_site(site, file_site, label),
+        rate_source="time stamps",
+        has_temperature=fmt.has_temperature,
+        has_truth_columns=fmt.has_truth,
+        log_format=fmt,
+        t0_ns=t0_ns,
+    )
+
+
+def _check_format_columns(names: list[str], fmt: LogFormat, label: str, header_row: int) -> None:
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise LogError(
+            f"{label}, row {header_row}: column {', '.join(dup)} appears more than once; column names must be unique"
+        )
+    for spec in fmt.columns:
+        if spec.name not in names:
+            shown = ", ".join(names[:12]) + (", ..." if len(names) > 12 else "")
+            raise LogError(
+                f"{label}, row {header_row}: no column {spec.name!r} (the {spec.quantity} column of the log format "
+                f"{fmt.source}); the file's columns are: {shown}"
+            )
+
+
+def _formatted_data_lines(p: Path, label: str, fmt: LogFormat) -> Iterator[tuple[int, str]]:
+    """(line number, text) of the header and data lines of a formatted CSV log (preamble, comments and
+    blank lines skipped)."""
+    for line_no, text in enumerate(_csv_lines(p, label), start=1):
+        if line_no < fmt.header_row:
+            continue
+        if not text.strip() or (fmt.comment is not None and text.lstrip().startswith(fmt.comment)):
+            if line_no == fmt.header_row:
+                raise LogError(
+                    f"{label}, row {line_no}: expected the header row here ([csv] header_row of {fmt.source})"
+                )
+            continue
+        yield line_no, text
+
+
+def _formatted_csv_head(p: Path, label: str, fmt: LogFormat) -> tuple[list[str], list[tuple[int, list[str]]]]:
+    """The header cells (stripped) and the first `_RATE_PROBE` + 1 data rows with their line numbers."""
+    header: list[str] | None = None
+    rows: list[tuple[int, list[str]]] = []
+    try:
+        for line_no, text in _formatted_data_lines(p, label, fmt):
+            cells = next(csv.reader([text], delimiter=fmt.delimiter), [])
+            if header is None:
+                header = [h.strip() for h in cells]
+                continue
+            rows.append((line_no, cells))
+            if len(rows) > _RATE_PROBE:
+                break
+    except csv.Error as exc:
+        raise LogError(f"{label}: unreadable CSV ({_short(exc)})") from None
+    if header is None:
+        raise LogError(f"{label}: no header row at line {fmt.header_row} ([csv] header_row of {fmt.source})")
+    return header, rows
+
+
+def _formatted_csv_last_time(p: Path, fmt: LogFormat, it: int, t0_ns: int | None) -> float | None:
+    spec = fmt.column("time")
+    assert spec is not None
+    with open(p, "rb") as fh:
+        fh.seek(0, os.SEEK_END)
+        size = fh.tell()
+        fh.seek(max(0, size - 65536))
+        lines = [
+            ln
+            for ln in fh.read().decode("utf-8", "replace").splitlines()
+            if ln.strip() and not (fmt.comment is not None and ln.lstrip().startswith(fmt.comment))
+        ]
+    if not lines:
+        return None
+    try:
+        cell = next(csv.reader([lines[-1]], delimiter=fmt.delimiter))[it]
+        if spec.is_iso_time:
+            ns = _iso_ns(pa.array([cell.strip()]), lambda i: "")
+            return (int(ns[0]) - (t0_ns or 0)) * 1e-9
+        return float(spec.convert(np.array([float(cell)]))[0])
+    except (ValueError, IndexError, StopIteration, csv.Error, LogError):
+        return None
+
+
 def open_log(
     path: str | os.PathLike[str],
     *,
     site: Site | Mapping[str, float] | None = None,
     require_temperature: bool = True,
+    format: str | os.PathLike[str] | LogFormat | None = None,
 ) -> ImuLog:
     """Open an IMU log file, check its header, detect its kind and sample rate.
 
@@ -1053,6 +1414,9 @@ def open_log(
         0). CSV files carry no site, so the procedure needs at least the latitude from here.
     require_temperature : bool
         Refuse a log without ``temp_c`` (default; the features need it). `navigate` does not.
+    format : path-like or LogFormat, optional
+        A log format description (`gyrodrift.log_format`, CLI ``--format FILE``) for a log with its own column
+        names, units, axes, delimiter or time stamps; None (default) reads the columns of the module docstring.
 
     Returns
     -------
@@ -1065,6 +1429,8 @@ def open_log(
         numbers, no usable rate. Row-level problems are found while streaming (`ImuLog.chunks`).
     OptionError
         A site value that is not a finite number or a latitude outside (-90, 90) deg.
+    LogFormatError
+        An invalid log format file (naming the file and key).
     OutputError
         The log belongs to a gyrodrift output set that an interrupted run left unfinished (docs/outputs.md).
     """
@@ -1074,6 +1440,8 @@ def open_log(
     label = str(path)
     _require_regular(p, label)
     check_complete(p)  # a log whose output set an interrupted `simulate` left unfinished (docs/outputs.md)
+    if format is not None:
+        return _open_formatted(p, label, load_log_format(format), site, require_temperature)
     suffix = p.suffix.lower()
     if suffix in (".parquet", ".pq"):
         return _open_parquet(p, label, site, require_temperature)

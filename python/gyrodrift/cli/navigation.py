@@ -195,14 +195,15 @@ def navigate_command(
             raise OptionError("give --drift-deg-h only (--compensate-drift-deg-h is its deprecated name)")
         click.echo("warning: --compensate-drift-deg-h is deprecated; use --drift-deg-h", err=True)
         drift_deg_h = old_drift_deg_h
-    site = site_from_options(lat0_deg, lon0_deg, height_m)
-    if log_format is not None:
-        from gyrodrift.logs import open_log
+    from gyrodrift.ins.navigate import nav_files
+    from gyrodrift.logs import ImuLog, open_log
 
-        imu = open_log(log, site=site, format=log_format, require_temperature=False)
-        site = None  # given to the log
+    site = site_from_options(lat0_deg, lon0_deg, height_m)
+    imu: Path | ImuLog = log
+    if log_format is not None:  # the site goes to the log it completes
+        imu, site = open_log(log, site=site, format=log_format, require_temperature=False), None
     result = navigate(
-        log if log_format is None else imu,
+        imu,
         hours=hours,
         compensate_drift_deg_h=0.0 if drift_deg_h is None else drift_deg_h,
         initial=initial,
@@ -214,7 +215,7 @@ def navigate_command(
     s = result.summary
     if as_json:
         print_json(s)
-    written = [out_dir / "nav.parquet", out_dir / "summary.json"]
+    written = [out_dir / name for name in nav_files(plot)]
     source = f"initial state from {_INITIAL_WORDS[s['initial_source']]}"
     if s["final_pos_err_nmi"] is not None:
         detail = (

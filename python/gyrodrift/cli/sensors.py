@@ -6,7 +6,15 @@ from pathlib import Path
 
 import click
 
-from gyrodrift.cli.options import json_option, print_json, quiet_option, say_wrote, site_from_options, site_options
+from gyrodrift.cli.options import (
+    json_option,
+    log_format_option,
+    print_json,
+    quiet_option,
+    say_wrote,
+    site_from_options,
+    site_options,
+)
 
 __all__ = ["allan_command", "COMMANDS"]
 
@@ -22,6 +30,7 @@ __all__ = ["allan_command", "COMMANDS"]
     "(docs/outputs.md). Required.",
 )
 @site_options
+@log_format_option
 @json_option
 @quiet_option
 def allan_command(
@@ -30,6 +39,7 @@ def allan_command(
     lat0_deg: float | None,
     lon0_deg: float | None,
     height_m: float | None,
+    log_format: Path | None,
     as_json: bool,
     quiet: bool,
 ) -> None:
@@ -43,7 +53,7 @@ def allan_command(
     from gyrodrift.logs import open_log
 
     out = OutputFolder(out_dir, "allan", ALLAN_FILES, inputs=[log])
-    imu = open_log(log, site=site_from_options(lat0_deg, lon0_deg, height_m))
+    imu = open_log(log, site=site_from_options(lat0_deg, lon0_deg, height_m), format=log_format)
     result = allan_deviation(imu, quiet=quiet)
     paths = allan_files(result, out)
     noise = scenario_noise_block(result)

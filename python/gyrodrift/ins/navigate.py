@@ -210,6 +210,7 @@ def navigate(
     decimation_s: float = 1.0,
     vertical: str = "fixed",
     out_dir: str | os.PathLike[str] | OutputFolder | None = None,
+    plot: bool = False,
     chunk_samples: int = DEFAULT_CHUNK_SAMPLES,
     quiet: bool = True,
 ) -> NavResult:
@@ -250,6 +251,9 @@ def navigate(
     out_dir : path-like or gyrodrift.atomic.OutputFolder, optional
         If given, write ``nav.parquet`` and ``summary.json`` there, published together (`write_navigation`);
         the folder is checked before navigating (docs/outputs.md): an input file is never replaced.
+    plot : bool
+        Also write ``navigation.png`` (position, latitude/longitude and attitude errors vs time) into `out_dir`,
+        in the same publication (needs `out_dir`). Default False.
     chunk_samples : int
         Samples per call to the core.
     quiet : bool
@@ -281,9 +285,11 @@ def navigate(
         raise OptionError(f"navigate: --compensate-drift-deg-h must be finite, got {compensate_drift_deg_h!r}")
     gyro_est[2] += float(compensate_drift_deg_h)
     accel_est = _vector3("accel_bias_ug", accel_bias_ug)
+    if plot and out_dir is None:
+        raise OptionError("navigate: --plot needs --out (the figure is written next to nav.parquet)")
     if out_dir is not None:  # checked before any work; the log itself is never one of the outputs
         source_path = imu if isinstance(imu, (str, os.PathLike)) else getattr(imu, "path", None)
-        out_dir = output_folder(out_dir, "navigate", NAV_FILES, inputs=[source_path] if source_path else ())
+        out_dir = output_folder(out_dir, "navigate", nav_files(plot), inputs=[source_path] if source_path else ())
     log = as_log(imu, site=site)
     rate = log.rate_hz
     source, init, start = _initial_from(initial, log)
@@ -381,7 +387,7 @@ def navigate(
     summary = _summary(run, track, cols)
     folder = None
     if out_dir is not None:
-        folder = write_navigation(cols, summary, out_dir)
+        folder = write_navigation(cols, summary, out_dir, plot=plot)
     return NavResult(columns=cols, summary=summary, out_dir=folder)
 
 
@@ -485,18 +491,34 @@ def _summary(run: _Run, track: Track, cols: Mapping[str, np.ndarray]) -> dict[st
 
 NAV_FILES = ("nav.parquet", "summary.json")
 """The files of a navigation output, published together."""
+NAV_PLOT = "navigation.png"
+"""The figure `navigate --plot` adds to them."""
+
+
+def nav_files(plot: bool = False) -> tuple[str, ...]:
+    """The files `write_navigation` publishes (with the figure when `plot`)."""
+    return NAV_FILES + ((NAV_PLOT,) if plot else ())
 
 
 def write_navigation(
-    columns: Mapping[str, np.ndarray], summary: Mapping[str, Any], out: str | os.PathLike[str] | OutputFolder | Stage
+    columns: Mapping[str, np.ndarray],
+    summary: Mapping[str, Any],
+    out: str | os.PathLike[str] | OutputFolder | Stage,
+    *,
+    plot: bool = False,
 ) -> Path:
     """Write ``nav.parquet`` (the columns, float64, metadata ``gyrodrift.format = gyrodrift-nav/1``) and
-    ``summary.json`` into `out` as one set (`gyrodrift.atomic.staged`); return the folder."""
+    ``summary.json`` (and with `plot` ``navigation.png``, `gyrodrift.procedure.figures.navigation_figure`) into
+    `out` as one set (`gyrodrift.atomic.staged`); return the folder."""
     table = pa.Table.from_pydict(
         {k: pa.array(v, pa.float64()) for k, v in columns.items()},
     ).replace_schema_metadata({"gyrodrift.format": "gyrodrift-nav/1", "gyrodrift.imu": str(summary.get("imu"))})
     json.dumps(summary, allow_nan=False)  # fail before writing either file
-    with staged(out, "navigate", NAV_FILES) as stage:
+    with staged(out, "navigate", nav_files(plot)) as stage:
         pq.write_table(table, stage.file("nav.parquet"), **PARQUET_OPTIONS)  # no dictionaries: 4x faster
         write_json(dict(summary), stage.file("summary.json"))
+        if plot:
+            from gyrodrift.procedure.figures import navigation_figure, save_png
+
+            save_png(navigation_figure(columns, summary), stage.file(NAV_PLOT))
     return stage.folder

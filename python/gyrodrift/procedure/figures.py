@@ -1,14 +1,49 @@
 """Figures of the procedure: alignment z-bias sigma, true-drift criterion curve, position error before and
-after compensation (the paper's Fig. 4/5). Each function takes a result and returns a matplotlib `Figure`
-(object API, no pyplot state); `gyrodrift.procedure.writers` saves them with `save_png`."""
+after compensation (the paper's Fig. 4/5), and the errors of one navigation (`navigate --plot`). Each function
+takes a result and returns a matplotlib `Figure` (object API, no pyplot state); `gyrodrift.procedure.writers`
+saves them with `save_png`. Colours: uncompensated ("before") is always `BEFORE_COLOUR`, compensated ("after")
+`AFTER_COLOUR`; the 1 nmi line is labelled in every position-error plot."""
 
 from __future__ import annotations
 
 import os
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
 
 from gyrodrift.procedure.results import Alignment, Evaluation, TrueDrift
 
-__all__ = ["alignment_sigma_figure", "criterion_figure", "position_error_figure", "save_png"]
+__all__ = [
+    "alignment_sigma_figure",
+    "criterion_figure",
+    "position_error_figure",
+    "navigation_figure",
+    "one_nmi_line",
+    "save_png",
+    "BEFORE_COLOUR",
+    "AFTER_COLOUR",
+]
+
+BEFORE_COLOUR = "C3"
+"""Colour of an uncompensated navigation in every figure."""
+AFTER_COLOUR = "C0"
+"""Colour of a compensated navigation in every figure."""
+
+
+def one_nmi_line(ax) -> None:
+    """The 1 nmi reference line, labelled on the plot itself (just under the line, at the right)."""
+    ax.axhline(1.0, color="k", ls="--", lw=0.8)
+    ax.annotate(
+        "1 nmi",
+        xy=(0.995, 1.0),
+        xycoords=("axes fraction", "data"),
+        xytext=(0, -3),
+        textcoords="offset points",
+        fontsize="small",
+        ha="right",
+        va="top",
+    )
 
 
 def _figure(nrows: int = 1):
@@ -55,24 +90,89 @@ def criterion_figure(truth: TrueDrift):
 
 
 def position_error_figure(ev: Evaluation):
-    """Position error [nmi] and latitude/longitude errors [arcsec] vs navigation time [h], before/after."""
+    """Position error [nmi] and latitude/longitude errors [arcsec] vs navigation time [h], before/after.
+
+    The legends give the final and the maximum error over the navigation, and where the compensated drift
+    came from (`Evaluation.source`: a model file, ``given``, ...).
+    """
     fig, (ax1, ax2) = _figure(2)
     b, a = ev.before, ev.after
-    ax1.plot(b.t_h, b.pos_err_nmi, color="C3", label=f"before (final {ev.before_final_nmi:.2f} nmi)")
     ax1.plot(
-        a.t_h, a.pos_err_nmi, color="C0", label=f"after {ev.drift_deg_h:.5f} deg/h (final {ev.after_final_nmi:.2f} nmi)"
+        b.t_h,
+        b.pos_err_nmi,
+        color=BEFORE_COLOUR,
+        label=f"before: no axial drift compensated (final {b.final_nmi:.2f} nmi, max {b.max_nmi:.2f} nmi)",
     )
-    ax1.axhline(1.0, color="k", ls="--", lw=0.8)
+    ax1.plot(
+        a.t_h,
+        a.pos_err_nmi,
+        color=AFTER_COLOUR,
+        label=f"after: {ev.drift_deg_h:.5f} deg/h from {_short_source(ev.source)} "
+        f"(final {a.final_nmi:.2f} nmi, max {a.max_nmi:.2f} nmi)",
+    )
+    one_nmi_line(ax1)
     ax1.set_ylabel("position error [nmi]")
     ax1.set_title(f"{ev.run}: {ev.hours:g} h of navigation after alignment")
-    ax1.legend()
+    ax1.legend(fontsize="small")
     ax1.grid(True, alpha=0.3)
-    ax2.plot(b.t_h, b.lat_err_arcsec, color="C3", ls="-", label="latitude, before")
-    ax2.plot(b.t_h, b.lon_err_arcsec, color="C3", ls=":", label="longitude, before")
-    ax2.plot(a.t_h, a.lat_err_arcsec, color="C0", ls="-", label="latitude, after")
-    ax2.plot(a.t_h, a.lon_err_arcsec, color="C0", ls=":", label="longitude, after")
+    ax2.plot(b.t_h, b.lat_err_arcsec, color=BEFORE_COLOUR, ls="-", label="latitude, before")
+    ax2.plot(b.t_h, b.lon_err_arcsec, color=BEFORE_COLOUR, ls=":", label="longitude, before")
+    ax2.plot(a.t_h, a.lat_err_arcsec, color=AFTER_COLOUR, ls="-", label="latitude, after")
+    ax2.plot(a.t_h, a.lon_err_arcsec, color=AFTER_COLOUR, ls=":", label="longitude, after")
     ax2.set_xlabel("time since end of alignment [h]")
     ax2.set_ylabel("error [arcsec]")
     ax2.legend(ncol=2, fontsize="small")
     ax2.grid(True, alpha=0.3)
+    return fig
+
+
+def _short_source(source: str) -> str:
+    """A drift source short enough for a legend (a model path becomes its file name)."""
+    if source in ("given", ""):
+        return "--drift-deg-h" if source == "given" else "?"
+    return os.path.basename(source) or source
+
+
+def navigation_figure(columns: Mapping[str, np.ndarray], summary: Mapping[str, Any]):
+    """The errors of one navigation (`gyrodrift.ins.navigate`, ``navigate --plot``) vs time [h] since its start:
+    position error [nmi] with the 1 nmi line, latitude/longitude errors [arcsec], and pitch/roll/yaw errors
+    [arcsec] when the log carries the true attitude (computed minus true). Without a known site the panels say
+    so instead of plotting."""
+    t_h = np.asarray(columns["t_s"], dtype=float) / 3600.0
+    fig, (ax1, ax2, ax3) = _figure(3)
+    fig.set_size_inches(7.5, 8.4)
+    drift = summary.get("compensate_drift_deg_h", 0.0)
+    what = "no axial drift compensated" if not drift else f"{drift:.5f} deg/h compensated"
+    title = f"{summary.get('imu', '')}: {summary.get('hours_navigated', t_h[-1] if len(t_h) else 0):.3g} h, {what}"
+    ax1.set_title(title, fontsize="medium")
+    if "pos_err_nmi" in columns:
+        final, peak = summary.get("final_pos_err_nmi"), summary.get("max_pos_err_nmi")
+        ax1.plot(
+            t_h,
+            columns["pos_err_nmi"],
+            color=AFTER_COLOUR if drift else BEFORE_COLOUR,
+            label=f"position error (final {final:.3f} nmi, max {peak:.3f} nmi)",
+        )
+        one_nmi_line(ax1)
+        ax1.legend(fontsize="small")
+        ax2.plot(t_h, columns["lat_err_arcsec"], color="C2", label="latitude")
+        ax2.plot(t_h, columns["lon_err_arcsec"], color="C1", label="longitude")
+        ax2.legend(fontsize="small")
+    else:
+        for ax in (ax1, ax2):
+            ax.text(
+                0.5, 0.5, "no site known: no position errors (give --lat0-deg)", ha="center", transform=ax.transAxes
+            )
+    ax1.set_ylabel("position error [nmi]")
+    ax2.set_ylabel("lat / lon error [arcsec]")
+    if "yaw_err_arcsec" in columns:
+        for name, colour in (("pitch", "C4"), ("roll", "C5"), ("yaw", "C6")):
+            ax3.plot(t_h, columns[f"{name}_err_arcsec"], color=colour, label=name)
+        ax3.legend(fontsize="small", ncol=3)
+    else:
+        ax3.text(0.5, 0.5, "no true attitude in the log: no attitude errors", ha="center", transform=ax3.transAxes)
+    ax3.set_ylabel("attitude error [arcsec]")
+    ax3.set_xlabel("time since start of navigation [h]")
+    for ax in (ax1, ax2, ax3):
+        ax.grid(True, alpha=0.3)
     return fig

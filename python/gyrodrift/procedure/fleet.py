@@ -9,10 +9,13 @@ only when a cluster is asked for.
 from __future__ import annotations
 
 import os
+import sys
+import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 from gyrodrift.cluster import DEFAULT_CONNECT_TIMEOUT_S, DaskMissingError, SchedulerUnreachableError, dask_client
+from gyrodrift.log_format import LogFormat, load_log_format
 from gyrodrift.logs import LogError, Site, open_log
 from gyrodrift.procedure.features import extract_features
 from gyrodrift.procedure.results import RunFeatures
@@ -29,13 +32,14 @@ __all__ = [
 def _features_task(
     path: str,
     site: Site | Mapping[str, float] | None,
+    log_format: LogFormat | None,
     timeline: Timeline,
     with_truth: bool,
     criterion: str,
     lat0_deg: float | None,
     chunk_samples: int,
 ) -> RunFeatures:
-    log = open_log(path, site=site)
+    log = open_log(path, site=site, format=log_format)
     return extract_features(
         log,
         timeline=timeline,
@@ -51,6 +55,7 @@ def features_table(
     paths: Sequence[str | os.PathLike[str]],
     *,
     site: Site | Mapping[str, float] | None = None,
+    log_format: str | os.PathLike[str] | LogFormat | None = None,
     lat0_deg: float | None = None,
     timeline: Timeline = DEFAULT_TIMELINE,
     with_truth: bool = False,
@@ -71,6 +76,8 @@ def features_table(
     site : Site or mapping, optional
         Static site (see `open_log`): a mapping such as ``{"lat_deg": 28.222}`` fills or overrides only the
         keys it gives; logs that carry no site (CSV) need at least the latitude.
+    log_format : path-like or LogFormat, optional
+        The log format description of every log (`gyrodrift.log_format`, CLI ``--format``); None: native columns.
     lat0_deg : float, optional
         True latitude for the table (default: each log's site latitude).
     timeline, with_truth, criterion, chunk_samples
@@ -84,7 +91,8 @@ def features_table(
     connect_timeout_s : float
         Seconds to wait for `scheduler` to answer before `SchedulerUnreachableError`.
     quiet : bool
-        True hides the progress bar (one tick per finished log).
+        True hides the progress bar and the line printed on stderr as each log finishes (its run, its place in
+        the list and its wall time: a log takes minutes, the bar alone would sit still).
 
     Returns
     -------
@@ -105,7 +113,8 @@ def features_table(
     paths = [str(p) for p in paths]
     if not paths:
         raise ValueError("no logs given")
-    logs = [open_log(p, site=site) for p in paths]  # header problems surface before any work starts
+    fmt = None if log_format is None else load_log_format(log_format)
+    logs = [open_log(p, site=site, format=fmt) for p in paths]  # header problems surface before any work starts
     for log in logs:
         if log.site is None:
             raise LogError(f"{log.label}: the log carries no site; give its latitude (--lat0-deg / site=)")
@@ -113,13 +122,24 @@ def features_table(
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
         raise LogError(f"run name(s) {', '.join(dup)} appear more than once (run = the log's file stem)")
-    args = (site, timeline, with_truth, criterion, lat0_deg, chunk_samples)
+    args = (site, fmt, timeline, with_truth, criterion, lat0_deg, chunk_samples)
+    start = time.monotonic()
+
+    def done(bar, i: int, res: RunFeatures) -> None:
+        bar.update(1)
+        if not quiet:
+            bar.write(
+                f"features: {res.run} done ({i + 1}/{len(paths)}, {time.monotonic() - start:.1f} s wall time so far)",
+                file=sys.stderr,
+            )
+
     if workers is None and scheduler is None:
         out = []
         with progress(len(paths), "features", quiet, unit="log") as bar:
-            for p in paths:
-                out.append(_features_task(p, *args))
-                bar.update(1)
+            for i, p in enumerate(paths):
+                bar.set_postfix_str(names[i])
+                out.append(_features_task(str(p), *args))
+                done(bar, i, out[-1])
         return out
     with dask_client(
         workers=workers, scheduler=scheduler, processes=processes, connect_timeout_s=connect_timeout_s
@@ -130,7 +150,7 @@ def features_table(
         ]
         results: list[RunFeatures] = []
         with progress(len(paths), "features", quiet, unit="log") as bar:
-            for f in futures:
+            for i, f in enumerate(futures):
                 results.append(f.result())
-                bar.update(1)
+                done(bar, i, results[-1])
         return results

@@ -24,6 +24,8 @@ from gyrodrift.procedure.results import RUN_TABLE_COLUMNS, Alignment, Evaluation
 __all__ = [
     "ALIGNMENT_FILES",
     "EVALUATION_FILES",
+    "EVALUATION_CURVE_COLUMNS",
+    "evaluation_curves_table",
     "IDENTIFICATION_FILES",
     "TRUTH_FILES",
     "RUN_TABLE_RECOGNISER",
@@ -40,7 +42,18 @@ __all__ = [
 
 ALIGNMENT_FILES = ("alignment.json", "alignment_z_sigma.png")
 TRUTH_FILES = ("true_drift.json", "criterion.png")
-EVALUATION_FILES = ("evaluation.json", "position_error.png")
+EVALUATION_FILES = ("evaluation.json", "position_error.png", "position_error.parquet")
+EVALUATION_CURVE_COLUMNS = (
+    "pass",
+    "drift_deg_h",
+    "t_h",
+    "north_m",
+    "east_m",
+    "lat_err_arcsec",
+    "lon_err_arcsec",
+    "pos_err_nmi",
+)
+"""Columns of ``position_error.parquet``: one row per kept time of each pass (``before`` then ``after``)."""
 IDENTIFICATION_FILES = ("identification.json",)
 CURVES_COLUMNS = ("run", "t_h", "lat_err_arcsec")
 RUN_TABLE_RECOGNISER = recognise_header(",".join(RUN_TABLE_COLUMNS) + ",", ",".join(RUN_TABLE_COLUMNS) + "\n")
@@ -75,15 +88,49 @@ def write_truth(truth: TrueDrift, out: str | os.PathLike[str] | Stage) -> dict:
     return dict(zip(("json", "png"), _paths(stage, TRUTH_FILES).values(), strict=True))
 
 
-def write_evaluation(ev: Evaluation, out: str | os.PathLike[str] | Stage) -> dict[str, Path]:
-    """Write ``evaluation.json`` and ``position_error.png`` into `out` (a folder or a stage), as one set.
+def evaluation_curves_table(ev: Evaluation):
+    """The curves of `position_error.png` as a pyarrow Table (`EVALUATION_CURVE_COLUMNS`, long format): ``pass``
+    (``before``: nothing compensated, ``after``: ``drift_deg_h`` subtracted), ``t_h`` since the end of
+    alignment [h], north/east errors [m], latitude/longitude errors [arcsec], position error [nmi, 1852 m];
+    all computed minus true."""
+    import numpy as np
+    import pyarrow as pa
 
-    Returns the final paths, keyed ``"json"`` and ``"png"``.
+    parts = []
+    for name, c in (("before", ev.before), ("after", ev.after)):
+        n = len(c.t_h)
+        parts.append(
+            {
+                "pass": np.full(n, name, dtype=object),
+                "drift_deg_h": np.full(n, float(c.drift_deg_h)),
+                "t_h": c.t_h,
+                "north_m": c.north_m,
+                "east_m": c.east_m,
+                "lat_err_arcsec": c.lat_err_arcsec,
+                "lon_err_arcsec": c.lon_err_arcsec,
+                "pos_err_nmi": c.pos_err_nmi,
+            }
+        )
+    cols = {k: np.concatenate([p[k] for p in parts]) for k in EVALUATION_CURVE_COLUMNS}
+    table = pa.table(
+        {k: pa.array(v, pa.string() if k == "pass" else pa.float64()) for k, v in cols.items()},
+    )
+    return table.replace_schema_metadata({"gyrodrift.format": "gyrodrift-evaluation-curves/1", "gyrodrift.run": ev.run})
+
+
+def write_evaluation(ev: Evaluation, out: str | os.PathLike[str] | Stage) -> dict[str, Path]:
+    """Write ``evaluation.json``, ``position_error.png`` and its curves ``position_error.parquet``
+    (`evaluation_curves_table`) into `out` (a folder or a stage), as one set.
+
+    Returns the final paths, keyed ``"json"``, ``"png"`` and ``"curves"``.
     """
+    import pyarrow.parquet as pq
+
     with staged(out, "evaluate", EVALUATION_FILES) as stage:
         write_json(ev.to_dict(), stage.file("evaluation.json"))
         save_png(position_error_figure(ev), stage.file("position_error.png"))
-    return dict(zip(("json", "png"), _paths(stage, EVALUATION_FILES).values(), strict=True))
+        pq.write_table(evaluation_curves_table(ev), stage.file("position_error.parquet"))
+    return dict(zip(("json", "png", "curves"), _paths(stage, EVALUATION_FILES).values(), strict=True))
 
 
 def identification_document(res: Identification) -> dict[str, Any]:
