@@ -331,6 +331,17 @@ def parse_campaign(data: Mapping[str, Any], source: str = "<campaign>") -> Campa
                 )
             if m["index"] is not None and int(m["index"]) >= len(default):
                 raise _fail(source, where, f"index out of range (the key has {len(default)} elements)")
+            for value in (
+                dist.args[0] if dist.kind == "choice" else dist.args[:1] if dist.kind == "normal" else dist.args
+            ):
+                trial = json.loads(json.dumps(base))
+                _set_path(trial, path, value, defaults)
+                try:
+                    Scenario.from_dict(trial, source="")
+                except InputError as exc:
+                    raise _fail(
+                        source, where, f"the value {value!r} makes no valid run: {str(exc).lstrip(': ')}"
+                    ) from None
         vary[path] = dist
     if grades and "grade" not in vary:
         raise _fail(source, "[vary.grade]", "grades are defined but no [vary.grade] chooses among them")
@@ -752,7 +763,8 @@ def write_run_table(
 
     ok = runs.select(runs.ok)
     optional = ("drift_std_deg_h", "drift_smoother_deg_h", "drift_smoother_std_deg_h")
-    cols = list(RUN_TABLE_COLUMNS) + ["drift_deg_h"] + [c for c in optional if np.isfinite(ok.numbers(c)).any()]
+    cols = list(RUN_TABLE_COLUMNS) + ["drift_deg_h"]
+    cols += [c for c in optional if c not in cols and np.isfinite(ok.numbers(c)).any()]
     values = {c: ok.numbers(c) for c in cols if c != "run"}
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")

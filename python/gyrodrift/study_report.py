@@ -61,24 +61,25 @@ def _png(fig) -> bytes:
     buf = io.BytesIO()
     fig.tight_layout()
     fig.savefig(buf, format="png", dpi=110)
-    import matplotlib.pyplot as plt
-
-    plt.close(fig)
     return buf.getvalue()
+
+
+def _subplots(figsize):
+    from matplotlib.figure import Figure  # no pyplot: no global figure state, any backend
+
+    fig = Figure(figsize=figsize)
+    return fig, fig.subplots()
 
 
 def make_figures(doc: dict) -> dict[str, bytes]:
     """The four figures as PNG bytes."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.ticker
     import numpy as np
 
     out: dict[str, bytes] = {}
     methods = doc["methods"]
     names = sorted(methods, key=lambda n: methods[n]["metrics"]["rms_eff"] or math.inf)
-    fig, ax = plt.subplots(figsize=(8, 0.38 * len(names) + 1.6))
+    fig, ax = _subplots((8, 0.38 * len(names) + 1.6))
     y = np.arange(len(names))
     ax.barh(y - 0.2, [methods[n]["metrics"]["rms_eff"] for n in names], 0.4, label="RMS vs effective drift")
     ax.barh(y + 0.2, [methods[n]["metrics"]["max_eff"] for n in names], 0.4, label="max vs effective drift", alpha=0.5)
@@ -87,13 +88,14 @@ def make_figures(doc: dict) -> dict[str, bytes]:
     ax.set_yticks(y, names)
     ax.invert_yaxis()
     ax.set_xscale("log")
+    ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     ax.set_xlabel("identification error on held-out runs [deg/h]")
-    ax.legend(fontsize=8, loc="lower right")
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2)
     ax.grid(True, axis="x", which="both", alpha=0.3)
     out["methods.png"] = _png(fig)
 
     def curve_figure(x, series: dict, xlabel: str, limit=None, xlog=False):
-        fig, ax = plt.subplots(figsize=(7, 4))
+        fig, ax = _subplots((7, 4))
         for k, (name, vals) in enumerate(series.items()):
             ax.plot(x, vals, marker="o", ms=4, label=name, color=f"C{k % 10}")
         if limit is not None and any(v is not None for v in limit):
@@ -101,6 +103,7 @@ def make_figures(doc: dict) -> dict[str, bytes]:
         ax.set_yscale("log")
         if xlog:
             ax.set_xscale("log")
+            ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
         ax.set_xlabel(xlabel)
         ax.set_ylabel("RMS error vs effective drift [deg/h]")
         ax.grid(True, which="both", alpha=0.3)
