@@ -8,6 +8,7 @@
 //! - [`imu_error`]: the body-frame IMU error model (biases, random walks, Gauss-Markov, scale, misalignment,
 //!   temperature-dependent axial drift).
 //! - [`simulator`]: exact IMU increments of a static base with a turntable, plus the error model.
+//! - [`trajectory`]: the land-vehicle route of a moving base (closed-form kinematics per segment).
 //! - [`strapdown`]: the strapdown navigator (coning/sculling, velocity, position, attitude).
 //! - [`coarse_alignment`], [`kalman`], [`alignment`]: the static-base alignment (coarse, 12-state filter, driver).
 //! - [`smoother`]: forward filter + RTS smoother over a whole static log (the axial drift with its 1-sigma), and
@@ -30,4 +31,5 @@ pub mod simulator;
 pub mod smoother;
 pub mod strapdown;
 pub mod temperature;
+pub mod trajectory;
 pub mod turntable;

@@ -142,6 +142,7 @@ fn simulator_refuses_short_buffers_tiny_spans_and_huge_chunks() {
         pitch: &mut f,
         roll: &mut g,
         yaw: &mut h,
+        truth: None,
     };
     assert_eq!(sim.fill(out).unwrap_err().key(), "dv_m_s");
     assert_eq!(sim.samples_done(), 0);

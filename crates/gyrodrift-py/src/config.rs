@@ -10,6 +10,7 @@ use gyrodrift_core::imu_error::ImuErrorParams;
 use gyrodrift_core::simulator::ImuSimulatorConfig;
 use gyrodrift_core::strapdown::{NavigatorConfig as CoreNavigatorConfig, Vertical};
 use gyrodrift_core::temperature::{TemperatureProfile, DEFAULT_TAU_S, DEFAULT_TEMP_C};
+use gyrodrift_core::trajectory::{Segment, TrajectoryConfig};
 use gyrodrift_core::turntable::{
     default_indexing_positions, scheme_from_settings, RotationScheme, DEFAULT_RECIPROCATING_SPAN_RAD,
     DEFAULT_TABLE_ACCEL_RAD_S2, DEFAULT_TABLE_RATE_RAD_S,
@@ -90,6 +91,15 @@ pub struct SimulatorConfig {
     drift_k2_rad_s_per_c2: f64,
     #[pyo3(get)]
     drift_k3_rad_s_per_c_per_s: f64,
+    /// Moving base (None: static): the static period before the drive [s].
+    #[pyo3(get)]
+    trajectory_start_s: Option<f64>,
+    /// Moving base: the route's segments (duration [s], acceleration [m/s^2], yaw rate [rad/s]).
+    #[pyo3(get)]
+    trajectory_segments: Option<Vec<(f64, f64, f64)>>,
+    /// Moving base: the segments are cycled until the end of the run.
+    #[pyo3(get)]
+    trajectory_repeat: bool,
 }
 
 #[pymethods]
@@ -104,7 +114,8 @@ impl SimulatorConfig {
         gyro_scale = None, gyro_misalignment_rad = None, accel_bias_m_s2 = None, accel_vrw_m_s_rts = None,
         accel_scale = None, temp_start_c = None, temp_end_c = None, temp_tau_s = None, temp_series_t_s = None,
         temp_series_c = None, drift_t0_c = None, drift_k1_rad_s_per_c = None, drift_k2_rad_s_per_c2 = None,
-        drift_k3_rad_s_per_c_per_s = None
+        drift_k3_rad_s_per_c_per_s = None, trajectory_start_s = None, trajectory_segments = None,
+        trajectory_repeat = false
     ))]
     #[allow(clippy::too_many_arguments)]
     fn new(
@@ -143,6 +154,9 @@ impl SimulatorConfig {
         drift_k1_rad_s_per_c: Option<f64>,
         drift_k2_rad_s_per_c2: Option<f64>,
         drift_k3_rad_s_per_c_per_s: Option<f64>,
+        trajectory_start_s: Option<f64>,
+        trajectory_segments: Option<Vec<(f64, f64, f64)>>,
+        trajectory_repeat: bool,
     ) -> PyResult<Self> {
         let d = ImuSimulatorConfig::default();
         let d0 = ImuErrorParams::default();
@@ -196,6 +210,23 @@ impl SimulatorConfig {
             scheme,
             errors,
             temperature,
+            trajectory: if trajectory_start_s.is_some() || trajectory_segments.is_some() {
+                Some(TrajectoryConfig {
+                    start_s: trajectory_start_s.unwrap_or(0.0),
+                    segments: trajectory_segments
+                        .unwrap_or_default()
+                        .into_iter()
+                        .map(|(duration, accel, yaw_rate)| Segment {
+                            duration,
+                            accel,
+                            yaw_rate,
+                        })
+                        .collect(),
+                    repeat: trajectory_repeat,
+                })
+            } else {
+                None
+            },
         };
         inner.validate().map_err(core_err)?;
         Ok(Self::resolved(inner, scheme_name, reciprocating_balanced))
@@ -273,6 +304,12 @@ impl SimulatorConfig {
             drift_k1_rad_s_per_c: e.drift_k1,
             drift_k2_rad_s_per_c2: e.drift_k2,
             drift_k3_rad_s_per_c_per_s: e.drift_k3,
+            trajectory_start_s: inner.trajectory.as_ref().map(|t| t.start_s),
+            trajectory_segments: inner
+                .trajectory
+                .as_ref()
+                .map(|t| t.segments.iter().map(|s| (s.duration, s.accel, s.yaw_rate)).collect()),
+            trajectory_repeat: inner.trajectory.as_ref().is_some_and(|t| t.repeat),
             inner,
         }
     }

@@ -10,7 +10,7 @@ use config::{AlignerConfig, NavigatorConfig, SimulatorConfig};
 
 use gyrodrift_core::earth;
 use gyrodrift_core::error::CoreError as CoreFailure;
-use gyrodrift_core::simulator::{ImuChunk, ImuChunkSlices, ImuSimulator as CoreSimulator};
+use gyrodrift_core::simulator::{ImuChunk, ImuChunkSlices, ImuSimulator as CoreSimulator, TruthSlices};
 use gyrodrift_core::strapdown::{NavState, Navigator as CoreNavigator};
 use gyrodrift_core::turntable::{balanced_reciprocating_span, RotationScheme};
 use numpy::{
@@ -173,6 +173,13 @@ impl ImuSimulator {
         d.set_item("pitch_rad", chunk.pitch.into_pyarray(py))?;
         d.set_item("roll_rad", chunk.roll.into_pyarray(py))?;
         d.set_item("yaw_rad", chunk.yaw.into_pyarray(py))?;
+        if !chunk.lat.is_empty() {
+            // Moving base: the true position and velocity.
+            d.set_item("lat_rad", chunk.lat.into_pyarray(py))?;
+            d.set_item("lon_rad", chunk.lon.into_pyarray(py))?;
+            d.set_item("height_m", chunk.height.into_pyarray(py))?;
+            d.set_item("vel_enu_m_s", n3(chunk.vel)?)?;
+        }
         Ok(Some(d))
     }
 
@@ -191,6 +198,18 @@ impl ImuSimulator {
         let mut pitch = writeable1(out, "pitch_rad")?;
         let mut roll = writeable1(out, "roll_rad")?;
         let mut yaw = writeable1(out, "yaw_rad")?;
+        // Moving base: the truth keys are optional, all four or none.
+        let want_truth = out.contains("lat_rad")?;
+        let mut truth_arrays = if want_truth {
+            Some((
+                writeable1(out, "lat_rad")?,
+                writeable1(out, "lon_rad")?,
+                writeable1(out, "height_m")?,
+                writeable2(out, "vel_enu_m_s")?,
+            ))
+        } else {
+            None
+        };
         let contiguous = |key: &'static str| arg_err(key, "expected a C-contiguous array");
         let slices = ImuChunkSlices {
             t_s: t.as_slice_mut().map_err(|_| contiguous("t_s"))?,
@@ -201,6 +220,15 @@ impl ImuSimulator {
             pitch: pitch.as_slice_mut().map_err(|_| contiguous("pitch_rad"))?,
             roll: roll.as_slice_mut().map_err(|_| contiguous("roll_rad"))?,
             yaw: yaw.as_slice_mut().map_err(|_| contiguous("yaw_rad"))?,
+            truth: match truth_arrays.as_mut() {
+                None => None,
+                Some((lat, lon, h, vel)) => Some(TruthSlices {
+                    lat: lat.as_slice_mut().map_err(|_| contiguous("lat_rad"))?,
+                    lon: lon.as_slice_mut().map_err(|_| contiguous("lon_rad"))?,
+                    height: h.as_slice_mut().map_err(|_| contiguous("height_m"))?,
+                    vel: vel.as_slice_mut().map_err(|_| contiguous("vel_enu_m_s"))?,
+                }),
+            },
         };
         let inner = &mut self.inner;
         py.detach(|| inner.fill(slices)).map_err(core_err)
