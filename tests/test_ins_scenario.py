@@ -79,7 +79,7 @@ BAD = [
     ),
     (
         "[imu]\nrate_hz = 100\n",
-        "unknown section [imu] (expected one of: site, run, rotation, gyro, accel, temperature, attitude)",
+        "unknown section [imu] (expected one of: site, run, rotation, gyro, accel, temperature, attitude, trajectory)",
     ),
     ("site = 3\n", "[site] must be a table, got number"),
     ("[attitude]\npitch_deg = 90\n", "[attitude] pitch_deg: must be strictly between -90 and 90, got 90"),

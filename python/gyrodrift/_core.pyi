@@ -3,6 +3,7 @@ docs/alignment-contract.md). SI units everywhere. Every refusal is `gyrodrift.er
 attribute names the setting or input). Keyword defaults of None take the core's default (documented in the
 contracts; each config shows it resolved as an attribute)."""
 
+from collections.abc import Sequence
 from typing import Any, ClassVar, Final
 
 import numpy as np
@@ -38,6 +39,9 @@ MAX_SPAN_DEG: Final[float]
 MIN_SAMPLES_PER_PERIOD: Final[float]
 MAX_CHUNK_SAMPLES: Final[int]
 MAX_INDEX_POSITIONS: Final[int]
+MAX_VEHICLE_SPEED_M_S: Final[float]
+MAX_VEHICLE_ACCEL_M_S2: Final[float]
+MAX_VEHICLE_YAW_RATE_DEG_S: Final[float]
 
 def normal_gravity(lat_rad: FloatArray, height_m: FloatArray) -> FloatArray: ...
 def meridian_radius(lat_rad: FloatArray) -> FloatArray: ...
@@ -87,6 +91,9 @@ class SimulatorConfig:
         drift_k1_rad_s_per_c: float | None = None,
         drift_k2_rad_s_per_c2: float | None = None,
         drift_k3_rad_s_per_c_per_s: float | None = None,
+        trajectory_start_s: float | None = None,
+        trajectory_segments: Sequence[tuple[float, float, float]] | None = None,
+        trajectory_repeat: bool = False,
     ) -> None: ...
     @property
     def lat_rad(self) -> float: ...
@@ -158,6 +165,12 @@ class SimulatorConfig:
     def drift_k2_rad_s_per_c2(self) -> float: ...
     @property
     def drift_k3_rad_s_per_c_per_s(self) -> float: ...
+    @property
+    def trajectory_start_s(self) -> float | None: ...
+    @property
+    def trajectory_segments(self) -> list[tuple[float, float, float]] | None: ...
+    @property
+    def trajectory_repeat(self) -> bool: ...
 
 class NavigatorConfig:
     """A validated initial state of the navigator."""

@@ -256,6 +256,7 @@ impl Trajectory {
 /// One classical Runge-Kutta step of the position from `t0` over `dt` within one piece (no boundary inside):
 /// returns (lat, lon) at t0 + dt and their rate there.
 #[inline]
+#[allow(clippy::too_many_arguments)]
 pub fn rk4_position(
     traj: &Trajectory,
     cursor: &mut usize,

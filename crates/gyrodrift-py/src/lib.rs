@@ -499,6 +499,12 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
         }
         m.add("MAX_CHUNK_SAMPLES", gyrodrift_core::simulator::MAX_CHUNK_SAMPLES)?;
         m.add("MAX_INDEX_POSITIONS", t::MAX_INDEX_POSITIONS)?;
+        m.add("MAX_VEHICLE_SPEED_M_S", gyrodrift_core::trajectory::MAX_SPEED_M_S)?;
+        m.add("MAX_VEHICLE_ACCEL_M_S2", gyrodrift_core::trajectory::MAX_ACCEL_M_S2)?;
+        m.add(
+            "MAX_VEHICLE_YAW_RATE_DEG_S",
+            gyrodrift_core::trajectory::MAX_YAW_RATE_RAD_S.to_degrees(),
+        )?;
     }
     m.add_function(wrap_pyfunction!(normal_gravity, m)?)?;
     m.add_function(wrap_pyfunction!(meridian_radius, m)?)?;

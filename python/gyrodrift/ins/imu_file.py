@@ -7,7 +7,9 @@ One row per IMU sample; every column name carries its unit (see docs/scenarios.m
 ``t_s`` end time of the sample [s]; ``dtheta_{x,y,z}_rad`` angle increments over the sample [rad] and
 ``dv_{x,y,z}_m_s`` velocity increments [m/s], body frame (x right, y forward, z up); ``temp_c`` system
 temperature [deg C]; ``table_angle_deg`` turntable angle about body Up [deg]; ``true_{pitch,roll,yaw}_deg``
-true body attitude at the end of the sample [deg].
+true body attitude at the end of the sample [deg]. A moving-base run (scenario with ``[trajectory]``) also has
+``true_lat_deg``, ``true_lon_deg`` [deg], ``true_height_m`` [m] and ``true_vel_{e,n,u}_m_s`` [m/s, ENU]: the
+vehicle's true position and velocity at the end of the sample (`ROUTE_COLUMNS`).
 
 File key-value metadata (UTF-8 JSON values): ``gyrodrift.format`` = ``"gyrodrift-imu/1"``,
 ``gyrodrift.scenario`` the resolved scenario in user units (TOML-shaped dict), ``gyrodrift.site`` the true
@@ -25,7 +27,15 @@ import pyarrow as pa
 from gyrodrift.ins.scenario import Scenario
 from gyrodrift.logs import TRUTH_COLUMNS
 
-__all__ = ["IMU_FORMAT", "IMU_COLUMNS", "TRUTH_COLUMNS", "imu_schema", "core_chunk_to_table"]
+__all__ = [
+    "IMU_FORMAT",
+    "IMU_COLUMNS",
+    "ROUTE_COLUMNS",
+    "TRUTH_COLUMNS",
+    "imu_columns",
+    "imu_schema",
+    "core_chunk_to_table",
+]
 
 IMU_FORMAT = "gyrodrift-imu/1"
 """Value of the ``gyrodrift.format`` metadata key of imu.parquet files written by this version."""
@@ -40,7 +50,22 @@ SENSOR_COLUMNS = (
     "dv_z_m_s",
 )
 IMU_COLUMNS = SENSOR_COLUMNS + ("temp_c", "table_angle_deg") + TRUTH_COLUMNS
-"""All columns of imu.parquet, in file order (all float64)."""
+"""All columns of a static-base imu.parquet, in file order (all float64)."""
+
+ROUTE_COLUMNS = (
+    "true_lat_deg",
+    "true_lon_deg",
+    "true_height_m",
+    "true_vel_e_m_s",
+    "true_vel_n_m_s",
+    "true_vel_u_m_s",
+)
+"""The true position and velocity columns a moving-base imu.parquet adds after `IMU_COLUMNS`."""
+
+
+def imu_columns(scenario: Scenario) -> tuple[str, ...]:
+    """The columns of the imu.parquet of `scenario`, in file order (`ROUTE_COLUMNS` added on a moving base)."""
+    return IMU_COLUMNS + (ROUTE_COLUMNS if scenario.trajectory is not None else ())
 
 
 def imu_schema(scenario: Scenario) -> pa.Schema:
@@ -53,7 +78,7 @@ def imu_schema(scenario: Scenario) -> pa.Schema:
         ),
         "gyrodrift.rate_hz": json.dumps(scenario.run.rate_hz),
     }
-    return pa.schema([pa.field(c, pa.float64()) for c in IMU_COLUMNS], metadata=meta)
+    return pa.schema([pa.field(c, pa.float64()) for c in imu_columns(scenario)], metadata=meta)
 
 
 def core_chunk_to_table(chunk: dict[str, Any], schema: pa.Schema) -> pa.Table:
@@ -74,4 +99,10 @@ def core_chunk_to_table(chunk: dict[str, Any], schema: pa.Schema) -> pa.Table:
         "true_roll_deg": np.rad2deg(np.asarray(chunk["roll_rad"], dtype=np.float64)),
         "true_yaw_deg": np.rad2deg(np.asarray(chunk["yaw_rad"], dtype=np.float64)),
     }
+    if "true_lat_deg" in schema.names:
+        vel = np.asarray(chunk["vel_enu_m_s"], dtype=np.float64)
+        cols["true_lat_deg"] = np.rad2deg(np.asarray(chunk["lat_rad"], dtype=np.float64))
+        cols["true_lon_deg"] = np.rad2deg(np.asarray(chunk["lon_rad"], dtype=np.float64))
+        cols["true_height_m"] = np.asarray(chunk["height_m"], dtype=np.float64)
+        cols["true_vel_e_m_s"], cols["true_vel_n_m_s"], cols["true_vel_u_m_s"] = vel[:, 0], vel[:, 1], vel[:, 2]
     return pa.Table.from_pydict(cols, schema=schema)

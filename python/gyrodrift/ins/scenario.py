@@ -21,7 +21,7 @@ import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, cast
+from typing import TYPE_CHECKING, Any, ClassVar, cast
 
 from gyrodrift.errors import InputError
 from gyrodrift.site import Site
@@ -170,6 +170,47 @@ class Attitude:
     yaw_deg: float = 0.0
 
 
+SEGMENT_KINDS = ("straight", "turn", "accelerate", "stop")
+"""The kinds of route segment of ``[trajectory] segments``."""
+
+DRIVE_H = 72.0
+"""Default length of the drive after the static period [h] (the paper's 1 nmi / 72 h)."""
+
+
+@dataclass(frozen=True)
+class Segment:
+    """One segment of a land-vehicle route, resolved: ``kind`` (one of `SEGMENT_KINDS`), ``duration_s`` [s],
+    longitudinal acceleration ``accel_m_s2`` [m/s^2] (accelerate; negative brakes) and turn rate
+    ``rate_deg_s`` [deg/s] (turn; positive counter-clockwise about Up, i.e. a left turn)."""
+
+    kind: str
+    duration_s: float
+    accel_m_s2: float = 0.0
+    rate_deg_s: float = 0.0
+
+    def to_toml_dict(self) -> dict[str, Any]:
+        """The segment as its TOML table (only the keys its kind takes)."""
+        out: dict[str, Any] = {"kind": self.kind, "duration_s": self.duration_s}
+        if self.kind == "accelerate":
+            out["accel_m_s2"] = self.accel_m_s2
+        if self.kind == "turn":
+            out["rate_deg_s"] = self.rate_deg_s
+        return out
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """A moving base: the vehicle stands still for ``static_h`` [h] (alignment and identification), then drives
+    ``segments`` in order (cycled to the end of the run with ``repeat``). The route is level at the site's
+    height; the vehicle's initial yaw is ``[attitude] yaw_deg`` and ``[attitude] pitch_deg``/``roll_deg`` are
+    the IMU's mounting tilt on the vehicle. After the last segment (without ``repeat``) the vehicle goes on
+    straight at its last speed."""
+
+    static_h: float = 16.0
+    repeat: bool = False
+    segments: tuple[Segment, ...] = ()
+
+
 @dataclass(frozen=True)
 class Scenario:
     """One static-base run. Build it with `load_scenario` (file) or `Scenario.from_dict` (mapping)."""
@@ -181,6 +222,7 @@ class Scenario:
     accel: Accel = field(default_factory=Accel)
     temperature: Temperature = field(default_factory=Temperature)
     attitude: Attitude = field(default_factory=Attitude)
+    trajectory: Trajectory | None = None
 
     @property
     def n_samples(self) -> int:
@@ -218,6 +260,15 @@ class Scenario:
         out: dict[str, dict[str, Any]] = {}
         for f in dataclasses.fields(self):
             section = getattr(self, f.name)
+            if section is None:
+                continue
+            if isinstance(section, Trajectory):
+                out["trajectory"] = {
+                    "static_h": section.static_h,
+                    "repeat": section.repeat,
+                    "segments": [seg.to_toml_dict() for seg in section.segments],
+                }
+                continue
             values: dict[str, Any] = {}
             for g in dataclasses.fields(section):
                 v = getattr(section, g.name)
@@ -289,7 +340,19 @@ class Scenario:
             drift_k1_rad_s_per_c=t.k1_deg_h_per_c * DEG_PER_H,
             drift_k2_rad_s_per_c2=t.k2_deg_h_per_c2 * DEG_PER_H,
             drift_k3_rad_s_per_c_per_s=t.k3_deg_h_per_c_per_h * DEG_PER_H * HOUR,
+            **self._trajectory_keywords(),
         )
+
+    def _trajectory_keywords(self) -> dict[str, Any]:
+        """The moving-base keywords of `_core.SimulatorConfig` (none for a static base)."""
+        tr = self.trajectory
+        if tr is None:
+            return {}
+        return {
+            "trajectory_start_s": tr.static_h * HOUR,
+            "trajectory_segments": [(g.duration_s, g.accel_m_s2, g.rate_deg_s * DEG) for g in tr.segments],
+            "trajectory_repeat": tr.repeat,
+        }
 
 
 def write_scenario_toml(scenario: Scenario, path: str | os.PathLike[str], header: str | None = None) -> None:
@@ -355,7 +418,7 @@ def _type_name(v: Any) -> str:
 class _Validator:
     """Turns a TOML-shaped mapping into a `Scenario`, naming the file and key in every error."""
 
-    SECTIONS = ("site", "run", "rotation", "gyro", "accel", "temperature", "attitude")
+    SECTIONS = ("site", "run", "rotation", "gyro", "accel", "temperature", "attitude", "trajectory")
 
     def __init__(self, source: str, base_dir: Path):
         self.source = source
@@ -463,9 +526,14 @@ class _Validator:
         for name in data:
             if name not in self.SECTIONS:
                 raise self.fail(None, None, f"unknown section [{name}] (expected one of: {', '.join(self.SECTIONS)})")
+        trajectory = self.trajectory(data)
+        run = self.run(data)
+        if trajectory is not None and "duration_h" not in data.get("run", {}):
+            run = dataclasses.replace(run, duration_h=trajectory.static_h + DRIVE_H)
         scenario = Scenario(
+            trajectory=trajectory,
             site=self.site(data),
-            run=self.run(data),
+            run=run,
             rotation=self.rotation(data),
             gyro=self.gyro(data),
             accel=self.accel(data),
@@ -633,6 +701,104 @@ class _Validator:
             yaw_deg=self.in_range("attitude", t, "yaw_deg", d.yaw_deg, -c.MAX_YAW_DEG, c.MAX_YAW_DEG),
         )
 
+    def trajectory(self, data) -> Trajectory | None:
+        """The ``[trajectory]`` section: static_h, repeat, segments (a list of tables with a ``kind``)."""
+        if "trajectory" not in data:
+            return None
+        t, d = self.section(data, "trajectory", Trajectory), Trajectory()
+        static_h = self.non_negative("trajectory", t, "static_h", d.static_h)
+        repeat = t.get("repeat", d.repeat)
+        if not isinstance(repeat, bool):
+            raise self.fail("trajectory", "repeat", f"expected true or false, got {_type_name(repeat)} {_show(repeat)}")
+        raw = t.get("segments", [])
+        if not isinstance(raw, (list, tuple)):
+            raise self.fail("trajectory", "segments", f"expected an array of tables, got {_type_name(raw)}")
+        segments: list[Segment] = []
+        speed = 0.0
+        for i, g in enumerate(raw):
+            seg = self.segment(f"segments[{i}]", g, speed)
+            speed = max(0.0, speed + seg.accel_m_s2 * seg.duration_s)
+            if speed < 1e-9:
+                speed = 0.0
+            segments.append(seg)
+        return Trajectory(static_h=static_h, repeat=repeat, segments=tuple(segments))
+
+    _SEGMENT_KEYS: ClassVar[dict[str, tuple[str, ...]]] = {
+        "straight": ("duration_s",),
+        "turn": ("rate_deg_s", "duration_s", "angle_deg"),
+        "accelerate": ("accel_m_s2", "duration_s", "to_speed_m_s"),
+        "stop": ("duration_s",),
+    }
+
+    def segment(self, key: str, g: Any, speed: float) -> Segment:
+        """One route segment (``key`` names it in messages), entered at `speed` [m/s]."""
+        sec, c = "trajectory", _limits()
+        if not isinstance(g, Mapping):
+            raise self.fail(sec, key, f"expected a table, got {_type_name(g)} {_show(g)}")
+        kind = g.get("kind")
+        if kind not in self._SEGMENT_KEYS:
+            kinds = ", ".join(map(repr, SEGMENT_KINDS))
+            raise self.fail(sec, f"{key}.kind", f"expected one of {kinds}, got {_show(kind)}")
+        allowed = self._SEGMENT_KEYS[kind]
+        for k in g:
+            if k != "kind" and k not in allowed:
+                raise self.fail(sec, f"{key}.{k}", f"unknown key for a {kind} segment (expected: {', '.join(allowed)})")
+
+        def one_of(a: str, b: str, what: str) -> None:
+            if (a in g) == (b in g):
+                raise self.fail(sec, key, f"{what} takes exactly one of {a} and {b}")
+
+        duration = self.number(sec, g, "duration_s", math.nan)
+        accel = rate = 0.0
+        max_speed = c.MAX_VEHICLE_SPEED_M_S
+        if kind == "turn":
+            max_rate = c.MAX_VEHICLE_YAW_RATE_DEG_S
+            rate = self.number(sec, g, "rate_deg_s", math.nan)
+            if not (0 < abs(rate) <= max_rate):
+                got = _show(g.get("rate_deg_s"))
+                raise self.fail(
+                    sec, f"{key}.rate_deg_s", f"expected a turn rate with 0 < |rate| <= {max_rate:.6g} deg/s, got {got}"
+                )
+            one_of("duration_s", "angle_deg", "a turn")
+            if "angle_deg" in g:
+                angle = self.number(sec, g, "angle_deg", math.nan)
+                if angle == 0 or (angle > 0) != (rate > 0):
+                    got = _show(g["angle_deg"])
+                    raise self.fail(sec, f"{key}.angle_deg", f"must be non-zero with the sign of rate_deg_s, got {got}")
+                duration = angle / rate
+        elif kind == "accelerate":
+            max_accel = c.MAX_VEHICLE_ACCEL_M_S2
+            accel = self.number(sec, g, "accel_m_s2", math.nan)
+            if not (0 < abs(accel) <= max_accel):
+                got = _show(g.get("accel_m_s2"))
+                raise self.fail(sec, f"{key}.accel_m_s2", f"expected 0 < |accel| <= {max_accel:.6g} m/s^2, got {got}")
+            one_of("duration_s", "to_speed_m_s", "an accelerate segment")
+            if "to_speed_m_s" in g:
+                target = self.number(sec, g, "to_speed_m_s", math.nan)
+                if not (0 <= target <= max_speed) or (target - speed) * accel <= 0:
+                    raise self.fail(
+                        sec,
+                        f"{key}.to_speed_m_s",
+                        f"cannot reach {_show(g['to_speed_m_s'])} m/s from {speed:.6g} m/s at {accel:.6g} m/s^2 "
+                        f"(speeds within [0, {max_speed:.6g}] m/s)",
+                    )
+                duration = (target - speed) / accel
+        if not (duration > 0 and math.isfinite(duration)):
+            raise self.fail(sec, f"{key}.duration_s", f"expected a duration > 0 s, got {_show(g.get('duration_s'))}")
+        if kind == "stop" and speed != 0.0:
+            raise self.fail(
+                sec,
+                key,
+                f"a stop needs the vehicle at rest, it moves at {speed:.6g} m/s "
+                "(brake first: an accelerate segment with to_speed_m_s = 0)",
+            )
+        end = speed + accel * duration
+        if not (-1e-9 <= end <= max_speed):
+            raise self.fail(
+                sec, key, f"the speed after this segment, {end:.6g} m/s, is outside [0, {max_speed:.6g}] m/s"
+            )
+        return Segment(kind=kind, duration_s=duration, accel_m_s2=accel, rate_deg_s=rate)
+
     def read_series_csv(self, value: Any) -> tuple[tuple[float, ...], tuple[float, ...]]:
         sec, key = "temperature", "series_csv"
         if not isinstance(value, str):
@@ -734,6 +900,7 @@ _CORE_KEYS = {
     "drift_k1_rad_s_per_c": ("temperature", "k1_deg_h_per_c"),
     "drift_k2_rad_s_per_c2": ("temperature", "k2_deg_h_per_c2"),
     "drift_k3_rad_s_per_c_per_s": ("temperature", "k3_deg_h_per_c_per_h"),
+    "trajectory": ("trajectory", "segments"),
 }
 """The TOML section and key of each keyword of `gyrodrift._core.SimulatorConfig` (for the core's refusals)."""
 

@@ -12,7 +12,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from gyrodrift.atomic import OutputFolder, output_folder
-from gyrodrift.ins.imu_file import IMU_COLUMNS, core_chunk_to_table, imu_schema
+from gyrodrift.ins.imu_file import core_chunk_to_table, imu_schema
 from gyrodrift.ins.scenario import Scenario
 from gyrodrift.ins.toml_writer import dumps_toml
 from gyrodrift.progress import progress
@@ -35,7 +35,7 @@ speed); byte-stream-split + zstd halves the size (about 40 bytes per sample) at 
 class ImuData:
     """A simulated run held in memory: the imu.parquet columns as numpy arrays, and its scenario.
 
-    ``columns`` maps every name of `gyrodrift.ins.imu_file.IMU_COLUMNS` to a float64 array (units in the
+    ``columns`` maps every name of `gyrodrift.ins.imu_file.imu_columns(scenario)` to a float64 array (units in the
     names). `navigate` accepts an ImuData just like an imu.parquet path.
     """
 
@@ -126,10 +126,10 @@ def simulate(
     bar = progress(scenario.n_samples, "simulate", quiet)
     with bar:
         if out_dir is None:
-            parts: dict[str, list[np.ndarray]] = {c: [] for c in IMU_COLUMNS}
+            parts: dict[str, list[np.ndarray]] = {c: [] for c in schema.names}
             for chunk in iter_core_chunks(scenario, chunk_samples):
                 table = core_chunk_to_table(chunk, schema)
-                for c in IMU_COLUMNS:
+                for c in schema.names:
                     parts[c].append(table.column(c).to_numpy())
                 bar.update(table.num_rows)
             cols = {c: (np.concatenate(v) if v else np.zeros(0)) for c, v in parts.items()}

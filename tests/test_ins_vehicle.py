@@ -1,0 +1,157 @@
+"""Moving base (issue 13): the ``[trajectory]`` section, the simulated route and its truth columns."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from gyrodrift import _core
+from gyrodrift.earth import radii_of_curvature
+from gyrodrift.ins import Scenario, load_scenario, simulate
+from gyrodrift.ins.scenario import DRIVE_H, ScenarioError
+
+ROUTE = [
+    {"kind": "accelerate", "accel_m_s2": 2.0, "to_speed_m_s": 20.0},
+    {"kind": "straight", "duration_s": 120.0},
+    {"kind": "turn", "rate_deg_s": 3.0, "angle_deg": 90.0},
+    {"kind": "straight", "duration_s": 60.0},
+    {"kind": "turn", "rate_deg_s": -6.0, "duration_s": 30.0},
+    {"kind": "accelerate", "accel_m_s2": -2.5, "to_speed_m_s": 0.0},
+    {"kind": "stop", "duration_s": 20.0},
+]
+
+
+def vehicle(**run) -> Scenario:
+    return Scenario.from_dict(
+        {
+            "run": {"rate_hz": 100.0, **run},
+            "rotation": {"scheme": "reciprocating"},
+            "attitude": {"yaw_deg": 25.0},
+            "trajectory": {"static_h": 0.01, "repeat": True, "segments": ROUTE},
+        },
+        source="vehicle.toml",
+    )
+
+
+def test_trajectory_section_resolves_and_round_trips():
+    s = vehicle(duration_h=0.2)
+    tr = s.trajectory
+    assert [g.kind for g in tr.segments] == [g["kind"] for g in ROUTE]
+    assert tr.segments[0].duration_s == pytest.approx(10.0)  # 20 m/s at 2 m/s^2
+    assert tr.segments[2].duration_s == pytest.approx(30.0)  # 90 deg at 3 deg/s
+    assert tr.segments[5].duration_s == pytest.approx(8.0)  # 20 m/s down at 2.5 m/s^2
+    assert Scenario.from_dict(s.to_toml_dict()) == s
+    cfg = s.to_core_config()
+    assert cfg.trajectory_start_s == pytest.approx(36.0) and cfg.trajectory_repeat
+    # Without [run] duration_h the run is the static period plus the 72 h drive.
+    assert Scenario.from_dict({"trajectory": {}}).run.duration_h == 16.0 + DRIVE_H
+    assert Scenario.from_dict({}).trajectory is None
+
+
+@pytest.mark.parametrize(
+    ("trajectory", "message"),
+    [
+        ({"static_h": -1}, "[trajectory] static_h: must be >= 0"),
+        ({"repeat": "yes"}, "[trajectory] repeat: expected true or false"),
+        ({"segments": {"kind": "stop"}}, "[trajectory] segments: expected an array of tables"),
+        ({"segments": [{"kind": "fly"}]}, "[trajectory] segments[0].kind: expected one of"),
+        ({"segments": [{"kind": "straight"}]}, "[trajectory] segments[0].duration_s: expected a duration > 0 s"),
+        ({"segments": [{"kind": "straight", "duration_s": 5, "speed": 3}]}, "segments[0].speed: unknown key"),
+        (
+            {"segments": [{"kind": "turn", "rate_deg_s": 90, "duration_s": 1}]},
+            "segments[0].rate_deg_s: expected a turn",
+        ),
+        ({"segments": [{"kind": "turn", "rate_deg_s": 3}]}, "exactly one of duration_s and angle_deg"),
+        ({"segments": [{"kind": "turn", "rate_deg_s": 3, "angle_deg": -90}]}, "with the sign of rate_deg_s"),
+        ({"segments": [{"kind": "accelerate", "accel_m_s2": 20, "duration_s": 1}]}, "segments[0].accel_m_s2"),
+        ({"segments": [{"kind": "accelerate", "accel_m_s2": -1, "to_speed_m_s": 5}]}, "cannot reach 5 m/s"),
+        ({"segments": [{"kind": "accelerate", "accel_m_s2": 1, "duration_s": 200}]}, "outside [0, 100] m/s"),
+        (
+            {
+                "segments": [
+                    {"kind": "accelerate", "accel_m_s2": 1, "to_speed_m_s": 5},
+                    {"kind": "stop", "duration_s": 9},
+                ]
+            },
+            "segments[1]: a stop needs the vehicle at rest",
+        ),
+        # A repeated route that gains speed every cycle: the core refuses it when it passes 100 m/s.
+        (
+            {"repeat": True, "segments": [{"kind": "accelerate", "accel_m_s2": 1, "to_speed_m_s": 30}]},
+            "[trajectory] segments: segment 1 ends at speed",
+        ),
+    ],
+)
+def test_bad_trajectories_name_the_file_and_key(trajectory, message):
+    with pytest.raises(ScenarioError) as exc:
+        Scenario.from_dict({"trajectory": trajectory}, source="vehicle.toml")
+    assert str(exc.value).startswith("vehicle.toml: [trajectory]")
+    assert message in str(exc.value)
+
+
+def test_a_route_that_would_pass_the_latitude_limit_is_refused(tmp_path):
+    path = tmp_path / "north.toml"
+    path.write_text(
+        '[site]\nlat_deg = 88.5\n[trajectory]\nstatic_h = 0\nsegments = [{kind = "accelerate", accel_m_s2 = 1, '
+        "to_speed_m_s = 30}]\n"
+    )
+    with pytest.raises(ScenarioError, match=r"north.toml: \[trajectory\] segments: the route reaches latitude"):
+        load_scenario(path)
+
+
+def test_truth_columns_follow_the_route():
+    s = vehicle(duration_h=0.1)
+    imu = simulate(s)
+    t = imu["t_s"]
+    speed = np.hypot(imu["true_vel_e_m_s"], imu["true_vel_n_m_s"])
+    assert np.all(speed[t <= 36.0] == 0.0) and np.all(imu["true_lat_deg"][t <= 36.0] == s.site.lat_deg)
+    cruise = (t > 46.01) & (t < 165.99)
+    np.testing.assert_allclose(speed[cruise], 20.0, rtol=0, atol=1e-9)
+    # Heading during the first straight: yaw 25 deg CCW from North, so the vehicle moves north-west.
+    np.testing.assert_allclose(
+        np.degrees(np.arctan2(-imu["true_vel_e_m_s"][cruise], imu["true_vel_n_m_s"][cruise])), 25.0, atol=1e-9
+    )
+    # The position is the integral of the velocity (trapezoid on the 100 Hz samples: mm over the run).
+    lat = np.radians(imu["true_lat_deg"])
+    rm, rn = radii_of_curvature(lat)
+    h = s.site.height_m
+    dt = 1.0 / s.run.rate_hz
+    dlat = np.cumsum(0.5 * dt * (imu["true_vel_n_m_s"][1:] + imu["true_vel_n_m_s"][:-1]) / (rm[1:] + h))
+    north_err_m = (lat[1:] - lat[0] - dlat) * rm[1:]
+    assert np.max(np.abs(north_err_m)) < 1e-3
+    # The IMU yaw is the vehicle's plus the table angle (level mounting).
+    veh_yaw = np.degrees(np.unwrap(np.radians(imu["true_yaw_deg"]))) - imu["table_angle_deg"]
+    wrapped = (veh_yaw - veh_yaw[0] + 180.0) % 360.0 - 180.0
+    assert abs(veh_yaw[0] - 25.0) < 1e-9
+    turned = wrapped[np.searchsorted(t, 196.0)]
+    assert turned == pytest.approx(90.0, abs=1e-6)
+
+
+def test_error_free_imu_navigates_the_route():
+    """The same drive navigated by the core from the true start: metres of error at most after 2 h with turns,
+    stops and a reciprocating table (the 72 h case: crates/gyrodrift-core/tests/vehicle.rs, ignored test)."""
+    s = vehicle(duration_h=2.0)
+    nav = _core.Navigator(
+        _core.NavigatorConfig(
+            lat_rad=math.radians(s.site.lat_deg),
+            lon_rad=math.radians(s.site.lon_deg),
+            height_m=s.site.height_m,
+            pitch_rad=0.0,
+            roll_rad=0.0,
+            yaw_rad=math.radians(25.0),
+            rate_hz=100.0,
+        )
+    )
+    sim = _core.ImuSimulator(s.to_core_config())
+    worst = 0.0
+    while (chunk := sim.next_chunk(200_000)) is not None:
+        out = nav.process(chunk["dtheta_rad"], chunk["dv_m_s"], 100)
+        idx = np.round(np.asarray(out["t_s"]) * 100).astype(int) - (sim.samples_done - len(chunk["t_s"])) - 1
+        lat_t, lon_t = chunk["lat_rad"][idx], chunk["lon_rad"][idx]
+        rm, rn = radii_of_curvature(lat_t)
+        north = (np.asarray(out["lat_rad"]) - lat_t) * rm
+        east = (np.asarray(out["lon_rad"]) - lon_t) * rn * np.cos(lat_t)
+        worst = max(worst, float(np.max(np.hypot(north, east))))
+    assert worst < 0.5, worst
