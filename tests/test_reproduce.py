@@ -38,15 +38,62 @@ def test_files_and_figures(run):
         "fitness_curve.png",
         "pred_vs_true.png",
         "error_per_run.png",
+        "position_error_72h.png",
     ):
         assert (out / name).is_file(), name
     for png in out.glob("*.png"):
         data = png.read_bytes()
         assert data.startswith(PNG_MAGIC) and len(data) > 5000
     html = (out / "report.html").read_text()
-    assert html.count("data:image/png;base64,") == 3
+    assert html.count("data:image/png;base64,") == 4
     md = (out / "report.md").read_text()
     assert "Table 3" in md and "![" in md
+
+
+def test_report_leads_with_the_result_and_marks_the_selected_model(run):
+    out, results = run
+    md = (out / "report.md").read_text()
+    html = (out / "report.html").read_text()
+    chosen = results["selected_by_loo"]["name"]
+    first_table = md.index("> |")
+    assert first_table < md.index("## ")  # the summary box comes before every section
+    box = md[first_table : md.index("\n\n", first_table)]
+    for what in ("test MAE", "max abs error", "gamma", "sigma", "convergence", "72 h position error"):
+        assert what in box, what
+    chosen_entry = next(m for m in results["methods"] if m["name"] == chosen)
+    assert f"| test MAE [deg/h] | 0.000073 (Table 3) | {chosen_entry['test_mae_deg_h']:.6f} |" in box
+    assert f"**{chosen} (selected)**" in md  # its row of the method table
+    assert html.count("class='sel'") > 20 and "class='box'" in html
+    # one number format per column: every cell of a drift column has 6 decimals
+    rows = [line for line in md.splitlines() if line.startswith("| 2") or line.startswith("| 3")]
+    for line in rows:
+        for cell in line.strip("|").split("|")[1:]:
+            assert len(cell.strip("* ").split(".")[1]) == 6, line
+
+
+def test_implied_72h_errors_and_the_fig45_run_agree_with_the_closed_form(run):
+    _, results = run
+    from gyrodrift.baselines import position_error_of_drift_nmi
+
+    # the closed form of method.md: 0.003 deg/h at 28.222 deg -> 5.40 nmi at 72 h, 0.001 deg/h -> 1.80 nmi
+    assert position_error_of_drift_nmi(72 * 3600.0, 0.003, 28.222) == pytest.approx(5.40, abs=0.005)
+    assert position_error_of_drift_nmi(72 * 3600.0, -0.001, 28.222) == pytest.approx(1.80, abs=0.005)
+    for m in results["methods"]:
+        implied = position_error_of_drift_nmi(72 * 3600.0, np.array(m["test_err_deg_h"]), 28.222)
+        assert m["implied_72h_pos_err_nmi_max"] == pytest.approx(implied.max())
+        assert m["implied_72h_pos_err_nmi_mean"] == pytest.approx(implied.mean())
+    f = results["position_error_72h"]
+    chosen = next(m for m in results["methods"] if m["name"] == results["selected_by_loo"]["name"])
+    k = results["data"]["test_runs"].index(f["run"])
+    err = np.abs(chosen["test_err_deg_h"])
+    assert np.sum(err < err[k]) == (len(err) - 1) // 2  # the (lower) median run
+    assert f["true_drift_deg_h"] == results["data"]["test_true_deg_h"][k]
+    for name in ("uncompensated", "selected", "paper"):
+        # the simulated navigation (core, reciprocating table) against the closed form of the residual drift
+        assert f[f"{name}_final_pos_err_nmi"] == pytest.approx(f[f"{name}_closed_form_72h_nmi"], abs=0.01)
+        assert f[f"{name}_max_pos_err_nmi"] >= f[f"{name}_final_pos_err_nmi"]
+        assert len(f["curves"][f"{name}_pos_err_nmi"]) == len(f["curves"]["t_h"])
+    assert f["curves"]["t_h"][-1] == pytest.approx(72.0)
 
 
 def test_schema_and_internal_consistency(run):
@@ -149,4 +196,5 @@ def test_cli_prints_a_summary(tmp_path):
     r = CliRunner().invoke(main, ["reproduce", "--out", str(tmp_path / "r"), "--seed", "1"])
     assert r.exit_code == 0, r.output
     assert "physics inversion" in r.output and "selected by LOO" in r.output
+    assert "wall time" in r.output and "simulated 72 h" in r.output
     assert (tmp_path / "r" / "results.json").exists()

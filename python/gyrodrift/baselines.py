@@ -29,6 +29,27 @@ def latitude_error_at(t_s, drift_deg_h, lat0_deg):
     return eps * np.cos(lat0) / w * (1.0 - np.cos(w * np.asarray(t_s, float))) / ARCSEC
 
 
+def position_error_of_drift_nmi(t_s, drift_deg_h, lat0_deg):
+    """Closed-form horizontal position error [nmi, 1852 m] at time ``t_s`` [s] of a constant residual axial drift
+    [deg/h] on a static base at ``lat0_deg`` (same phi-angle model as `latitude_error_at`).
+
+    north = R_M dL(t), dL(t) = (eps cos L / w_ie)(1 - cos w_ie t); east = R_N cos L dlon(t),
+    dlon(t) = eps sin L (t - sin(w_ie t) / w_ie) (WGS-84 radii at L). At 28.222 deg a residual of 0.001 deg/h
+    gives 1.80 nmi at 72 h. The error is even in the drift's sign.
+    """
+    from gyrodrift.earth import radii_of_curvature
+    from gyrodrift.units import NMI_M
+
+    eps = np.asarray(drift_deg_h, float) * DEG_PER_H
+    lat0 = np.asarray(lat0_deg, float) * DEG
+    t = np.asarray(t_s, float)
+    w = OMEGA_IE_RAD_S
+    r_m, r_n = radii_of_curvature(lat0)
+    north = r_m * eps * np.cos(lat0) / w * (1.0 - np.cos(w * t))
+    east = r_n * np.cos(lat0) * eps * np.sin(lat0) * (t - np.sin(w * t) / w)
+    return np.hypot(north, east) / NMI_M
+
+
 def physics_inversion(runs: RunTable, t_h: float = 12.0) -> np.ndarray:
     """Axial drift [deg/h] from the latitude error at ``t_h`` hours, exact inversion of ``latitude_error_at``."""
     w = OMEGA_IE_RAD_S

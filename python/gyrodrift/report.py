@@ -66,7 +66,7 @@ def short_name(m: dict) -> str:
     return f"{label} ({m['encoding']})" if m.get("encoding") else label
 
 
-REPORT_FIGURES = ("fitness_curve", "pred_vs_true", "error_per_run")
+REPORT_FIGURES = ("fitness_curve", "pred_vs_true", "error_per_run", "position_error_72h")
 """The report's figures, written as ``<name>.png``."""
 REPORT_FILES = ("results.json", "report.md", "report.html") + tuple(f"{name}.png" for name in REPORT_FIGURES)
 """The files of a reproduction output, published together (`gyrodrift.reproduce.reproduce`)."""
@@ -78,43 +78,125 @@ def _png(fig) -> bytes:
     return buffer.getvalue()
 
 
+METHOD_COLOURS = {
+    "cpso_loo": "C0",
+    "cpso_paper": "C1",
+    "physics_inversion": "C2",
+    "latitude_line": "C4",
+    "grid_loo": "C5",
+    "paper_params": "C7",
+    "physics_encoding": "C8",
+    "pso_loo": "C6",
+}
+"""One colour per method family in every figure; the paper's claims are black, an uncompensated navigation red
+(`gyrodrift.procedure.figures.BEFORE_COLOUR`, never a method's colour)."""
+PAPER_COLOUR = "k"
+ENCODING_STYLES = {"temp_range": "-", "temp_mean": "--", "temp_span": ":"}
+"""Line style per encoding where one family is drawn for several encodings."""
+BUDGET_DEG_H = 0.0005
+"""The identification error that leaves about 1 nmi after 72 h (0.9 nmi at 28.222 deg)."""
+
+
+def method_colour(m: dict) -> str:
+    """The colour of a method in every figure (by family)."""
+    return METHOD_COLOURS.get(m["family"], "C9")
+
+
+def selected_method(results: dict) -> dict:
+    """The model selected by leave-one-out error (``selected_by_loo``)."""
+    name = results["selected_by_loo"]["name"]
+    return next(m for m in results["methods"] if m["name"] == name)
+
+
+def _label(m: dict, chosen: dict) -> str:
+    return short_name(m) + (" (selected)" if m is chosen else "")
+
+
 def make_figures(results: dict) -> dict[str, bytes]:
     """The report's PNG figures, {name: PNG bytes} for the names in `REPORT_FIGURES`."""
     from matplotlib.figure import Figure  # object API: no pyplot state, the caller's backend untouched
 
+    from gyrodrift.procedure.figures import BEFORE_COLOUR, one_nmi_line
+
     claims = results["paper_claims"]
     true = np.array(results["data"]["test_true_deg_h"])
     runs = results["data"]["test_runs"]
+    chosen = selected_method(results)
     out = {}
 
-    fig = Figure(figsize=(11, 4))
+    fig = Figure(figsize=(11, 4.2))
     axes = fig.subplots(1, 2)
+    paper_iter = claims["fitness_converged_after_iterations"]
     for m in results["methods"]:
         if m["family"] == "cpso_paper":
-            axes[0].semilogy(np.arange(1, len(m["fitness_history"]) + 1), m["fitness_history"], label=m["encoding"])
-    axes[0].axhline(claims["fitness"], color="k", ls="--", lw=1, label=f"paper's claim {claims['fitness']:.3e}")
+            h = m["fitness_history"]
+            mine = m["encoding"] == chosen["encoding"]
+            conv = m.get("converged_iteration")
+            axes[0].semilogy(
+                np.arange(1, len(h) + 1),
+                h,
+                color=method_colour(m),
+                ls=ENCODING_STYLES.get(m["encoding"], "-"),
+                lw=2.2 if mine else 1.2,
+                label=f"{m['encoding']}{' (selected)' if mine else ''}: within 1 % of final at it. {conv}",
+            )
+            if conv:
+                axes[0].plot([conv], [h[conv - 1]], "o", color=method_colour(m), ms=5)
+    axes[0].axhline(
+        claims["fitness"], color=PAPER_COLOUR, ls="--", lw=1, label=f"paper's fitness {claims['fitness']:.3e}"
+    )
+    axes[0].axvline(paper_iter, color=PAPER_COLOUR, ls=":", lw=1)
+    axes[0].annotate(
+        f"paper: converged after ~{paper_iter} iterations",
+        xy=(paper_iter, 0.8),
+        xycoords=("data", "axes fraction"),
+        xytext=(4, 0),
+        textcoords="offset points",
+        va="center",
+        fontsize=8,
+    )
     axes[0].set(
         xlabel="iteration", ylabel="fitness: train MAE [deg/h]", title="CPSO, paper settings (cf. paper Fig. 3)"
     )
-    axes[0].legend(fontsize=8)
+    axes[0].legend(fontsize=7, loc="center left", title="CPSO-paper", title_fontsize=7)
     for m in results["methods"]:
         if m["family"] in ("cpso_loo", "pso_loo") and m["fitness_history"]:
             h = np.asarray(m["fitness_history"])
             evals = np.linspace(m["nfev"] / len(h), m["nfev"], len(h))
-            axes[1].plot(evals, h, ls="-" if m["family"] == "cpso_loo" else ":", label=short_name(m))
+            axes[1].plot(
+                evals,
+                h,
+                color=method_colour(m),
+                ls=ENCODING_STYLES.get(m["encoding"], "-"),
+                lw=2.2 if m is chosen else 1.2,
+                label=_label(m, chosen),
+            )
     axes[1].set(xlabel="objective evaluations", ylabel="LOO MAE [deg/h]", title="chaos vs plain PSO, equal budget")
     axes[1].legend(fontsize=7)
     fig.tight_layout()
     out["fitness_curve"] = _png(fig)
 
     shown = key_methods(results)
-    fig = Figure(figsize=(5.5, 5))
+    fig = Figure(figsize=(6, 5.5))
     ax = fig.subplots()
     lim = 1.15 * max(np.abs(true).max(), max(np.abs(m["test_pred_deg_h"]).max() for m in shown))
-    ax.plot([-lim, lim], [-lim, lim], color="0.6", lw=1)
-    ax.scatter(true, claims["test_pred_deg_h"], marker="x", color="k", label="paper's Table 3 (claimed)")
+    diag = np.array([-lim, lim])
+    ax.fill_between(
+        diag, diag - BUDGET_DEG_H, diag + BUDGET_DEG_H, color="0.85", label=f"+-{BUDGET_DEG_H} deg/h (~1 nmi / 72 h)"
+    )
+    ax.plot(diag, diag, color="0.5", lw=1)
+    ax.scatter(true, claims["test_pred_deg_h"], marker="x", color=PAPER_COLOUR, label="paper's Table 3 (claimed)")
     for m in shown:
-        ax.scatter(true, m["test_pred_deg_h"], s=18, label=short_name(m))
+        sel = m is chosen
+        ax.scatter(
+            true,
+            m["test_pred_deg_h"],
+            s=60 if sel else 18,
+            color=method_colour(m),
+            edgecolors="k" if sel else "none",
+            zorder=3 if sel else 2,
+            label=_label(m, chosen),
+        )
     ax.set(
         xlabel="true drift [deg/h]",
         ylabel="identified drift [deg/h]",
@@ -122,25 +204,67 @@ def make_figures(results: dict) -> dict[str, bytes]:
         xlim=(-lim, lim),
         ylim=(-lim, lim),
     )
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=7, loc="upper left")
     fig.tight_layout()
     out["pred_vs_true"] = _png(fig)
 
-    fig = Figure(figsize=(10, 4))
+    fig = Figure(figsize=(10, 4.2))
     ax = fig.subplots()
     width = 0.8 / (len(shown) + 1)
     x = np.arange(len(runs))
-    true_minus_claim = true - np.array(claims["test_pred_deg_h"])
-    ax.bar(x, true_minus_claim, width, color="k", label="paper (true - Table 3 prediction)")
+    ax.axhspan(-BUDGET_DEG_H, BUDGET_DEG_H, color="0.9", zorder=0, label=f"+-{BUDGET_DEG_H} deg/h (~1 nmi / 72 h)")
+    ax.bar(x, true - np.array(claims["test_pred_deg_h"]), width, color=PAPER_COLOUR, label="paper (true - Table 3)")
     for i, m in enumerate(shown, start=1):
-        ax.bar(x + i * width, m["test_err_deg_h"], width, label=short_name(m))
-    ax.axhline(0.0005, color="r", ls="--", lw=1)
-    ax.axhline(-0.0005, color="r", ls="--", lw=1, label="+-0.0005 deg/h (1 nmi / 72 h budget)")
+        sel = m is chosen
+        ax.bar(
+            x + i * width,
+            m["test_err_deg_h"],
+            width,
+            color=method_colour(m),
+            edgecolor="k" if sel else "none",
+            linewidth=1.2 if sel else 0,
+            label=_label(m, chosen),
+        )
+    ax.axhline(0.0, color="0.4", lw=0.8)
     ax.set_xticks(x + 0.4 - width / 2, runs)
     ax.set(xlabel="test run", ylabel="error, true - identified [deg/h]", title="identification error per test run")
     ax.legend(fontsize=7, ncol=2)
     fig.tight_layout()
     out["error_per_run"] = _png(fig)
+
+    f45 = results["position_error_72h"]
+    c = f45["curves"]
+    t_h = np.asarray(c["t_h"])
+    fig = Figure(figsize=(8, 4.5))
+    ax = fig.subplots()
+    d = f45["compensated_drift_deg_h"]
+    rows = (
+        ("uncompensated", BEFORE_COLOUR, "-", "no axial drift compensated"),
+        ("selected", method_colour(chosen), "-", f"{d['selected']:.6f} deg/h from {short_name(chosen)} (selected)"),
+        ("paper", PAPER_COLOUR, "--", f"{d['paper']:.6f} deg/h from the paper's Table 3"),
+    )
+    for key, colour, ls, what in rows:
+        ax.plot(
+            t_h,
+            c[f"{key}_pos_err_nmi"],
+            color=colour,
+            ls=ls,
+            lw=2.0 if key == "selected" else 1.3,
+            label=f"{what} (final {f45[f'{key}_final_pos_err_nmi']:.2f} nmi, "
+            f"max {f45[f'{key}_max_pos_err_nmi']:.2f} nmi)",
+        )
+    one_nmi_line(ax)
+    ax.set(
+        xlabel="time since start of navigation [h]",
+        ylabel="position error [nmi]",
+        title=f"test run {f45['run']} (true drift {f45['true_drift_deg_h']:.6f} deg/h), simulated at "
+        f"{f45['lat_deg']} deg, {f45['rate_hz']:g} Hz (cf. paper Fig. 4/5)",
+    )
+    ax.title.set_fontsize(9)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7, loc="upper left")
+    fig.tight_layout()
+    out["position_error_72h"] = _png(fig)
     return out
 
 
@@ -217,18 +341,106 @@ def conclusion(results: dict) -> list[str]:
     return paras
 
 
+def _col(fmt: str):
+    """A column formatter: one format for every number of the column, "-" for a missing value."""
+
+    def f(x) -> str:
+        if x is None or (isinstance(x, float) and not np.isfinite(x)):
+            return "-"
+        return format(x, fmt)
+
+    return f
+
+
+DRIFT = _col(".6f")  # deg/h: predictions, errors, MAEs of the order of 1e-4
+SCI = _col(".3e")  # quantities spanning decades: gamma, sigma, train-MAE fitness
+NMI = _col(".2f")
+COUNT = _col("d")
+
+
+def summary_box(results: dict) -> tuple:
+    """The box at the top of the report: the paper's claims beside the selected model's results."""
+    claims = results["paper_claims"]
+    true = np.array(results["data"]["test_true_deg_h"])
+    claim_err = true - np.array(claims["test_pred_deg_h"])
+    chosen = selected_method(results)
+    twin = _method(results, "cpso_paper", chosen["encoding"])
+    implied = results["paper_implied_72h_pos_err_nmi"]
+    f45 = results["position_error_72h"]
+    rows = [
+        ["test MAE [deg/h]", DRIFT(float(np.mean(np.abs(claim_err)))) + " (Table 3)", DRIFT(chosen["test_mae_deg_h"])],
+        [
+            "test max abs error [deg/h]",
+            f"{DRIFT(float(np.max(np.abs(claim_err))))} (claimed: all within {claims['claimed_accuracy_deg_h']:.4f})",
+            DRIFT(chosen["test_max_abs_err_deg_h"]),
+        ],
+        [
+            "72 h position error implied by the test errors, mean / max [nmi]",
+            f"{NMI(implied['mean'])} / {NMI(implied['max'])}",
+            f"{NMI(chosen['implied_72h_pos_err_nmi_mean'])} / {NMI(chosen['implied_72h_pos_err_nmi_max'])}",
+        ],
+        [
+            f"72 h position error of test run {f45['run']}, simulated, compensated (uncompensated: "
+            f"{NMI(f45['uncompensated_max_pos_err_nmi'])}) [nmi, max]",
+            NMI(f45["paper_max_pos_err_nmi"]),
+            NMI(f45["selected_max_pos_err_nmi"]),
+        ],
+        ["gamma (regularisation)", SCI(claims["gamma"]), SCI(chosen["gamma"]) + " (standardised inputs)"],
+        ["sigma (RBF width)", SCI(claims["sigma"]), SCI(chosen["sigma"]) + " (standardised inputs)"],
+        [
+            "fitness: train MAE of the paper-settings swarm [deg/h]",
+            SCI(claims["fitness"]),
+            SCI(twin["fitness"]) + f" ({twin['encoding']}; the selected model's LOO MAE: "
+            f"{DRIFT(chosen['loo_mae_deg_h'])})"
+            if twin
+            else "-",
+        ],
+        [
+            "convergence [iterations]",
+            f"~{claims['fitness_converged_after_iterations']}",
+            f"{twin['converged_iteration'] if twin else '-'} (paper settings), {chosen['converged_iteration']} "
+            "(selected); within 1 % of the final fitness",
+        ],
+    ]
+    note = (
+        f"Selected without test data: {chosen['name']}. Implied errors: the closed-form 72 h position error of a "
+        f"residual drift equal to each test error at {results['data']['lat0_deg']} deg (0.0005 deg/h leaves 0.90 "
+        "nmi). Simulated run: the test run with the median error of the selected model, noise-free, 10 Hz "
+        "(figure position_error_72h.png)."
+    )
+    return (
+        "box",
+        "Result: the paper's claims beside this reproduction",
+        ["", "paper (claimed)", "reproduced"],
+        rows,
+        note,
+    )
+
+
 def report_blocks(results: dict, figures: dict[str, Path]) -> list[tuple]:
-    """The report as blocks: ("h1"|"h2", text), ("p", text), ("table", header, rows), ("img", path, caption)."""
+    """The report as blocks: ("h1"|"h2", text), ("p", text), ("box", title, header, rows, note),
+    ("table", header, rows, highlighted row indices, highlighted column indices), ("img", path, caption).
+
+    The selected model is highlighted in every table (its row or columns) and every figure.
+    """
     claims = results["paper_claims"]
     true = results["data"]["test_true_deg_h"]
     shown = key_methods(results)
+    chosen = selected_method(results)
+    sel_cols = {4 + i for i, m in enumerate(shown) if m is chosen} | {
+        4 + len(shown) + i for i, m in enumerate(shown) if m is chosen
+    }
+    methods = results["methods"]
     blocks: list[tuple] = [
         ("h1", "gyrodrift reproduce: CPSO-LSSVM axial drift identification (Yu et al. 2013)"),
+        summary_box(results),
         (
             "p",
-            f"gyrodrift {results['gyrodrift_version']}, seed {results['seed']}, "
-            f"{results['elapsed_s']:.1f} s. Trained on the paper's 22 training runs, tested on its 10 test runs "
-            f"(site latitude {results['data']['lat0_deg']} deg). Drifts in deg/h; errors are true minus identified.",
+            f"gyrodrift {results['gyrodrift_version']}, seed {results['seed']}, methods computed in "
+            f"{results['elapsed_s']:.1f} s (wall time). Trained on the paper's 22 training runs, tested on its 10 "
+            f"test runs (site latitude {results['data']['lat0_deg']} deg). Drifts in deg/h; errors are true minus "
+            "identified. The selected model is marked in bold (highlighted in the HTML) in every table and drawn "
+            "thicker or outlined in every figure; each method keeps one colour in every figure.",
         ),
         ("h2", "How the inputs were encoded and scaled"),
         (
@@ -243,50 +455,89 @@ def report_blocks(results: dict, figures: dict[str, Path]) -> list[tuple]:
             + results["selected_by_loo"]["rule"]
             + f" -> {results['selected_by_loo']['name']}.",
         ),
-        ("h2", "Identification of the test runs (cf. the paper's Table 3)"),
+        ("h2", "Identification of the test runs (cf. the paper's Table 3) [deg/h]"),
         (
             "table",
             ["run", "true", "paper pred (claimed)", "paper err (published)"]
-            + [f"{short_name(m)} pred" for m in shown]
-            + [f"{short_name(m)} err" for m in shown],
+            + [f"{_label(m, chosen)} pred" for m in shown]
+            + [f"{_label(m, chosen)} err" for m in shown],
             [
-                [run, _fmt(true[i]), _fmt(claims["test_pred_deg_h"][i]), _fmt(claims["test_err_deg_h"][i])]
-                + [_fmt(m["test_pred_deg_h"][i]) for m in shown]
-                + [_fmt(m["test_err_deg_h"][i]) for m in shown]
+                [run, DRIFT(true[i]), DRIFT(claims["test_pred_deg_h"][i]), DRIFT(claims["test_err_deg_h"][i])]
+                + [DRIFT(m["test_pred_deg_h"][i]) for m in shown]
+                + [DRIFT(m["test_err_deg_h"][i]) for m in shown]
                 for i, run in enumerate(results["data"]["test_runs"])
             ],
+            set(),
+            sel_cols,
         ),
         ("h2", "Every method"),
         (
+            "p",
+            "Errors and MAEs in deg/h; gamma and sigma in standardised input units; 'converged' is the first "
+            "iteration within 1 % of the final fitness; the 72 h columns are the closed-form position errors the "
+            "10 test errors imply at the paper's latitude (mean and max).",
+        ),
+        (
             "table",
-            ["method", "gamma", "sigma", "evaluations", "train MAE", "LOO MAE", "test MAE", "test max |err|"],
+            [
+                "method",
+                "gamma",
+                "sigma",
+                "evaluations",
+                "converged",
+                "train MAE",
+                "LOO MAE",
+                "test MAE",
+                "test max abs err",
+                "72 h mean [nmi]",
+                "72 h max [nmi]",
+            ],
             [
                 [
-                    m["name"],
-                    _fmt(m.get("gamma")) + (" (bound)" if "gamma" in m.get("on_search_bound", ()) else ""),
-                    _fmt(m.get("sigma")) + (" (bound)" if "sigma" in m.get("on_search_bound", ()) else ""),
-                    str(m.get("nfev", "-")) if m.get("nfev") else "-",
-                    _fmt(m["train_mae_deg_h"]),
-                    _fmt(m.get("loo_mae_deg_h")),
-                    _fmt(m["test_mae_deg_h"]),
-                    _fmt(m["test_max_abs_err_deg_h"]),
+                    m["name"] + (" (selected)" if m is chosen else ""),
+                    SCI(m.get("gamma")) + (" (bound)" if "gamma" in m.get("on_search_bound", ()) else ""),
+                    SCI(m.get("sigma")) + (" (bound)" if "sigma" in m.get("on_search_bound", ()) else ""),
+                    COUNT(m.get("nfev") or None),
+                    COUNT(m.get("converged_iteration")),
+                    SCI(m["train_mae_deg_h"]),
+                    DRIFT(m.get("loo_mae_deg_h")),
+                    DRIFT(m["test_mae_deg_h"]),
+                    DRIFT(m["test_max_abs_err_deg_h"]),
+                    NMI(m["implied_72h_pos_err_nmi_mean"]),
+                    NMI(m["implied_72h_pos_err_nmi_max"]),
                 ]
-                for m in results["methods"]
+                for m in methods
             ],
+            {i for i, m in enumerate(methods) if m is chosen},
+            set(),
         ),
         ("h2", "Figures"),
         (
             "img",
-            figures["fitness_curve"],
-            "Fitness per iteration of the paper-settings CPSO (left; paper Fig. 3) "
-            "and LOO MAE against evaluations, chaos vs plain PSO (right).",
+            figures["position_error_72h"],
+            "72 h position error of a representative test run simulated at the paper's latitude: uncompensated, "
+            "with the selected model's drift and with the paper's Table 3 drift compensated (the paper's Fig. 4/5).",
         ),
-        ("img", figures["pred_vs_true"], "Identified vs true drift on the 10 test runs."),
-        ("img", figures["error_per_run"], "Error per test run; dashed red: the 0.0005 deg/h budget."),
+        (
+            "img",
+            figures["fitness_curve"],
+            "Fitness per iteration of the paper-settings CPSO with the paper's ~55 iterations marked (left; paper "
+            "Fig. 3) and LOO MAE against evaluations, chaos vs plain PSO (right).",
+        ),
+        (
+            "img",
+            figures["pred_vs_true"],
+            "Identified vs true drift on the 10 test runs; grey band: +-0.0005 deg/h around the diagonal.",
+        ),
+        ("img", figures["error_per_run"], "Error per test run; grey band: the +-0.0005 deg/h budget."),
         ("h2", "Conclusion"),
     ]
     blocks += [("p", p) for p in conclusion(results)]
     return blocks
+
+
+def _md_cell(text: str, bold: bool) -> str:
+    return f"**{text}**" if bold and text else text
 
 
 def render_markdown(blocks: list[tuple]) -> str:
@@ -298,10 +549,21 @@ def render_markdown(blocks: list[tuple]) -> str:
             lines += [f"## {b[1]}", ""]
         elif b[0] == "p":
             lines += [b[1], ""]
+        elif b[0] == "box":
+            _, title, header, rows, note = b
+            lines += [f"> **{title}**", ">"]
+            lines.append("> | " + " | ".join(header) + " |")
+            lines.append("> |" + "---|" * len(header))
+            lines += ["> | " + " | ".join(row) + " |" for row in rows]
+            lines += [">", f"> {note}", ""]
         elif b[0] == "table":
-            lines.append("| " + " | ".join(b[1]) + " |")
-            lines.append("|" + "---|" * len(b[1]))
-            lines += ["| " + " | ".join(row) + " |" for row in b[2]]
+            _, header, rows, hl_rows, hl_cols = b
+            lines.append("| " + " | ".join(_md_cell(h, j in hl_cols) for j, h in enumerate(header)) + " |")
+            lines.append("|" + "---|" * len(header))
+            lines += [
+                "| " + " | ".join(_md_cell(c, i in hl_rows or j in hl_cols) for j, c in enumerate(row)) + " |"
+                for i, row in enumerate(rows)
+            ]
             lines.append("")
         elif b[0] == "img":
             lines += [f"![{b[2]}]({Path(b[1]).name})", "", f"*{b[2]}*", ""]
@@ -314,17 +576,39 @@ def render_html(blocks: list[tuple], images: dict[str, bytes]) -> str:
         "<!DOCTYPE html><html><head><meta charset='utf-8'><title>gyrodrift reproduce</title>",
         "<style>body{font-family:sans-serif;max-width:1100px;margin:2em auto;line-height:1.4}"
         "table{border-collapse:collapse;font-size:12px}td,th{border:1px solid #bbb;padding:2px 6px;text-align:right}"
-        "td:first-child{text-align:left}img{max-width:100%}</style></head><body>",
+        "td:first-child{text-align:left}img{max-width:100%}.sel{background:#fff2b3;font-weight:bold}"
+        ".box{border:2px solid #333;background:#f4f7fb;padding:0.6em 1em;margin:1em 0}"
+        ".box table{font-size:13px}.box p{font-size:12px}</style></head><body>",
     ]
+
+    def cls(on: bool) -> str:
+        return " class='sel'" if on else ""
+
     for b in blocks:
         if b[0] in ("h1", "h2"):
             parts.append(f"<{b[0]}>{html.escape(b[1])}</{b[0]}>")
         elif b[0] == "p":
             parts.append(f"<p>{html.escape(b[1])}</p>")
-        elif b[0] == "table":
-            parts.append("<table><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in b[1]) + "</tr>")
-            for row in b[2]:
+        elif b[0] == "box":
+            _, title, header, rows, note = b
+            parts.append(f"<div class='box'><h2>{html.escape(title)}</h2><table><tr>")
+            parts.append("".join(f"<th>{html.escape(h)}</th>" for h in header) + "</tr>")
+            for row in rows:
                 parts.append("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in row) + "</tr>")
+            parts.append(f"</table><p>{html.escape(note)}</p></div>")
+        elif b[0] == "table":
+            _, header, rows, hl_rows, hl_cols = b
+            parts.append(
+                "<table><tr>"
+                + "".join(f"<th{cls(j in hl_cols)}>{html.escape(h)}</th>" for j, h in enumerate(header))
+                + "</tr>"
+            )
+            for i, row in enumerate(rows):
+                parts.append(
+                    f"<tr{cls(i in hl_rows)}>"
+                    + "".join(f"<td{cls(j in hl_cols)}>{html.escape(c)}</td>" for j, c in enumerate(row))
+                    + "</tr>"
+                )
             parts.append("</table>")
         elif b[0] == "img":
             data = base64.b64encode(images[Path(b[1]).name]).decode()
@@ -350,16 +634,31 @@ def write_report(results: dict, stage: Stage) -> None:
 
 def summary_lines(results: dict) -> list[str]:
     """A one-screen terminal summary."""
-    lines = [f"{'method':<72} {'test MAE':>10} {'max|err|':>10} {'LOO MAE':>10}"]
+    chosen = selected_method(results)
+    lines = [
+        f"  {'method [deg/h; 72 h: nmi implied, mean]':<72} {'test MAE':>10} {'max|err|':>10} {'LOO MAE':>10} "
+        f"{'72 h':>6}"
+    ]
     for m in results["methods"]:
         if m["family"] == "paper_params" and m.get("scaling") != "standard":
             continue
+        mark = "* " if m is chosen else "  "
         lines.append(
-            f"{m['name'][:72]:<72} {_fmt(m['test_mae_deg_h']):>10} {_fmt(m['test_max_abs_err_deg_h']):>10} "
-            f"{_fmt(m.get('loo_mae_deg_h')):>10}"
+            f"{mark}{m['name'][:72]:<72} {DRIFT(m['test_mae_deg_h']):>10} {DRIFT(m['test_max_abs_err_deg_h']):>10} "
+            f"{DRIFT(m.get('loo_mae_deg_h')):>10} {NMI(m['implied_72h_pos_err_nmi_mean']):>6}"
         )
     true = np.array(results["data"]["test_true_deg_h"])
-    paper_mae = float(np.mean(np.abs(true - np.array(results["paper_claims"]["test_pred_deg_h"]))))
-    lines.append(f"{'paper Table 3 (claimed)':<72} {_fmt(paper_mae):>10}")
-    lines.append(f"selected by LOO (no test data): {results['selected_by_loo']['name']}")
+    claim_err = true - np.array(results["paper_claims"]["test_pred_deg_h"])
+    lines.append(
+        f"  {'paper Table 3 (claimed)':<72} {DRIFT(float(np.mean(np.abs(claim_err)))):>10} "
+        f"{DRIFT(float(np.max(np.abs(claim_err)))):>10} {'':>10} "
+        f"{NMI(results['paper_implied_72h_pos_err_nmi']['mean']):>6}"
+    )
+    f45 = results["position_error_72h"]
+    lines.append(f"* selected by LOO (no test data): {chosen['name']}")
+    lines.append(
+        f"test run {f45['run']} simulated 72 h at {f45['lat_deg']} deg: max position error "
+        f"{NMI(f45['uncompensated_max_pos_err_nmi'])} nmi uncompensated, {NMI(f45['selected_max_pos_err_nmi'])} nmi "
+        f"with the selected model, {NMI(f45['paper_max_pos_err_nmi'])} nmi with the paper's Table 3 drift"
+    )
     return lines

@@ -377,9 +377,12 @@ def predict(data, model_file, out, coverage, lat0_deg, split, as_json, fmt, quie
 @quiet_option
 def reproduce(out_dir, seed, as_json, quiet):
     """Reproduce the paper's experiment on its embedded data, with baselines and a report."""
+    import time
+
     from gyrodrift.report import summary_lines
     from gyrodrift.reproduce import reproduce as run
 
+    started = time.monotonic()  # wall time of the whole command: tuning, the 72 h simulation, figures, writing
     results = run(out_dir, seed=seed, quiet=quiet)  # checks out_dir before the work
     if as_json:
         print_json(results)
@@ -391,7 +394,7 @@ def reproduce(out_dir, seed, as_json, quiet):
         [f"{out_dir}/{name}" for name in names],
         quiet=quiet,
         as_json=as_json,
-        detail=f"and the figures; {results['elapsed_s']:.1f} s",
+        detail=f"and the figures; wall time {time.monotonic() - started:.1f} s",
     )
 
 
