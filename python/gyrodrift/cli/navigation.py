@@ -155,8 +155,9 @@ _INITIAL_WORDS = {
     "out_dir",
     required=True,
     type=click.Path(path_type=Path),
-    help="Folder receiving nav.parquet and summary.json: new, empty, or holding only gyrodrift's outputs, "
-    "e.g. the simulation's own folder (docs/outputs.md). Required.",
+    help="Folder receiving nav.parquet (the curves: state and errors every 1 s) and summary.json, and "
+    "navigation.png with --plot: new, empty, or holding only gyrodrift's outputs, e.g. the simulation's own "
+    "folder (docs/outputs.md). Required.",
 )
 @click.option(
     "--plot",

@@ -214,7 +214,8 @@ def truth_command(log, criterion, hours, lat0_deg, lon0_deg, height_m, log_forma
     "out_dir",
     required=True,
     type=click.Path(path_type=Path),
-    help="Folder for evaluation.json and position_error.png: new, empty, or holding only gyrodrift's outputs "
+    help="Folder for evaluation.json, position_error.png and its curves position_error.parquet (before/after, "
+    "t_h, lat/lon errors [arcsec], position error [nmi]): new, empty, or holding only gyrodrift's outputs "
     "(docs/outputs.md). Required.",
 )
 @click.option(
