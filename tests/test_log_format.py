@@ -269,3 +269,22 @@ def test_navigate_cli_reads_a_formatted_log_and_plots(simulated, tmp_path):
     assert len(lat) >= len(ref["lat_err_arcsec"]) - 1
     np.testing.assert_allclose(lat, ref["lat_err_arcsec"][: len(lat)], atol=0.02)
     assert got.column("yaw_err_arcsec").null_count == 0
+
+
+def test_features_of_a_formatted_log_equal_the_native_logs(tmp_path):
+    """The procedure reads through the same reader: features (alignment + navigation) of the ';' CSV export in
+    deg/s and g equal those of the native log (the CLI's --format goes the same way)."""
+    from gyrodrift.procedure import features_table
+    from gyrodrift.procedure.timeline import Timeline
+
+    scn = Scenario.from_dict({**SCENARIO, "run": {"duration_h": 1.15, "rate_hz": 5.0, "seed": 4}})
+    native = simulate(scn, out_dir=tmp_path / "sim", quiet=True)
+    table = pq.read_table(native)
+    csv_path = MAKE.to_degs_csv({c: table.column(c).to_numpy() for c in table.column_names}, 5.0, tmp_path / "x.csv")
+    short = Timeline(align_h=0.1, features_h=1.0, truth_h=1.0, coarse_s=60.0)
+    site = {"lat_deg": 28.222, "lon_deg": 112.99, "height_m": 50.0}
+    (ref,) = features_table([native], timeline=short)
+    (got,) = features_table([csv_path], log_format=CSV_FORMAT, site=site, timeline=short)
+    assert got.lat_deg == pytest.approx(ref.lat_deg, abs=1e-10)
+    assert got.lat_err_arcsec == pytest.approx(ref.lat_err_arcsec, abs=1e-5)
+    assert got.temp_end_c == pytest.approx(ref.temp_end_c, abs=1e-4)
