@@ -122,3 +122,25 @@ def test_quiet_writes_nothing_and_json_keeps_stdout_parseable(tmp_path):
     assert r.exit_code == 0, r.output
     assert json.loads(r.stdout)["initial_source"] == "truth"
     assert r.stderr.startswith(f"wrote {out / 'nav.parquet'}, {out / 'summary.json'} (")
+
+
+def test_the_paper_table_as_a_cli_run_table(tmp_path):
+    """`load_paper().runs.to_csv` (the README's way) gives a table `fit --split train` and `predict` read as is."""
+    import gyrodrift as gd
+    from gyrodrift.runs import read_runs_csv
+
+    paper = gd.load_paper().runs
+    path = tmp_path / "paper.csv"
+    paper.to_csv(path)
+    back = read_runs_csv(path, require_truth=True)  # lat0_deg is a column now: no --lat0-deg needed
+    for name in ("run", "split", "lat_deg", "lat0_deg", "temp_min_c", "temp_max_c", "drift_deg_h"):
+        assert list(getattr(back, name)) == list(getattr(paper, name)), name
+    model = tmp_path / "model.json"
+    r = CliRunner().invoke(main, ["fit", str(path), "--split", "train", "--method", "grid", "--out", str(model)])
+    assert r.exit_code == 0 and "fitted on 22 runs" in r.stdout, r.output
+    r = CliRunner().invoke(main, ["predict", str(path), "--split", "test", "--model", str(model)])
+    assert r.exit_code == 0 and len(r.stdout.splitlines()) == 11, r.output
+    (tmp_path / "notes.csv").write_text("my notes\n")
+    with pytest.raises(OSError, match="notes.csv"):
+        paper.to_csv(tmp_path / "notes.csv")  # replaces only a run table
+    assert (tmp_path / "notes.csv").read_text() == "my notes\n"

@@ -70,7 +70,11 @@ def test_range_cells_and_lat0_column(tmp_path):
         ),
         ("run,temp_min_c,temp_max_c\n1,1,2\n", {"lat0_deg": 28.0}, r"row 1: missing column 'lat_deg'"),
         ("run,lat_deg\n1,28\n", {"lat0_deg": 28.0}, r"row 1: missing temperature columns"),
-        ("run,lat_deg,temp_min_c,temp_max_c\n1,28,1,2\n", {}, r"no lat0_deg column and no site latitude"),
+        (
+            "run,lat_deg,temp_min_c,temp_max_c\n1,28,1,2\n",
+            {},
+            r"no lat0_deg column; give the site latitude \(--lat0-deg",
+        ),
         (
             "run,lat_deg,temp_min_c,temp_max_c\n1,28,1,2\n",
             {"lat0_deg": 28.0, "require_truth": True},

@@ -352,8 +352,10 @@ def atomic_write(
 
     Examples
     --------
-    >>> with atomic_write("result.csv") as fh:   # doctest: +SKIP
-    ...     fh.write("a,b\\n1,2\\n")
+    >>> with atomic_write("result.csv") as fh:
+    ...     _ = fh.write("a,b\\n1,2\\n")
+    >>> open("result.csv").read()
+    'a,b\\n1,2\\n'
     """
     if mode not in ("w", "wb"):
         raise ValueError(f"atomic_write: mode must be 'w' or 'wb', got {mode!r}")

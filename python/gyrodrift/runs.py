@@ -284,6 +284,31 @@ class RunTable:
             out.append(rec)
         return out
 
+    def to_csv(self, path) -> None:
+        """Write the table as a run-table CSV that `read_runs_csv` (and ``gyrodrift fit``/``predict``) reads back
+        to an equal table: ``run, split, lat_deg, lat0_deg, temp_min_c, temp_max_c, drift_deg_h`` and the optional
+        columns the table has (empty cells where unknown; floats written in full precision).
+
+        The file is written atomically and replaces only a run table (a file starting ``run,``).
+
+        >>> import gyrodrift as gd
+        >>> gd.load_paper().runs.to_csv("paper.csv")
+        >>> read_runs_csv("paper.csv").select(gd.load_paper().runs.split == "test").run.tolist()[:3]
+        ['23', '24', '25']
+        """
+        from gyrodrift.atomic import atomic_write, recognise_header
+
+        columns = ["run", "split", "lat_deg", "lat0_deg", "temp_min_c", "temp_max_c", "drift_deg_h", *self.extra]
+        buf = io.StringIO()
+        writer = csv.writer(buf, lineterminator="\n")
+        writer.writerow(columns)
+        for rec in self.records():
+            writer.writerow(
+                ["" if rec.get(c) is None else repr(rec[c]) if isinstance(rec[c], float) else rec[c] for c in columns]
+            )
+        with atomic_write(path, recognise=recognise_header("run,"), what="run table") as handle:
+            handle.write(buf.getvalue())
+
 
 STRUCTURED_FIELDS = ("run", "lat_deg", "lat0_deg", "temp_min_c", "temp_max_c", "drift_deg_h", "split")
 """Fields of a run table as a structured array (:meth:`RunTable.to_structured`); units as the columns."""
@@ -462,7 +487,9 @@ def read_runs_csv(path, *, lat0_deg: float | None = None, require_truth: bool = 
                 f"{name}, row 1: missing temperature columns: expected temp_min_c and temp_max_c, or temp_range_c"
             )
         if "lat0_deg" not in col and lat0_deg is None:
-            raise RunTableError(f"{name}, row 1: no lat0_deg column and no site latitude given (lat0_deg)")
+            raise RunTableError(
+                f"{name}, row 1: no lat0_deg column; give the site latitude (--lat0-deg, or lat0_deg= in Python)"
+            )
         if require_truth and "drift_deg_h" not in col:
             raise RunTableError(f"{name}, row 1: missing column 'drift_deg_h' (true axial drift, deg/h) for training")
 

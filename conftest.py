@@ -1,0 +1,80 @@
+"""The documentation runs as written: every ```python and ```bash block of README.md and docs/*.md, and every
+docstring example (``>>>``) of the package, is a test (Sybil, collected through pyproject's testpaths).
+
+Each document runs in its own temporary folder (its blocks in order, sharing the folder and, for Python, one
+namespace), with ``examples/`` reachable there as a symbolic link to the repository's, so that the documented
+commands (``gyrodrift simulate examples/scenarios/tour.toml ...``) run unchanged and nothing is written into the
+repository. A bash block runs with ``bash -euo pipefail``: any failing command fails the test. The only block not
+run is one that installs the package (``pip install``), behind a ``<!-- skip: next -->`` directive: the tests run
+inside that installation; tests/test_docs.py checks that no other block is skipped or left unlabelled.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+
+from sybil import Sybil
+from sybil.parsers.markdown import CodeBlockParser, PythonCodeBlockParser, SkipParser
+from sybil.parsers.rest import DocTestParser
+
+ROOT = Path(__file__).resolve().parent
+EXECUTED_LANGUAGES = ("bash", "python")
+"""The fenced-block languages that are executed; every other block must say what it is (text, toml, c, ...)."""
+BASH_TIMEOUT_S = 600
+
+
+def _enter_folder(namespace: dict) -> None:
+    folder = Path(tempfile.mkdtemp(prefix="gyrodrift-docs-"))
+    (folder / "examples").symlink_to(ROOT / "examples", target_is_directory=True)
+    namespace["_docs_previous_cwd"] = os.getcwd()
+    namespace["_docs_folder"] = folder
+    os.chdir(folder)
+
+
+def _leave_folder(namespace: dict) -> None:
+    os.chdir(namespace.pop("_docs_previous_cwd"))
+    shutil.rmtree(namespace.pop("_docs_folder"), ignore_errors=True)
+
+
+class BashBlockParser(CodeBlockParser):
+    """Runs a ```bash block with ``bash -euo pipefail`` in the document's folder; fails with its output."""
+
+    language = "bash"
+
+    def evaluate(self, example) -> str | None:
+        env = {**os.environ, "MPLBACKEND": "Agg"}
+        proc = subprocess.run(
+            ["bash", "-euo", "pipefail", "-c", example.parsed],
+            cwd=os.getcwd(),
+            env=env,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+            timeout=BASH_TIMEOUT_S,
+        )
+        if proc.returncode != 0:
+            return f"bash block exited with status {proc.returncode}:\n{example.parsed}\n--- output ---\n{proc.stdout}"
+        return None
+
+
+markdown_sybil = Sybil(
+    parsers=[PythonCodeBlockParser(), BashBlockParser(), SkipParser()],
+    patterns=["README.md", "docs/*.md"],
+    setup=_enter_folder,
+    teardown=_leave_folder,
+    name="docs",
+)
+
+docstring_sybil = Sybil(
+    parsers=[DocTestParser()],
+    patterns=["python/gyrodrift/*.py", "python/gyrodrift/*/*.py"],
+    setup=_enter_folder,
+    teardown=_leave_folder,
+    name="docstrings",
+)
+
+pytest_collect_file = (markdown_sybil + docstring_sybil).pytest()

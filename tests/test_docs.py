@@ -1,0 +1,71 @@
+"""The documentation cannot drift from the code: every ```bash and ```python block of README.md and docs/*.md is
+collected by the root conftest.py (Sybil) and run by `python -m pytest`; these tests check that none escapes."""
+
+from __future__ import annotations
+
+import re
+import tomllib
+from pathlib import Path
+
+import conftest
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCUMENTS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+FENCE = re.compile(r"^```(\S*)\s*$")
+SKIP = "<!-- skip: next -->"
+LANGUAGES = {*conftest.EXECUTED_LANGUAGES, "text", "toml", "json", "c", "rust"}
+"""Executed (bash, python) or plainly not code to run: a shell session or synopsis is ```text, not ```sh."""
+
+
+def _blocks(path: Path):
+    """(line of the opening fence, language, body, directive on the line before) of every fenced block."""
+    lines = path.read_text(encoding="utf-8").splitlines()
+    out, i = [], 0
+    while i < len(lines):
+        m = FENCE.match(lines[i])
+        if m:
+            j = i + 1
+            while not lines[j].startswith("```"):
+                j += 1
+            before = lines[i - 1].strip() if i else ""
+            out.append((i + 1, m.group(1), "\n".join(lines[i + 1 : j]), before))
+            i = j
+        i += 1
+    return out
+
+
+@pytest.mark.parametrize("path", DOCUMENTS, ids=lambda p: p.name)
+def test_every_block_says_its_language(path):
+    for line, language, _, _ in _blocks(path):
+        assert language in LANGUAGES, f"{path.name}:{line}: block language {language!r}, expected one of {LANGUAGES}"
+
+
+@pytest.mark.parametrize("path", DOCUMENTS, ids=lambda p: p.name)
+def test_every_bash_and_python_block_is_executed(path):
+    fenced = [(line, lang, body, before) for line, lang, body, before in _blocks(path) if lang in ("bash", "python")]
+    skipped = [line for line, _, body, before in fenced if before == SKIP]
+    for line, _, body, before in fenced:
+        if before == SKIP:
+            assert "pip install" in body, f"{path.name}:{line}: only the block installing the package may be skipped"
+    text = path.read_text(encoding="utf-8")
+    assert text.count("<!-- skip") == len(skipped), f"{path.name}: a skip directive other than before a pip install"
+    document = conftest.markdown_sybil.parse(path)
+    directives = {line - 1 for line in skipped}  # a skip directive is a region of its own, on the line before
+    executed = sorted(e.line for e in document.examples() if e.line not in directives)
+    assert executed == [line for line, *_ in fenced], f"{path.name}: blocks Sybil does not run"
+
+
+def test_pytest_runs_the_docs_and_the_docstrings():
+    testpaths = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["pytest"]["ini_options"]["testpaths"]
+    assert {"tests", "README.md", "docs", "python/gyrodrift"} <= set(testpaths)
+    extras = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["optional-dependencies"]["test"]
+    assert any(e.startswith("sybil") for e in extras)
+
+
+def test_the_readme_opens_with_the_two_setup_commands():
+    blocks = _blocks(ROOT / "README.md")
+    assert blocks[0][2].splitlines() == [
+        "python -m pip install . && gyrodrift reproduce",
+        'python -m pip install ".[test]" && python -m pytest',
+    ]
