@@ -283,6 +283,7 @@ def parse_campaign(data: Mapping[str, Any], source: str = "<campaign>") -> Campa
     for key, v in (("count", count), ("seed", seed)):
         if isinstance(v, bool) or not isinstance(v, int) or v < (1 if key == "count" else 0):
             raise _fail(source, f"[campaign] {key}", f"expected an integer >= {1 if key == 'count' else 0}, got {v!r}")
+    assert isinstance(count, int) and isinstance(seed, int)  # checked just above
     if count > 1_000_000:
         raise _fail(source, "[campaign] count", f"at most 1000000 runs, got {count}")
     name = head.get("name", Path(source).stem)
@@ -464,6 +465,7 @@ def _measure(campaign: Campaign, index: int, chunk_samples: int) -> dict[str, An
     truth = f.truth
     assert truth is not None
     base, opt = truth.base, truth.optimum
+    assert base is not None and opt is not None  # find_true_drift always sets them
     d_star = truth.drift_deg_h
     if abs(d_star) >= 2e-4:  # the secant 0 -> d*: exact at both ends, estimates fall between or near them
         lo, hi, dd = base, opt, d_star

@@ -145,8 +145,8 @@ def _fit_learned(name: str, train, *, seed: int, max_iter: int):
     from gyrodrift.encodings import encode
     from gyrodrift.model import fit_drift_model
 
-    common = dict(encoding="physics", rng=seed, quiet=True, max_iter=max_iter)
-    specs = {
+    common: dict[str, Any] = dict(encoding="physics", rng=seed, quiet=True, max_iter=max_iter)
+    specs: dict[str, dict[str, Any]] = {
         "CPSO-LSSVM (paper fitness)": dict(method="cpso", objective="train_mae"),
         "CPSO-LSSVM (LOO)": dict(method="cpso", objective="loo_mae"),
         "PSO-LSSVM (LOO)": dict(method="pso", objective="loo_mae"),

@@ -135,6 +135,7 @@ def simulate(
             cols = {c: (np.concatenate(v) if v else np.zeros(0)) for c, v in parts.items()}
             return ImuData(columns=cols, scenario=scenario, schema=schema)
 
+        assert out is not None  # out_dir was given
         with out.publish() as stage:
             with pq.ParquetWriter(stage.file("imu.parquet"), schema, **PARQUET_OPTIONS) as writer:
                 for chunk in iter_core_chunks(scenario, chunk_samples):

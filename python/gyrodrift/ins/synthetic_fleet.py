@@ -47,6 +47,8 @@ def simulate_fleet(
                 "attitude": {"yaw_deg": float(rng.uniform(0, 360))},
             }
         )
-        paths.append(simulate(scn, out_dir=base / f"run{i:02d}"))
+        path = simulate(scn, out_dir=base / f"run{i:02d}")
+        assert isinstance(path, Path)  # simulate writes a file when given a folder
+        paths.append(path)
         drifts.append(drift)
     return paths, np.array(drifts)

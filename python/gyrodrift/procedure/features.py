@@ -140,12 +140,14 @@ def extract_features(
             chunk_samples=chunk_samples,
             quiet=quiet,
         )
+        assert truth.base is not None and truth.alignment is not None  # find_true_drift always sets them
         return _from_curve(log, truth.base, truth.temperature, hours, truth.alignment, truth, lat0_deg, smoothed)
     if alignment is None:
         alignment = align_log(log, timeline=timeline, chunk_samples=chunk_samples, quiet=quiet)
     res = navigate_after_alignment(
         log, alignment, [0.0], hours, temperature_hours=hours, chunk_samples=chunk_samples, quiet=quiet, desc="features"
     )
+    assert res.temperature is not None  # asked for (temperature_hours)
     return _from_curve(log, res.curves[0], res.temperature, hours, alignment, None, lat0_deg, smoothed)
 
 
