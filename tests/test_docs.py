@@ -69,3 +69,22 @@ def test_the_readme_opens_with_the_two_setup_commands():
         "python -m pip install . && gyrodrift reproduce",
         'python -m pip install ".[test]" && python -m pytest',
     ]
+
+
+LINK = re.compile(r"\]\(([^)#\s]+)(?:#[^)]*)?\)")
+
+
+@pytest.mark.parametrize("path", DOCUMENTS, ids=lambda p: p.name)
+def test_every_relative_link_names_a_file_of_the_repository(path):
+    for target in LINK.findall(path.read_text(encoding="utf-8")):
+        if "://" not in target:
+            assert (path.parent / target).exists(), f"{path.name}: link to {target}, not in the repository"
+
+
+def test_the_architecture_names_only_what_the_repository_holds():
+    text = (ROOT / "docs" / "architecture.md").read_text(encoding="utf-8")
+    for absent in ("method.md", "../shared", "issue "):
+        assert absent not in text, absent
+    modules = {p.stem for p in (ROOT / "python" / "gyrodrift").glob("*.py") if not p.stem.startswith("_")}
+    described = set(re.findall(r"\*\*`([a-z_]+)`\*\*", text)) | set(re.findall(r"`([a-z_]+)`", text))
+    assert modules <= described, f"modules without a word in docs/architecture.md: {sorted(modules - described)}"
