@@ -288,7 +288,7 @@ def test_folders_holding_the_users_files_are_refused_and_the_current_folder_work
     assert sorted(os.listdir(tmp_path)) == ["d", "here", "logs"]  # no ..<hex>.tmp folder beside it
 
 
-PNGS = ["fitness_curve.png", "pred_vs_true.png", "error_per_run.png"]
+PNGS = ["fitness_curve.png", "pred_vs_true.png", "error_per_run.png", "position_error_72h.png"]
 
 
 def test_navigate_into_the_simulation_folder_keeps_its_input(inputs, tmp_path):
