@@ -135,7 +135,7 @@ def estimate_white_noise(log: ImuLog, *, hours: float = 1.0, chunk_samples: int 
     tail_g = tail_a = None
     for chunk in log.chunks(chunk_samples, stop=n):
         g, a = np.asarray(chunk.dtheta_rad, float), np.asarray(chunk.dv_m_s, float)
-        if tail_g is not None:  # the differences across chunk boundaries
+        if tail_g is not None and tail_a is not None:  # the differences across chunk boundaries
             g, a = np.vstack([tail_g, g]), np.vstack([tail_a, a])
         if len(g) >= 3:
             m = len(g) - 2

@@ -30,7 +30,9 @@ alignment's own z estimate plays no part.
 Uncertainty of the label (issue 10): with sensor noise, d* is the constant that best cancels this run's random
 walk, not the sensor's drift. Its 1-sigma ``drift_std_deg_h`` comes from a linear covariance analysis of the 72 h
 navigation with the core's error model (`_core.label_sigma`, gyrodrift-core ``smoother::label_sigma``: attitude,
-velocity and north/east position errors driven by ARW and VRW, from the alignment's final attitude 1-sigma):
+velocity and north/east position errors driven by ARW and VRW over the navigation; the alignment's errors are
+left out: they are the same in the run and in its noise-free twin but for their noise-driven part, which is
+small; with the alignment's whole attitude 1-sigma the ``rms`` sigma came out 1.4 times the observed spread):
 ``final``: ``var = g' Cov(e(T)) g / |g|^4`` with g the position response to the drift at hour 72 and e the
 position error it does not explain; ``rms``: the same for the sums over the curve points (an accumulator
 state); ``max`` has no closed form and takes the ``rms`` value (an approximation). ARW and VRW are measured
@@ -270,7 +272,6 @@ def find_true_drift(
         criterion=criterion,
         hours=hours,
         height_m=float(alignment.site.height_m),
-        att_std_arcsec=alignment.att_std_arcsec,
         decimation_s=decimation_s,
     )
     budget = label_budget_deg_h(hours, decimation_s)
