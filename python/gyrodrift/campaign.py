@@ -402,15 +402,21 @@ def smoother_available() -> bool:
     return importlib.util.find_spec("gyrodrift.procedure.smoother") is not None
 
 
-def _smoother_step(log, scenario, timeline) -> tuple[float, float]:
-    """The 16 h smoother's z drift and 1-sigma [deg/h] with the scenario's noise model (NaN, NaN when the module
-    is absent)."""
+def _noise_model(scenario):
+    """The run's own noise model (its scenario's gyro and accelerometer noise keys), for the smoother and the
+    truth's label sigma: a simulated run's noise is known, not measured."""
+    from gyrodrift.procedure.noise import SensorNoise
+
+    data = scenario.to_toml_dict()
+    return SensorNoise.from_block({"gyro": data["gyro"], "accel": data["accel"]}, source="scenario")
+
+
+def _smoother_step(log, noise, timeline) -> tuple[float, float]:
+    """The 16 h smoother's z drift and 1-sigma [deg/h] (NaN, NaN when the module is absent)."""
     if not smoother_available():
         return math.nan, math.nan
     from gyrodrift.procedure.smoother import smooth_log
 
-    data = scenario.to_toml_dict()
-    noise = {"gyro": data["gyro"], "accel": data["accel"]}
     res = smooth_log(log, timeline=timeline, noise=noise)
     return float(res.drift_deg_h), float(res.drift_std_deg_h)
 
@@ -461,7 +467,16 @@ def _measure(campaign: Campaign, index: int, chunk_samples: int) -> dict[str, An
     alignment = align_log(log, timeline=timeline, chunk_samples=chunk_samples)
     out["t_align_s"] = time.perf_counter() - t
     t = time.perf_counter()
-    f = extract_features(log, with_truth=True, timeline=timeline, alignment=alignment, chunk_samples=chunk_samples)
+    noise = _noise_model(scn)
+    f = extract_features(
+        log,
+        with_truth=True,
+        timeline=timeline,
+        alignment=alignment,
+        smoother=False,  # timed on its own below
+        noise=noise,
+        chunk_samples=chunk_samples,
+    )
     truth = f.truth
     assert truth is not None
     base, opt = truth.base, truth.optimum
@@ -487,7 +502,8 @@ def _measure(campaign: Campaign, index: int, chunk_samples: int) -> dict[str, An
         temp_min_c=f.temp_min_c,
         temp_max_c=f.temp_max_c,
         drift_deg_h=d_star,
-        drift_std_deg_h=float(getattr(truth, "drift_std_deg_h", math.nan) or math.nan),
+        drift_std_deg_h=float(truth.drift_std_deg_h),
+        label_flagged=bool(truth.flagged),
         truth_verified=bool(truth.verified),
         drift_curvefit_deg_h=f.drift_curvefit_deg_h,
         drift_curvefit_std_deg_h=f.drift_curvefit_std_deg_h,
@@ -509,13 +525,16 @@ def _measure(campaign: Campaign, index: int, chunk_samples: int) -> dict[str, An
     out["smoother_error"] = None
     if campaign.options.get("smoother", True):
         try:  # a smoother failure is recorded beside the run's other results, which stay valid
-            out["drift_smoother_deg_h"], out["drift_smoother_std_deg_h"] = _smoother_step(log, scn, timeline)
+            out["drift_smoother_deg_h"], out["drift_smoother_std_deg_h"] = _smoother_step(log, noise, timeline)
         except Exception as exc:
             out["smoother_error"] = f"{type(exc).__name__}: {' '.join(str(exc).split())}"[:2000]
     out["t_smoother_s"] = time.perf_counter() - t
     t = time.perf_counter()
-    twin = ImuLog.from_scenario(campaign.scenario(index, noise=False))
-    out["drift_effective_deg_h"] = find_true_drift(twin, timeline=timeline, chunk_samples=chunk_samples).drift_deg_h
+    twin_scn = campaign.scenario(index, noise=False)
+    twin = find_true_drift(
+        ImuLog.from_scenario(twin_scn), timeline=timeline, noise=_noise_model(twin_scn), chunk_samples=chunk_samples
+    )
+    out["drift_effective_deg_h"] = twin.drift_deg_h
     out["t_twin_s"] = time.perf_counter() - t
     return out
 
@@ -554,7 +573,7 @@ def _schema(campaign: Campaign):
             "hours_truth",
         )
     ]
-    fields.append(("truth_verified", pa.bool_()))
+    fields += [("truth_verified", pa.bool_()), ("label_flagged", pa.bool_())]
     fields += [(c, f64) for c in ("t_align_s", "t_passes_s", "t_smoother_s", "t_twin_s", "t_total_s")]
     fields += [("error", s), ("smoother_error", s), ("worker", s)]
     fields += [(c, pa.list_(pa.float32())) for c in CURVE_COLUMNS]
@@ -783,6 +802,19 @@ def write_run_table(
 # --- running ---------------------------------------------------------------------------------------------
 
 
+def _watch_parent(parent_pid: int) -> None:
+    """Pool-worker initializer: exit when the client that started the pool is gone (kill -9 of the client must
+    not leave workers computing runs nobody will commit)."""
+    import threading
+
+    def watch() -> None:
+        while os.getppid() == parent_pid:
+            time.sleep(0.5)
+        os._exit(1)
+
+    threading.Thread(target=watch, daemon=True, name="gyrodrift-parent-watch").start()
+
+
 def _pool_map(campaign, todo, workers, on_row: Callable[[dict], None]) -> int:
     """Process `todo` on a local process pool; a worker killed mid-run breaks the pool: a new pool takes the
     runs not yet committed (at most 3 times). Returns the number of runs lost to broken pools."""
@@ -792,7 +824,9 @@ def _pool_map(campaign, todo, workers, on_row: Callable[[dict], None]) -> int:
         if not remaining:
             return 0
         finished: set[int] = set()
-        pool = concurrent.futures.ProcessPoolExecutor(max_workers=workers, mp_context=ctx)
+        pool = concurrent.futures.ProcessPoolExecutor(
+            max_workers=workers, mp_context=ctx, initializer=_watch_parent, initargs=(os.getpid(),)
+        )
         try:
             futures = {pool.submit(process_run, campaign, i): i for i in remaining}
             try:
