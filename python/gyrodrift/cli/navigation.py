@@ -68,7 +68,7 @@ def simulate_command(
     are and recorded in scenario.resolved.toml.
     """
     from gyrodrift.atomic import OutputFolder
-    from gyrodrift.ins.scenario import Scenario, load_scenario
+    from gyrodrift.ins.scenario import Scenario, ScenarioError, load_scenario
     from gyrodrift.ins.simulate import SIMULATION_FILES, rotation_summary, simulate
 
     out = OutputFolder(out_dir, "simulate", SIMULATION_FILES, inputs=[scenario_toml])
@@ -82,8 +82,10 @@ def simulate_command(
         scenario = Scenario.from_dict(data, source=f"{scenario_toml} with {flags}", base_dir=scenario_toml.parent)
     try:
         path = simulate(scenario, out_dir=out, quiet=quiet)
-    except ValueError as exc:  # the core refused the configuration
-        raise click.ClickException(f"{scenario_toml}: {exc}") from None
+    except ValueError as exc:  # the core refused the configuration: name the file it came from
+        if str(exc).startswith(str(scenario_toml)):
+            raise
+        raise ScenarioError(f"{scenario_toml}: {exc}") from None
     rot = rotation_summary(scenario)
     resolved = out_dir / "scenario.resolved.toml"
     if as_json:
