@@ -106,11 +106,13 @@ def campaign_command(source, out, workers, scheduler, connect_timeout_s, limit, 
     }
     if as_json:
         print_json(doc)
-    elif not quiet:
-        click.echo(
-            f"{campaign.name}: {summary.done} run(s) done now ({summary.failed} failed), {summary.skipped} already "
-            f"done, {summary.total - summary.skipped - summary.done} pending, in {summary.elapsed_s:.1f} s -> {out}"
-        )
+    say_wrote(
+        [out],
+        quiet=quiet,
+        as_json=as_json,
+        detail=f"{campaign.name}: {summary.done} run(s) done now ({summary.failed} failed), {summary.skipped} "
+        f"already done, {summary.total - summary.skipped - summary.done} pending, in {summary.elapsed_s:.1f} s",
+    )
 
 
 def _export(campaign, index: int, out, quiet: bool, as_json: bool) -> None:

@@ -282,7 +282,7 @@ def navigate(
         raise OptionError(f"navigate: --hours must be a finite number of hours, got {hours!r}")
     gyro_est = _vector3("gyro_bias_deg_h", gyro_bias_deg_h)
     if not math.isfinite(compensate_drift_deg_h):
-        raise OptionError(f"navigate: --compensate-drift-deg-h must be finite, got {compensate_drift_deg_h!r}")
+        raise OptionError(f"navigate: --drift-deg-h must be finite, got {compensate_drift_deg_h!r}")
     gyro_est[2] += float(compensate_drift_deg_h)
     accel_est = _vector3("accel_bias_ug", accel_bias_ug)
     if plot and out_dir is None:
