@@ -2,19 +2,25 @@
 
 Every encoding x scaling is fitted (RBF, the kernel `fit` tunes) on the paper's runs and on a random synthetic
 table with several sites; on the synthetic table the linear and polynomial kernels of the LSSVR are exported
-too. Each model is evaluated on 1000 rows: the training runs, then random rows spanning 1.2 times the training
-range of each raw input (so that some fall outside it).
+too. Hybrid models (``target="residual"``: physics estimate + learned correction) are fitted for every physics
+column x encoding on a synthetic table carrying the curve-fit and smoother columns and label 1-sigmas (so the
+fits are weighted, and one run is left out), and the default ``gyrodrift fit`` model goes through the commands
+(fit, then export). Each model is evaluated on 1000 rows: the training runs, then random rows spanning 1.2
+times the training range of each input (so that some fall outside it). The C of every model is built in one
+compiler run (each model's source wrapped in its own translation unit), the Rust in one crate.
 
-Tolerance: ``|generated - python| <= 1e-12 * max(|python|, S)`` with ``S = sum_i |alpha_i K(x_i, x)| + |b|``,
-the magnitude of the terms the kernel sum adds. Relative to ``|python|`` alone no float64 code can promise
-1e-12 where the terms cancel (a drift crossing zero): numpy sums them with BLAS in another order, and the
-rounding of either order is about ``eps * S``. The measured maxima are printed (``pytest -s``) and quoted in
-docs/export.md.
+Tolerance: ``|generated - python| <= 1e-12 * max(|python|, S)`` with ``S = sum_i |alpha_i K(x_i, x)| + |b|``
+(+ ``|physics|`` for a hybrid), the magnitude of the terms the prediction adds. Relative to ``|python|`` alone
+no float64 code can promise 1e-12 where the terms cancel (a drift crossing zero): numpy sums them with BLAS in
+another order, and the rounding of either order is about ``eps * S``. The measured maxima are printed
+(``pytest -s``) and quoted in docs/export.md.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
+import json
 import math
 import os
 import re
@@ -29,19 +35,20 @@ from click.testing import CliRunner
 
 import gyrodrift
 from gyrodrift import export
-from gyrodrift.choices import ENCODINGS, SCALINGS
+from gyrodrift.choices import DEFAULT_ENCODING, ENCODINGS, PHYSICS_COLUMNS, SCALINGS
 from gyrodrift.cli import main
 from gyrodrift.encodings import encode
 from gyrodrift.errors import InputError, OptionError
 from gyrodrift.kernels import kernel_matrix
 from gyrodrift.lssvr import LSSVR
-from gyrodrift.model import fit_drift_model
-from gyrodrift.model_io import save_model
+from gyrodrift.model import fit_drift_model, physics_estimate
+from gyrodrift.model_io import load_model, save_model
 from gyrodrift.runs import RunTable
 
 TOL = 1e-12
 N_ROWS = 1000
 RAW = ("lat_deg", "lat0_deg", "temp_min_c", "temp_max_c")
+ALL = tuple(export.INPUTS)  # the raw inputs, then the physics columns the navigation computer computes
 CC = shutil.which("cc")
 CARGO = shutil.which("cargo")
 CFLAGS = ["-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O2"]
@@ -72,13 +79,33 @@ def _synthetic_runs(rng: np.random.Generator, n: int = 24) -> RunTable:
     )
 
 
+def _hybrid_runs(rng: np.random.Generator) -> RunTable:
+    """The synthetic runs with the curve-fit and smoother columns (the drift plus noise [deg/h]) and label
+    1-sigmas (one beyond `gyrodrift fit`'s default limit of 1e-3 deg/h, so that run is left out)."""
+    runs = _synthetic_runs(rng)
+    n = len(runs)
+    std = rng.uniform(5e-5, 4e-4, n)
+    std[3] = 2e-3
+    extra = {
+        "drift_std_deg_h": std,
+        "drift_curvefit_deg_h": runs.drift_deg_h + rng.normal(0.0, 4e-4, n),
+        "drift_smoother_deg_h": runs.drift_deg_h + rng.normal(0.0, 1e-4, n),
+    }
+    return runs.replace(extra=extra, source="synthetic-hybrid")
+
+
+def _value(runs: RunTable, name: str) -> np.ndarray:
+    """Input ``name`` (`export.INPUTS`) of each run: a column, or a physics column (NaN where absent)."""
+    return runs.column(name) if name in export.PHYSICS_INPUTS else getattr(runs, name)
+
+
 def _probe_rows(train: RunTable, rng: np.random.Generator) -> RunTable:
     """The training runs, then random rows over 1.2 times the training range of each input and of the latitude
-    error (N_ROWS in all)."""
+    error (N_ROWS in all); the physics columns the training runs have too."""
     n = N_ROWS - len(train)
     cols = {}
-    for name in RAW:
-        v = getattr(train, name)
+    for name in [*RAW, *(c for c in export.PHYSICS_INPUTS if train.has_column(c))]:
+        v = _value(train, name)
         lo, hi = float(v.min()), float(v.max())
         span = hi - lo or 0.5
         cols[name] = rng.uniform(lo - 0.1 * span, hi + 0.1 * span, n)
@@ -92,37 +119,50 @@ def _probe_rows(train: RunTable, rng: np.random.Generator) -> RunTable:
         run=np.array([f"p{i}" for i in range(N_ROWS)]),
         drift_deg_h=np.full(N_ROWS, np.nan),
         **{name: np.concatenate([getattr(train, name), cols[name]]) for name in RAW},
+        extra={c: np.concatenate([_value(train, c), cols[c]]) for c in cols if c not in RAW},
     )
 
 
-def _model(train: RunTable, encoding: str, scaling: str, kernel: str):
+def _model(train: RunTable, encoding: str, scaling: str, kernel: str, physics: str | None = None):
     sigma = _SIGMA[kernel][scaling]
-    model = fit_drift_model(train, encoding=encoding, scaling=scaling, gamma=100.0, sigma=sigma)
+    hybrid = {} if physics is None else {"target": "residual", "physics_column": physics, "max_label_std_deg_h": 1e-3}
+    model = fit_drift_model(train, encoding=encoding, scaling=scaling, gamma=100.0, sigma=sigma, **hybrid)
     if kernel != "rbf":  # `fit` tunes RBF only; the LSSVR has the other kernels, and the export supports them
         est = LSSVR(gamma=100.0, sigma=sigma, kernel=kernel, degree=3, coef0=1.0)
         model.named_steps["lssvr"].lssvr_ = est.fit(model[:-1].transform(train), train.drift_deg_h)
     return model
 
 
-def _expected(model, train: RunTable, rows: RunTable) -> dict:
+def _used_inputs(model) -> list[str]:
+    """The inputs a model reads: those of its features and, for a hybrid, of its physics estimate."""
+    exprs = [export.FEATURE_EXPRESSIONS[f] for f in model.feature_names]
+    if model.target == "residual":
+        exprs.append(export.PHYSICS_EXPRESSIONS[model.physics_column])
+    return [n for n in ALL if any(n in e.inputs for e in exprs)]
+
+
+def _expected(model, rows: RunTable) -> dict:
     """What the generated code must give, computed in Python independently of gyrodrift.export."""
+    train = model.training_["runs"]  # the runs the model was fitted on (without any left out)
     est = model.lssvr
     K = kernel_matrix(model[:-1].transform(rows), est.X_fit_, kernel=est.kernel, sigma=est.sigma, coef0=est.coef0)
-    used = [n for n in RAW if any(n in export.FEATURE_EXPRESSIONS[f].inputs for f in model.feature_names)]
     inside = np.ones(len(rows), bool)
-    for name in used:
-        v, t = getattr(rows, name), getattr(train, name)
+    for name in _used_inputs(model):
+        v, t = _value(rows, name), _value(train, name)
         inside &= (v >= t.min()) & (v <= t.max())
     feats, tfeats = encode(rows, model.encoding), encode(train, model.encoding)
     inside &= np.all((feats >= tfeats.min(axis=0)) & (feats <= tfeats.max(axis=0)), axis=1)
     pred = model.predict(rows)
+    physics = physics_estimate(rows, model.physics_column) if model.target == "residual" else np.zeros(len(rows))
     terms = K * est.alpha_
     return {
         "pred": pred,
-        "exact": np.array([math.fsum([*t, est.intercept_]) for t in terms]),  # the terms summed exactly
-        "scale": np.abs(K * est.alpha_).sum(axis=1) + abs(est.intercept_),
+        # the terms summed exactly
+        "exact": np.array([math.fsum([*t, est.intercept_, p]) for t, p in zip(terms, physics, strict=True)]),
+        "scale": np.abs(K * est.alpha_).sum(axis=1) + abs(est.intercept_) + np.abs(physics),
         "inside": inside,
         "features": feats,
+        "physics": physics,
     }
 
 
@@ -130,16 +170,28 @@ def _cases():
     rng = np.random.default_rng(20130613)
     paper = gyrodrift.load_paper().train
     synthetic = _synthetic_runs(rng)
+    hybrid = _hybrid_runs(rng)
     out = []
     for encoding, scaling in itertools.product(ENCODINGS, SCALINGS):
-        out.append(("paper", paper, encoding, scaling, "rbf"))
+        out.append(("paper", paper, encoding, scaling, "rbf", None))
     for encoding, scaling, kernel in itertools.product(ENCODINGS, SCALINGS, ("rbf", "linear", "poly")):
-        out.append(("synthetic", synthetic, encoding, scaling, kernel))
+        out.append(("synthetic", synthetic, encoding, scaling, kernel, None))
+    for (i, physics), (j, encoding) in itertools.product(enumerate(PHYSICS_COLUMNS), enumerate(ENCODINGS)):
+        scaling = SCALINGS[(i + j) % len(SCALINGS)]  # every scaling with every physics column
+        out.append(("hybrid", hybrid, encoding, scaling, "rbf", physics))
     return out
 
 
 CASES = _cases()
-CASE_IDS = [f"{d}-{e}-{s}-{k}" for d, _, e, s, k in CASES]
+CASE_IDS = [
+    f"{d}-{e}-{s}-{k}" + ("" if p is None else "-" + p.removeprefix("drift_").removesuffix("_deg_h"))
+    for d, _, e, s, k, p in CASES
+]
+DEFAULT_CASE = "cli-default-fit"
+"""The model of `gyrodrift fit TABLE --out model.json` with every default (a hybrid on the 12 h inversion,
+weighted by the label 1-sigmas, one run left out), exported by `gyrodrift export`."""
+_CLI_EXPORTS: dict[str, dict[str, str]] = {}
+"""Language -> the files `gyrodrift export` wrote for DEFAULT_CASE (filled by the `fitted` fixture)."""
 
 COS_SUFFIX = "+cos"
 """A case exported with the latitude error written as ``(lat - lat0) * 3600 * cos(0 * lat0)`` (the same bits):
@@ -155,7 +207,10 @@ _COS_EXPRESSION = export.FeatureExpression(
 
 
 def _export(case_id: str, model, lang: str) -> dict[str, str]:
-    """The generated files of a case (the cos case with its patched feature expression)."""
+    """The generated files of a case (the cos case with its patched feature expression; the default `fit`
+    model's from the command)."""
+    if case_id == DEFAULT_CASE:
+        return _CLI_EXPORTS[lang]
     with pytest.MonkeyPatch.context() as patch:
         if case_id.endswith(COS_SUFFIX):
             patch.setitem(export.FEATURE_EXPRESSIONS, "lat_err_arcsec", _COS_EXPRESSION)
@@ -163,20 +218,47 @@ def _export(case_id: str, model, lang: str) -> dict[str, str]:
 
 
 @pytest.fixture(scope="module")
-def fitted():
+def default_fit_file(tmp_path_factory):
+    """A model file of `gyrodrift fit` with every default, on the hybrid synthetic table (CSV)."""
+    folder = tmp_path_factory.mktemp("default_fit")
+    table = folder / "runs.csv"
+    _hybrid_runs(np.random.default_rng(20130613)).to_csv(table)
+    r = CliRunner().invoke(main, ["fit", str(table), "--out", str(folder / "model.json"), "--quiet"])
+    assert r.exit_code == 0, r.output
+    return folder / "model.json"
+
+
+@pytest.fixture(scope="module")
+def fitted(default_fit_file, tmp_path_factory):
     """Case id -> (model, rows, expected), built once for the C and the Rust tests."""
     rng = np.random.default_rng(7)
     out = {}
-    for case_id, (_, train, encoding, scaling, kernel) in zip(CASE_IDS, CASES, strict=True):
-        model = _model(train, encoding, scaling, kernel)
-        rows = _probe_rows(train, rng)
-        out[case_id] = (model, rows, _expected(model, train, rows))
+    for case_id, (_, train, encoding, scaling, kernel, physics) in zip(CASE_IDS, CASES, strict=True):
+        model = _model(train, encoding, scaling, kernel, physics)
+        rows = _probe_rows(model.training_["runs"], rng)
+        out[case_id] = (model, rows, _expected(model, rows))
     out[COS_CASE] = out[CASE_IDS[0]]
+    model = load_model(default_fit_file)
+    assert (model.encoding, model.target, model.physics_column) == (DEFAULT_ENCODING, "residual", PHYSICS_COLUMNS[0])
+    assert model.training["weighted"] and model.training_["left_out"]
+    rows = _probe_rows(model.training_["runs"], rng)
+    out[DEFAULT_CASE] = (model, rows, _expected(model, rows))
+    for lang in export.LANGUAGES:
+        folder = tmp_path_factory.mktemp(f"default_export_{lang}")
+        args = ["export", "--model", str(default_fit_file), "--lang", lang, "--out", str(folder), "--quiet"]
+        r = CliRunner().invoke(main, args)
+        assert r.exit_code == 0, r.output
+        _CLI_EXPORTS[lang] = {name: (folder / name).read_text() for name in export.LANGUAGES[lang]}
     return out
 
 
+ALL_CASES = [*CASE_IDS, COS_CASE, DEFAULT_CASE]
+
+
 def _rows_text(rows: RunTable) -> str:
-    return "".join(" ".join(repr(float(getattr(rows, n)[i])) for n in RAW) + "\n" for i in range(len(rows)))
+    """One line per row: every input of `ALL` (0 for a physics column the rows do not have)."""
+    values = np.nan_to_num(np.column_stack([_value(rows, n) for n in ALL]), nan=0.0)
+    return "".join(" ".join(repr(float(v)) for v in row) + "\n" for row in values)
 
 
 def _check(case_id: str, got: np.ndarray, exp: dict) -> tuple[float, float]:
@@ -201,6 +283,66 @@ def test_every_feature_of_every_encoding_has_a_c_and_a_rust_expression(encoding)
             declared = {n: f"<{n}>" for n in (*expr.inputs, *expr.functions)}
             text = template.format(**declared)  # a KeyError here: the template reads an undeclared input
             assert all(f"<{n}>" in text for n in expr.inputs)
+
+
+@pytest.mark.parametrize("physics", PHYSICS_COLUMNS)
+def test_every_physics_column_has_a_c_and_a_rust_expression(physics):
+    expr = export.PHYSICS_EXPRESSIONS[physics]
+    assert set(expr.inputs) <= set(export.INPUTS) and expr.unit == "deg/h"
+    if physics == "drift_inversion_deg_h":  # computed from the latitudes, as the physics feature is
+        assert expr == dataclasses.replace(export.FEATURE_EXPRESSIONS["drift_equiv_deg_h"], unit="deg/h")
+    else:  # the navigation computer computes it: an input, read as it is
+        assert expr.inputs == (physics,) and physics in export.PHYSICS_INPUTS and "deg/h" in export.INPUTS[physics]
+
+
+@pytest.mark.parametrize(
+    ("physics", "encoding", "fields", "functions"),
+    [
+        ("drift_inversion_deg_h", "physics", RAW, ("cos", "exp")),
+        ("drift_inversion_deg_h", "temperature", RAW, ("cos", "exp")),  # the latitudes for the physics alone
+        ("drift_curvefit_deg_h", "temperature", ("temp_min_c", "temp_max_c", "drift_curvefit_deg_h"), ("exp",)),
+        ("drift_smoother_deg_h", "lat_only", ("lat_deg", "lat0_deg", "drift_smoother_deg_h"), ("exp",)),
+    ],
+)
+def test_a_hybrid_reads_its_physics_inputs_and_checks_their_range(physics, encoding, fields, functions):
+    model = _model(_hybrid_runs(np.random.default_rng(5)), encoding, "standard", "rbf", physics)
+    spec = export.export_spec(model)
+    assert spec.inputs == fields and spec.functions == functions and spec.physics == physics
+    header = export.export_model(model, "c")["gyrodrift_model.h"]
+    rust = export.export_model(model, "rust")["gyrodrift_model.rs"]
+    assert re.findall(r"    double (\w+); /\*", header) == list(fields)
+    assert re.findall(r"    pub (\w+): f64,", rust.split("pub struct Inputs")[1].split("}")[0]) == list(fields)
+    assert "double gyrodrift_model_physics_deg_h(const gyrodrift_model_inputs *inputs);" in header
+    assert (
+        f'#define GYRODRIFT_MODEL_PHYSICS "{physics}"' in header and f'pub const PHYSICS: &str = "{physics}";' in rust
+    )
+    assert re.search(r"pub fn physics_deg_h\(inputs: &Inputs, _?math: &Math\) -> f64", rust)
+    assert "pub fn correction_deg_h(inputs: &Inputs, math: &Math) -> f64" in rust
+    if physics != "drift_inversion_deg_h":  # the extra input's training range is in the range check
+        train = model.training_["runs"].column(physics)
+        lo, hi = export._lit(train.min()), export._lit(train.max())
+        assert f'{{"{physics}", {lo}, {hi}}}' in export.export_model(model, "c")["gyrodrift_model.c"]
+        assert f'Range {{ name: "{physics}", min: {lo}, max: {hi} }}' in rust
+        assert f"{physics}: [{lo}, {hi}], " in header  # provenance
+
+
+def test_label_weights_change_the_model_but_need_nothing_at_prediction(fitted):
+    weighted, _, _ = fitted[DEFAULT_CASE]
+    assert weighted.training["weighted"]
+    runs = weighted.training_["runs"]
+    est = weighted.lssvr
+    plain = fit_drift_model(runs, encoding=DEFAULT_ENCODING, target="residual", gamma=est.gamma, sigma=est.sigma)
+    unweighted = fit_drift_model(
+        runs, encoding=DEFAULT_ENCODING, target="residual", gamma=est.gamma, sigma=est.sigma, label_weighting="none"
+    )
+    np.testing.assert_array_equal(plain.lssvr.alpha_, est.alpha_)  # the same fit as the command's
+    assert np.max(np.abs(unweighted.lssvr.alpha_ - est.alpha_)) > 1e-3 * np.max(np.abs(est.alpha_))  # weights matter
+    files = [
+        *_export(DEFAULT_CASE, weighted, "c").values(),
+        _export(DEFAULT_CASE, weighted, "rust")["gyrodrift_model.rs"],
+    ]
+    assert all("drift_std" not in re.sub(r"Label weighting[^\n]*", "", text) for text in files)
+    assert export.export_spec(unweighted).inputs == export.export_spec(weighted).inputs == RAW
 
 
 def test_a_feature_without_expression_cannot_be_exported(monkeypatch):
@@ -255,23 +397,38 @@ def test_provenance_text_cannot_break_the_generated_code(tmp_path):
 
 # --- C ------------------------------------------------------------------------------------------------------
 
-_C_DRIVER = """#include <stdio.h>
-#include <stdlib.h>
-#include "gyrodrift_model.h"
+_C_PUBLIC = (
+    "input_ranges",
+    "feature_ranges",
+    "features",
+    "in_range",
+    "physics_deg_h",
+    "correction_deg_h",
+    "drift_deg_h",
+)
 
-int main(void)
+_C_WRAPPER = """/* Model NAME: its generated source in a translation unit of its own, public names prefixed. */
+#include <stdio.h>
+#include <stdlib.h>
+DEFINES
+#include "NAME/gyrodrift_model.c"
+
+int NAME_run(void);
+
+/* Rows of every input of the test on stdin; per row: drift, in range, physics, features. */
+int NAME_run(void)
 {
-    char text[4][64];
-    double u[4], f[GYRODRIFT_MODEL_N_FEATURES];
+    char text[N_ALL][64];
+    double u[N_ALL], f[GYRODRIFT_MODEL_N_FEATURES];
     int k;
-    while (scanf("%63s %63s %63s %63s", text[0], text[1], text[2], text[3]) == 4) {
+    while (scanf(FORMAT, TEXTS) == N_ALL) {
         gyrodrift_model_inputs in;
-        for (k = 0; k < 4; ++k) {
+        for (k = 0; k < N_ALL; ++k) {
             u[k] = strtod(text[k], NULL);
         }
 FILL
         gyrodrift_model_features(&in, f);
-        printf("%.17g %d", gyrodrift_model_drift_deg_h(&in), gyrodrift_model_in_range(&in));
+        printf("%.17g %d %.17g", gyrodrift_model_drift_deg_h(&in), gyrodrift_model_in_range(&in), PHYSICS);
         for (k = 0; k < GYRODRIFT_MODEL_N_FEATURES; ++k) {
             printf(" %.17g", f[k]);
         }
@@ -282,36 +439,77 @@ FILL
 """
 
 C_RESULTS: dict[str, tuple[float, ...]] = {}
-"""Case id -> (max |c - py| / |py|, max |c - py| / S, compile + link [s], max |c - exact| / |exact|,
-max |py - exact| / |exact|, max |c - py| / |py| where |py| >= S / 10), printed by test_c_summary."""
+"""Case id -> (max |c - py| / |py|, max |c - py| / S, max |c - exact| / |exact|, max |py - exact| / |exact|,
+max |c - py| / |py| where |py| >= S / 10, fraction of the rows in range), printed by test_c_summary."""
+
+
+def _c_wrapper(name: str, header: str, hybrid: bool) -> str:
+    fill = "\n".join(f"        in.{n} = u[{k}];" for k, n in enumerate(ALL) if f"double {n};" in header)
+    return (
+        _C_WRAPPER.replace("DEFINES", "\n".join(f"#define gyrodrift_model_{f} NAME_{f}" for f in _C_PUBLIC))
+        .replace("NAME", name)
+        .replace("N_ALL", str(len(ALL)))
+        .replace("FORMAT", '"' + " ".join(["%63s"] * len(ALL)) + '"')
+        .replace("TEXTS", ", ".join(f"text[{k}]" for k in range(len(ALL))))
+        .replace("FILL", fill)
+        .replace("PHYSICS", "gyrodrift_model_physics_deg_h(&in)" if hybrid else "0.0")
+    )
+
+
+@pytest.fixture(scope="module")
+def c_driver(fitted, tmp_path_factory):
+    """One program holding every model's C (one compiler run); ``driver k`` evaluates model k on stdin.
+
+    Returns (path, {case id: model index}, build time [s])."""
+    folder = tmp_path_factory.mktemp("c_export")
+    index, sources, dispatch = {}, [], []
+    for k, case_id in enumerate(ALL_CASES):
+        model = fitted[case_id][0]
+        name = f"m{k:03d}"
+        files = _export(case_id, model, "c")
+        needs_math = model.lssvr.kernel == "rbf" or any(
+            export.FEATURE_EXPRESSIONS[f].functions for f in model.feature_names
+        )
+        needs_math |= case_id == COS_CASE or (
+            model.target == "residual" and model.physics_column == "drift_inversion_deg_h"
+        )
+        assert ("#include <math.h>" in files["gyrodrift_model.c"]) == needs_math, case_id
+        (folder / name).mkdir()
+        for file_name, text in files.items():
+            (folder / name / file_name).write_text(text)
+        (folder / f"{name}.c").write_text(_c_wrapper(name, files["gyrodrift_model.h"], model.target == "residual"))
+        sources.append(f"{name}.c")
+        dispatch.append(f"    case {k}: return {name}_run();")
+        index[case_id] = k
+    declarations = "".join(f"int m{k:03d}_run(void);\n" for k in range(len(ALL_CASES)))
+    (folder / "main.c").write_text(
+        f"#include <stdlib.h>\n{declarations}\nint main(int argc, char **argv)\n{{\n"
+        f"    switch (argc > 1 ? atoi(argv[1]) : -1) {{\n"
+        + "\n".join(dispatch)
+        + "\n    default: return 2;\n    }\n}\n"
+    )
+    start = time.perf_counter()
+    subprocess.run([CC, *CFLAGS, "main.c", *sources, "-lm", "-o", "driver"], cwd=folder, check=True, timeout=600)
+    return folder / "driver", index, time.perf_counter() - start
 
 
 @pytest.mark.skipif(CC is None, reason="no C compiler (cc) on PATH")
-@pytest.mark.parametrize("case_id", [*CASE_IDS, COS_CASE])
-def test_c_export_reproduces_python(case_id, fitted, tmp_path):
+@pytest.mark.parametrize("case_id", ALL_CASES)
+def test_c_export_reproduces_python(case_id, fitted, c_driver):
     model, rows, exp = fitted[case_id]
-    files = _export(case_id, model, "c")
-    needs_math = any(export.FEATURE_EXPRESSIONS[f].functions for f in model.feature_names)
-    assert ("#include <math.h>" in files["gyrodrift_model.c"]) == (
-        model.lssvr.kernel == "rbf" or case_id == COS_CASE or needs_math
-    )
-    for name, text in files.items():
-        (tmp_path / name).write_text(text)
-    fill = "\n".join(
-        f"        in.{n} = u[{k}];" for k, n in enumerate(RAW) if f"double {n};" in files["gyrodrift_model.h"]
-    )
-    (tmp_path / "driver.c").write_text(_C_DRIVER.replace("FILL", fill))
-    start = time.perf_counter()
-    subprocess.run(
-        [CC, *CFLAGS, "driver.c", "gyrodrift_model.c", "-lm", "-o", "driver"], cwd=tmp_path, check=True, timeout=120
-    )
-    compile_s = time.perf_counter() - start
+    driver, index, _ = c_driver
     out = subprocess.run(
-        [str(tmp_path / "driver")], input=_rows_text(rows), capture_output=True, text=True, check=True, timeout=60
+        [str(driver), str(index[case_id])],
+        input=_rows_text(rows),
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=60,
     ).stdout.split("\n")[:-1]
     table = np.array([line.split() for line in out], float)
-    assert table.shape == (N_ROWS, 2 + len(model.feature_names))
-    np.testing.assert_array_equal(table[:, 2:], exp["features"])  # the features are the same bits
+    assert table.shape == (N_ROWS, 3 + len(model.feature_names))
+    np.testing.assert_array_equal(table[:, 3:], exp["features"])  # the features are the same bits
+    np.testing.assert_array_equal(table[:, 2], exp["physics"])  # and so is a hybrid's physics estimate
     np.testing.assert_array_equal(table[:, 1].astype(bool), exp["inside"])
     assert exp["inside"][: model.training["n_runs"]].all()  # the training runs come first
     assert 50 < exp["inside"].sum() < N_ROWS - 50  # rows on both sides of the range check
@@ -322,27 +520,44 @@ def test_c_export_reproduces_python(case_id, fitted, tmp_path):
     np_exact = float(np.max(np.abs(exp["pred"] - exp["exact"]) / np.abs(exp["exact"])))
     large = np.abs(exp["pred"]) >= 0.1 * exp["scale"]  # rows whose terms do not cancel much
     rel_large = float(np.max(np.abs(table[large, 0] - exp["pred"][large]) / np.abs(exp["pred"][large]), initial=0.0))
-    C_RESULTS[case_id] = (rel, rel_s, compile_s, float(np.max(c_exact / np.abs(exp["exact"]))), np_exact, rel_large)
+    C_RESULTS[case_id] = (
+        rel,
+        rel_s,
+        float(np.max(c_exact / np.abs(exp["exact"]))),
+        np_exact,
+        rel_large,
+        float(exp["inside"].mean()),
+    )
 
 
 @pytest.mark.skipif(CC is None, reason="no C compiler (cc) on PATH")
-def test_c_summary():
+def test_c_summary(c_driver):
     """Print the C measurements (pytest -s) for docs/export.md."""
     if not C_RESULTS:
         pytest.skip("the C cases did not run")
-    rbf = [v for k, v in C_RESULTS.items() if k.endswith("-rbf")]
-    every = list(C_RESULTS.values())
-
-    def top(values, i):
-        return max(v[i] for v in values)
-
+    groups = {
+        "rbf": [v for k, v in C_RESULTS.items() if "-rbf" in k and "hybrid" not in k],
+        "all target drift": [v for k, v in C_RESULTS.items() if "hybrid" not in k and k != DEFAULT_CASE],
+        "hybrid": [v for k, v in C_RESULTS.items() if k.startswith("hybrid")],
+        **{
+            f"hybrid {p}": [v for k, v in C_RESULTS.items() if k.startswith("hybrid") and k.endswith(p)]
+            for p in ("inversion", "curvefit", "smoother")
+        },
+        "default fit": [C_RESULTS[DEFAULT_CASE]] if DEFAULT_CASE in C_RESULTS else [],
+    }
+    inside = [v[5] for v in C_RESULTS.values()]
     print(
-        f"\nC: {len(every)} models; max |c - py| / |py|: rbf {top(rbf, 0):.3g}, all {top(every, 0):.3g} "
-        f"({max(C_RESULTS, key=lambda k: C_RESULTS[k][0])}); max |c - py| / S: {top(every, 1):.3g}; "
-        f"compile+link per model {np.median([v[2] for v in every]):.2f} s (median), {top(every, 2):.2f} s (max); "
-        f"against the exactly summed terms, rbf: c {top(rbf, 3):.3g}, numpy {top(rbf, 4):.3g}; all: c "
-        f"{top(every, 3):.3g}, numpy {top(every, 4):.3g}; max |c - py| / |py| where |py| >= S/10: {top(every, 5):.3g}"
+        f"\nC: {len(C_RESULTS)} models, one build of all {c_driver[2]:.1f} s; rows in range "
+        f"{min(inside):.0%} to {max(inside):.0%}, {np.mean(inside):.0%} on average"
     )
+    for label, values in groups.items():
+        if values:
+            print(
+                f"  {label} ({len(values)}): max |c - py| / |py| {max(v[0] for v in values):.3g}, / S "
+                f"{max(v[1] for v in values):.3g}; against the exact sum: c {max(v[2] for v in values):.3g}, "
+                f"numpy {max(v[3] for v in values):.3g}; where |py| >= S/10: {max(v[4] for v in values):.3g}"
+            )
+    print(f"  worst |c - py| / |py|: {max(C_RESULTS, key=lambda k: C_RESULTS[k][0])}")
     assert max(v[1] for v in C_RESULTS.values()) < TOL
 
 
@@ -359,17 +574,18 @@ publish = false
 
 _RUST_RUNNER = """use gyrodrift_export_check as g;
 
-/// Rows "u0 u1 u2 u3 python bound inside f...": checks one model, prints its worst relative errors.
-fn run(name: &str, data: &str, eval: &dyn Fn(&[f64]) -> (f64, bool, Vec<f64>)) {
+/// Rows "u0 .. uN-1 python bound S inside physics f...": checks one model, prints its worst relative errors.
+fn run(name: &str, data: &str, eval: &dyn Fn(&[f64]) -> (f64, bool, f64, Vec<f64>)) {
     let (mut rel, mut rel_s, mut n) = (0.0_f64, 0.0_f64, 0usize);
     for line in data.lines() {
         let v: Vec<f64> = line.split(' ').map(|t| t.parse::<f64>().unwrap()).collect();
-        let (pred, inside, features) = eval(&v[0..4]);
-        let (python, bound, scale) = (v[4], v[5], v[6]);
+        let (pred, inside, physics, features) = eval(&v[0..N_ALL]);
+        let (python, bound, scale) = (v[N_ALL], v[N_ALL + 1], v[N_ALL + 2]);
         let err = (pred - python).abs();
         assert!(err <= bound, "{name}: row {n}: {pred:e} vs python {python:e}");
-        assert_eq!(inside, v[7] != 0.0, "{name}: row {n}: range check");
-        assert_eq!(features, v[8..].to_vec(), "{name}: row {n}: features");
+        assert_eq!(inside, v[N_ALL + 3] != 0.0, "{name}: row {n}: range check");
+        assert_eq!(physics.to_bits(), v[N_ALL + 4].to_bits(), "{name}: row {n}: physics estimate");
+        assert_eq!(features, v[N_ALL + 5..].to_vec(), "{name}: row {n}: features");
         rel = rel.max(err / python.abs());
         rel_s = rel_s.max(err / scale);
         n += 1;
@@ -388,24 +604,24 @@ def test_rust_export_reproduces_python(fitted, tmp_path_factory):
     (project / "data").mkdir()
     (project / "Cargo.toml").write_text(_CARGO_TOML)
     lib = ["#![no_std]", "// Every exported model, compiled without std."]
-    tests = [_RUST_RUNNER]
+    tests = [_RUST_RUNNER.replace("N_ALL", str(len(ALL)))]
     names = {}
-    for i, case_id in enumerate([*CASE_IDS, COS_CASE]):
+    for i, case_id in enumerate(ALL_CASES):
         model, rows, exp = fitted[case_id]
-        module = f"m{i:02d}"
+        module = f"m{i:03d}"
         names[module] = case_id
         text = _export(case_id, model, "rust")["gyrodrift_model.rs"]
         (project / "src" / f"{module}.rs").write_text(text)
         lib.append(f"pub mod {module};")
         bound = TOL * np.maximum(np.abs(exp["pred"]), exp["scale"])
         lines = []
-        for r in range(N_ROWS):
-            values = [getattr(rows, n)[r] for n in RAW]
-            values += [exp["pred"][r], bound[r], exp["scale"][r], float(exp["inside"][r]), *exp["features"][r]]
-            lines.append(" ".join(repr(float(v)) for v in values))
+        for r, inputs in enumerate(_rows_text(rows).splitlines()):
+            values = [exp["pred"][r], bound[r], exp["scale"][r], float(exp["inside"][r]), exp["physics"][r]]
+            lines.append(" ".join([inputs, *(repr(float(v)) for v in [*values, *exp["features"][r]])]))
         (project / "data" / f"{module}.txt").write_text("\n".join(lines) + "\n")
-        fields = ", ".join(f"{n}: u[{k}]" for k, n in enumerate(RAW) if f"pub {n}: f64" in text)
+        fields = ", ".join(f"{n}: u[{k}]" for k, n in enumerate(ALL) if f"pub {n}: f64" in text)
         math = ", ".join(f"{fn}: f64::{fn}" for fn in ("exp", "cos") if f"pub {fn}: fn(f64) -> f64" in text)
+        physics = "m::physics_deg_h(&inputs, &math)" if model.target == "residual" else "0.0"
         tests.append(
             f"""
 #[test]
@@ -414,7 +630,7 @@ fn {module}() {{
     let math = m::Math {{ {math} }};
     run("{module}", include_str!("../data/{module}.txt"), &|u: &[f64]| {{
         let inputs = m::Inputs {{ {fields} }};
-        (m::drift_deg_h(&inputs, &math), m::in_range(&inputs, &math), m::features(&inputs, &math).to_vec())
+        (m::drift_deg_h(&inputs, &math), m::in_range(&inputs, &math), {physics}, m::features(&inputs, &math).to_vec())
     }});
 }}
 """
@@ -441,13 +657,22 @@ fn {module}() {{
     results = {}
     for module, rel, rel_s in re.findall(r"RESULT (m\d+) (\S+) (\S+)\n", run.stdout):
         results[names[module]] = (float(rel), float(rel_s))
-    assert set(results) == {*CASE_IDS, COS_CASE}
-    rbf = [v for k, v in results.items() if k.endswith("-rbf")]
-    print(
-        f"\nRust: {len(results)} models; max |rs - py| / |py|: rbf {max(v[0] for v in rbf):.3g}, all "
-        f"{max(v[0] for v in results.values()):.3g}; max |rs - py| / S: {max(v[1] for v in results.values()):.3g}; "
-        f"cargo test build of all {len(results)} modules {compile_s:.1f} s"
-    )
+    assert set(results) == set(ALL_CASES)
+    groups = {
+        "rbf": [v for k, v in results.items() if "-rbf" in k and "hybrid" not in k],
+        "all target drift": [v for k, v in results.items() if "hybrid" not in k and k != DEFAULT_CASE],
+        **{
+            f"hybrid {p}": [v for k, v in results.items() if k.startswith("hybrid") and k.endswith(p)]
+            for p in ("inversion", "curvefit", "smoother")
+        },
+        "default fit": [results[DEFAULT_CASE]],
+    }
+    print(f"\nRust: {len(results)} models, cargo test build of all {compile_s:.1f} s")
+    for label, values in groups.items():
+        print(
+            f"  {label} ({len(values)}): max |rs - py| / |py| {max(v[0] for v in values):.3g}, "
+            f"/ S {max(v[1] for v in values):.3g}"
+        )
 
 
 # --- the command --------------------------------------------------------------------------------------------
@@ -458,6 +683,17 @@ def model_file(tmp_path_factory, fitted):
     path = tmp_path_factory.mktemp("model") / "model.json"
     save_model(fitted[CASE_IDS[0]][0], path)
     return path
+
+
+def test_cli_exports_the_default_fit_model_as_a_hybrid(default_fit_file, tmp_path):
+    r = CliRunner().invoke(main, ["export", "--model", str(default_fit_file), "--lang", "c", "--out", str(tmp_path)])
+    assert r.exit_code == 0, r.output
+    assert "hybrid on drift_inversion_deg_h" in r.output
+    args = ["export", "--model", str(default_fit_file), "--lang", "rust", "--out", str(tmp_path), "--json"]
+    r = CliRunner().invoke(main, args)
+    assert r.exit_code == 0, r.output
+    doc = json.loads(r.stdout)  # one JSON document; the "wrote" line goes to stderr
+    assert (doc["encoding"], doc["target"], doc["physics_column"]) == ("physics", "residual", "drift_inversion_deg_h")
 
 
 def test_cli_writes_c_and_rust_into_one_folder(model_file, tmp_path):

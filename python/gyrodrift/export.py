@@ -1,8 +1,12 @@
 """Code generation: a fitted drift model as a C99 header/source pair or a ``no_std`` Rust module.
 
 The generated code computes the identified axial drift [deg/h] on the navigation computer from the raw run
-inputs the model's encoding reads (latitude at the 12th hour of free navigation [deg], site latitude [deg],
-temperature extremes over the 12 h [deg C]), exactly as ``DriftModel.predict`` does: the encoding's features
+inputs the model reads (latitude at the 12th hour of free navigation [deg], site latitude [deg], temperature
+extremes over the 12 h [deg C]), exactly as ``DriftModel.predict`` does. A hybrid model (``target="residual"``)
+returns its physics estimate plus the learned correction: the 12 h inversion of the latitude error is computed
+inside (`PHYSICS_EXPRESSIONS`, the operations of `gyrodrift.baselines.physics_inversion`); the 12 h curve fit and
+the 16 h smoother are computed by the navigation computer itself and passed in as one more input
+(`PHYSICS_INPUTS`, deg/h). The learned part is the encoding's features
 (`FEATURE_EXPRESSIONS`, the same operations as `gyrodrift.encodings.encode`), the scaler, the kernel (the
 conventions of `gyrodrift.kernels`: rbf ``exp(-|x - z|^2 / sigma^2)``, linear ``x . z``, polynomial
 ``(x . z / sigma^2 + coef0)^degree``), the support vectors, alpha and the intercept. Every float is printed with
@@ -38,7 +42,10 @@ from gyrodrift.errors import InputError, OptionError
 
 __all__ = [
     "FEATURE_EXPRESSIONS",
+    "INPUTS",
     "LANGUAGES",
+    "PHYSICS_EXPRESSIONS",
+    "PHYSICS_INPUTS",
     "RAW_INPUTS",
     "ExportSpec",
     "FeatureExpression",
@@ -61,12 +68,22 @@ RAW_INPUTS: dict[str, str] = {
 }
 """The raw run inputs (`gyrodrift.runs.RunTable` columns) a generated function can read, with their units."""
 
+PHYSICS_INPUTS: dict[str, str] = {
+    "drift_curvefit_deg_h": "axial drift from the navigation computer's 12 h curve fit of the latitude error [deg/h]",
+    "drift_smoother_deg_h": "axial drift from the navigation computer's 16 h smoother over the alignment log [deg/h]",
+}
+"""Physics estimates of a hybrid model that the navigation computer computes itself: run-table columns passed
+to the generated function as one more input (`gyrodrift.choices.PHYSICS_COLUMNS` other than the inversion)."""
+
+INPUTS: dict[str, str] = {**RAW_INPUTS, **PHYSICS_INPUTS}
+"""Every input a generated function can read, in the order of its fields, with its unit."""
+
 
 @dataclass(frozen=True)
 class FeatureExpression:
     """How one feature of `gyrodrift.choices.ENCODINGS` is computed from the raw inputs in generated code.
 
-    ``c`` and ``rust`` are expression templates: ``{lat_deg}`` and the other `RAW_INPUTS` stand for the input
+    ``c`` and ``rust`` are expression templates: ``{lat_deg}`` and the other `INPUTS` stand for the input
     fields, ``{cos}`` (and any other name in ``functions``) for the math function, so that the same operations,
     in the same order, as `gyrodrift.encodings.encode` are written in each language.
     """
@@ -116,6 +133,17 @@ FEATURE_EXPRESSIONS: dict[str, FeatureExpression] = {
 """Every feature name of every encoding, as generated C and Rust (tests/test_export.py checks that none is
 missing: a new encoding must add its features here)."""
 
+PHYSICS_EXPRESSIONS: dict[str, FeatureExpression] = {
+    # gyrodrift.model.physics_estimate: physics_inversion(runs, t_h=12.0), the same operations as the feature
+    "drift_inversion_deg_h": FeatureExpression(("lat_deg", "lat0_deg"), _DRIFT_EQUIV, _DRIFT_EQUIV, "deg/h", ("cos",)),
+    **{
+        name: FeatureExpression((name,), f"{{{name}}}", f"{{{name}}}", "deg/h")
+        for name in ("drift_curvefit_deg_h", "drift_smoother_deg_h")
+    },
+}
+"""The physics estimate of a hybrid model (``physics_column``, `gyrodrift.choices.PHYSICS_COLUMNS`) in generated
+code: the 12 h inversion computed from the latitudes, or an input (`PHYSICS_INPUTS`) read as it is."""
+
 _PREFIX = "gyrodrift_model"
 
 
@@ -123,14 +151,18 @@ _PREFIX = "gyrodrift_model"
 class ExportSpec:
     """Everything the generated code needs, as plain numbers (read from a fitted `DriftModel`).
 
-    ``input_ranges`` and ``feature_ranges`` hold (min, max) of each raw input (``inputs``) and of each feature
-    (``feature_names``) over the training runs, in their units; ``mean``/
+    ``input_ranges`` and ``feature_ranges`` hold (min, max) of each input (``inputs``, `INPUTS`: the raw inputs the
+    features or the physics estimate read, then a physics column passed in) and of each feature (``feature_names``)
+    over the training runs, in their units; ``physics`` is the hybrid's physics column (None when the model
+    learns the drift itself, ``target="drift"``); ``mean``/
     ``scale`` (standard: ``(x - mean) / scale``) or ``scale``/``offset`` (minmax: ``x * scale + offset``)
     the scaler; ``support_vectors`` are in scaled units.
     """
 
     encoding: str
     scaling: str
+    target: str
+    physics: str | None
     feature_names: tuple[str, ...]
     inputs: tuple[str, ...]
     functions: tuple[str, ...]
@@ -169,12 +201,21 @@ def export_spec(model, *, model_sha256: str | None = None) -> ExportSpec:
     """The numbers of a fitted `gyrodrift.model.DriftModel` that the generated code needs.
 
     ``model_sha256`` (the SHA-256 of the model file's bytes, if known) is recorded in the provenance.
-    Raises `InputError` if a feature of the model's encoding has no entry in `FEATURE_EXPRESSIONS`.
+    Raises `InputError` if a feature of the model's encoding has no entry in `FEATURE_EXPRESSIONS`, or a hybrid's
+    physics column none in `PHYSICS_EXPRESSIONS`.
+
+    Prediction needs only what is read here: the features, the scaler, the support vectors, alpha, the intercept
+    and the physics estimate. How the fit got there (label weights ``C_i = gamma w_i``, left-out runs, the tuning)
+    is folded into alpha and the intercept.
     """
-    if getattr(model, "target", "drift") != "drift":
+    target = str(getattr(model, "target", "drift"))
+    physics = str(model.physics_column) if target == "residual" else None
+    if target not in ("drift", "residual"):
+        raise InputError(f"unknown model target {target!r}; expected drift or residual")
+    if physics is not None and physics not in PHYSICS_EXPRESSIONS:
         raise InputError(
-            "a hybrid model (target residual: physics estimate + learned correction) cannot be exported yet; "
-            "refit it with --target drift to export"
+            f"physics column {physics!r} of the hybrid model has no C/Rust expression in "
+            "gyrodrift.export.PHYSICS_EXPRESSIONS; it cannot be exported"
         )
     names = tuple(model.feature_names)
     missing = [name for name in names if name not in FEATURE_EXPRESSIONS]
@@ -183,8 +224,11 @@ def export_spec(model, *, model_sha256: str | None = None) -> ExportSpec:
             f"encoding {model.encoding!r}: feature {', '.join(missing)} has no C/Rust expression in "
             "gyrodrift.export.FEATURE_EXPRESSIONS; it cannot be exported"
         )
-    inputs = tuple(name for name in RAW_INPUTS if any(name in FEATURE_EXPRESSIONS[f].inputs for f in names))
-    functions = tuple(sorted({fn for f in names for fn in FEATURE_EXPRESSIONS[f].functions}))
+    exprs = [FEATURE_EXPRESSIONS[f] for f in names]
+    if physics is not None:
+        exprs.append(PHYSICS_EXPRESSIONS[physics])
+    inputs = tuple(name for name in INPUTS if any(name in e.inputs for e in exprs))
+    functions = tuple(sorted({fn for e in exprs for fn in e.functions}))
     training = dict(model.training)
     if not re.fullmatch(r"[0-9a-f]{64}", str(training.get("sha256", ""))):
         raise InputError(f"the model's training digest is not a SHA-256 hex digest: {training.get('sha256')!r}")
@@ -205,9 +249,12 @@ def export_spec(model, *, model_sha256: str | None = None) -> ExportSpec:
         mean, scale = np.asarray(scaler.mean_, float), np.asarray(scaler.scale_, float)
     elif model.scaling == "minmax":
         scale, offset = np.asarray(scaler.scale_, float), np.asarray(scaler.min_, float)
+    input_values = [runs.column(n) if n in PHYSICS_INPUTS else getattr(runs, n) for n in inputs]
     return ExportSpec(
         encoding=model.encoding,
         scaling=model.scaling,
+        target=target,
+        physics=physics,
         feature_names=names,
         inputs=inputs,
         functions=functions,
@@ -222,7 +269,7 @@ def export_spec(model, *, model_sha256: str | None = None) -> ExportSpec:
         mean=mean,
         scale=scale,
         offset=offset,
-        input_ranges=_ranges(np.column_stack([getattr(runs, name) for name in inputs])),
+        input_ranges=_ranges(np.column_stack(input_values)),
         feature_ranges=_ranges(encode(runs, model.encoding)),
         training=training,
         model_sha256=model_sha256,
@@ -279,14 +326,30 @@ def _provenance_lines(spec: ExportSpec) -> list[str]:
         f"Hyperparameters: gamma = {_lit(spec.gamma)}, sigma = {_lit(spec.sigma)} (scaled input units)"
         + (f", degree = {spec.degree}, coef0 = {_lit(spec.coef0)}" if spec.kernel == "poly" else ""),
         f"Support vectors: {spec.support_vectors.shape[0]}",
-        "Inputs read, with their range over the training runs (the range check refuses inputs outside it):",
+        "Label weighting at fit time: "
+        + ("weighted by drift_std_deg_h" if training.get("weighted") else "none")
+        + " (folded into alpha and the intercept; nothing at prediction time)",
     ]
+    if spec.physics is None:
+        lines.append("Target: drift (the learned function is the drift)")
+    else:
+        how = (
+            "computed here from lat_deg and lat0_deg (gyrodrift.baselines.physics_inversion at 12 h)"
+            if spec.physics == "drift_inversion_deg_h"
+            else "an input, computed by the navigation computer"
+        )
+        lines.append(
+            "Target: residual (hybrid): drift = physics estimate + learned correction; "
+            f"physics estimate: {spec.physics} [deg/h], {how}"
+        )
+    lines.append("Inputs read, with their range over the training runs (the range check refuses inputs outside it):")
     for name, (lo, hi) in zip(spec.inputs, spec.input_ranges, strict=True):
-        lines.append(f"  {name}: [{_lit(lo)}, {_lit(hi)}], {RAW_INPUTS[name]}")
+        lines.append(f"  {name}: [{_lit(lo)}, {_lit(hi)}], {INPUTS[name]}")
     lines.append("Features, with their range over the training runs (checked too):")
     for name, (lo, hi) in zip(spec.feature_names, spec.feature_ranges, strict=True):
         lines.append(f"  {name}: [{_lit(lo)}, {_lit(hi)}] {FEATURE_EXPRESSIONS[name].unit}")
-    lines.append("Output: identified axial gyro drift [deg/h] (subtract it from the z-gyro output).")
+    total = "" if spec.physics is None else " = physics estimate + learned correction"
+    lines.append(f"Output: identified axial gyro drift [deg/h]{total} (subtract it from the z-gyro output).")
     return lines
 
 
@@ -298,16 +361,17 @@ def _kernel_formula(spec: ExportSpec) -> str:
     return "poly, K(x, z) = (x . z / sigma^2 + coef0)^degree"
 
 
+def _expression(expr: FeatureExpression, lang: str, field: str, function: str) -> str:
+    """``expr`` in ``lang``, reading inputs as ``field.format(name)`` and functions as ``function.format(name)``."""
+    template = expr.c if lang == "c" else expr.rust
+    subst = {inp: field.format(inp) for inp in INPUTS}
+    subst.update({fn: function.format(fn) for fn in expr.functions})
+    return template.format(**subst)
+
+
 def _feature_exprs(spec: ExportSpec, lang: str, field: str, function: str) -> list[str]:
-    """The expression of each feature in ``lang``, reading inputs as ``field.format(name)``."""
-    out = []
-    for name in spec.feature_names:
-        expr = FEATURE_EXPRESSIONS[name]
-        template = expr.c if lang == "c" else expr.rust
-        subst = {inp: field.format(inp) for inp in RAW_INPUTS}
-        subst.update({fn: function.format(fn) for fn in expr.functions})
-        out.append(template.format(**subst))
-    return out
+    """The expression of each feature in ``lang`` (see `_expression`)."""
+    return [_expression(FEATURE_EXPRESSIONS[name], lang, field, function) for name in spec.feature_names]
 
 
 # --- C ---------------------------------------------------------------------------------------------------
@@ -328,7 +392,24 @@ def _c_files(spec: ExportSpec) -> dict[str, str]:
     guard = U + "_H"
     nf, nsv, ni = len(spec.feature_names), spec.support_vectors.shape[0], len(spec.inputs)
     prov = "\n".join(" * " + line if line else " *" for line in _provenance_lines(spec))
-    fields = "\n".join(f"    double {name}; /* {RAW_INPUTS[name]} */" for name in spec.inputs)
+    fields = "\n".join(f"    double {name}; /* {INPUTS[name]} */" for name in spec.inputs)
+    learned = f"{P}_drift_deg_h" if spec.physics is None else f"{P}_correction_deg_h"
+    if spec.physics is None:
+        physics_macro = ""
+        drift_decl = f"""/* The identified axial gyro drift [deg/h]; check {P}_in_range first: the model does not
+ * extrapolate. */
+double {P}_drift_deg_h(const {P}_inputs *inputs);"""
+    else:
+        physics_macro = f'#define {U}_PHYSICS "{spec.physics}"\n'
+        drift_decl = f"""/* The physics estimate [deg/h]: {_physics_doc(spec)}. */
+double {P}_physics_deg_h(const {P}_inputs *inputs);
+
+/* The learned correction [deg/h] added to the physics estimate. */
+double {P}_correction_deg_h(const {P}_inputs *inputs);
+
+/* The identified axial gyro drift [deg/h]: physics estimate + learned correction.
+ * Check {P}_in_range first: the model does not extrapolate. */
+double {P}_drift_deg_h(const {P}_inputs *inputs);"""
     header = f"""/*
  * {header_name}: the identified axial gyro drift model, C99, no allocation, no I/O, const data only.
  *
@@ -342,11 +423,12 @@ def _c_files(spec: ExportSpec) -> dict[str, str]:
 #define {U}_ENCODING "{spec.encoding}"
 #define {U}_SCALING "{spec.scaling}"
 #define {U}_KERNEL "{spec.kernel}"
-#define {U}_N_INPUTS {ni}
+#define {U}_TARGET "{spec.target}"
+{physics_macro}#define {U}_N_INPUTS {ni}
 #define {U}_N_FEATURES {nf}
 #define {U}_N_SUPPORT_VECTORS {nsv}
 
-/* The raw run inputs the model reads. */
+/* The inputs the model reads. */
 typedef struct {P}_inputs {{
 {fields}
 }} {P}_inputs;
@@ -370,8 +452,7 @@ void {P}_features(const {P}_inputs *inputs, double features[{U}_N_FEATURES]);
 /* 1 when every input and every feature lies within its training range (NaN never does), else 0. */
 int {P}_in_range(const {P}_inputs *inputs);
 
-/* The identified axial gyro drift [deg/h]; check {P}_in_range first: the model does not extrapolate. */
-double {P}_drift_deg_h(const {P}_inputs *inputs);
+{drift_decl}
 
 #endif /* {guard} */
 """
@@ -470,7 +551,7 @@ int {P}_in_range(const {P}_inputs *inputs)
     return 1;
 }}
 
-double {P}_drift_deg_h(const {P}_inputs *inputs)
+double {learned}(const {P}_inputs *inputs)
 {{
     double x[{U}_N_FEATURES];
     double acc = 0.0;
@@ -483,14 +564,34 @@ double {P}_drift_deg_h(const {P}_inputs *inputs)
     return acc + {P}_intercept;
 }}
 """
+    if spec.physics is not None:
+        physics = _expression(PHYSICS_EXPRESSIONS[spec.physics], "c", "inputs->{}", "{}")
+        source += f"""
+double {P}_physics_deg_h(const {P}_inputs *inputs)
+{{
+    return {physics};
+}}
+
+double {P}_drift_deg_h(const {P}_inputs *inputs)
+{{
+    return {P}_correction_deg_h(inputs) + {P}_physics_deg_h(inputs);
+}}
+"""
     return {header_name: header, source_name: source}
+
+
+def _physics_doc(spec: ExportSpec) -> str:
+    """What the physics estimate of a hybrid is, for a comment."""
+    if spec.physics == "drift_inversion_deg_h":
+        return "the 12 h inversion of the latitude error, w_ie dL / (cos(lat0) (1 - cos(w_ie 12 h)))"
+    return f"the input {spec.physics}, computed by the navigation computer"
 
 
 def _numerics_note(spec: ExportSpec, marker: str) -> str:
     """Where the generated arithmetic may differ from numpy's in the last bits (comment lines)."""
     parts = ["the kernel sum (accumulated in support-vector order; numpy hands it to BLAS)"]
-    if "exp" in spec.functions:
-        parts.append("exp (the target's libm; numpy may use its own)")
+    if spec.functions:
+        parts.append(f"{' and '.join(spec.functions)} (the target's libm; numpy may use its own)")
     if spec.kernel == "poly" and spec.degree > 2:
         parts.append("the integer power (repeated multiplication; numpy calls pow)")
     text = (
@@ -528,7 +629,7 @@ def _rust_files(spec: ExportSpec) -> dict[str, str]:
     (file_name,) = LANGUAGES["rust"]
     nf, nsv, ni = len(spec.feature_names), spec.support_vectors.shape[0], len(spec.inputs)
     prov = "\n".join("//! " + line if line else "//!" for line in _provenance_lines(spec))
-    fields = "\n".join(f"    /// {RAW_INPUTS[n]}\n    pub {n}: f64," for n in spec.inputs)
+    fields = "\n".join(f"    /// {INPUTS[n]}\n    pub {n}: f64," for n in spec.inputs)
     math_fields = "\n".join(
         f"    /// `{fn}` of an f64 (e.g. `libm::{fn}`, or `f64::{fn}` with std)\n    pub {fn}: fn(f64) -> f64,"
         for fn in spec.functions
@@ -583,6 +684,33 @@ def _rust_files(spec: ExportSpec) -> dict[str, str]:
             kval *= base;
         }}"""
     x_binding = "let x" if spec.scaling == "none" else "let mut x"
+    learned = "drift_deg_h" if spec.physics is None else "correction_deg_h"
+    if spec.physics is None:
+        learned_doc = (
+            "/// The identified axial gyro drift [deg/h]; check [`in_range`] first: the model does not extrapolate."
+        )
+        physics_macro = hybrid_fns = ""
+    else:
+        learned_doc = "/// The learned correction [deg/h] added to the physics estimate ([`physics_deg_h`])."
+        physics_macro = f"""/// Physics estimate of the hybrid model (`physics_column`).
+pub const PHYSICS: &str = "{spec.physics}";
+"""
+        expr = PHYSICS_EXPRESSIONS[spec.physics]
+        physics_math = "math" if expr.functions else "_math"
+        hybrid_fns = f"""
+/// The physics estimate [deg/h]: {_physics_doc(spec)}.
+#[must_use]
+pub fn physics_deg_h(inputs: &Inputs, {physics_math}: &Math) -> f64 {{
+    {_expression(expr, "rust", "inputs.{}", "(math.{})")}
+}}
+
+/// The identified axial gyro drift [deg/h]: physics estimate + learned correction; check [`in_range`] first: the
+/// model does not extrapolate.
+#[must_use]
+pub fn drift_deg_h(inputs: &Inputs, math: &Math) -> f64 {{
+    correction_deg_h(inputs, math) + physics_deg_h(inputs, math)
+}}
+"""
     text = f"""//! {file_name}: the identified axial gyro drift model, `no_std` (only `core`), no allocation, no I/O.
 //!
 {prov}
@@ -600,14 +728,16 @@ pub const ENCODING: &str = "{spec.encoding}";
 pub const SCALING: &str = "{spec.scaling}";
 /// Kernel of the LSSVR.
 pub const KERNEL: &str = "{spec.kernel}";
-/// Number of raw inputs (fields of [`Inputs`]).
+/// What the LSSVR learned: "drift", or "residual" (hybrid: drift = physics estimate + learned correction).
+pub const TARGET: &str = "{spec.target}";
+{physics_macro}/// Number of raw inputs (fields of [`Inputs`]).
 pub const N_INPUTS: usize = {ni};
 /// Number of features.
 pub const N_FEATURES: usize = {nf};
 /// Number of support vectors (training runs).
 pub const N_SUPPORT_VECTORS: usize = {nsv};
 
-/// The raw run inputs the model reads.
+/// The inputs the model reads.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Inputs {{
 {fields}
@@ -662,9 +792,9 @@ pub fn in_range(inputs: &Inputs, math: &Math) -> bool {{
     within(&INPUT_RANGES, &[{input_values}]) && within(&FEATURE_RANGES, &features(inputs, math))
 }}
 
-/// The identified axial gyro drift [deg/h]; check [`in_range`] first: the model does not extrapolate.
+{learned_doc}
 #[must_use]
-pub fn drift_deg_h(inputs: &Inputs, math: &Math) -> f64 {{
+pub fn {learned}(inputs: &Inputs, math: &Math) -> f64 {{
     {x_binding} = features(inputs, math);
 {scale_loop}    let mut acc = 0.0_f64;
     for (sv, &alpha) in SUPPORT_VECTORS.iter().zip(ALPHA.iter()) {{
@@ -673,5 +803,5 @@ pub fn drift_deg_h(inputs: &Inputs, math: &Math) -> f64 {{
     }}
     acc + INTERCEPT
 }}
-"""
+{hybrid_fns}"""
     return {file_name: text}

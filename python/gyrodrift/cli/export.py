@@ -36,7 +36,9 @@ def export_command(model_file: Path, lang: str, out_dir: Path, as_json: bool, qu
     """Write the --model file as source code computing the identified drift [deg/h] on a navigation computer.
 
     The code carries the model's provenance and the training ranges of its inputs, with a function saying
-    whether an input lies within them (docs/export.md).
+    whether an input lies within them (docs/export.md). A hybrid model (the default of `fit`) returns its
+    physics estimate plus the learned correction: the 12 h inversion is computed from the latitudes; the curve
+    fit or the smoother is one more input [deg/h] that the navigation computer computes.
     """
     import hashlib
 
@@ -53,9 +55,19 @@ def export_command(model_file: Path, lang: str, out_dir: Path, as_json: bool, qu
         for name, text in files.items():
             stage.file(name).write_text(text, encoding="utf-8")
     paths = [out_dir / name for name in names]
+    physics = model.physics_column if model.target == "residual" else None
     if as_json:
-        print_json({"files": [str(p) for p in paths], "encoding": model.encoding, "kernel": model.lssvr.kernel})
-    say_wrote(paths, quiet=quiet, as_json=as_json, detail=f"{model.encoding}, {model.lssvr.kernel}")
+        print_json(
+            {
+                "files": [str(p) for p in paths],
+                "encoding": model.encoding,
+                "kernel": model.lssvr.kernel,
+                "target": model.target,
+                "physics_column": physics,
+            }
+        )
+    detail = f"{model.encoding}, {model.lssvr.kernel}" + ("" if physics is None else f", hybrid on {physics}")
+    say_wrote(paths, quiet=quiet, as_json=as_json, detail=detail)
 
 
 COMMANDS = (export_command,)
