@@ -230,6 +230,10 @@ def run_study(
     hours = set(np.round(ok.numbers("hours_truth"), 6))
     if len(hours) > 1:
         raise InputError(f"the runs were navigated over different truth spans ({sorted(hours)} h)")
+    if "label_flagged" in ok.columns:
+        flagged = int(np.sum([bool(v) for v in ok["label_flagged"]]))
+        if flagged:
+            notes.append(f"{flagged} run(s) have a truth label beyond the 1 nmi / 72 h budget (label_flagged)")
     tr_idx, te_idx = split_runs(len(ok), test_fraction, seed)
     table = run_table(ok, source="campaign")
     train, test = table.select(tr_idx), table.select(te_idx)
@@ -304,12 +308,14 @@ def run_study(
     edges = np.quantile(lat, np.linspace(0, 1, latitude_bins + 1)) if len(lat) else np.zeros(2)
     which = np.clip(np.searchsorted(edges, lat, side="right") - 1, 0, latitude_bins - 1)
     by_lat: dict[str, Any] = {"edges_deg": edges, "center_deg": [], "n": [], "rms_eff": {n: [] for n in methods}}
+    by_lat["limit_deg_h"] = []
     for b in range(latitude_bins):
         sel = which == b
         if not sel.any():
             continue
         by_lat["center_deg"].append(float(np.mean(lat[sel])))
         by_lat["n"].append(int(sel.sum()))
+        by_lat["limit_deg_h"].append(_rms(smoother_std[sel]) if has_smoother else math.nan)
         for n, m in methods.items():
             by_lat["rms_eff"][n].append(_rms((effective - m.pred)[sel]))
     return StudyResult(

@@ -104,6 +104,7 @@ def make_figures(doc: dict) -> dict[str, bytes]:
         if xlog:
             ax.set_xscale("log")
             ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+            ax.set_xticks(list(x), [f"{v:g}" for v in x])
         ax.set_xlabel(xlabel)
         ax.set_ylabel("RMS error vs effective drift [deg/h]")
         ax.grid(True, which="both", alpha=0.3)
@@ -142,6 +143,7 @@ def make_figures(doc: dict) -> dict[str, bytes]:
         bl["center_deg"],
         {n: [math.nan if v is None else v for v in bl["rms_eff"][n]] for n in shown},
         "site latitude (held-out runs, mean of the bin) [deg]",
+        limit=bl.get("limit_deg_h"),
     )
     return out
 
