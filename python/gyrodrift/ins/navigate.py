@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import math
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -20,6 +20,7 @@ from gyrodrift.ins.nav_errors import attitude_errors_arcsec, position_errors
 from gyrodrift.ins.scenario import Scenario
 from gyrodrift.ins.simulate import PARQUET_OPTIONS, ImuData
 from gyrodrift.ins.stream import Track, run_navigators
+from gyrodrift.ins.track import ReferenceTrack, load_track, route_of
 from gyrodrift.logs import DEFAULT_CHUNK_SAMPLES, ImuLog, LogError, LogTruth, open_log
 from gyrodrift.site import Site
 from gyrodrift.units import DEG, DEG_PER_H, HOUR, MICRO_G
@@ -209,6 +210,7 @@ def navigate(
     timeline: Any = None,
     decimation_s: float = 1.0,
     vertical: str = "fixed",
+    reference: Any = None,
     out_dir: str | os.PathLike[str] | OutputFolder | None = None,
     plot: bool = False,
     chunk_samples: int = DEFAULT_CHUNK_SAMPLES,
@@ -247,7 +249,14 @@ def navigate(
     decimation_s : float
         Keep the state every `decimation_s` [s] (rounded to whole samples, counted from the navigation start).
     vertical : {"fixed", "damped"}
-        Vertical channel of the core navigator ("fixed": height held, static base).
+        Vertical channel of the core navigator ("fixed": height held, static base or a level route; "damped": a
+        second-order loop towards the initial height).
+    reference : ReferenceTrack or path, optional
+        Moving base: the true track the position errors are computed against, interpolated to the kept samples
+        (`gyrodrift.ins.track`: a `ReferenceTrack` or a GNSS CSV/Parquet file with ``t_s, lat_deg, lon_deg,
+        height_m`` and optionally ``vel_{e,n,u}_m_s``, times on the log's time base). Default: the simulated route
+        when the source is a moving-base scenario or its imu.parquet (``[trajectory]``), else the static site.
+        A track that does not cover the navigated span is a `gyrodrift.ins.track.TrackError`.
     out_dir : path-like or gyrodrift.atomic.OutputFolder, optional
         If given, write ``nav.parquet`` and ``summary.json`` there, published together (`write_navigation`);
         the folder is checked before navigating (docs/outputs.md): an input file is never replaced.
@@ -337,6 +346,9 @@ def navigate(
             f"{n_total} sample(s){after}, shorter than one output step ({dec / rate:g} s = {dec} samples)"
         )
 
+    ref = _reference_track(reference, imu)
+    if ref is not None:
+        ref.require_cover(start / rate, (start + n_total) / rate, f"navigating {log.label}")
     nav = _core.Navigator(
         _core.NavigatorConfig(
             lat_rad=init["lat_deg"] * DEG,
@@ -383,8 +395,9 @@ def navigate(
         gyro_est=gyro_est,
         accel_est=accel_est,
     )
-    cols = _columns(track, true_deg, log.site)
-    summary = _summary(run, track, cols)
+    truth_at = _truth_at(ref, log.site)
+    cols = _columns(track, true_deg, truth_at, start / rate)
+    summary = _summary(run, track, cols, truth_at, ref)
     folder = None
     if out_dir is not None:
         folder = write_navigation(cols, summary, out_dir, plot=plot)
@@ -406,16 +419,50 @@ class _Run:
     accel_est: list[float]
 
 
-def _columns(track: Track, true_deg: np.ndarray | None, site: Site | None) -> dict[str, np.ndarray]:
-    """nav.parquet columns from the kept states (user units), with errors against the site and true attitude.
+TruthAt = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
+"""The true (lat, lon) [rad] at log times [s]."""
+
+
+def _truth_at(ref: ReferenceTrack | None, site: Site | None) -> TruthAt | None:
+    """The true position over time: the reference track's (moving base), else the static site's, else None."""
+    if ref is not None:
+
+        def along(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            lat, lon, _ = ref.at(t)
+            return lat, lon
+
+        return along
+    if site is None:
+        return None
+    lat0, lon0 = site.lat_deg * DEG, site.lon_deg * DEG
+    return lambda t: (np.full(np.shape(t), lat0), np.full(np.shape(t), lon0))
+
+
+def _reference_track(reference: Any, imu: Any) -> ReferenceTrack | None:
+    """The reference track of `navigate`: given (a ReferenceTrack or a track file), else the simulated route of a
+    moving-base source, else None (static base: the site)."""
+    if isinstance(reference, ReferenceTrack):
+        return reference
+    if reference is not None:
+        return load_track(reference)
+    scenario = route_of(imu)
+    return None if scenario is None else ReferenceTrack.from_scenario(scenario)
+
+
+def _columns(
+    track: Track, true_deg: np.ndarray | None, truth_at: TruthAt | None, start_s: float
+) -> dict[str, np.ndarray]:
+    """nav.parquet columns from the kept states (user units), with errors against the truth (the static site or
+    the reference track at the log time `start_s` + t_s) and the true attitude.
 
     The angles are converted in place (the errors are computed from the radians first), so the kept arrays
     become the columns without a second copy of the output.
     """
     k = track.kept
     errors: dict[str, np.ndarray] = {}
-    if site is not None:
-        pe = position_errors(k["lat_rad"], k["lon_rad"], site.lat_deg * DEG, site.lon_deg * DEG)
+    if truth_at is not None:
+        true_lat, true_lon = truth_at(start_s + k["t_s"])
+        pe = position_errors(k["lat_rad"], k["lon_rad"], true_lat, true_lon)
         errors = {name: pe[name] for name in ("lat_err_arcsec", "lon_err_arcsec", "pos_err_nmi")}
         if true_deg is not None:
             tr = np.deg2rad(true_deg, out=true_deg)
@@ -439,7 +486,13 @@ def _columns(track: Track, true_deg: np.ndarray | None, site: Site | None) -> di
     return cols
 
 
-def _summary(run: _Run, track: Track, cols: Mapping[str, np.ndarray]) -> dict[str, Any]:
+def _summary(
+    run: _Run,
+    track: Track,
+    cols: Mapping[str, np.ndarray],
+    truth_at: TruthAt | None = None,
+    ref: ReferenceTrack | None = None,
+) -> dict[str, Any]:
     """The content of summary.json (user units)."""
     site = run.log.site
     rate = run.log.rate_hz
@@ -449,8 +502,9 @@ def _summary(run: _Run, track: Track, cols: Mapping[str, np.ndarray]) -> dict[st
         d = dict(extra)
         d["lat_deg"] = math.degrees(lat)
         d["lon_deg"] = math.degrees(lon)
-        if site is not None:
-            e = position_errors(lat, lon, site.lat_deg * DEG, site.lon_deg * DEG)
+        if truth_at is not None:
+            true_lat, true_lon = truth_at(np.array([run.start / rate + float(extra["t_h"]) * HOUR]))
+            e = position_errors(lat, lon, true_lat[0], true_lon[0])
             d["lat_err_arcsec"] = float(e["lat_err_arcsec"])
             d["lon_err_arcsec"] = float(e["lon_err_arcsec"])
             d["pos_err_nmi"] = float(e["pos_err_nmi"])
@@ -476,12 +530,13 @@ def _summary(run: _Run, track: Track, cols: Mapping[str, np.ndarray]) -> dict[st
         "truth": None
         if site is None
         else {"lat_deg": site.lat_deg, "lon_deg": site.lon_deg, "height_m": site.height_m},
+        "reference": None if ref is None else ref.label,
         "checkpoints": checkpoints,
         "final": final_pt,
         "final_pos_err_nmi": final_pt["pos_err_nmi"],
         "max_pos_err_nmi": None,
     }
-    if site is not None:
+    if truth_at is not None:
         candidates = [final_pt["pos_err_nmi"]] + [c["pos_err_nmi"] for c in checkpoints]
         if len(cols["pos_err_nmi"]):
             candidates.append(float(np.max(cols["pos_err_nmi"])))

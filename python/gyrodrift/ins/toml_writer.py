@@ -1,4 +1,5 @@
-"""A minimal TOML writer for resolved scenarios: tables of numbers, strings, booleans and number arrays.
+"""A minimal TOML writer for resolved scenarios: tables of numbers, strings, booleans, arrays and inline tables
+(the route segments of ``[trajectory]``).
 
 The standard library reads TOML (`tomllib`) but does not write it; scenarios need only this subset.
 """
@@ -28,7 +29,14 @@ def _value(v: Any, where: str) -> str:
     if isinstance(v, str):
         return json.dumps(v, ensure_ascii=False)  # a JSON string is a valid TOML basic string
     if isinstance(v, (list, tuple)):
+        if any(isinstance(x, Mapping) for x in v):  # an array of inline tables: one per line
+            return "[\n" + "".join(f"  {_value(x, where)},\n" for x in v) + "]"
         return "[" + ", ".join(_value(x, where) for x in v) + "]"
+    if isinstance(v, Mapping):
+        for k in v:
+            if not (isinstance(k, str) and k.replace("_", "").isalnum()):
+                raise ValueError(f"{where}: key {k!r} cannot be written as a bare TOML key")
+        return "{ " + ", ".join(f"{k} = {_value(x, where)}" for k, x in v.items()) + " }"
     raise TypeError(f"{where}: cannot write {type(v).__name__} to TOML")
 
 
