@@ -225,29 +225,43 @@ def truth_command(log, criterion, hours, lat0_deg, lon0_deg, height_m, log_forma
     show_default=True,
     help="Hours of free navigation [h], counted from the end of the 4 h alignment.",
 )
+@click.option(
+    "--reference",
+    "reference",
+    type=click.Path(dir_okay=False, path_type=Path),
+    default=None,
+    help="Moving base: reference track (GNSS CSV/Parquet: t_s, lat_deg, lon_deg, height_m, optional "
+    "vel_e/n/u_m_s; times on the log's time base) to compute the errors against; adds route_map.png. "
+    "Default: the simulated route of a moving-base imu.parquet, else the static site.",
+)
 @site_options
 @log_format_option
 @json_option
 @quiet_option
 def evaluate_command(
-    log, drift_deg_h, model_path, out_dir, hours, lat0_deg, lon0_deg, height_m, log_format, as_json, quiet
+    log, drift_deg_h, model_path, out_dir, hours, reference, lat0_deg, lon0_deg, height_m, log_format, as_json, quiet
 ):
     """Navigate LOG 72 h after alignment without and with compensating the axial drift; plot both errors."""
     from gyrodrift.atomic import OutputFolder
+    from gyrodrift.ins.track import route_of
     from gyrodrift.procedure.evaluate import evaluate_compensation
     from gyrodrift.procedure.identify import identify
-    from gyrodrift.procedure.writers import EVALUATION_FILES, write_evaluation
+    from gyrodrift.procedure.writers import evaluation_files, write_evaluation
 
     if (drift_deg_h is None) == (model_path is None):
         raise click.UsageError("give exactly one of --drift-deg-h or --model")
-    out = OutputFolder(out_dir, "evaluate", EVALUATION_FILES, inputs=[p for p in (log, model_path) if p is not None])
+    moving = reference is not None or route_of(log) is not None
+    inputs = [p for p in (log, model_path, reference) if p is not None]
+    out = OutputFolder(out_dir, "evaluate", evaluation_files(moving), inputs=inputs)
     imu = _open(log, site_from_options(lat0_deg, lon0_deg, height_m), log_format)
     alignment = None
     source = "given"
     if model_path is not None:
         ident = identify(imu, model_path, quiet=quiet)
         drift_deg_h, alignment, source = ident.drift_deg_h, ident.features.alignment, str(model_path)
-    ev = evaluate_compensation(imu, drift_deg_h, hours=hours, alignment=alignment, source=source, quiet=quiet)
+    ev = evaluate_compensation(
+        imu, drift_deg_h, hours=hours, alignment=alignment, source=source, quiet=quiet, reference=reference
+    )
     paths = write_evaluation(ev, out)
     if as_json:
         print_json(ev.to_dict())

@@ -2,12 +2,15 @@
 
 Both navigations run side by side in one read of the log, from the same alignment: "before" subtracts no
 z drift, "after" subtracts ``drift_deg_h`` from the z gyro (measured - estimate). Errors are computed minus
-true; position error in nmi (1852 m).
+true; position error in nmi (1852 m). On a moving base the truth is a reference track
+(`gyrodrift.ins.track`): the simulated route of a moving-base imu.parquet by default, or a GNSS file.
 """
 
 from __future__ import annotations
 
 import math
+import os
+from typing import Any
 
 from gyrodrift.errors import OptionError
 from gyrodrift.logs import ImuLog
@@ -31,6 +34,7 @@ def evaluate_compensation(
     source: str = "given",
     chunk_samples: int = 100_000,
     quiet: bool = True,
+    reference: Any = None,
 ) -> Evaluation:
     """Navigate `hours` (default ``timeline.truth_h``, 72 h) after alignment without and with the drift.
 
@@ -44,6 +48,10 @@ def evaluate_compensation(
         As in `find_true_drift`.
     source : str
         Recorded in the result (e.g. the model file the drift came from).
+    reference : ReferenceTrack or path, optional
+        The true track to compute the errors against (moving base): a `gyrodrift.ins.track.ReferenceTrack` or a
+        GNSS CSV/Parquet file (``t_s, lat_deg, lon_deg, height_m``, optional ``vel_{e,n,u}_m_s``, times on the
+        log's time base, interpolated). Default: the route of a simulated moving-base log, else the static site.
 
     Returns
     -------
@@ -57,8 +65,10 @@ def evaluate_compensation(
         f"the evaluation ({timeline.align_h:g} h alignment + {hours:g} h navigation)",
         align_h=timeline.align_h,
     )
+    _require_stand(log, timeline)
     if alignment is None:
         alignment = align_log(log, timeline=timeline, chunk_samples=chunk_samples, quiet=quiet)
+    ref = reference_for(log, reference)
     res = navigate_after_alignment(
         log,
         alignment,
@@ -68,6 +78,7 @@ def evaluate_compensation(
         chunk_samples=chunk_samples,
         quiet=quiet,
         desc="evaluate",
+        reference=ref,
     )
     return Evaluation(
         run=log.name,
@@ -77,4 +88,31 @@ def evaluate_compensation(
         after=res.curves[1],
         alignment=alignment,
         source=source,
+        reference=ref,
+        start_s=alignment.samples_used / alignment.rate_hz,
     )
+
+
+def _require_stand(log: Any, timeline: Timeline) -> None:
+    """Refuse a simulated moving-base log whose vehicle drives off before the static alignment ends."""
+    from gyrodrift.ins.track import route_of
+
+    scenario = route_of(log)
+    if scenario is not None and scenario.trajectory.static_h < timeline.align_h:
+        raise OptionError(
+            f"{log.label}: the vehicle drives off at {scenario.trajectory.static_h:g} h, before the end of the "
+            f"{timeline.align_h:g} h static alignment ([trajectory] static_h >= {timeline.align_h:g} needed)"
+        )
+
+
+def reference_for(log: Any, reference: Any = None) -> Any:
+    """The reference track of an evaluation: `reference` (a ReferenceTrack, or a track file path), else the
+    simulated route behind a moving-base `log`, else None (static base: the site)."""
+    from gyrodrift.ins.track import ReferenceTrack, load_track, route_of
+
+    if isinstance(reference, ReferenceTrack):
+        return reference
+    if isinstance(reference, (str, os.PathLike)):
+        return load_track(reference)
+    scenario = route_of(log)
+    return None if scenario is None else ReferenceTrack.from_scenario(scenario)

@@ -126,6 +126,40 @@ def position_error_figure(ev: Evaluation):
     return fig
 
 
+def route_map_figure(ev: Evaluation):
+    """Moving base: the reference route and the navigated tracks before/after compensation, east/north [km] from
+    the position at the end of the alignment (the paper's route map). Navigated = reference + error."""
+    ref = ev.reference
+    if ref is None:
+        raise ValueError("route_map_figure needs an evaluation against a reference track")
+    fig, (ax,) = _figure(1)
+    t = np.concatenate([[0.0], ev.before.t_h])
+    lat, lon, _ = ref.at(ev.start_s + t * 3600.0)
+    lat0, lon0 = lat[0], lon[0]
+    from gyrodrift.earth import radii_of_curvature
+
+    r_m, r_n = radii_of_curvature(np.array([lat0]))
+    north = (lat - lat0) * r_m[0] / 1000.0
+    east = (lon - lon0) * r_n[0] * np.cos(lat0) / 1000.0
+    ax.plot(east, north, color="black", lw=2.0, label=f"reference ({os.path.basename(ref.label) or ref.label})")
+    for curve, colour, name in ((ev.before, BEFORE_COLOUR, "before"), (ev.after, AFTER_COLOUR, "after")):
+        ax.plot(
+            east[1:] + curve.east_m / 1000.0,
+            north[1:] + curve.north_m / 1000.0,
+            color=colour,
+            lw=0.8,
+            label=f"navigated, {name} (max error {curve.max_nmi:.2f} nmi)",
+        )
+    ax.plot([0.0], [0.0], "ko")
+    ax.set_xlabel("east [km]")
+    ax.set_ylabel("north [km]")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_title(f"{ev.run}: route, {ev.hours:g} h after alignment")
+    ax.legend(fontsize="small")
+    ax.grid(True, alpha=0.3)
+    return fig
+
+
 def _short_source(source: str) -> str:
     """A drift source short enough for a legend (a model path becomes its file name)."""
     if source in ("given", ""):

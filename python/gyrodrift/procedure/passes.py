@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -58,6 +59,7 @@ def navigate_after_alignment(
     threads: int | None = None,
     quiet: bool = True,
     desc: str = "navigate",
+    reference: Any = None,
 ) -> PassResult:
     """Navigate `hours` after the alignment once per z drift in `drifts_deg_h`, reading the log once.
 
@@ -80,6 +82,9 @@ def navigate_after_alignment(
         CPUs; 1 = in turn). Results do not depend on it: each navigator sees the same samples in order.
     chunk_samples, quiet, desc
         Chunking of the read, progress bar switch and label.
+    reference : gyrodrift.ins.track.ReferenceTrack, optional
+        Moving base: the true track (log time base) the errors are computed against instead of the static site;
+        it must cover the navigation (`TrackError` otherwise).
 
     Returns
     -------
@@ -125,6 +130,8 @@ def navigate_after_alignment(
         nav.set_gyro_bias(alignment.gyro_compensation_rad_s(float(d)))
         nav.set_accel_bias(alignment.accel_compensation_m_s2())
         navs.append(nav)
+    if reference is not None:
+        reference.require_cover(start / rate, stop / rate, f"navigating {log.label} after the alignment")
     tracks = run_navigators(
         log,
         navs,
@@ -138,12 +145,18 @@ def navigate_after_alignment(
         quiet=quiet,
         desc=f"{desc} {log.name}",
     )
-    lat0 = alignment.site.lat_deg * DEG
-    lon0 = alignment.site.lon_deg * DEG
     t_h = np.arange(1, n_nav // dec + 1) * dec / rate / HOUR
     exact_end = n_nav % dec != 0  # the curves always end with the exact last state (the "final" criterion's point)
     if exact_end:
         t_h = np.append(t_h, n_nav / rate / HOUR)
+    hours_done = np.arange(0, len(tracks[0].hourly) + 1, dtype=float) if tracks else np.zeros(1)
+    if reference is None:
+        lat0 = alignment.site.lat_deg * DEG
+        lon0 = alignment.site.lon_deg * DEG
+        hourly_true = np.full(len(hours_done), lat0)
+    else:
+        lat0, lon0, _ = reference.at(start / rate + t_h * HOUR)
+        hourly_true = reference.at(start / rate + hours_done * HOUR)[0]
     curves = []
     for d, track in zip(drifts_deg_h, tracks, strict=True):
         lat, lon = track.kept["lat_rad"], track.kept["lon_rad"]
@@ -151,7 +164,7 @@ def navigate_after_alignment(
             lat = np.append(lat, float(track.final["lat_rad"]))
             lon = np.append(lon, float(track.final["lon_rad"]))
         pe = position_errors(lat, lon, lat0, lon0)
-        h = np.array([lat0] + [float(st["lat_rad"]) for _, st in track.hourly])
+        h = np.array([hourly_true[0]] + [float(st["lat_rad"]) for _, st in track.hourly])
         curves.append(
             NavCurve(
                 drift_deg_h=float(d),
@@ -161,7 +174,7 @@ def navigate_after_alignment(
                 lat_err_arcsec=pe["lat_err_arcsec"],
                 lon_err_arcsec=pe["lon_err_arcsec"],
                 hourly_lat_deg=np.rad2deg(h),
-                hourly_lat_err_arcsec=(h - lat0) / DEG * 3600.0,
+                hourly_lat_err_arcsec=(h - hourly_true[: len(h)]) / DEG * 3600.0,
             )
         )
     temperature_stats = None

@@ -408,6 +408,11 @@ class Evaluation:
         Error curves (``t_h`` since the end of alignment).
     source : str
         Where the drift came from (``"given"`` or the model file).
+    reference : gyrodrift.ins.track.ReferenceTrack or None
+        Moving base: the true track the errors are computed against (None: the static site).
+    start_s : float
+        Log time of the navigation start [s] (the end of the alignment): curve time t_h is log time
+        start_s + 3600 t_h.
     """
 
     run: str
@@ -417,6 +422,8 @@ class Evaluation:
     after: NavCurve = field(repr=False)
     alignment: Alignment | None = field(default=None, repr=False)
     source: str = "given"
+    reference: Any = field(default=None, repr=False)
+    start_s: float = 0.0
 
     @property
     def before_final_nmi(self) -> float:
@@ -433,6 +440,7 @@ class Evaluation:
             "run": self.run,
             "drift_deg_h": self.drift_deg_h,
             "drift_source": self.source,
+            "reference": None if self.reference is None else self.reference.label,
             "hours": self.hours,
             "before": {"final_pos_err_nmi": self.before.final_nmi, "max_pos_err_nmi": self.before.max_nmi},
             "after": {"final_pos_err_nmi": self.after.final_nmi, "max_pos_err_nmi": self.after.max_nmi},

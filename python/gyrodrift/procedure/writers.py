@@ -18,7 +18,13 @@ from pathlib import Path
 from typing import Any
 
 from gyrodrift.atomic import Stage, atomic_files, check_output_files, recognise_header, staged, write_json
-from gyrodrift.procedure.figures import alignment_sigma_figure, criterion_figure, position_error_figure, save_png
+from gyrodrift.procedure.figures import (
+    alignment_sigma_figure,
+    criterion_figure,
+    position_error_figure,
+    route_map_figure,
+    save_png,
+)
 from gyrodrift.procedure.results import RUN_TABLE_COLUMNS, Alignment, Evaluation, Identification, RunFeatures, TrueDrift
 
 __all__ = [
@@ -43,6 +49,15 @@ __all__ = [
 ALIGNMENT_FILES = ("alignment.json", "alignment_z_sigma.png")
 TRUTH_FILES = ("true_drift.json", "criterion.png")
 EVALUATION_FILES = ("evaluation.json", "position_error.png", "position_error.parquet")
+ROUTE_MAP_FILE = "route_map.png"
+"""The route map an evaluation against a reference track (moving base) adds to `EVALUATION_FILES`."""
+
+
+def evaluation_files(moving: bool) -> tuple[str, ...]:
+    """The files `write_evaluation` publishes: `EVALUATION_FILES`, plus the route map on a moving base."""
+    return EVALUATION_FILES + ((ROUTE_MAP_FILE,) if moving else ())
+
+
 EVALUATION_CURVE_COLUMNS = (
     "pass",
     "drift_deg_h",
@@ -120,17 +135,22 @@ def evaluation_curves_table(ev: Evaluation):
 
 def write_evaluation(ev: Evaluation, out: str | os.PathLike[str] | Stage) -> dict[str, Path]:
     """Write ``evaluation.json``, ``position_error.png`` and its curves ``position_error.parquet``
-    (`evaluation_curves_table`) into `out` (a folder or a stage), as one set.
+    (`evaluation_curves_table`) into `out` (a folder or a stage), as one set; on a moving base (an evaluation
+    against a reference track) also the route map ``route_map.png``.
 
-    Returns the final paths, keyed ``"json"``, ``"png"`` and ``"curves"``.
+    Returns the final paths, keyed ``"json"``, ``"png"``, ``"curves"`` (and ``"route_map"``).
     """
     import pyarrow.parquet as pq
 
-    with staged(out, "evaluate", EVALUATION_FILES) as stage:
+    files = evaluation_files(ev.reference is not None)
+    with staged(out, "evaluate", files) as stage:
         write_json(ev.to_dict(), stage.file("evaluation.json"))
         save_png(position_error_figure(ev), stage.file("position_error.png"))
         pq.write_table(evaluation_curves_table(ev), stage.file("position_error.parquet"))
-    return dict(zip(("json", "png", "curves"), _paths(stage, EVALUATION_FILES).values(), strict=True))
+        if ev.reference is not None:
+            save_png(route_map_figure(ev), stage.file(ROUTE_MAP_FILE))
+    keys = ("json", "png", "curves", "route_map")
+    return dict(zip(keys, _paths(stage, files).values(), strict=False))
 
 
 def identification_document(res: Identification) -> dict[str, Any]:
