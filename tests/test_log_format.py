@@ -288,3 +288,14 @@ def test_features_of_a_formatted_log_equal_the_native_logs(tmp_path):
     assert got.lat_deg == pytest.approx(ref.lat_deg, abs=1e-10)
     assert got.lat_err_arcsec == pytest.approx(ref.lat_err_arcsec, abs=1e-5)
     assert got.temp_end_c == pytest.approx(ref.temp_end_c, abs=1e-4)
+
+
+def test_spaces_around_the_files_column_names_are_ignored(tmp_path):
+    lines = (EXAMPLES / "ins_export_degs.csv").read_text().splitlines()
+    lines[2] = "; ".join(f" {name}" for name in lines[2].split(";"))
+    p = tmp_path / "spaced.csv"
+    p.write_text("\n".join(lines) + "\n")
+    ref = _whole(open_log(EXAMPLES / "ins_export_degs.csv", format=CSV_FORMAT, site={"lat_deg": 28.222}))
+    got = _whole(open_log(p, format=CSV_FORMAT, site={"lat_deg": 28.222}))
+    for a, b in zip(got, ref, strict=True):
+        np.testing.assert_array_equal(a, b)

@@ -513,7 +513,7 @@ class ImuLog:
         assert fmt is not None
         values: dict[str, np.ndarray] = {}
         for spec in fmt.columns:
-            col = table.column(spec.name)
+            col = table.column(self._raw_names.get(spec.name, spec.name))
             if col.null_count:
                 i = int(np.flatnonzero(np.asarray(col.is_null().to_numpy(zero_copy_only=False)))[0])
                 raise LogError(f"{_where(self, first + i, spec.quantity)}: empty or NaN cell")
@@ -574,7 +574,7 @@ class ImuLog:
         if fmt is not None:
             time = fmt.column("time")
             if time is not None and time.is_iso_time:
-                types[time.name] = pa.string()
+                types[self._raw_names.get(time.name, time.name)] = pa.string()
             parse_options = pcsv.ParseOptions(delimiter=fmt.delimiter)
             if fmt.comment is not None:  # pyarrow has no comment lines: a filtered stream drops them
                 assert self.path is not None  # only file logs are CSV
@@ -1257,8 +1257,10 @@ def _open_formatted(p: Path, label: str, fmt: LogFormat, site, require_temperatu
         file_site = _read_site(meta, label)
         kind = "parquet"
         first_rows: list[tuple[int, list[str]]] = []
+        raw_names: dict[str, str] = {}
     elif suffix == ".csv":
-        header, first_rows = _formatted_csv_head(p, label, fmt)
+        header, raw_header, first_rows = _formatted_csv_head(p, label, fmt)
+        raw_names = {h: r for h, r in zip(header, raw_header, strict=True) if h != r}
         names = header
         _check_format_columns(names, fmt, label, fmt.header_row)
         it = header.index(time.name)
@@ -1318,6 +1320,7 @@ def _open_formatted(p: Path, label: str, fmt: LogFormat, site, require_temperatu
         has_truth_columns=fmt.has_truth,
         log_format=fmt,
         t0_ns=t0_ns,
+        raw_names=raw_names,
     )
 
 
@@ -1351,14 +1354,19 @@ def _formatted_data_lines(p: Path, label: str, fmt: LogFormat) -> Iterator[tuple
         yield line_no, text
 
 
-def _formatted_csv_head(p: Path, label: str, fmt: LogFormat) -> tuple[list[str], list[tuple[int, list[str]]]]:
-    """The header cells (stripped) and the first `_RATE_PROBE` + 1 data rows with their line numbers."""
+def _formatted_csv_head(
+    p: Path, label: str, fmt: LogFormat
+) -> tuple[list[str], list[str], list[tuple[int, list[str]]]]:
+    """The header cells (stripped and as written) and the first `_RATE_PROBE` + 1 data rows with their line
+    numbers."""
     header: list[str] | None = None
+    raw: list[str] = []
     rows: list[tuple[int, list[str]]] = []
     try:
         for line_no, text in _formatted_data_lines(p, label, fmt):
             cells = next(csv.reader([text], delimiter=fmt.delimiter), [])
             if header is None:
+                raw = list(cells)
                 header = [h.strip() for h in cells]
                 continue
             rows.append((line_no, cells))
@@ -1368,7 +1376,7 @@ def _formatted_csv_head(p: Path, label: str, fmt: LogFormat) -> tuple[list[str],
         raise LogError(f"{label}: unreadable CSV ({_short(exc)})") from None
     if header is None:
         raise LogError(f"{label}: no header row at line {fmt.header_row} ([csv] header_row of {fmt.source})")
-    return header, rows
+    return header, raw, rows
 
 
 def _formatted_csv_last_time(p: Path, fmt: LogFormat, it: int, t0_ns: int | None) -> float | None:
