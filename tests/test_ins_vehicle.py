@@ -318,3 +318,36 @@ def test_cli_evaluate_on_a_moving_base_log(tmp_path):
     assert r.output.strip().splitlines()[-1].endswith("(time stamps on the IMU log's time base)")
     assert "gnss.csv: the reference track covers 0 .. 2999 s, navigating" in r.output
     assert "needs 14400 .. 16200 s" in r.output
+
+
+def test_vehicle_attitude_columns_remove_the_table_turn(tmp_path):
+    """nav.parquet of a moving-base run carries the vehicle's attitude: the navigated IMU attitude with the table
+    angle removed, equal to the route's heading (error-free IMU, tilted mounting), from memory and from the file."""
+    from gyrodrift.ins import navigate
+    from gyrodrift.ins.vehicle import vehicle_attitude_rad
+
+    d = vehicle(duration_h=0.2).to_toml_dict()
+    d["attitude"].update(pitch_deg=0.5, roll_deg=-0.8)
+    s = Scenario.from_dict(d)
+    imu = simulate(s)
+    nav = navigate(imu, decimation_s=1.0)
+    idx = np.round(nav["t_s"] * 100).astype(int) - 1
+    vp, vr, vy = vehicle_attitude_rad(
+        np.radians(imu["true_pitch_deg"][idx]),
+        np.radians(imu["true_roll_deg"][idx]),
+        np.radians(imu["true_yaw_deg"][idx]),
+        np.radians(imu["table_angle_deg"][idx]),
+    )
+    # The truth's vehicle attitude is the mounting tilt and the route's yaw (25 deg, +90, -180 ...).
+    np.testing.assert_allclose(np.degrees(vp), 0.5, atol=1e-9)
+    np.testing.assert_allclose(np.degrees(vr), -0.8, atol=1e-9)
+    course = np.degrees(np.arctan2(-imu["true_vel_e_m_s"][idx], imu["true_vel_n_m_s"][idx]))
+    moving = np.hypot(imu["true_vel_e_m_s"][idx], imu["true_vel_n_m_s"][idx]) > 1.0
+    assert np.max(np.abs((np.degrees(vy) - course + 180) % 360 - 180)[moving]) < 1e-6
+    # The navigated columns follow it to arcseconds.
+    for name, truth in (("vehicle_pitch_deg", vp), ("vehicle_roll_deg", vr), ("vehicle_yaw_deg", vy)):
+        diff = (nav[name] - np.degrees(truth) + 180.0) % 360.0 - 180.0
+        assert np.max(np.abs(diff)) * 3600 < 1.0, name
+    path = simulate(s, out_dir=tmp_path / "sim")
+    from_file = navigate(path, decimation_s=1.0)
+    np.testing.assert_allclose(from_file["vehicle_yaw_deg"], nav["vehicle_yaw_deg"], atol=1e-9)

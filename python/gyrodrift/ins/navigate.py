@@ -21,11 +21,21 @@ from gyrodrift.ins.scenario import Scenario
 from gyrodrift.ins.simulate import PARQUET_OPTIONS, ImuData
 from gyrodrift.ins.stream import Track, run_navigators
 from gyrodrift.ins.track import ReferenceTrack, load_track, route_of
+from gyrodrift.ins.vehicle import table_angles_deg, vehicle_attitude_rad
 from gyrodrift.logs import DEFAULT_CHUNK_SAMPLES, ImuLog, LogError, LogTruth, open_log
 from gyrodrift.site import Site
 from gyrodrift.units import DEG, DEG_PER_H, HOUR, MICRO_G
 
-__all__ = ["NavResult", "navigate", "as_log", "INITIAL_SOURCES", "NAV_COLUMNS", "NAV_ERROR_COLUMNS", "SUMMARY_FORMAT"]
+__all__ = [
+    "NavResult",
+    "navigate",
+    "as_log",
+    "INITIAL_SOURCES",
+    "NAV_COLUMNS",
+    "NAV_ERROR_COLUMNS",
+    "VEHICLE_COLUMNS",
+    "SUMMARY_FORMAT",
+]
 
 NAV_COLUMNS = (
     "t_s",
@@ -50,6 +60,10 @@ NAV_ERROR_COLUMNS = (
     "yaw_err_arcsec",
 )
 """Columns of nav.parquet present when the truth is known (computed minus true)."""
+
+VEHICLE_COLUMNS = ("vehicle_pitch_deg", "vehicle_roll_deg", "vehicle_yaw_deg")
+"""Columns of nav.parquet on a moving base whose log has the table angle: the vehicle's attitude, the navigated IMU
+attitude with the table turn removed (`gyrodrift.ins.vehicle`)."""
 
 SUMMARY_FORMAT = "gyrodrift-nav-summary/1"
 
@@ -396,7 +410,16 @@ def navigate(
         accel_est=accel_est,
     )
     truth_at = _truth_at(ref, log.site)
+    kept_idx = start + dec * np.arange(1, n_total // dec + 1) - 1  # 0-based log samples of the kept states
+    table_deg = table_angles_deg(imu, kept_idx) if ref is not None else None
+    vehicle = None
+    if table_deg is not None:
+        k = track.kept
+        vehicle = vehicle_attitude_rad(k["pitch_rad"], k["roll_rad"], k["yaw_rad"], np.deg2rad(table_deg))
     cols = _columns(track, true_deg, truth_at, start / rate)
+    if vehicle is not None:
+        for name, angle in zip(VEHICLE_COLUMNS, vehicle, strict=True):
+            cols[name] = np.rad2deg(angle)
     summary = _summary(run, track, cols, truth_at, ref)
     folder = None
     if out_dir is not None:
