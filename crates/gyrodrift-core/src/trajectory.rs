@@ -66,7 +66,7 @@ pub struct Kinematics {
     /// Speed [m/s] and its rate [m/s^2].
     pub speed: f64,
     pub accel: f64,
-    /// Vehicle yaw [rad] (CCW about Up, unwrapped) and its rate [rad/s].
+    /// Vehicle yaw \[rad\] (CCW about Up, unwrapped) and its rate [rad/s].
     pub yaw: f64,
     pub yaw_rate: f64,
 }
@@ -187,7 +187,7 @@ impl Trajectory {
         })
     }
 
-    /// Times [s] where the kinematics change form (segment starts and ends), increasing.
+    /// Times \[s\] where the kinematics change form (segment starts and ends), increasing.
     pub fn boundaries(&self) -> impl Iterator<Item = f64> + '_ {
         self.pieces.iter().map(|p| p.t0).chain(self.pieces.last().map(|p| p.t1))
     }
@@ -209,7 +209,7 @@ impl Trajectory {
         Some(i)
     }
 
-    /// End time [s] of the piece holding `t` (infinite if none follows).
+    /// End time \[s\] of the piece holding `t` (infinite if none follows).
     #[inline]
     pub fn piece_end(&self, cursor: &mut usize, t: f64) -> f64 {
         match self.find(cursor, t) {
@@ -219,7 +219,7 @@ impl Trajectory {
         }
     }
 
-    /// Kinematics at `t` [s] (closed form; `cursor` speeds up monotone queries), with `yaw0` the heading of
+    /// Kinematics at `t` \[s\] (closed form; `cursor` speeds up monotone queries), with `yaw0` the heading of
     /// the standing vehicle.
     #[inline]
     pub fn at(&self, cursor: &mut usize, t: f64, yaw0: f64) -> Kinematics {
