@@ -299,3 +299,27 @@ def test_spaces_around_the_files_column_names_are_ignored(tmp_path):
     got = _whole(open_log(p, format=CSV_FORMAT, site={"lat_deg": 28.222}))
     for a, b in zip(got, ref, strict=True):
         np.testing.assert_array_equal(a, b)
+
+
+def test_iso_time_stamps_in_a_csv(tmp_path):
+    """ISO 8601 text time stamps (with Z) read as seconds since the first sample; a bad one is named by line."""
+    lines = (EXAMPLES / "ins_export_degs.csv").read_text().splitlines()
+    start = np.datetime64("2024-05-01T08:00:00", "ms")
+    out = lines[:3]
+    for line in lines[3:]:
+        cells = line.split(";")
+        cells[0] = str(start + np.timedelta64(int(cells[0]), "ms")) + "Z"
+        out.append(";".join(cells))
+    p = tmp_path / "iso.csv"
+    p.write_text("\n".join(out) + "\n")
+    fmt = tmp_path / "iso.toml"
+    fmt.write_text(CSV_FORMAT.read_text().replace('unit = "ms"', 'unit = "iso"'))
+    site = {"lat_deg": 28.222}
+    t, dth, dv, _ = _whole(open_log(p, format=fmt, site=site), chunk=300)
+    t_ref, dth_ref, dv_ref, _ = _whole(open_log(EXAMPLES / "ins_export_degs.csv", format=CSV_FORMAT, site=site))
+    np.testing.assert_allclose(t, t_ref - t_ref[0], atol=1e-9)
+    np.testing.assert_array_equal(dth, dth_ref)
+    out[700] = "2024-05-01 nonsense;" + out[700].split(";", 1)[1]  # file line 701
+    p.write_text("\n".join(out) + "\n")
+    with pytest.raises(LogError, match=r"iso.csv, row 701, column Time_ms \(time, iso\): expected an ISO 8601"):
+        list(open_log(p, format=fmt, site=site).chunks(300))
