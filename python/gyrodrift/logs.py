@@ -702,31 +702,48 @@ def _csv_line_of(log: ImuLog, index: int) -> int:
 
 class _SkipLines(io.RawIOBase):
     """A file's bytes without its first `skip` lines and without lines starting with `comment` (for pyarrow's
-    CSV reader, which has no comment lines)."""
+    CSV reader, which has no comment lines). Filters 1 MB blocks at a time (a line-by-line filter was 100 times
+    slower than the reader itself)."""
 
     def __init__(self, path: Path, skip: int, comment: str):
         self._fh = open(path, "rb")  # closed by close()
         self._skip = skip
         self._comment = comment.encode("utf-8")
         self._buf = b""
+        self._pos = 0
+        self._tail = b""
+        self._eof = False
 
     def readable(self) -> bool:
         return True
 
+    def _fill(self) -> None:
+        while self._pos >= len(self._buf) and not self._eof:
+            block = self._fh.read(1 << 20)
+            if block:
+                data = self._tail + block
+                cut = max(data.rfind(b"\n"), data.rfind(b"\r")) + 1
+                if cut == 0:
+                    self._tail = data
+                    continue
+                data, self._tail = data[:cut], data[cut:]
+            else:
+                self._eof = True
+                data, self._tail = self._tail, b""
+            lines = data.splitlines(keepends=True)
+            if self._skip:
+                k = min(self._skip, len(lines))
+                lines = lines[k:]
+                self._skip -= k
+            c = self._comment
+            self._buf = b"".join(ln for ln in lines if not ln.lstrip().startswith(c))
+            self._pos = 0
+
     def readinto(self, b) -> int:  # type: ignore[override]
-        while len(self._buf) < len(b):
-            line = self._fh.readline()
-            if not line:
-                break
-            if self._skip > 0:
-                self._skip -= 1
-                continue
-            if line.lstrip().startswith(self._comment):
-                continue
-            self._buf += line
-        n = min(len(b), len(self._buf))
-        b[:n] = self._buf[:n]
-        self._buf = self._buf[n:]
+        self._fill()
+        n = min(len(b), len(self._buf) - self._pos)
+        b[:n] = self._buf[self._pos : self._pos + n]
+        self._pos += n
         return n
 
     def close(self) -> None:
