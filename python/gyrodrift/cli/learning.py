@@ -193,7 +193,7 @@ def fit(
 
     check_output_file(out, inputs=[data], recognise=MODEL_FILE_RECOGNISER, what="model file")
     runs = _read_runs(data, lat0_deg, True, split)
-    if split is None and any(runs.split) and not quiet:
+    if split is None and any(runs.split):
         click.echo(
             f"note: {data} has a split column; training on all {len(runs)} rows "
             "(--split train uses the training rows only)",
@@ -221,16 +221,14 @@ def fit(
             raise
         raise OptionError(f"--gamma {gamma:g} --sigma {sigma:g}: {exc}") from None
     training = model.training
-    if training.get("left_out") and not quiet:
+    if training.get("left_out"):
         limit = DEFAULT_MAX_LABEL_STD_DEG_H if max_label_std_deg_h is None else max_label_std_deg_h
         click.echo(
             f"note: left out {len(training['left_out'])} run(s) whose drift_std_deg_h exceeds {limit:g} deg/h "
             f"(too uncertain to label): {', '.join(training['left_out'])}",
             err=True,
         )
-    if quiet:
-        pass
-    elif training["weighted"]:
+    if training["weighted"]:
         click.echo("note: runs weighted by their label 1-sigma drift_std_deg_h (weighted LS-SVM)", err=True)
     elif "drift_std_deg_h" in runs.extra and not no_label_weights:
         click.echo("note: drift_std_deg_h is missing for some runs; the runs are not weighted", err=True)

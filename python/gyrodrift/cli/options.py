@@ -82,12 +82,12 @@ def json_option(f):
 
 
 def quiet_option(f):
-    """Add ``--quiet``: no progress bar, notes or 'wrote ...' line (a result asked for on stdout still prints)."""
+    """Add ``--quiet``: no progress bar, summary or 'wrote ...' line (a result asked for on stdout still prints)."""
     return click.option(
         "--quiet",
         is_flag=True,
-        help="No progress bar, notes or 'wrote ...' line; a result with no other place (stdout, --json) still "
-        "prints. Default: off.",
+        help="No progress bar, summary or 'wrote ...' line; a result with no other place (stdout, --json) still "
+        "prints, and warnings and notes still go to stderr. Default: off.",
     )(f)
 
 
