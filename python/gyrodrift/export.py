@@ -13,13 +13,14 @@ conventions of `gyrodrift.kernels`: rbf ``exp(-|x - z|^2 / sigma^2)``, linear ``
 17 significant digits, which round-trips a float64, so the constants are the model's bits.
 
 The only differences from Python are in the last bits: the kernel sum ``sum_i alpha_i K_i`` is accumulated in
-order (numpy hands it to BLAS, which blocks and may fuse), ``exp`` is the target's libm (numpy may use its own
-SIMD exp), and an integer power is repeated multiplication (numpy calls ``pow`` for degrees other than 2).
-docs/export.md gives the measured differences.
+order (numpy hands it to BLAS, which blocks and may fuse), ``exp`` and ``cos`` are the target's libm (numpy may
+use its own SIMD versions), and an integer power is repeated multiplication (numpy calls ``pow`` for degrees
+other than 2). docs/export.md gives the measured differences.
 
 Provenance travels with the code, as comments and as constants and functions: the training digest (SHA-256 of
 the training runs, `gyrodrift.model.training_digest`), the exporting package's version, the encoding, scaling,
-kernel and hyperparameters, and the range of each raw input and of each feature over the training runs, with
+kernel and hyperparameters, the target (a hybrid's physics column), and the range of each input (a hybrid's
+physics input included) and of each feature over the training runs, with
 functions returning the ranges and one saying whether an input lies within them, so that the navigation
 computer can refuse to extrapolate.
 
