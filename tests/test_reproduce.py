@@ -94,6 +94,13 @@ def test_implied_72h_errors_and_the_fig45_run_agree_with_the_closed_form(run):
         assert f[f"{name}_max_pos_err_nmi"] >= f[f"{name}_final_pos_err_nmi"]
         assert len(f["curves"][f"{name}_pos_err_nmi"]) == len(f["curves"]["t_h"])
     assert f["curves"]["t_h"][-1] == pytest.approx(72.0)
+    for m in results["methods"]:  # convergence: the first iteration within 1 % of the final fitness, swarms only
+        if m["family"] in ("cpso_paper", "cpso_loo", "pso_loo"):
+            h = np.array(m["fitness_history"])
+            k = m["converged_iteration"]
+            assert h[k - 1] <= h[-1] * 1.01 and (k == 1 or h[k - 2] > h[-1] * 1.01)
+        elif m["family"] == "grid_loo":
+            assert m["converged_iteration"] is None
 
 
 def test_schema_and_internal_consistency(run):

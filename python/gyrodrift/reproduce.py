@@ -156,7 +156,9 @@ def _model_entry(name: str, family: str, model: DriftModel, data, **extra) -> di
         sigma=float(est.sigma),
         fitness=tuning.fitness if tuning else None,
         fitness_history=tuning.history if tuning else [],
-        converged_iteration=converged_iteration(tuning.history) if tuning else None,
+        converged_iteration=converged_iteration(tuning.history)
+        if tuning and tuning.method in ("cpso", "pso")
+        else None,
         nfev=tuning.nfev if tuning else 0,
         loo_mae_deg_h=float(np.mean(np.abs(loo))) if np.all(np.isfinite(loo)) else None,
         **extra,
