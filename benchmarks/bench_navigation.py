@@ -8,7 +8,7 @@
    fresh chunks (`next_chunk`) and with caller-owned buffers refilled in place (`fill_into`).
 2. Rust `Navigator` alone: the same run, chunks simulated beforehand are not kept (the simulator is timed
    separately and its time subtracted; the navigation time is measured around `process` only).
-3. The numpy `ReferenceNavigator` (python/gyrodrift/ins/reference_nav.py, the same equations, one sample
+3. The numpy `ReferenceNavigator` (python/gyrodrift/testing/reference_nav.py, the same equations, one sample
    per Python iteration) on the first `--reference-s` seconds of the same data.
 
 Prints samples/s of each, the ratios Rust / numpy (navigator, and each simulator against the numpy
@@ -32,7 +32,7 @@ import numpy as np
 
 from gyrodrift import _core
 from gyrodrift.ins import Scenario
-from gyrodrift.ins.reference_nav import ReferenceNavigator
+from gyrodrift.testing.reference_nav import ReferenceNavigator
 from gyrodrift.units import DEG
 
 

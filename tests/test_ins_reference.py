@@ -10,7 +10,7 @@ import pytest
 from gyrodrift.earth import OMEGA_IE_RAD_S, normal_gravity
 from gyrodrift.ins import Scenario, navigate, simulate
 from gyrodrift.ins.nav_errors import position_errors, radii_of_curvature
-from gyrodrift.ins.reference_nav import ReferenceNavigator, euler_to_quat, quat_to_euler
+from gyrodrift.testing.reference_nav import ReferenceNavigator, euler_to_quat, quat_to_euler
 from gyrodrift.units import ARCSEC, DEG, DEG_PER_H
 
 W = OMEGA_IE_RAD_S

@@ -1,4 +1,7 @@
-"""Test helpers shipped with the package (as ``numpy.testing``): nothing in the library imports this module.
+"""Test helpers shipped with the package (as ``numpy.testing``): nothing in the library imports this package.
+
+``gyrodrift.testing.reference_nav`` is a plain numpy strapdown navigator, the tests' independent oracle for
+the Rust navigator (and the reference of benchmarks/bench_navigation.py).
 
 Standard optimisation test functions (global minimum 0), for checking and benchmarking optimisers such as
 :func:`gyrodrift.cpso.minimize_cpso`. Each takes a 1-D point ``x`` and returns a float. Minima: sphere,
