@@ -545,7 +545,7 @@ class ImuLog:
             # also faster (benchmarks/bench_memory.py).
             pf = pq.ParquetFile(self.path, pre_buffer=False)
             groups = pf.metadata.num_row_groups
-        except (pa.ArrowException, OSError) as exc:
+        except (pa.ArrowException, OSError, UnicodeDecodeError) as exc:
             raise LogError(f"{self.label}: unreadable Parquet file ({_short(exc)})") from None
         columns = [self._raw_names.get(c, c) for c in self._wanted()]
 
@@ -1063,7 +1063,7 @@ def _open_parquet(p: Path, label: str, site, require_temperature: bool) -> ImuLo
         pf = pq.ParquetFile(p, pre_buffer=False)
         schema = pf.schema_arrow
         n = pf.metadata.num_rows
-    except (pa.ArrowException, OSError) as exc:
+    except (pa.ArrowException, OSError, UnicodeDecodeError) as exc:  # a damaged schema may hold non-UTF-8 names
         raise LogError(f"{label}: not a Parquet file ({_short(exc)})") from None
     with pf:
         names = list(schema.names)
@@ -1251,7 +1251,7 @@ def _open_formatted(p: Path, label: str, fmt: LogFormat, site, require_temperatu
             pf = pq.ParquetFile(p, pre_buffer=False)
             schema = pf.schema_arrow
             n = pf.metadata.num_rows
-        except (pa.ArrowException, OSError) as exc:
+        except (pa.ArrowException, OSError, UnicodeDecodeError) as exc:  # non-UTF-8 names in a damaged schema
             raise LogError(f"{label}: not a Parquet file ({_short(exc)})") from None
         with pf:
             names = list(schema.names)
