@@ -1,6 +1,7 @@
 """A simulated fleet from power-on to identified drift: the numbers quoted in docs/procedure.md.
 
-Run: ``python examples/simulated_fleet.py [--runs 13] [--rate-hz 10] [--workdir DIR]``. It simulates 16 h
+Run: ``python examples/simulated_fleet.py [--runs 13] [--rate-hz 10] [--workdir DIR]``. The logs go to DIR when
+given (and stay there), otherwise to a temporary folder removed at the end. It simulates 16 h
 alignment runs of a reciprocating RLG INS whose axial drift follows the temperature
 (0.0015 + 0.0002 (end_c - 28) deg/h plus a N(0, 1e-4) deg/h scatter), with ARW 0.0005 deg/sqrt(h),
 VRW 5 ug/sqrt(Hz) and horizontal biases; extracts the features of every run (alignment + 12 h navigation),
@@ -31,7 +32,16 @@ def main():
     ap.add_argument("--seed", type=int, default=5)
     ap.add_argument("--workdir", type=Path, default=None)
     args = ap.parse_args()
-    base = args.workdir or Path(tempfile.mkdtemp(prefix="gyrodrift-fleet-"))
+    if args.workdir is not None:
+        run(args, args.workdir)
+        print(f"logs in {args.workdir}")
+        return
+    with tempfile.TemporaryDirectory(prefix="gyrodrift-fleet-") as tmp:  # nothing left behind
+        run(args, Path(tmp))
+
+
+def run(args: argparse.Namespace, base: Path) -> None:
+    """Simulate the fleet into `base`, train on the first runs and print the held-out errors."""
     paths, drifts = simulate_fleet(base, args.runs, rate_hz=args.rate_hz, rng=args.seed)
     table = features_run_table(features_table(paths))
     table = RunTable(
@@ -57,7 +67,6 @@ def main():
         f"physics inversion         held-out errors [deg/h]: {np.array2string(err, precision=2)}  "
         f"MAE {np.mean(np.abs(err)):.2e}"
     )
-    print(f"logs in {base}")
 
 
 if __name__ == "__main__":

@@ -1,4 +1,4 @@
-"""Fleet campaigns: a campaign file -> many simulated runs, processed in workers, stored run by run (issue 11).
+"""Fleet campaigns: a campaign file -> many simulated runs, processed in workers, stored run by run.
 
 A campaign file (TOML, docs/campaigns.md) holds
 
@@ -398,7 +398,7 @@ def _timeline(options: Mapping[str, Any]):
 
 
 def smoother_available() -> bool:
-    """True once `gyrodrift.procedure.smoother` exists (the 16 h Kalman smoother, issue 10 item 2)."""
+    """True once `gyrodrift.procedure.smoother` exists (the 16 h Kalman smoother)."""
     return importlib.util.find_spec("gyrodrift.procedure.smoother") is not None
 
 
@@ -519,7 +519,7 @@ def _measure(campaign: Campaign, index: int, chunk_samples: int) -> dict[str, An
         curve_north_per_deg_h=np.asarray(gn, np.float32).tolist(),
         curve_east_per_deg_h=np.asarray(ge, np.float32).tolist(),
     )
-    # --- the 16 h smoother: one more step when gyrodrift.procedure.smoother exists (issue 10 item 2) ---
+    # --- the 16 h smoother: one more step when gyrodrift.procedure.smoother exists ---
     t = time.perf_counter()
     out["drift_smoother_deg_h"], out["drift_smoother_std_deg_h"] = math.nan, math.nan
     out["smoother_error"] = None

@@ -1,4 +1,4 @@
-"""The accuracy study of a campaign: every identification method on the same held-out runs (issue 11).
+"""The accuracy study of a campaign: every identification method on the same held-out runs.
 
 `run_study(df)` takes the runs of a campaign (`gyrodrift.campaign.read_runs`), splits them by run into
 training and held-out runs (seeded), fits the learned methods on the training runs and evaluates every method

@@ -1,4 +1,4 @@
-"""gyrodrift.procedure: from an IMU log to a compensated navigation (the paper's procedure, issue 5).
+"""gyrodrift.procedure: from an IMU log to a compensated navigation (the paper's procedure).
 
 Time line (`Timeline`): alignment over log hours 0-4; every navigation pass starts at the end of alignment;
 the features use navigation hours 0-12, the true drift and the evaluation hours 0-72 (logs >= 76 h).

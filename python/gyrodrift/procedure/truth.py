@@ -27,7 +27,7 @@ then simulate the compensation and keep the drift that minimises the position er
 The drift is the total constant to subtract from the z-gyro output (measured - estimate) [deg/h]; the
 alignment's own z estimate plays no part.
 
-Uncertainty of the label (issue 10): with sensor noise, d* is the constant that best cancels this run's random
+Uncertainty of the label: with sensor noise, d* is the constant that best cancels this run's random
 walk, not the sensor's drift. Its 1-sigma ``drift_std_deg_h`` comes from a linear covariance analysis of the 72 h
 navigation with the core's error model (`_core.label_sigma`, gyrodrift-core ``smoother::label_sigma``: attitude,
 velocity and north/east position errors driven by ARW and VRW over the navigation; the alignment's errors are
