@@ -184,7 +184,7 @@ def four_latitude_features(rate_hz: float = 10.0) -> RunTable:
                 "temp_min_c": res.temperature.min_c,
                 "temp_max_c": res.temperature.max_c,
                 "drift_curvefit_deg_h": cf.drift_deg_h,
-                "drift_smoother_deg_h": sm.drift_deg_h,
+                "drift_smoother_deg_h": sm.navigation_drift_deg_h,
             }
         )
     return RunTable.from_records(rows, source="four latitudes")

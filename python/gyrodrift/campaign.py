@@ -412,13 +412,14 @@ def _noise_model(scenario):
 
 
 def _smoother_step(log, noise, timeline) -> tuple[float, float]:
-    """The 16 h smoother's z drift and 1-sigma [deg/h] (NaN, NaN when the module is absent)."""
+    """The 16 h smoother's z drift carried into navigation and its 1-sigma [deg/h] (the end-of-span drift under
+    its thermal model; NaN, NaN when the module is absent)."""
     if not smoother_available():
         return math.nan, math.nan
     from gyrodrift.procedure.smoother import smooth_log
 
     res = smooth_log(log, timeline=timeline, noise=noise)
-    return float(res.drift_deg_h), float(res.drift_std_deg_h)
+    return float(res.navigation_drift_deg_h), float(res.navigation_drift_std_deg_h)
 
 
 def linear_error_nmi(north0_m, east0_m, north_per_deg_h, east_per_deg_h, drift_deg_h) -> np.ndarray:

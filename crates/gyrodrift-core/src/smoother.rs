@@ -8,8 +8,19 @@
 //! States (this order, `state_names`): the 12 of `kalman` (phi E N U \[rad\], dv E N U [m/s], gyro bias x y z
 //! [rad/s], accelerometer bias x y z [m/s^2]), then the position error north, east \[m\] (computed minus true:
 //! dN = (R_M + h) dL, dE = (R_N + h) cos L dlon), then optionally a first-order Gauss-Markov gyro bias (x y z)
-//! and a rate random walk gyro bias (x y z) [rad/s]. The gyro's total residual bias is eps + b_gm + b_rrw; the
-//! gyro bias states `eps` are random constants: `drift` below is the constant part of the z gyro.
+//! and a rate random walk gyro bias (x y z) [rad/s], then optionally (`thermal`) the thermal coefficient k_z
+//! [rad/s/degC] of the z gyro. The gyro's total residual bias is eps + b_gm + b_rrw (+ k_z (T - T_ref) on z, T the
+//! log's temperature, T_ref that of the last coarse-alignment sample unless given); the gyro bias states `eps` and
+//! k_z are random constants.
+//!
+//! Thermal model: the z drift eps_z + k_z (T(t) - T_ref) enters the attitude error as -C_b^n[:, z] (T - T_ref) k_z,
+//! with T - T_ref averaged over each update interval (a known input, like C_b^n). k_z is not fed back (as the
+//! Gauss-Markov states). Reported: the drift at the end of the span eps_z + k_z (T_end - T_ref) with its 1-sigma
+//! from the joint covariance (`drift_end`), k_z, and eps_z. The constant-drift estimate `drift` is the thermal
+//! state conditioned on k_z = 0: for a random constant with an independent prior that is exactly the posterior of
+//! the model without the state (mean a'x - (a'P e_k / P_kk) x_k, variance a'Pa - (a'P e_k)^2 / P_kk). When the
+//! temperature spanned less than `thermal_min_range` after the coarse alignment every reported estimate is
+//! conditioned so (the constant model is reported, `thermal` false).
 //!
 //! Continuous model (static base, v = 0; `kalman::ErrorModel` plus the position couplings):
 //!   phi_dot = kalman's - C_b^n (b_gm + b_rrw) + (0, -w_U dN / R_M, w_N dN / R_M)   (the Earth rate at the
@@ -33,7 +44,8 @@
 //!   C_k = P_{k|k} Phi_k' P_{k+1|k}^-1,  x_{k|N} = x_{k|k} + C_k (x_{k+1|N} - x_{k+1|k}),
 //!   P_{k|N} = P_{k|k} + C_k (P_{k+1|N} - P_{k+1|k}) C_k'
 //! (the usual RTS recursion; the known input shifts the prediction and the smoothed mean alike). The total z
-//! drift at update k is the navigator's z bias before that update plus the smoothed eps_z (+ b_gm,z + b_rrw,z).
+//! drift at update k is the navigator's z bias before that update plus the smoothed eps_z (+ b_gm,z + b_rrw,z,
+//! + k_z (T_k - T_ref) under the thermal model).
 //! P_{k+1|k}^-1 is applied through a Cholesky factor of its correlation matrix (states span 1e-24 to 1e-6 in
 //! their SI variances).
 
@@ -49,6 +61,10 @@ use nalgebra::{DMatrix, DVector};
 
 /// Index of the north and east position-error states \[m\].
 pub const POS: usize = N_BASE;
+/// Default prior 1-sigma of the thermal coefficient k_z [deg/h/degC] and least temperature range \[deg C\] for
+/// which the thermal model is reported (`SmootherConfig`).
+pub const DEFAULT_THERMAL_SIGMA_DEG_H_PER_C: f64 = 0.01;
+pub const DEFAULT_THERMAL_MIN_RANGE_C: f64 = 0.5;
 /// Largest number of updates a smoother keeps for its backward pass (memory: about 3 n^2 + 2 n floats each,
 /// under 200 MB with all 20 states).
 pub const MAX_UPDATES: u64 = 20_000;
@@ -90,6 +106,17 @@ pub struct SmootherConfig {
     pub position_sigma: f64,
     /// Interval of the reported history \[s\] (`history_s`, default 600).
     pub history_s: f64,
+    /// Thermal model of the z drift (`thermal`, default false): one more random-constant state k_z
+    /// [rad/s/degC], the z drift being eps_z + k_z (T - T_ref); `process` then needs every sample's temperature.
+    pub thermal: bool,
+    /// Prior 1-sigma of k_z [rad/s/degC] (`thermal_sigma_rad_s_per_c`, default 0.01 deg/h/degC: wide).
+    pub thermal_sigma: f64,
+    /// T_ref \[deg C\] (`temp_ref_c`); None: the temperature of the last sample of the coarse alignment.
+    pub temp_ref: Option<f64>,
+    /// Least temperature range over the span after the coarse alignment \[deg C\] for which the thermal model is
+    /// the reported one (`thermal_min_range_c`, default 0.5); below it the constant model's estimates (the thermal
+    /// state conditioned on k_z = 0) are reported.
+    pub thermal_min_range: f64,
 }
 
 impl SmootherConfig {
@@ -114,6 +141,10 @@ impl SmootherConfig {
             zupt_sigma: 1e-4,
             position_sigma: 0.01,
             history_s: 600.0,
+            thermal: false,
+            thermal_sigma: DEFAULT_THERMAL_SIGMA_DEG_H_PER_C * DEG_PER_HOUR,
+            temp_ref: None,
+            thermal_min_range: DEFAULT_THERMAL_MIN_RANGE_C,
         }
     }
 
@@ -165,6 +196,32 @@ impl SmootherConfig {
             1e4,
             Unit::Si("m"),
         )?;
+        let per_c = Unit::Scaled(180.0 / std::f64::consts::PI * 3600.0, "deg/h/degC");
+        all_positive_at_most(
+            "thermal_sigma_rad_s_per_c",
+            "thermal coefficient prior sigma",
+            &[self.thermal_sigma],
+            DEG_PER_HOUR,
+            per_c,
+        )?;
+        if let Some(t) = self.temp_ref {
+            in_range(
+                "temp_ref_c",
+                "reference temperature",
+                t,
+                -100.0,
+                200.0,
+                Unit::Si("deg C"),
+            )?;
+        }
+        in_range(
+            "thermal_min_range_c",
+            "least temperature range",
+            self.thermal_min_range,
+            0.0,
+            300.0,
+            Unit::Si("deg C"),
+        )?;
         let updates = ((self.span_s - self.coarse_s) / self.update_s).ceil();
         check(
             updates <= MAX_UPDATES as f64,
@@ -203,9 +260,14 @@ impl SmootherConfig {
         self.gyro_rrw > 0.0
     }
 
-    /// Number of states (14, 17 or 20).
+    /// Number of states (14, 17 or 20; one more with the thermal state).
     pub fn n_states(&self) -> usize {
-        N_BASE + 2 + 3 * usize::from(self.has_gm()) + 3 * usize::from(self.has_rrw())
+        N_BASE + 2 + 3 * usize::from(self.has_gm()) + 3 * usize::from(self.has_rrw()) + usize::from(self.thermal)
+    }
+
+    /// Index of the thermal coefficient k_z (the last state; None when absent).
+    fn thermal_index(&self) -> Option<usize> {
+        self.thermal.then(|| self.n_states() - 1)
     }
 
     /// First Gauss-Markov state and first random-walk state (None when absent).
@@ -228,6 +290,9 @@ pub fn state_names(cfg: &SmootherConfig) -> Vec<&'static str> {
     if cfg.has_rrw() {
         names.extend(["gyro_rrw_x", "gyro_rrw_y", "gyro_rrw_z"]);
     }
+    if cfg.thermal {
+        names.push("gyro_temp_z");
+    }
     names
 }
 
@@ -241,6 +306,7 @@ struct Model {
     inv_rm_h: f64,
     gm: Option<usize>,
     rrw: Option<usize>,
+    thermal: Option<usize>,
     tau: f64,
     /// Continuous noise densities squared on the diagonal.
     qc: DVector<f64>,
@@ -275,13 +341,15 @@ impl Model {
             inv_rm_h: 1.0 / (earth::meridian_radius(cfg.lat) + cfg.height),
             gm: cfg.gm_index(),
             rrw: cfg.rrw_index(),
+            thermal: cfg.thermal_index(),
             tau: cfg.gyro_correlation,
             qc,
         }
     }
 
-    /// Continuous system matrix for the mean body-to-nav DCM `c` of the interval.
-    fn system_matrix(&self, c: &Mat3) -> DMatrix<f64> {
+    /// Continuous system matrix for the mean body-to-nav DCM `c` and the mean T - T_ref `dtemp` \[deg C\] of the
+    /// interval.
+    fn system_matrix(&self, c: &Mat3, dtemp: f64) -> DMatrix<f64> {
         let mut f = DMatrix::zeros(self.n, self.n);
         let b = self.base.system_matrix(c);
         for i in 0..N_BASE {
@@ -305,12 +373,18 @@ impl Model {
                 f[(g + i, g + i)] = -1.0 / self.tau;
             }
         }
+        if let Some(k) = self.thermal {
+            // The z drift's thermal part k_z (T - T_ref) on the body z axis.
+            for i in 0..3 {
+                f[(PHI + i, k)] = -c[i][2] * dtemp;
+            }
+        }
         f
     }
 
     /// Phi = exp(F t) (Taylor to order 8) and Q (trapezoidal).
-    fn discretise(&self, c: &Mat3, t: f64) -> (DMatrix<f64>, DMatrix<f64>) {
-        let ft = self.system_matrix(c) * t;
+    fn discretise(&self, c: &Mat3, dtemp: f64, t: f64) -> (DMatrix<f64>, DMatrix<f64>) {
+        let ft = self.system_matrix(c, dtemp) * t;
         let mut phi = DMatrix::identity(self.n, self.n);
         let mut term = DMatrix::identity(self.n, self.n);
         for k in 1..=8 {
@@ -340,6 +414,8 @@ struct Step {
     /// The navigator's z gyro bias [rad/s] and all three gyro biases before this update's feedback.
     gyro_bias: [f64; 3],
     accel_bias: [f64; 3],
+    /// T - T_ref at the update \[deg C\] (0 without the thermal state).
+    dtemp: f64,
 }
 
 /// Everything the smoother reports (SI).
@@ -348,12 +424,27 @@ pub struct SmootherResult {
     /// End of the span \[s\] from the first sample.
     pub t_s: f64,
     /// The constant part of the z-gyro bias [rad/s] (smoothed; measured - estimate is the corrected output) and its
-    /// 1-sigma.
+    /// 1-sigma, under the constant-drift model: with the thermal state, conditioned on k_z = 0 (exactly the
+    /// posterior of the model without that state).
     pub drift: f64,
     pub drift_std: f64,
-    /// The total z-gyro bias at the end of the span (constant + Gauss-Markov + random walk) and its 1-sigma.
+    /// The total z-gyro bias at the end of the span under the reported model (constant + Gauss-Markov + random
+    /// walk, + k_z (T_end - T_ref) when `thermal`) and its 1-sigma: the drift carried into navigation.
     pub drift_end: f64,
     pub drift_end_std: f64,
+    /// True when the thermal model is the reported one (`drift_end`, the history, the biases): the thermal state
+    /// is there and the temperature spanned at least `thermal_min_range`.
+    pub thermal: bool,
+    /// Thermal model (NaN without the state): eps_z, the z drift at T_ref [rad/s], and k_z [rad/s/degC], each with
+    /// its 1-sigma; T_ref, the temperature at the end of the span and the range (max - min) after the coarse
+    /// alignment \[deg C\].
+    pub drift_ref: f64,
+    pub drift_ref_std: f64,
+    pub thermal_coeff: f64,
+    pub thermal_coeff_std: f64,
+    pub temp_ref: f64,
+    pub temp_end: f64,
+    pub temp_range: f64,
     /// The constant gyro and accelerometer biases, body x y z (smoothed), and their 1-sigma.
     pub gyro_bias: [f64; 3],
     pub gyro_bias_std: [f64; 3],
@@ -383,6 +474,13 @@ struct Forward {
     gyro_bias: [f64; 3],
     accel_bias: [f64; 3],
     c_sum: Mat3,
+    /// Sum of T - T_ref over the interval \[deg C\], T_ref, and the temperature range and last value after the
+    /// coarse alignment (thermal state only).
+    temp_sum: f64,
+    temp_ref: f64,
+    temp_min: f64,
+    temp_max: f64,
+    temp_last: f64,
     n_interval: u64,
     steps: Vec<Step>,
     /// P_{k+1|k} of each step's successor (parallel to `steps`, one fewer at the end).
@@ -404,6 +502,8 @@ pub struct Smoother {
     coarse: InertialCoarseAlignment,
     fwd: Option<Forward>,
     failed: Option<CoreError>,
+    /// The last temperature seen \[deg C\] (the default T_ref once the coarse alignment ends).
+    temp_last: f64,
 }
 
 impl Smoother {
@@ -422,6 +522,7 @@ impl Smoother {
             k: 0,
             fwd: None,
             failed: None,
+            temp_last: f64::NAN,
         })
     }
 
@@ -445,17 +546,29 @@ impl Smoother {
         self.k >= self.n_total
     }
 
-    /// Consume raw increments (flat row-major (n x 3) slices, dtheta \[rad\], dv [m/s], body frame); stops at the end
-    /// of the span. Returns how many samples were used. A refused chunk changes nothing; an estimate leaving its
-    /// range ([`CoreError::Diverged`]) stops the smoother.
-    pub fn process(&mut self, dtheta: &[f64], dv: &[f64]) -> Result<usize, CoreError> {
+    /// Consume raw increments (flat row-major (n x 3) slices, dtheta \[rad\], dv [m/s], body frame) and, with the
+    /// thermal state, the temperature of each sample \[deg C\] (`temp_c`, one per sample; ignored without it);
+    /// stops at the end of the span. Returns how many samples were used. A refused chunk changes nothing; an
+    /// estimate leaving its range ([`CoreError::Diverged`]) stops the smoother.
+    pub fn process(&mut self, dtheta: &[f64], dv: &[f64], temp_c: Option<&[f64]>) -> Result<usize, CoreError> {
         if let Some(e) = &self.failed {
             return Err(e.clone());
         }
-        check_increments(dtheta, dv, 1.0 / self.cfg.rate_hz)?;
-        let n = (dtheta.len() / 3).min(usize::try_from(self.n_total - self.k).unwrap_or(usize::MAX));
-        for (a, b) in dtheta.chunks_exact(3).zip(dv.chunks_exact(3)).take(n) {
-            if let Err(e) = self.step([a[0], a[1], a[2]], [b[0], b[1], b[2]]) {
+        let rows = check_increments(dtheta, dv, 1.0 / self.cfg.rate_hz)?;
+        let temp = if self.cfg.thermal {
+            let t = temp_c.ok_or_else(|| CoreError::Shape {
+                key: "temp_c",
+                message: "the thermal model needs the temperature of every sample".to_string(),
+            })?;
+            check_temperatures(t, rows)?;
+            Some(t)
+        } else {
+            None
+        };
+        let n = rows.min(usize::try_from(self.n_total - self.k).unwrap_or(usize::MAX));
+        for (i, (a, b)) in dtheta.chunks_exact(3).zip(dv.chunks_exact(3)).take(n).enumerate() {
+            let t = temp.map_or(f64::NAN, |t| t[i]);
+            if let Err(e) = self.step([a[0], a[1], a[2]], [b[0], b[1], b[2]], t) {
                 self.failed = Some(e.clone());
                 return Err(e);
             }
@@ -463,8 +576,9 @@ impl Smoother {
         Ok(n)
     }
 
-    fn step(&mut self, dtheta: [f64; 3], dv: [f64; 3]) -> Result<(), CoreError> {
+    fn step(&mut self, dtheta: [f64; 3], dv: [f64; 3], temp_c: f64) -> Result<(), CoreError> {
         self.k += 1;
+        self.temp_last = temp_c;
         if self.k <= self.n_coarse {
             self.coarse.step(dtheta, dv);
             if self.k == self.n_coarse {
@@ -483,6 +597,12 @@ impl Smoother {
             for (sum, x) in sum_row.iter_mut().zip(c_row) {
                 *sum += x;
             }
+        }
+        if self.cfg.thermal {
+            fwd.temp_sum += temp_c - fwd.temp_ref;
+            fwd.temp_min = fwd.temp_min.min(temp_c);
+            fwd.temp_max = fwd.temp_max.max(temp_c);
+            fwd.temp_last = temp_c;
         }
         fwd.n_interval += 1;
         if fwd.n_interval == self.n_update || last {
@@ -536,6 +656,14 @@ impl Smoother {
             // The random walk starts at zero with the log; by the end of the coarse span it has spread.
             sigma[r..r + 3].copy_from_slice(&[cfg.gyro_rrw * t_s.sqrt(); 3]);
         }
+        if let Some(k) = cfg.thermal_index() {
+            sigma[k] = cfg.thermal_sigma;
+        }
+        let temp_ref = if cfg.thermal {
+            cfg.temp_ref.unwrap_or(self.temp_last)
+        } else {
+            0.0
+        };
         let p = DMatrix::from_diagonal(&DVector::from_iterator(n, sigma.iter().map(|s| s * s)));
         let x = DVector::zeros(n);
         let steps = vec![Step {
@@ -545,6 +673,7 @@ impl Smoother {
             phi_next: None,
             gyro_bias: [0.0; 3],
             accel_bias: [0.0; 3],
+            dtemp: if cfg.thermal { self.temp_last - temp_ref } else { 0.0 },
         }];
         self.fwd = Some(Forward {
             nav,
@@ -554,6 +683,11 @@ impl Smoother {
             gyro_bias: [0.0; 3],
             accel_bias: [0.0; 3],
             c_sum: [[0.0; 3]; 3],
+            temp_sum: 0.0,
+            temp_ref,
+            temp_min: self.temp_last,
+            temp_max: self.temp_last,
+            temp_last: self.temp_last,
             n_interval: 0,
             steps,
             p_pred: Vec::new(),
@@ -588,7 +722,7 @@ impl Forward {
         let n_int = self.n_interval as f64;
         let t = n_int / cfg.rate_hz;
         let c_mean: Mat3 = std::array::from_fn(|i| std::array::from_fn(|j| self.c_sum[i][j] / n_int));
-        let (phi, q) = self.model.discretise(&c_mean, t);
+        let (phi, q) = self.model.discretise(&c_mean, self.temp_sum / n_int, t);
         let x_pred = &phi * &self.x;
         let p_pred = symmetrise(&phi * &self.p * phi.transpose() + q);
         if let Some(prev) = self.steps.last_mut() {
@@ -674,8 +808,14 @@ impl Forward {
             phi_next: None,
             gyro_bias: before.0,
             accel_bias: before.1,
+            dtemp: if self.model.thermal.is_some() {
+                self.temp_last - self.temp_ref
+            } else {
+                0.0
+            },
         });
         self.c_sum = [[0.0; 3]; 3];
+        self.temp_sum = 0.0;
         self.n_interval = 0;
         Ok(())
     }
@@ -687,9 +827,30 @@ impl Forward {
         let last = &self.steps[m - 1];
         let mut xs = last.x.clone();
         let mut ps = last.p.clone();
-        // Selector of the total z drift: eps_z + gm_z + rrw_z.
-        let mut e_total = DVector::zeros(n);
-        e_total[EPS + 2] = 1.0;
+        // The thermal model is reported when its state is there and the temperature moved enough; otherwise every
+        // estimate is conditioned on k_z = 0, which is exactly the posterior of the constant-drift model.
+        let k_th = self.model.thermal;
+        let temp_range = self.temp_max - self.temp_min;
+        let thermal = k_th.is_some() && temp_range >= cfg.thermal_min_range;
+        // Mean and 1-sigma of a'x, conditioned on k_z = 0 when `cond`.
+        let linear = |a: &DVector<f64>, x: &DVector<f64>, p: &DMatrix<f64>, cond: bool| {
+            let pa = p * a;
+            let (mut mean, mut var) = (a.dot(x), a.dot(&pa));
+            if let (Some(k), true) = (k_th, cond) {
+                if p[(k, k)] > 0.0 {
+                    mean -= pa[k] / p[(k, k)] * x[k];
+                    var -= pa[k] * pa[k] / p[(k, k)];
+                }
+            }
+            (mean, var.max(0.0).sqrt())
+        };
+        let unit = |i: usize| {
+            let mut a = DVector::zeros(n);
+            a[i] = 1.0;
+            a
+        };
+        // Selector of the total z drift: eps_z + gm_z + rrw_z (+ k_z (T - T_ref) under the thermal model).
+        let mut e_total = unit(EPS + 2);
         if let Some(g) = self.model.gm {
             e_total[g + 2] = 1.0;
         }
@@ -697,9 +858,12 @@ impl Forward {
             e_total[r + 2] = 1.0;
         }
         let total = |step: &Step, x: &DVector<f64>, p: &DMatrix<f64>| {
-            let d = step.gyro_bias[2] + e_total.dot(x);
-            let v = (p * &e_total).dot(&e_total);
-            (d, v.max(0.0).sqrt())
+            let mut a = e_total.clone();
+            if let (Some(k), true) = (k_th, thermal) {
+                a[k] = step.dtemp;
+            }
+            let (d, s) = linear(&a, x, p, !thermal);
+            (step.gyro_bias[2] + d, s)
         };
         let every = ((cfg.history_s / cfg.update_s).round() as usize).max(1);
         let mut hist = Vec::new();
@@ -738,19 +902,37 @@ impl Forward {
         hist.reverse();
         // xs, ps are now at the first step (the start of the fine span, zero navigator biases).
         let first = &self.steps[0];
-        let std = |i: usize| ps[(i, i)].max(0.0).sqrt();
-        let gyro_bias: [f64; 3] = std::array::from_fn(|i| first.gyro_bias[i] + xs[EPS + i]);
-        let accel_bias: [f64; 3] = std::array::from_fn(|i| first.accel_bias[i] + xs[NABLA + i]);
+        let est = |i: usize, cond: bool| linear(&unit(i), &xs, &ps, cond);
+        let gyro_bias: [f64; 3] = std::array::from_fn(|i| first.gyro_bias[i] + est(EPS + i, !thermal).0);
+        let accel_bias: [f64; 3] = std::array::from_fn(|i| first.accel_bias[i] + est(NABLA + i, !thermal).0);
+        let (drift, drift_std) = est(EPS + 2, true);
+        let (drift_ref, drift_ref_std, thermal_coeff, thermal_coeff_std) = match k_th {
+            Some(k) => {
+                let (e, es) = est(EPS + 2, false);
+                let (c, cs) = est(k, false);
+                (first.gyro_bias[2] + e, es, c, cs)
+            }
+            None => (f64::NAN, f64::NAN, f64::NAN, f64::NAN),
+        };
+        let some = |x: f64| if k_th.is_some() { x } else { f64::NAN };
         Ok(SmootherResult {
             t_s: t_end,
-            drift: gyro_bias[2],
-            drift_std: std(EPS + 2),
+            drift: first.gyro_bias[2] + drift,
+            drift_std,
             drift_end,
             drift_end_std,
+            thermal,
+            drift_ref,
+            drift_ref_std,
+            thermal_coeff,
+            thermal_coeff_std,
+            temp_ref: some(self.temp_ref),
+            temp_end: some(self.temp_last),
+            temp_range: some(temp_range),
             gyro_bias,
-            gyro_bias_std: std::array::from_fn(|i| std(EPS + i)),
+            gyro_bias_std: std::array::from_fn(|i| est(EPS + i, !thermal).1),
             accel_bias,
-            accel_bias_std: std::array::from_fn(|i| std(NABLA + i)),
+            accel_bias_std: std::array::from_fn(|i| est(NABLA + i, !thermal).1),
             hist_t: hist.iter().map(|h| h.0).collect(),
             hist_drift: hist.iter().map(|h| h.1).collect(),
             hist_drift_std: hist.iter().map(|h| h.2).collect(),
@@ -760,6 +942,24 @@ impl Forward {
             max_position_error: self.max_pos,
             updates: m - 1,
         })
+    }
+}
+
+/// Check one chunk's temperatures \[deg C\]: one per sample, finite, within the simulator's [-100, 200].
+fn check_temperatures(temp_c: &[f64], rows: usize) -> Result<(), CoreError> {
+    if temp_c.len() != rows {
+        return Err(CoreError::Shape {
+            key: "temp_c",
+            message: format!("has {} values for {rows} samples", temp_c.len()),
+        });
+    }
+    match temp_c.iter().position(|t| !(-100.0..=200.0).contains(t)) {
+        None => Ok(()),
+        Some(index) => Err(CoreError::Sample {
+            key: "temp_c",
+            index,
+            message: format!("temperature {} deg C is outside [-100, 200] deg C", temp_c[index]),
+        }),
     }
 }
 
@@ -843,7 +1043,7 @@ pub fn label_sigma(cfg: &LabelConfig) -> Result<LabelSigma, CoreError> {
     let model = Model::new(&sc);
     let n = model.n;
     let identity: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-    let (phi, q) = model.discretise(&identity, cfg.step_s);
+    let (phi, q) = model.discretise(&identity, 0.0, cfg.step_s);
     // Augmented covariance: the error state and the accumulator s (last).
     let na = n + 1;
     let mut p = DMatrix::zeros(na, na);

@@ -3,9 +3,11 @@
 
 use gyrodrift_core::alignment::{DEG_PER_HOUR, MICRO_G};
 use gyrodrift_core::attitude::Euler;
+use gyrodrift_core::error::CoreError;
 use gyrodrift_core::imu_error::ImuErrorParams;
 use gyrodrift_core::simulator::{ImuChunk, ImuSimulator, ImuSimulatorConfig};
-use gyrodrift_core::smoother::{label_sigma, LabelConfig, Smoother, SmootherConfig, SmootherResult};
+use gyrodrift_core::smoother::{label_sigma, state_names, LabelConfig, Smoother, SmootherConfig, SmootherResult};
+use gyrodrift_core::temperature::TemperatureProfile;
 use gyrodrift_core::turntable::RotationScheme;
 use std::f64::consts::PI;
 
@@ -45,7 +47,7 @@ fn smooth(sim_cfg: ImuSimulatorConfig) -> SmootherResult {
     let mut sm = Smoother::new(cfg).unwrap();
     let mut ch = ImuChunk::default();
     while !sm.done() && s.next_chunk(50_000, &mut ch) > 0 {
-        sm.process(&ch.dtheta, &ch.dv).unwrap();
+        sm.process(&ch.dtheta, &ch.dv, None).unwrap();
     }
     sm.result().unwrap()
 }
@@ -170,6 +172,163 @@ fn settings_are_checked_and_results_wait_for_the_span() {
     cfg.span_s = 3600.0;
     let mut sm = Smoother::new(cfg).unwrap();
     assert!(sm.result().is_err());
-    assert!(sm.process(&[f64::NAN, 0.0, 0.0], &[0.0, 0.0, 9.8]).is_err());
+    assert!(sm.process(&[f64::NAN, 0.0, 0.0], &[0.0, 0.0, 9.8], None).is_err());
     assert_eq!(sm.samples_done(), 0);
+}
+
+/// A warm-up log: drift = `drift_deg_h` + `k1_deg_h_per_c` (T - 28 degC), T from 18 to 38 degC with time constant
+/// `tau_h`.
+fn thermal_sim(drift_deg_h: f64, k1_deg_h_per_c: f64, tau_h: f64, seed: u64, noise: bool) -> ImuSimulatorConfig {
+    let mut s = sim(40.0, drift_deg_h, reciprocating(), seed, noise);
+    s.errors.drift_t0_c = 28.0;
+    s.errors.drift_k1 = k1_deg_h_per_c * DEG_PER_HOUR;
+    s.temperature = TemperatureProfile::WarmUp {
+        start_c: 18.0,
+        end_c: 38.0,
+        tau_s: tau_h * 3600.0,
+    };
+    s
+}
+
+/// Smooth a simulated log feeding its temperature column; `configure` edits the settings.
+fn smooth_thermal(sim_cfg: ImuSimulatorConfig, configure: impl Fn(&mut SmootherConfig)) -> SmootherResult {
+    let mut cfg = SmootherConfig::new(sim_cfg.lat, sim_cfg.lon, sim_cfg.height, sim_cfg.rate_hz);
+    cfg.span_s = SPAN_S;
+    cfg.thermal = true;
+    configure(&mut cfg);
+    let mut s = ImuSimulator::new(sim_cfg).unwrap();
+    let mut sm = Smoother::new(cfg).unwrap();
+    let mut ch = ImuChunk::default();
+    while !sm.done() && s.next_chunk(50_000, &mut ch) > 0 {
+        sm.process(&ch.dtheta, &ch.dv, Some(&ch.temp_c)).unwrap();
+    }
+    sm.result().unwrap()
+}
+
+/// The simulated z drift [deg/h] at time t [s] of `thermal_sim`.
+fn thermal_drift_at(drift_deg_h: f64, k1_deg_h_per_c: f64, tau_h: f64, t_s: f64) -> f64 {
+    let temp = 38.0 + (18.0 - 38.0) * (-t_s / (tau_h * 3600.0)).exp();
+    drift_deg_h + k1_deg_h_per_c * (temp - 28.0)
+}
+
+#[test]
+fn noise_free_thermal_logs_give_the_end_drift_and_the_coefficient() {
+    for (tau_h, k1) in [(1.5, 0.0002), (3.0, -0.0005)] {
+        let r = smooth_thermal(thermal_sim(0.003, k1, tau_h, 1, false), |_| {});
+        assert!(r.thermal);
+        let end = thermal_drift_at(0.003, k1, tau_h, SPAN_S);
+        let err_end = r.drift_end / DEG_PER_HOUR - end;
+        let err_k = r.thermal_coeff / DEG_PER_HOUR - k1;
+        println!(
+            "tau {tau_h} h, k1 {k1}: end drift error {err_end:.1e} deg/h (1-sigma {:.1e}), k error {err_k:.1e} \
+             deg/h/degC (1-sigma {:.1e}), T_ref {:.2}, T_end {:.2}, range {:.2} degC",
+            r.drift_end_std / DEG_PER_HOUR,
+            r.thermal_coeff_std / DEG_PER_HOUR,
+            r.temp_ref,
+            r.temp_end,
+            r.temp_range
+        );
+        assert!(err_end.abs() < 1e-5, "{err_end}");
+        assert!(err_k.abs() < 1e-6, "{err_k}");
+        // eps_z is the drift at T_ref; the history follows the law.
+        let at_ref = 0.003 + k1 * (r.temp_ref - 28.0);
+        assert!((r.drift_ref / DEG_PER_HOUR - at_ref).abs() < 1e-5);
+        for (t, d) in r.hist_t.iter().zip(&r.hist_drift) {
+            assert!(
+                (d / DEG_PER_HOUR - thermal_drift_at(0.003, k1, tau_h, *t)).abs() < 2e-5,
+                "{t} {d}"
+            );
+        }
+        // The constant model (conditioned on k_z = 0) sees a mean of the warm-up, not the end.
+        assert!((r.drift / DEG_PER_HOUR - end).abs() > 1e-4);
+    }
+}
+
+#[test]
+fn the_constant_model_is_the_thermal_state_conditioned_on_zero() {
+    // One noisy warm-up log: the thermal filter told to report the constant model (range threshold above the
+    // warm-up) against the filter without the thermal state.
+    let sim_cfg = thermal_sim(0.003, 0.0002, 2.0, 7, true);
+    let plain = smooth(sim_cfg.clone());
+    let cond = smooth_thermal(sim_cfg.clone(), |c| c.thermal_min_range = 100.0);
+    assert!(!cond.thermal && cond.temp_range > 15.0);
+    for (a, b, what) in [
+        (plain.drift, cond.drift, "drift"),
+        (plain.drift_std, cond.drift_std, "drift sigma"),
+        (plain.drift_end, cond.drift_end, "end drift"),
+        (plain.drift_end_std, cond.drift_end_std, "end sigma"),
+        (plain.gyro_bias_std[0], cond.gyro_bias_std[0], "x sigma"),
+    ] {
+        assert!((a - b).abs() < 1e-3 * plain.drift_std, "{what}: {a} vs {b}");
+    }
+    // The thermal report of the same log: a wider end-drift sigma, and `drift` is still the constant model's.
+    let th = smooth_thermal(sim_cfg, |_| {});
+    assert!(th.thermal && th.drift_end_std > plain.drift_std);
+    assert!((th.drift - plain.drift).abs() < 1e-3 * plain.drift_std);
+    // A constant temperature: the thermal state is decoupled, the constant model reported, the same numbers.
+    let mut flat = thermal_sim(0.003, 0.0002, 2.0, 7, true);
+    flat.temperature = TemperatureProfile::WarmUp {
+        start_c: 30.0,
+        end_c: 30.0,
+        tau_s: 3600.0,
+    };
+    let plain = smooth(flat.clone());
+    let th = smooth_thermal(flat, |_| {});
+    assert!(!th.thermal && th.temp_range == 0.0);
+    assert!((th.drift_end - plain.drift_end).abs() < 1e-6 * plain.drift_std);
+}
+
+#[test]
+fn thermal_z_scores_of_the_end_drift_have_unit_rms() {
+    // 8 seeds, 8 h at 5 Hz (the 30-seed runs are in tests/test_smoother.py's benchmark and the docs).
+    let n = 8;
+    let mut z2 = 0.0;
+    for seed in 0..n {
+        let r = smooth_thermal(thermal_sim(0.003, 0.0002, 3.0, 200 + seed, true), |_| {});
+        let z = (r.drift_end / DEG_PER_HOUR - thermal_drift_at(0.003, 0.0002, 3.0, SPAN_S))
+            / (r.drift_end_std / DEG_PER_HOUR);
+        z2 += z * z;
+    }
+    let rms = (z2 / n as f64).sqrt();
+    println!("thermal end-drift z-score rms over {n} seeds: {rms:.2}");
+    assert!((0.5..1.6).contains(&rms), "{rms}");
+}
+
+#[test]
+fn thermal_settings_and_temperatures_are_checked() {
+    let mut cfg = SmootherConfig::new(0.7, 0.0, 0.0, 10.0);
+    cfg.span_s = 3600.0;
+    cfg.thermal = true;
+    cfg.thermal_sigma = 0.0;
+    assert_eq!(
+        Smoother::new(cfg.clone()).unwrap_err().key(),
+        "thermal_sigma_rad_s_per_c"
+    );
+    cfg.thermal_sigma = 0.01 * DEG_PER_HOUR;
+    cfg.temp_ref = Some(500.0);
+    assert_eq!(Smoother::new(cfg.clone()).unwrap_err().key(), "temp_ref_c");
+    cfg.temp_ref = None;
+    cfg.thermal_min_range = -1.0;
+    assert_eq!(Smoother::new(cfg.clone()).unwrap_err().key(), "thermal_min_range_c");
+    cfg.thermal_min_range = 0.5;
+    let mut sm = Smoother::new(cfg).unwrap();
+    let (dth, dv) = ([0.0; 6], [0.0, 0.0, 0.98, 0.0, 0.0, 0.98]);
+    assert_eq!(sm.process(&dth, &dv, None).unwrap_err().key(), "temp_c");
+    assert_eq!(sm.process(&dth, &dv, Some(&[20.0])).unwrap_err().key(), "temp_c");
+    let e = sm.process(&dth, &dv, Some(&[20.0, f64::NAN])).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            CoreError::Sample {
+                key: "temp_c",
+                index: 1,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    assert_eq!(sm.samples_done(), 0);
+    assert_eq!(sm.process(&dth, &dv, Some(&[20.0, 20.1])), Ok(2));
+    assert_eq!(sm.config().n_states(), 15);
+    assert_eq!(state_names(sm.config()).last(), Some(&"gyro_temp_z"));
 }

@@ -1,12 +1,12 @@
 //! Binding of `gyrodrift_core::smoother` as `_core.SmootherConfig`, `_core.Smoother` and `_core.label_sigma`
 //! (docs/identification.md, "The 16 h smoother"). It converts types and releases the GIL, nothing else.
 
-use super::{core_err, flat, increments};
+use super::{arg_err, core_err, flat, increments};
 use gyrodrift_core::smoother::{
     label_sigma as core_label_sigma, state_names, LabelConfig, Smoother as CoreSmoother,
     SmootherConfig as CoreSmootherConfig,
 };
-use numpy::PyArray1;
+use numpy::{PyArray1, PyReadonlyArray1};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -50,6 +50,14 @@ pub struct SmootherConfig {
     position_sigma_m: f64,
     #[pyo3(get)]
     history_s: f64,
+    #[pyo3(get)]
+    thermal: bool,
+    #[pyo3(get)]
+    thermal_sigma_rad_s_per_c: f64,
+    #[pyo3(get)]
+    temp_ref_c: Option<f64>,
+    #[pyo3(get)]
+    thermal_min_range_c: f64,
 }
 
 #[pymethods]
@@ -59,7 +67,8 @@ impl SmootherConfig {
         *, lat_rad, lon_rad, height_m, rate_hz, coarse_s = None, span_s = None, update_s = None,
         att_sigma_rad = None, gyro_bias_sigma_rad_s = None, accel_bias_sigma_m_s2 = None, gyro_arw_rad_rts = None,
         accel_vrw_m_s_rts = None, gyro_bias_instability_rad_s = None, gyro_correlation_s = None,
-        gyro_rrw_rad_s_rts = None, zupt_sigma_m_s = None, position_sigma_m = None, history_s = None
+        gyro_rrw_rad_s_rts = None, zupt_sigma_m_s = None, position_sigma_m = None, history_s = None,
+        thermal = None, thermal_sigma_rad_s_per_c = None, temp_ref_c = None, thermal_min_range_c = None
     ))]
     #[allow(clippy::too_many_arguments)]
     fn new(
@@ -81,6 +90,10 @@ impl SmootherConfig {
         zupt_sigma_m_s: Option<f64>,
         position_sigma_m: Option<f64>,
         history_s: Option<f64>,
+        thermal: Option<bool>,
+        thermal_sigma_rad_s_per_c: Option<f64>,
+        temp_ref_c: Option<f64>,
+        thermal_min_range_c: Option<f64>,
     ) -> PyResult<Self> {
         let base = CoreSmootherConfig::new(lat_rad, lon_rad, height_m, rate_hz);
         let inner = CoreSmootherConfig {
@@ -98,6 +111,10 @@ impl SmootherConfig {
             zupt_sigma: zupt_sigma_m_s.unwrap_or(base.zupt_sigma),
             position_sigma: position_sigma_m.unwrap_or(base.position_sigma),
             history_s: history_s.unwrap_or(base.history_s),
+            thermal: thermal.unwrap_or(base.thermal),
+            thermal_sigma: thermal_sigma_rad_s_per_c.unwrap_or(base.thermal_sigma),
+            temp_ref: temp_ref_c,
+            thermal_min_range: thermal_min_range_c.unwrap_or(base.thermal_min_range),
             ..base
         };
         inner.validate().map_err(core_err)?;
@@ -120,11 +137,16 @@ impl SmootherConfig {
             zupt_sigma_m_s: inner.zupt_sigma,
             position_sigma_m: inner.position_sigma,
             history_s: inner.history_s,
+            thermal: inner.thermal,
+            thermal_sigma_rad_s_per_c: inner.thermal_sigma,
+            temp_ref_c: inner.temp_ref,
+            thermal_min_range_c: inner.thermal_min_range,
             inner,
         })
     }
 
-    /// Names of the states, in order (14; 17 with the Gauss-Markov states; 20 with the rate random walk too).
+    /// Names of the states, in order (14; 17 with the Gauss-Markov states; 20 with the rate random walk too; one
+    /// more, `gyro_temp_z`, with the thermal state).
     #[getter]
     fn state_names(&self) -> Vec<&'static str> {
         state_names(&self.inner)
@@ -169,17 +191,27 @@ impl Smoother {
         self.inner.n_samples()
     }
 
-    /// Consume raw increments (dtheta [rad], dv [m/s], (n, 3), body frame); returns how many samples were used.
+    /// Consume raw increments (dtheta [rad], dv [m/s], (n, 3), body frame) and, with the thermal state, the
+    /// temperature of each sample (`temp_c` [deg C], (n,)); returns how many samples were used.
+    #[pyo3(signature = (dtheta_rad, dv_m_s, temp_c = None))]
     fn process<'py>(
         &mut self,
         py: Python<'py>,
         dtheta_rad: &Bound<'py, PyAny>,
         dv_m_s: &Bound<'py, PyAny>,
+        temp_c: Option<PyReadonlyArray1<'py, f64>>,
     ) -> PyResult<usize> {
         let (a, b) = increments(dtheta_rad, dv_m_s)?;
         let (dth, dv) = (flat(&a, "dtheta_rad")?, flat(&b, "dv_m_s")?);
+        let temp = temp_c
+            .as_ref()
+            .map(|t| {
+                t.as_slice()
+                    .map_err(|_| arg_err("temp_c", "expected a contiguous array"))
+            })
+            .transpose()?;
         let inner = &mut self.inner;
-        py.detach(|| inner.process(dth, dv)).map_err(core_err)
+        py.detach(|| inner.process(dth, dv, temp)).map_err(core_err)
     }
 
     /// The smoothed result (SI): runs the backward pass (GIL released). `CoreError` before `done`.
@@ -192,6 +224,14 @@ impl Smoother {
         d.set_item("drift_std_rad_s", r.drift_std)?;
         d.set_item("drift_end_rad_s", r.drift_end)?;
         d.set_item("drift_end_std_rad_s", r.drift_end_std)?;
+        d.set_item("thermal", r.thermal)?;
+        d.set_item("drift_ref_rad_s", r.drift_ref)?;
+        d.set_item("drift_ref_std_rad_s", r.drift_ref_std)?;
+        d.set_item("thermal_coeff_rad_s_per_c", r.thermal_coeff)?;
+        d.set_item("thermal_coeff_std_rad_s_per_c", r.thermal_coeff_std)?;
+        d.set_item("temp_ref_c", r.temp_ref)?;
+        d.set_item("temp_end_c", r.temp_end)?;
+        d.set_item("temp_range_c", r.temp_range)?;
         d.set_item("gyro_bias_rad_s", PyArray1::from_slice(py, &r.gyro_bias))?;
         d.set_item("gyro_bias_std_rad_s", PyArray1::from_slice(py, &r.gyro_bias_std))?;
         d.set_item("accel_bias_m_s2", PyArray1::from_slice(py, &r.accel_bias))?;

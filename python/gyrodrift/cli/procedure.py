@@ -342,9 +342,17 @@ def identify_command(log, model_path, lat0_deg, lon0_deg, height_m, log_format, 
         f"  12 h curve fit of the latitude and longitude errors: {res.curvefit_drift_deg_h:.6f} +- "
         f"{res.curvefit_drift_std_deg_h:.6f} deg/h (1-sigma)"
     )
+    sm = f.smoother
+    thermal_note = (
+        ""
+        if sm is None or sm.model != "thermal"
+        else f", thermal model: the drift at the end of the span ({sm.temp_end_c:.1f} degC), k_z "
+        f"{sm.thermal_coeff_deg_h_per_c:.2e} +- {sm.thermal_coeff_std_deg_h_per_c:.2e} deg/h/degC"
+    )
     click.echo(
-        f"  16 h smoother (alignment + 12 h, zero velocity and known position): {res.smoother_drift_deg_h:.6f} +- "
-        f"{res.smoother_drift_std_deg_h:.6f} deg/h (1-sigma: the Cramer-Rao line of these 16 h)"
+        f"  16 h smoother (alignment + 12 h, zero velocity and known position{thermal_note}): "
+        f"{res.smoother_drift_deg_h:.6f} +- {res.smoother_drift_std_deg_h:.6f} deg/h (1-sigma: the Cramer-Rao "
+        "line of these 16 h)"
     )
     click.echo(
         f"  alignment z estimate: {res.alignment_z_drift_deg_h:.6f} +- {res.alignment_z_drift_std_deg_h:.6f} "

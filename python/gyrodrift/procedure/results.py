@@ -348,7 +348,9 @@ class RunFeatures:
         The drift from the 12 h curve fit of the latitude and longitude error curves and its 1-sigma [deg/h]
         (`gyrodrift.curve_fit`).
     drift_smoother_deg_h, drift_smoother_std_deg_h : float
-        The 16 h smoother's drift and its 1-sigma [deg/h] (NaN when not run).
+        The 16 h smoother's drift carried into navigation and its 1-sigma [deg/h]
+        (`SmootherEstimate.navigation_drift_deg_h`: the end-of-span drift under its thermal model; NaN when not
+        run).
     drift_std_deg_h : float
         1-sigma of the truth label (NaN without truth) [deg/h].
     label_flagged : bool
@@ -477,7 +479,8 @@ class Identification:
     curvefit_drift_deg_h, curvefit_drift_std_deg_h : float
         The 12 h curve fit's drift and 1-sigma [deg/h] (`gyrodrift.curve_fit`).
     smoother_drift_deg_h, smoother_drift_std_deg_h : float
-        The 16 h smoother's drift and 1-sigma [deg/h] (`gyrodrift.procedure.smoother`; NaN when not run).
+        The 16 h smoother's drift carried into navigation and its 1-sigma [deg/h] (`gyrodrift.procedure.smoother`;
+        the end-of-span drift under its thermal model, `smoother_model`; NaN when not run).
     outside_training_range : bool
         The run's inputs lie outside the model's training runs' range (per input or jointly): an extrapolation.
     range_warnings : tuple of str
@@ -503,6 +506,12 @@ class Identification:
     smoother_drift_deg_h: float = math.nan
     smoother_drift_std_deg_h: float = math.nan
 
+    @property
+    def smoother_model(self) -> str | None:
+        """The smoother's model (``"thermal"`` or ``"constant"``; None when it did not run)."""
+        sm = self.features.smoother
+        return None if sm is None else sm.model
+
     def to_dict(self) -> dict[str, Any]:
         f = self.features
         return {
@@ -514,6 +523,7 @@ class Identification:
             "curvefit_drift_std_deg_h": self.curvefit_drift_std_deg_h,
             "smoother_drift_deg_h": self.smoother_drift_deg_h,
             "smoother_drift_std_deg_h": self.smoother_drift_std_deg_h,
+            "smoother_model": self.smoother_model,
             "outside_training_range": self.outside_training_range,
             "range_warnings": list(self.range_warnings),
             "alignment_z_drift_deg_h": self.alignment_z_drift_deg_h,
@@ -542,11 +552,22 @@ class SmootherEstimate:
     span_h : float
         Hours of the log used, from its first sample.
     drift_deg_h, drift_std_deg_h : float
-        The constant part of the z-gyro bias (subtract it from the z gyro) and its 1-sigma [deg/h]: the
-        Cramer-Rao line of the linear-Gaussian model.
+        The constant-drift model's z-gyro bias (subtract it from the z gyro) and its 1-sigma [deg/h]: the
+        Cramer-Rao line of the linear-Gaussian model without a thermal term (with the thermal state: conditioned
+        on k_z = 0, exactly that model's posterior).
     drift_end_deg_h, drift_end_std_deg_h : float
-        The total z-gyro bias at the end of the span (constant + Gauss-Markov + random walk) and its 1-sigma;
-        equal to the constant without bias-drift terms.
+        The total z-gyro bias at the end of the span under the reported `model` (constant + Gauss-Markov + random
+        walk, + k_z (T_end - T_ref) under the thermal model) and its 1-sigma [deg/h]; equal to the constant
+        without bias-drift terms under the constant model.
+    model : {"thermal", "constant"}
+        The model of the reported end drift and history: ``thermal`` when the thermal state ran and the
+        temperature spanned at least its ``thermal_min_range_c``.
+    drift_ref_deg_h, drift_ref_std_deg_h, thermal_coeff_deg_h_per_c, thermal_coeff_std_deg_h_per_c : float
+        The thermal model's eps_z (the z drift at `temp_ref_c`) [deg/h] and k_z [deg/h/degC], with 1-sigma (NaN
+        without the thermal state).
+    temp_ref_c, temp_end_c, temp_range_c : float
+        T_ref, the temperature at the end of the span and its range after the coarse alignment [degC] (NaN
+        without the thermal state).
     gyro_bias_deg_h, gyro_bias_std_deg_h : tuple of 3 floats
         Constant gyro biases, body x y z, and their 1-sigma [deg/h].
     accel_bias_ug, accel_bias_std_ug : tuple of 3 floats
@@ -568,6 +589,14 @@ class SmootherEstimate:
     drift_std_deg_h: float
     drift_end_deg_h: float
     drift_end_std_deg_h: float
+    model: str
+    drift_ref_deg_h: float
+    drift_ref_std_deg_h: float
+    thermal_coeff_deg_h_per_c: float
+    thermal_coeff_std_deg_h_per_c: float
+    temp_ref_c: float
+    temp_end_c: float
+    temp_range_c: float
     gyro_bias_deg_h: tuple[float, float, float]
     gyro_bias_std_deg_h: tuple[float, float, float]
     accel_bias_ug: tuple[float, float, float]
@@ -582,16 +611,41 @@ class SmootherEstimate:
     max_position_error_m: float = math.nan
     updates: int = 0
 
+    @property
+    def navigation_drift_deg_h(self) -> float:
+        """The drift the system carries into navigation [deg/h]: the end-of-span drift under the thermal model,
+        the constant under the constant model."""
+        return self.drift_end_deg_h if self.model == "thermal" else self.drift_deg_h
+
+    @property
+    def navigation_drift_std_deg_h(self) -> float:
+        """1-sigma of `navigation_drift_deg_h` [deg/h]."""
+        return self.drift_end_std_deg_h if self.model == "thermal" else self.drift_std_deg_h
+
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready summary (user units; the history as lists)."""
+        """JSON-ready summary (user units; the history as lists; NaN as null)."""
+
+        def num(x: float) -> float | None:
+            return None if math.isnan(x) else x
+
         return {
-            "format": "gyrodrift-smoother/1",
+            "format": "gyrodrift-smoother/2",
             "run": self.run,
             "span_h": self.span_h,
             "drift_deg_h": self.drift_deg_h,
             "drift_std_deg_h": self.drift_std_deg_h,
             "drift_end_deg_h": self.drift_end_deg_h,
             "drift_end_std_deg_h": self.drift_end_std_deg_h,
+            "model": self.model,
+            "navigation_drift_deg_h": self.navigation_drift_deg_h,
+            "navigation_drift_std_deg_h": self.navigation_drift_std_deg_h,
+            "drift_ref_deg_h": num(self.drift_ref_deg_h),
+            "drift_ref_std_deg_h": num(self.drift_ref_std_deg_h),
+            "thermal_coeff_deg_h_per_c": num(self.thermal_coeff_deg_h_per_c),
+            "thermal_coeff_std_deg_h_per_c": num(self.thermal_coeff_std_deg_h_per_c),
+            "temp_ref_c": num(self.temp_ref_c),
+            "temp_end_c": num(self.temp_end_c),
+            "temp_range_c": num(self.temp_range_c),
             "gyro_bias_deg_h": list(self.gyro_bias_deg_h),
             "gyro_bias_std_deg_h": list(self.gyro_bias_std_deg_h),
             "accel_bias_ug": list(self.accel_bias_ug),

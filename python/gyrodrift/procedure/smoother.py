@@ -9,6 +9,15 @@ error model: no method identifying the drift from these 16 h can do better on av
 
 The noise model (`SensorNoise`) is given (a scenario's or `gyrodrift allan`'s ``[gyro]``/``[accel]`` keys) or
 measured from the log (ARW and VRW from the second differences of the increments; no bias drift).
+
+Thermal model: when the log has a temperature column the z drift is modelled as eps_z + k_z (T - T_ref), k_z a
+random constant [deg/h/degC] and T the log's temperature (T_ref: the temperature at the end of the coarse
+alignment). The reported drift carried into navigation (`SmootherEstimate.navigation_drift_deg_h`) is then the
+drift at the end of the span, eps_z + k_z (T_end - T_ref), with its 1-sigma from the joint covariance, as long as
+the temperature spanned at least ``thermal_min_range_c`` (0.5 degC) after the coarse alignment; otherwise, and
+without a temperature column or with ``thermal=False``, the constant-drift model's estimate (``model`` says which).
+The constant-drift estimate is always reported too (``drift_deg_h``: the thermal state conditioned on k_z = 0,
+exactly the posterior of the model without it).
 """
 
 from __future__ import annotations
@@ -35,6 +44,7 @@ def smooth_log(
     noise: SensorNoise | Mapping[str, Any] | None = None,
     hours: float | None = None,
     options: Mapping[str, Any] | None = None,
+    thermal: bool | None = None,
     chunk_samples: int = 100_000,
     quiet: bool = True,
 ) -> SmootherEstimate:
@@ -52,7 +62,12 @@ def smooth_log(
     hours : float, optional
         Span from the first sample [h] (default ``timeline.align_h + timeline.features_h``).
     options : mapping, optional
-        Other SI keywords of `_core.SmootherConfig` (``update_s``, priors, measurement sigmas).
+        Other SI keywords of `_core.SmootherConfig` (``update_s``, priors, measurement sigmas, and for the thermal
+        model ``thermal_sigma_rad_s_per_c`` (prior 1-sigma of k_z, default 0.01 deg/h/degC), ``temp_ref_c``,
+        ``thermal_min_range_c``).
+    thermal : bool, optional
+        The thermal state k_z (module docstring). Default: on when the log has a temperature column (the thermal
+        model is then reported when the temperature varied); ``True`` without a column raises `LogError`.
     chunk_samples, quiet
         Read size and progress switch.
 
@@ -73,6 +88,10 @@ def smooth_log(
     else:
         model = SensorNoise.from_block(noise)
     used = model.floored()
+    if thermal is None:
+        thermal = log.has_temperature
+    elif thermal:
+        log.require_temperature("the smoother's thermal model")
     site = log.site
     config: dict[str, Any] = {
         "lat_rad": site.lat_deg * DEG,
@@ -82,12 +101,14 @@ def smooth_log(
         "coarse_s": float(timeline.coarse_s),
         "span_s": span_h * HOUR,
         **used.core_keywords(),
+        "thermal": bool(thermal),
     }
     config.update(dict(options or {}))
     sm = _core.Smoother(_core.SmootherConfig(**config))
     with progress(int(sm.n_samples), f"smooth {log.name}", quiet) as bar:
         for chunk in log.chunks(chunk_samples, stop=int(sm.n_samples)):
-            k = int(sm.process(np.ascontiguousarray(chunk.dtheta_rad), np.ascontiguousarray(chunk.dv_m_s)))
+            temp = np.ascontiguousarray(chunk.temp_c, dtype=float) if thermal and chunk.temp_c is not None else None
+            k = int(sm.process(np.ascontiguousarray(chunk.dtheta_rad), np.ascontiguousarray(chunk.dv_m_s), temp))
             bar.update(k)
             if sm.done:
                 break
@@ -104,6 +125,14 @@ def smooth_log(
         drift_std_deg_h=float(r["drift_std_rad_s"]) / DEG_PER_H,
         drift_end_deg_h=float(r["drift_end_rad_s"]) / DEG_PER_H,
         drift_end_std_deg_h=float(r["drift_end_std_rad_s"]) / DEG_PER_H,
+        model="thermal" if r["thermal"] else "constant",
+        drift_ref_deg_h=float(r["drift_ref_rad_s"]) / DEG_PER_H,
+        drift_ref_std_deg_h=float(r["drift_ref_std_rad_s"]) / DEG_PER_H,
+        thermal_coeff_deg_h_per_c=float(r["thermal_coeff_rad_s_per_c"]) / DEG_PER_H,
+        thermal_coeff_std_deg_h_per_c=float(r["thermal_coeff_std_rad_s_per_c"]) / DEG_PER_H,
+        temp_ref_c=float(r["temp_ref_c"]),
+        temp_end_c=float(r["temp_end_c"]),
+        temp_range_c=float(r["temp_range_c"]),
         gyro_bias_deg_h=vec("gyro_bias_rad_s", DEG_PER_H),
         gyro_bias_std_deg_h=vec("gyro_bias_std_rad_s", DEG_PER_H),
         accel_bias_ug=vec("accel_bias_m_s2", MICRO_G),
