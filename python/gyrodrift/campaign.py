@@ -650,7 +650,8 @@ def _parquet_recogniser(head: bytes) -> bool:
 
 @dataclass
 class CampaignSummary:
-    """What a `run_campaign` call did: runs total, already done before, done now, failed now, seconds."""
+    """What a `run_campaign` call did: runs total, already done before, done now, failed now, lost to broken
+    workers, seconds, and whether a Ctrl-C stopped it before every run was done."""
 
     total: int
     skipped: int
@@ -658,6 +659,7 @@ class CampaignSummary:
     failed: int
     lost: int
     elapsed_s: float
+    interrupted: bool = False
 
 
 class CampaignStore:
@@ -866,10 +868,15 @@ def write_run_table(
 # --- running ---------------------------------------------------------------------------------------------
 
 
-def _watch_parent(parent_pid: int) -> None:
-    """Pool-worker initializer: exit when the client that started the pool is gone (kill -9 of the client must
-    not leave workers computing runs nobody will commit)."""
+def _worker_init(parent_pid: int) -> None:
+    """Pool-worker initializer: ignore SIGINT (a Ctrl-C in the terminal reaches the whole process group; the
+    client decides: finish the runs in progress, or terminate the workers on a second Ctrl-C), and exit when the
+    client that started the pool is gone (kill -9 of the client must not leave workers computing runs nobody will
+    commit)."""
+    import signal
     import threading
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
     def watch() -> None:
         while os.getppid() == parent_pid:
@@ -879,46 +886,158 @@ def _watch_parent(parent_pid: int) -> None:
     threading.Thread(target=watch, daemon=True, name="gyrodrift-parent-watch").start()
 
 
-def _pool_map(campaign, todo, workers, on_row: Callable[[dict], None]) -> int:
-    """Process `todo` on a local process pool; a worker killed mid-run breaks the pool: a new pool takes the
+class _Interrupts:
+    """SIGINT during a campaign: the first stops new runs from being submitted (the runs in progress finish and
+    are committed; a note on stderr says so), the second raises KeyboardInterrupt (abort at once). Installed only
+    on the main thread (signal handlers live there); the previous handler comes back on exit."""
+
+    def __init__(self) -> None:
+        self.count = 0
+        self.in_progress: Callable[[], int] = lambda: 0
+        self.committing = False  # a run is being written: a second Ctrl-C waits for its rename
+        self.abort_pending = False
+        self._previous: Any = None
+        self._installed = False
+
+    @property
+    def stopping(self) -> bool:
+        return self.count > 0
+
+    def _handle(self, signum, frame) -> None:
+        import sys
+
+        self.count += 1
+        if self.count > 1:
+            if self.committing:
+                self.abort_pending = True
+                return
+            raise KeyboardInterrupt
+        n = self.in_progress()
+        sys.stderr.write(
+            f"\ncampaign: interrupted: no new runs are started; finishing and committing the {n} run(s) in progress "
+            "(Ctrl-C again aborts them at once; rerunning the same command resumes)\n"
+        )
+        sys.stderr.flush()
+
+    def __enter__(self) -> _Interrupts:
+        import signal
+        import threading
+
+        if threading.current_thread() is threading.main_thread():
+            self._previous = signal.signal(signal.SIGINT, self._handle)
+            self._installed = True
+        return self
+
+    def __exit__(self, *exc) -> None:
+        import signal
+
+        if self._installed:
+            signal.signal(signal.SIGINT, self._previous)
+
+
+def _abort_note(n: int) -> None:
+    import sys
+
+    sys.stderr.write(
+        f"\ncampaign: aborted; {n} run(s) in progress were not committed (rerunning the same command resumes)\n"
+    )
+    sys.stderr.flush()
+
+
+def _terminate_workers(pool: concurrent.futures.ProcessPoolExecutor) -> None:
+    """Stop a pool's worker processes now (they ignore SIGINT). Python 3.14 has ``terminate_workers``; before it,
+    the executor's process table."""
+    terminate = getattr(pool, "terminate_workers", None)
+    if terminate is not None:
+        terminate()
+        return
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        proc.terminate()
+
+
+def _pool_map(campaign, todo, workers, on_row: Callable[[dict], None], interrupts: _Interrupts) -> int:
+    """Process `todo` on a local process pool, at most `workers` runs handed out at a time (so a first Ctrl-C
+    leaves only the runs in progress to finish). A worker killed mid-run breaks the pool: a new pool takes the
     runs not yet committed (at most 3 times). Returns the number of runs lost to broken pools."""
+    from collections import deque
+
     remaining = list(todo)
     ctx = multiprocessing.get_context("spawn")
     for _attempt in range(4):
-        if not remaining:
+        if not remaining or interrupts.stopping:
             return 0
         finished: set[int] = set()
+        queue = deque(remaining)
+        running: dict[concurrent.futures.Future, int] = {}
+        interrupts.in_progress = running.__len__
         pool = concurrent.futures.ProcessPoolExecutor(
-            max_workers=workers, mp_context=ctx, initializer=_watch_parent, initargs=(os.getpid(),)
+            max_workers=workers, mp_context=ctx, initializer=_worker_init, initargs=(os.getpid(),)
         )
         try:
-            futures = {pool.submit(process_run, campaign, i): i for i in remaining}
-            try:
-                for fut in concurrent.futures.as_completed(futures):
-                    on_row(fut.result())
-                    finished.add(futures[fut])
-            except concurrent.futures.process.BrokenProcessPool:
-                pass
+            while True:
+                while queue and len(running) < workers and not interrupts.stopping:
+                    i = queue.popleft()
+                    running[pool.submit(process_run, campaign, i)] = i
+                if not running:
+                    break
+                done, _ = concurrent.futures.wait(running, return_when=concurrent.futures.FIRST_COMPLETED)
+                for fut in done:
+                    row = fut.result()  # BrokenProcessPool when a worker died
+                    on_row(row)
+                    finished.add(running.pop(fut))
+        except concurrent.futures.process.BrokenProcessPool:
+            pass
+        except BaseException as exc:  # a second Ctrl-C (KeyboardInterrupt) or the client's own failure
+            if isinstance(exc, KeyboardInterrupt):
+                _abort_note(len(running))
+            _terminate_workers(pool)
+            raise
         finally:
             pool.shutdown(wait=True, cancel_futures=True)
         remaining = [i for i in remaining if i not in finished]
+        if interrupts.stopping:
+            return 0
     return len(remaining)
 
 
-def _dask_map(campaign, todo, client, on_row: Callable[[dict], None]) -> int:
+def _dask_map(campaign, todo, client, on_row: Callable[[dict], None], interrupts: _Interrupts) -> int:
+    """Process `todo` on a dask cluster, as many runs handed out at a time as the cluster has threads (so a
+    first Ctrl-C leaves only the runs in progress to finish). Returns the runs lost to the infrastructure."""
+    from collections import deque
+
     from dask.distributed import as_completed
 
-    futures = [
-        client.submit(process_run, campaign, i, pure=False, key=f"campaign-{campaign.digest()[:8]}-{i}") for i in todo
-    ]
+    prefix = f"campaign-{campaign.digest()[:8]}"
+    queue = deque(todo)
+    running: set = set()
+    interrupts.in_progress = running.__len__
+    flow = as_completed()
+
+    def refill() -> None:
+        window = max(1, sum(client.nthreads().values()))
+        while queue and len(running) < window and not interrupts.stopping:
+            i = queue.popleft()
+            fut = client.submit(process_run, campaign, i, pure=False, key=f"{prefix}-{i}")
+            running.add(fut)
+            flow.add(fut)
+
     lost = 0
-    for fut in as_completed(futures):
-        try:
-            row = fut.result()
-        except Exception:  # the infrastructure failed (a worker killed too often): not the run's error
-            lost += 1
-            continue
-        on_row(row)
+    refill()
+    try:
+        for fut in flow:
+            running.discard(fut)
+            try:
+                row = fut.result()
+            except Exception:  # the infrastructure failed (a worker killed too often): not the run's error
+                lost += 1
+            else:
+                on_row(row)
+            refill()
+    except BaseException as exc:
+        if isinstance(exc, KeyboardInterrupt):
+            _abort_note(len(running))
+        client.cancel(list(running))
+        raise
     return lost
 
 
@@ -953,6 +1072,10 @@ def run_campaign(
         Process at most this many of the pending runs (lowest indices first).
     quiet : bool
         Hide the progress bar (runs done, failures, rate, time left).
+
+    SIGINT (Ctrl-C), when called on the main thread: the first stops new runs (the runs in progress finish and
+    are committed; the summary says ``interrupted``), the second aborts at once (KeyboardInterrupt; the runs in
+    progress are not committed, a run being written is renamed into place first). A rerun resumes either way.
     """
     from gyrodrift.cluster import DEFAULT_CONNECT_TIMEOUT_S, dask_client
     from gyrodrift.progress import progress
@@ -971,10 +1094,16 @@ def run_campaign(
         todo = todo[:limit]
     t0 = time.perf_counter()
     counts = {"done": 0, "failed": 0}
-    with progress(len(todo), f"campaign {campaign.name}", quiet, unit="run") as bar:
+    with _Interrupts() as interrupts, progress(len(todo), f"campaign {campaign.name}", quiet, unit="run") as bar:
 
         def on_row(row: dict) -> None:
-            store.write(row, schema)
+            interrupts.committing = True
+            try:
+                store.write(row, schema)
+            finally:
+                interrupts.committing = False
+            if interrupts.abort_pending:
+                raise KeyboardInterrupt
             counts["done"] += 1
             counts["failed"] += row.get("error") is not None
             bar.set_postfix(failed=counts["failed"], refresh=False)
@@ -988,7 +1117,15 @@ def run_campaign(
                 scheduler=scheduler,
                 connect_timeout_s=DEFAULT_CONNECT_TIMEOUT_S if connect_timeout_s is None else connect_timeout_s,
             ) as client:
-                lost = _dask_map(campaign, todo, client, on_row)
+                lost = _dask_map(campaign, todo, client, on_row, interrupts)
         else:
-            lost = _pool_map(campaign, todo, workers or os.cpu_count() or 1, on_row)
-    return CampaignSummary(campaign.count, len(done), counts["done"], counts["failed"], lost, time.perf_counter() - t0)
+            lost = _pool_map(campaign, todo, workers or os.cpu_count() or 1, on_row, interrupts)
+    return CampaignSummary(
+        campaign.count,
+        len(done),
+        counts["done"],
+        counts["failed"],
+        lost,
+        time.perf_counter() - t0,
+        interrupted=interrupts.stopping,
+    )
