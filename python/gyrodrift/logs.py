@@ -61,6 +61,7 @@ their true initial attitude (`LogTruth`, from the ``gyrodrift.scenario`` metadat
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import json
@@ -76,7 +77,7 @@ import numpy as np
 import pyarrow as pa
 
 from gyrodrift import _core
-from gyrodrift.errors import InputError, OptionError
+from gyrodrift.errors import CoreError, InputError, OptionError
 from gyrodrift.log_format import LogFormat, load_log_format
 from gyrodrift.runs import TEMPERATURE_LIMITS_C
 from gyrodrift.site import Site
@@ -456,6 +457,26 @@ class ImuLog:
         """Raise `LogError` if the log has no ``temp_c`` column (what: who needs it)."""
         if not self.has_temperature:
             raise LogError(f"{self.label}, row 1: missing column temp_c (system temperature, deg C; {what} needs it)")
+
+    @contextlib.contextmanager
+    def core_errors(self, first: int = 0) -> Iterator[None]:
+        """Name this log in a `CoreError` the Rust core raises inside the block (its aligner, smoother or
+        navigators refusing this log's samples or diverging on them), so that the one-line error says which file.
+
+        The core's message is kept (the quantity, and the time ``t`` [s] counted from the first sample it was
+        given when it says one); `first` is that sample's 0-based index in the log, named as a row when it is not
+        the log's first. The ``key`` attribute is kept too. An error that already names the log passes unchanged.
+        """
+        try:
+            yield
+        except CoreError as exc:
+            text = str(exc)
+            if text.startswith(f"{self.label}: "):
+                raise
+            since = "" if first == 0 else f" (t counted from {_where(self, first).removeprefix(self.label + ', ')})"
+            err = CoreError(f"{self.label}: {text}{since}")
+            err.key = getattr(exc, "key", None)  # type: ignore[attr-defined]
+            raise err from exc
 
     # ------------------------------------------------------------------------------------------
     # Streaming

@@ -164,7 +164,7 @@ def run_navigators(
     pos = 0
     n_threads = min(len(navigators), os.cpu_count() or 1) if threads is None else max(1, min(threads, len(navigators)))
     pool = ThreadPoolExecutor(max_workers=n_threads) if n_threads > 1 else None
-    with progress(n_samples, desc, quiet) as bar, pool or contextlib.nullcontext():
+    with log.core_errors(start), progress(n_samples, desc, quiet) as bar, pool or contextlib.nullcontext():
         chunks = log.chunks(chunk_samples, stop=stop)
         for chunk in chunks if threads == 1 else prefetched(chunks):
             if chunk.first_index + len(chunk) <= start:
