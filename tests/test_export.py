@@ -437,6 +437,21 @@ def test_provenance_text_cannot_break_the_generated_code(tmp_path):
     assert line.endswith('#error \\"y\\" \\u00e9.csv')  # one comment line, escaped
 
 
+def test_a_hybrids_physics_estimate_is_a_term_of_the_sum_also_with_metadata_routing():
+    import sklearn
+
+    paper = gyrodrift.load_paper()
+    model = fit_drift_model(paper.train, encoding="physics", target="residual", gamma=100.0, sigma=0.7)
+    X = model[:-1].transform(paper.test)
+    physics = physics_estimate(paper.test, "drift_inversion_deg_h")
+    pred = model.predict(paper.test)
+    np.testing.assert_array_equal(pred, model.lssvr.predict(X, offset=physics))
+    with sklearn.config_context(enable_metadata_routing=True):  # the offset is not routed through the Pipeline
+        np.testing.assert_array_equal(model.predict(paper.test), pred)
+    with pytest.raises(ValueError, match="one value per sample"):
+        model.lssvr.predict(X, offset=physics[:-1])
+
+
 # --- C ------------------------------------------------------------------------------------------------------
 
 _C_PUBLIC = (

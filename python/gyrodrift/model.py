@@ -487,9 +487,10 @@ class DriftModel(Pipeline):
         """Identified drift [deg/h] of each run: the LSSVR's output (plus the physics estimate for a hybrid, added
         inside the LSSVR's compensated sum: `LSSVR.predict`)."""
         runs = as_run_table(X)
-        if self.target == "residual":
-            params = {**params, "offset": self._base(runs)}
-        return super().predict(runs, **params)
+        if self.target != "residual":
+            return super().predict(runs, **params)
+        # the last step called directly: an offset routed through Pipeline.predict would need metadata requests
+        return self.named_steps["lssvr"].predict(self[:-1].transform(runs), offset=self._base(runs), **params)
 
     def score(self, X, y=None, sample_weight=None, **params) -> float:
         """R^2 of the identified drifts (``predict``) against ``y`` (default: the runs' drifts)."""
