@@ -16,18 +16,20 @@ import numpy as np
 import pytest
 
 from gyrodrift.campaign import (
+    CURVE_COLUMNS,
     CampaignError,
     CampaignStore,
     load_campaign,
     parse_campaign,
     read_runs,
     run_campaign,
+    trial_drift_deg_h,
     write_run_table,
 )
 from gyrodrift.errors import InputError, OutputError
 
 TINY = Path(__file__).resolve().parents[1] / "examples" / "campaigns" / "tiny.toml"
-VOLATILE = {"worker", "t_align_s", "t_passes_s", "t_smoother_s", "t_twin_s", "t_total_s"}
+VOLATILE = {"worker"} | {f"{k}_{s}_s" for k in ("t", "cpu") for s in ("align", "passes", "smoother", "twin", "total")}
 
 
 def tiny_text(count: int, extra: str = "") -> str:
@@ -180,7 +182,8 @@ def test_export_log_and_linear_curves_match_navigation(store, tmp_path):
     assert res.exit_code == 0, res.output
     log = open_log(tmp_path / "log" / "imu.parquet")
     tl = Timeline(align_h=1.0, features_h=12.0, truth_h=13.0)
-    truth = find_true_drift(log, timeline=tl)
+    # the campaign's truth: one read, linearised between 0 and the scenario's nominal drift (no verification read)
+    truth = find_true_drift(log, timeline=tl, verify=False, trial_deg_h=trial_drift_deg_h(campaign.scenario(k), tl))
     assert truth.drift_deg_h == runs.numbers("drift_deg_h")[k]
     assert log.n_samples == campaign.scenario(k).n_samples
     d = runs.numbers("drift_effective_deg_h")[k] + 0.0007  # any estimate, not one of the secant's ends
@@ -335,3 +338,32 @@ def test_cli_campaign_and_study(store, tmp_path):
     html = (tmp_path / "study" / "report.html").read_text()
     assert html.index("Summary") < html.index("Methods on the held-out runs") and "data:image/png;base64" in html
     assert math.isfinite(doc["methods"]["12 h curve fit"]["metrics"]["coverage_eff"])
+
+
+def test_one_read_path_matches_the_verified_path(tmp_path):
+    """The default per-run path (the truth linearised in its one read, the twin navigated once at d*) against the
+    previous one (`[options] verify = true`: verification reads, the twin's own truth) on the same runs: the
+    drifts within 3e-7 deg/h (the verified truth's own tolerance is 1e-7 deg/h), every other scalar identical,
+    the error curves within 1e-3 nmi for any drift within 0.002 deg/h of the truth."""
+    from gyrodrift.campaign import CampaignRuns, process_run
+
+    fast = load_campaign(write_campaign(tmp_path, "fast", 3))
+    slow_path = tmp_path / "slow.toml"
+    slow_path.write_text(tiny_text(3).replace("[options]\n", "[options]\nverify = true\n"))
+    slow = load_campaign(slow_path)
+    assert slow.options["verify"] is True and "verify" not in fast.options
+    for i in range(3):
+        a, b = process_run(slow, i), process_run(fast, i)
+        assert a["error"] is None and b["error"] is None
+        assert a["truth_verified"] is True and b["truth_verified"] is None
+        for name in ("drift_deg_h", "drift_effective_deg_h"):
+            assert abs(b[name] - a[name]) < 3e-7, (i, name, b[name] - a[name])
+        assert a["drift_deg_h"] != b["drift_deg_h"]  # two computations, not one
+        for name, v in a.items():
+            if isinstance(v, float) and name not in VOLATILE and name not in ("drift_deg_h", "drift_effective_deg_h"):
+                assert b[name] == v or (math.isnan(v) and math.isnan(b[name])), (i, name)
+        assert a["curve_north0_m"] == b["curve_north0_m"] and a["curve_east0_m"] == b["curve_east0_m"]
+        runs = [CampaignRuns({}, {k: np.array([r[k]], float) for k in CURVE_COLUMNS}) for r in (a, b)]
+        for d in a["drift_deg_h"] + np.array([-0.002, 0.0, 0.002]):
+            ea, eb = (r.errors_nmi([d])[0] for r in runs)
+            assert np.max(np.abs(ea - eb)) < 1e-3, (i, d)

@@ -9,11 +9,13 @@ fits are weighted, and one run is left out), and the default ``gyrodrift fit`` m
 times the training range of each input (so that some fall outside it). The C of every model is built in one
 compiler run (each model's source wrapped in its own translation unit), the Rust in one crate.
 
-Tolerance: ``|generated - python| <= 1e-12 * max(|python|, S)`` with ``S = sum_i |alpha_i K(x_i, x)| + |b|``
-(+ ``|physics|`` for a hybrid), the magnitude of the terms the prediction adds. Relative to ``|python|`` alone
-no float64 code can promise 1e-12 where the terms cancel (a drift crossing zero): numpy sums them with BLAS in
-another order, and the rounding of either order is about ``eps * S``. The measured maxima are printed
-(``pytest -s``) and quoted in docs/export.md.
+Tolerance: ``|generated - python| <= 1e-12 * |python|`` on every row, the drifts near zero included. Python's
+prediction (`gyrodrift.lssvr`, "prediction arithmetic") and the generated code do the same IEEE operations in the
+same order, the kernel's exp from the same C library and the sum compensated, so they agree to the last bit
+here (counted). The compensated sum is checked too: Python's prediction is within 1 ulp of its terms summed
+exactly (`math.fsum`, the terms recomputed here from the documented operations), however much they cancel
+(condition ``S / |sum|`` with ``S = sum_i |alpha_i K_i| + |b|`` (+ ``|physics|``) printed). The measured maxima
+are printed (``pytest -s``) and quoted in docs/export.md.
 """
 
 from __future__ import annotations
@@ -141,11 +143,33 @@ def _used_inputs(model) -> list[str]:
     return [n for n in ALL if any(n in e.inputs for e in exprs)]
 
 
+def _kernel_terms(est, X: np.ndarray) -> np.ndarray:
+    """K(X[j], x_i), shape (n_rows, n_train), by the documented operations (gyrodrift.lssvr, "prediction
+    arithmetic"), written out here one row at a time: features in order, exp of the C library, powers multiplied."""
+    out = np.empty((len(X), len(est.X_fit_)))
+    s2 = est.sigma * est.sigma
+    for j, x in enumerate(X.tolist()):
+        for i, z in enumerate(est.X_fit_.tolist()):
+            acc = 0.0
+            for a, b in zip(x, z, strict=True):
+                acc += (a - b) * (a - b) if est.kernel == "rbf" else a * b
+            if est.kernel == "rbf":
+                acc = math.exp(-acc / s2)
+            elif est.kernel != "linear":
+                base = acc / s2 + est.coef0
+                acc = base
+                for _ in range(1, est.degree):
+                    acc *= base
+            out[j, i] = acc
+    return out
+
+
 def _expected(model, rows: RunTable) -> dict:
     """What the generated code must give, computed in Python independently of gyrodrift.export."""
     train = model.training_["runs"]  # the runs the model was fitted on (without any left out)
     est = model.lssvr
-    K = kernel_matrix(model[:-1].transform(rows), est.X_fit_, kernel=est.kernel, sigma=est.sigma, coef0=est.coef0)
+    X = model[:-1].transform(rows)
+    K = _kernel_terms(est, X)
     inside = np.ones(len(rows), bool)
     for name in _used_inputs(model):
         v, t = _value(rows, name), _value(train, name)
@@ -155,11 +179,15 @@ def _expected(model, rows: RunTable) -> dict:
     pred = model.predict(rows)
     physics = physics_estimate(rows, model.physics_column) if model.target == "residual" else np.zeros(len(rows))
     terms = K * est.alpha_
+    # numpy's kernel (scipy's distances, numpy's exp and power) summed by BLAS: the arithmetic before the export
+    # and Python agreed on theirs
+    numpy_kernel = kernel_matrix(X, est.X_fit_, kernel=est.kernel, sigma=est.sigma, coef0=est.coef0)
     return {
         "pred": pred,
         # the terms summed exactly
         "exact": np.array([math.fsum([*t, est.intercept_, p]) for t, p in zip(terms, physics, strict=True)]),
-        "scale": np.abs(K * est.alpha_).sum(axis=1) + abs(est.intercept_) + np.abs(physics),
+        "scale": np.abs(terms).sum(axis=1) + abs(est.intercept_) + np.abs(physics),
+        "numpy": numpy_kernel @ est.alpha_ + est.intercept_ + physics,
         "inside": inside,
         "features": feats,
         "physics": physics,
@@ -262,12 +290,26 @@ def _rows_text(rows: RunTable) -> str:
 
 
 def _check(case_id: str, got: np.ndarray, exp: dict) -> tuple[float, float]:
-    """Assert the tolerance; return (max error relative to |python|, max error relative to S)."""
+    """Assert the tolerance; return (max error relative to |python|, fraction of rows with the same bits)."""
     err = np.abs(got - exp["pred"])
-    bound = TOL * np.maximum(np.abs(exp["pred"]), exp["scale"])
-    worst = int(np.argmax(err / bound))
+    bound = TOL * np.abs(exp["pred"])
+    worst = int(np.argmax(err - bound))
     assert np.all(err <= bound), f"{case_id}: row {worst}: {got[worst]!r} vs python {exp['pred'][worst]!r}"
-    return float(np.max(err / np.abs(exp["pred"]))), float(np.max(err / exp["scale"]))
+    return float(np.max(err / np.abs(exp["pred"]))), float(np.mean(got == exp["pred"]))
+
+
+def test_python_prediction_is_its_terms_summed_exactly_then_rounded(fitted):
+    """The compensated sum: within 1 ulp of the exact sum of its terms on every row of every model, even where
+    they cancel (condition S / |sum| up to about 1e10); numpy's kernel summed by BLAS is not."""
+    cond, numpy_err = {}, {}
+    for case_id in ALL_CASES:
+        exp = fitted[case_id][2]
+        err = np.abs(exp["pred"] - exp["exact"])
+        assert np.all(err <= np.spacing(np.abs(exp["exact"]))), case_id
+        cond[case_id] = np.max(exp["scale"] / np.abs(exp["exact"]))
+        numpy_err[case_id] = np.max(np.abs(exp["numpy"] - exp["exact"]) / np.abs(exp["exact"]))
+    assert max(cond.values()) > 1e6  # terms cancel (down to a drift ~1e-7 of its terms): the check is not trivial
+    assert max(numpy_err.values()) > 1e-12  # where numpy's kernel summed by BLAS misses the 1e-12 target
 
 
 # --- every feature can be exported ------------------------------------------------------------------------
@@ -395,6 +437,21 @@ def test_provenance_text_cannot_break_the_generated_code(tmp_path):
     assert line.endswith('#error \\"y\\" \\u00e9.csv')  # one comment line, escaped
 
 
+def test_a_hybrids_physics_estimate_is_a_term_of_the_sum_also_with_metadata_routing():
+    import sklearn
+
+    paper = gyrodrift.load_paper()
+    model = fit_drift_model(paper.train, encoding="physics", target="residual", gamma=100.0, sigma=0.7)
+    X = model[:-1].transform(paper.test)
+    physics = physics_estimate(paper.test, "drift_inversion_deg_h")
+    pred = model.predict(paper.test)
+    np.testing.assert_array_equal(pred, model.lssvr.predict(X, offset=physics))
+    with sklearn.config_context(enable_metadata_routing=True):  # the offset is not routed through the Pipeline
+        np.testing.assert_array_equal(model.predict(paper.test), pred)
+    with pytest.raises(ValueError, match="one value per sample"):
+        model.lssvr.predict(X, offset=physics[:-1])
+
+
 # --- C ------------------------------------------------------------------------------------------------------
 
 _C_PUBLIC = (
@@ -439,8 +496,9 @@ FILL
 """
 
 C_RESULTS: dict[str, tuple[float, ...]] = {}
-"""Case id -> (max |c - py| / |py|, max |c - py| / S, max |c - exact| / |exact|, max |py - exact| / |exact|,
-max |c - py| / |py| where |py| >= S / 10, fraction of the rows in range), printed by test_c_summary."""
+"""Case id -> (max |c - py| / |py|, fraction of rows with the same bits, max |py - exact| / |exact|,
+max |numpy - exact| / |exact|, max condition S / |exact|, fraction of the rows in range), printed by
+test_c_summary."""
 
 
 def _c_wrapper(name: str, header: str, hybrid: bool) -> str:
@@ -513,19 +571,14 @@ def test_c_export_reproduces_python(case_id, fitted, c_driver):
     np.testing.assert_array_equal(table[:, 1].astype(bool), exp["inside"])
     assert exp["inside"][: model.training["n_runs"]].all()  # the training runs come first
     assert 50 < exp["inside"].sum() < N_ROWS - 50  # rows on both sides of the range check
-    rel, rel_s = _check(case_id, table[:, 0], exp)
-    # against the exactly summed terms, the generated order does as well as numpy's
-    c_exact = np.abs(table[:, 0] - exp["exact"])
-    assert np.all(c_exact <= TOL * np.maximum(np.abs(exp["exact"]), exp["scale"]))
-    np_exact = float(np.max(np.abs(exp["pred"] - exp["exact"]) / np.abs(exp["exact"])))
-    large = np.abs(exp["pred"]) >= 0.1 * exp["scale"]  # rows whose terms do not cancel much
-    rel_large = float(np.max(np.abs(table[large, 0] - exp["pred"][large]) / np.abs(exp["pred"][large]), initial=0.0))
+    rel, same = _check(case_id, table[:, 0], exp)
+    exact = np.abs(exp["exact"])
     C_RESULTS[case_id] = (
         rel,
-        rel_s,
-        float(np.max(c_exact / np.abs(exp["exact"]))),
-        np_exact,
-        rel_large,
+        same,
+        float(np.max(np.abs(exp["pred"] - exp["exact"]) / exact)),
+        float(np.max(np.abs(exp["numpy"] - exp["exact"]) / exact)),
+        float(np.max(exp["scale"] / exact)),
         float(exp["inside"].mean()),
     )
 
@@ -553,12 +606,13 @@ def test_c_summary(c_driver):
     for label, values in groups.items():
         if values:
             print(
-                f"  {label} ({len(values)}): max |c - py| / |py| {max(v[0] for v in values):.3g}, / S "
-                f"{max(v[1] for v in values):.3g}; against the exact sum: c {max(v[2] for v in values):.3g}, "
-                f"numpy {max(v[3] for v in values):.3g}; where |py| >= S/10: {max(v[4] for v in values):.3g}"
+                f"  {label} ({len(values)}): max |c - py| / |py| {max(v[0] for v in values):.3g}, rows with the "
+                f"same bits {min(v[1] for v in values):.1%}; against the exact sum of the terms: py "
+                f"{max(v[2] for v in values):.3g}, numpy kernel + BLAS {max(v[3] for v in values):.3g}; "
+                f"condition S / |sum| up to {max(v[4] for v in values):.3g}"
             )
     print(f"  worst |c - py| / |py|: {max(C_RESULTS, key=lambda k: C_RESULTS[k][0])}")
-    assert max(v[1] for v in C_RESULTS.values()) < TOL
+    assert max(v[0] for v in C_RESULTS.values()) <= TOL
 
 
 # --- Rust -------------------------------------------------------------------------------------------------
@@ -574,24 +628,25 @@ publish = false
 
 _RUST_RUNNER = """use gyrodrift_export_check as g;
 
-/// Rows "u0 .. uN-1 python bound S inside physics f...": checks one model, prints its worst relative errors.
+/// Rows "u0 .. uN-1 python bound inside physics f...": checks one model, prints its worst relative error and
+/// the number of rows with the same bits as Python's.
 fn run(name: &str, data: &str, eval: &dyn Fn(&[f64]) -> (f64, bool, f64, Vec<f64>)) {
-    let (mut rel, mut rel_s, mut n) = (0.0_f64, 0.0_f64, 0usize);
+    let (mut rel, mut same, mut n) = (0.0_f64, 0usize, 0usize);
     for line in data.lines() {
         let v: Vec<f64> = line.split(' ').map(|t| t.parse::<f64>().unwrap()).collect();
         let (pred, inside, physics, features) = eval(&v[0..N_ALL]);
-        let (python, bound, scale) = (v[N_ALL], v[N_ALL + 1], v[N_ALL + 2]);
+        let (python, bound) = (v[N_ALL], v[N_ALL + 1]);
         let err = (pred - python).abs();
         assert!(err <= bound, "{name}: row {n}: {pred:e} vs python {python:e}");
-        assert_eq!(inside, v[N_ALL + 3] != 0.0, "{name}: row {n}: range check");
-        assert_eq!(physics.to_bits(), v[N_ALL + 4].to_bits(), "{name}: row {n}: physics estimate");
-        assert_eq!(features, v[N_ALL + 5..].to_vec(), "{name}: row {n}: features");
+        assert_eq!(inside, v[N_ALL + 2] != 0.0, "{name}: row {n}: range check");
+        assert_eq!(physics.to_bits(), v[N_ALL + 3].to_bits(), "{name}: row {n}: physics estimate");
+        assert_eq!(features, v[N_ALL + 4..].to_vec(), "{name}: row {n}: features");
         rel = rel.max(err / python.abs());
-        rel_s = rel_s.max(err / scale);
+        same += usize::from(pred.to_bits() == python.to_bits());
         n += 1;
     }
     assert!(n >= 1000);
-    println!("RESULT {name} {rel:e} {rel_s:e}");
+    println!("RESULT {name} {rel:e} {same} {n}");
 }
 """
 
@@ -613,10 +668,10 @@ def test_rust_export_reproduces_python(fitted, tmp_path_factory):
         text = _export(case_id, model, "rust")["gyrodrift_model.rs"]
         (project / "src" / f"{module}.rs").write_text(text)
         lib.append(f"pub mod {module};")
-        bound = TOL * np.maximum(np.abs(exp["pred"]), exp["scale"])
+        bound = TOL * np.abs(exp["pred"])
         lines = []
         for r, inputs in enumerate(_rows_text(rows).splitlines()):
-            values = [exp["pred"][r], bound[r], exp["scale"][r], float(exp["inside"][r]), exp["physics"][r]]
+            values = [exp["pred"][r], bound[r], float(exp["inside"][r]), exp["physics"][r]]
             lines.append(" ".join([inputs, *(repr(float(v)) for v in [*values, *exp["features"][r]])]))
         (project / "data" / f"{module}.txt").write_text("\n".join(lines) + "\n")
         fields = ", ".join(f"{n}: u[{k}]" for k, n in enumerate(ALL) if f"pub {n}: f64" in text)
@@ -655,8 +710,8 @@ fn {module}() {{
     )
     assert run.returncode == 0, (run.stdout + run.stderr)[-4000:]
     results = {}
-    for module, rel, rel_s in re.findall(r"RESULT (m\d+) (\S+) (\S+)\n", run.stdout):
-        results[names[module]] = (float(rel), float(rel_s))
+    for module, rel, same, n in re.findall(r"RESULT (m\d+) (\S+) (\d+) (\d+)\n", run.stdout):
+        results[names[module]] = (float(rel), int(same) / int(n))
     assert set(results) == set(ALL_CASES)
     groups = {
         "rbf": [v for k, v in results.items() if "-rbf" in k and "hybrid" not in k],
@@ -671,7 +726,7 @@ fn {module}() {{
     for label, values in groups.items():
         print(
             f"  {label} ({len(values)}): max |rs - py| / |py| {max(v[0] for v in values):.3g}, "
-            f"/ S {max(v[1] for v in values):.3g}"
+            f"rows with the same bits {min(v[1] for v in values):.1%}"
         )
 
 

@@ -322,7 +322,8 @@ def test_cli_evaluate_on_a_moving_base_log(tmp_path):
 
 def test_vehicle_attitude_columns_remove_the_table_turn(tmp_path):
     """nav.parquet of a moving-base run carries the vehicle's attitude: the navigated IMU attitude with the table
-    angle removed, equal to the route's heading (error-free IMU, tilted mounting), from memory and from the file."""
+    angle removed, equal to the route's heading (error-free IMU, tilted mounting), from memory, from the file and
+    from a scenario navigated on the fly."""
     from gyrodrift.ins import navigate
     from gyrodrift.ins.vehicle import vehicle_attitude_rad
 
@@ -351,3 +352,7 @@ def test_vehicle_attitude_columns_remove_the_table_turn(tmp_path):
     path = simulate(s, out_dir=tmp_path / "sim")
     from_file = navigate(path, decimation_s=1.0)
     np.testing.assert_allclose(from_file["vehicle_yaw_deg"], nav["vehicle_yaw_deg"], atol=1e-9)
+    # A scenario navigated on the fly (nothing stored) takes the table angle from the simulated chunks.
+    on_the_fly = navigate(s, decimation_s=1.0)
+    for name in ("vehicle_pitch_deg", "vehicle_roll_deg", "vehicle_yaw_deg"):
+        np.testing.assert_allclose(on_the_fly[name], nav[name], atol=1e-9)

@@ -67,6 +67,7 @@ __all__ = [
     "read_runs",
     "run_campaign",
     "run_table",
+    "trial_drift_deg_h",
     "write_run_table",
 ]
 
@@ -86,6 +87,8 @@ NOISE_KEYS = {
 }
 """Noise-grade keys and the scenario section each sets; the noise-free twin sets every one but correlation_s to 0."""
 TWIN_OFF = ("arw_deg_rth", "bias_instability_deg_h", "rrw_deg_h_rth", "vrw_ug_rthz")
+STAGES = ("align", "passes", "smoother", "twin")
+"""The timed stages of a run (columns ``t_STAGE_s`` wall and ``cpu_STAGE_s`` CPU seconds, and ``_total``)."""
 TIMELINE_KEYS = ("align_h", "features_h", "truth_h")
 """`[options]` keys shortening the procedure's time line (tests and quick looks; default 4 h, 12 h, 72 h)."""
 _PATH_RE = re.compile(r"^(?P<section>[a-z_]+)\.(?P<key>[a-z0-9_]+)(?:\[(?P<index>[0-9]+)\])?$")
@@ -347,11 +350,14 @@ def parse_campaign(data: Mapping[str, Any], source: str = "<campaign>") -> Campa
     if grades and "grade" not in vary:
         raise _fail(source, "[vary.grade]", "grades are defined but no [vary.grade] chooses among them")
     options = dict(data.get("options") or {})
-    bad = sorted(set(options) - {"smoother", *TIMELINE_KEYS})
+    bad = sorted(set(options) - {"smoother", "verify", *TIMELINE_KEYS})
     if bad:
-        raise _fail(source, f"[options] {bad[0]}", f"unknown key (expected smoother, {', '.join(TIMELINE_KEYS)})")
-    if "smoother" in options and not isinstance(options["smoother"], bool):
-        raise _fail(source, "[options] smoother", f"expected true or false, got {options['smoother']!r}")
+        raise _fail(
+            source, f"[options] {bad[0]}", f"unknown key (expected smoother, verify, {', '.join(TIMELINE_KEYS)})"
+        )
+    for key in ("smoother", "verify"):
+        if key in options and not isinstance(options[key], bool):
+            raise _fail(source, f"[options] {key}", f"expected true or false, got {options[key]!r}")
     for key in TIMELINE_KEYS:
         if key in options:
             v = _number(source, f"[options] {key}", options[key])
@@ -439,13 +445,14 @@ def process_run(campaign: Campaign, index: int, *, chunk_samples: int = 100_000)
     row: dict[str, Any] = {"run": spec.run, "index": index, "seed": spec.seed, "grade": spec.grade}
     row.update({param_column(k): v for k, v in spec.params.items() if k != "grade"})
     row["worker"] = f"{socket.gethostname()}-{os.getpid()}"
-    t_start = time.perf_counter()
+    t_start, cpu_start = time.perf_counter(), time.process_time()
     try:
         row.update(_measure(campaign, index, chunk_samples))
         row["error"] = None
     except Exception as exc:  # a failed run is a row with its error; the campaign goes on
         row["error"] = f"{type(exc).__name__}: {' '.join(str(exc).split())}"[:2000]
     row["t_total_s"] = time.perf_counter() - t_start
+    row["cpu_total_s"] = time.process_time() - cpu_start
     return row
 
 
@@ -454,47 +461,95 @@ def param_column(name: str) -> str:
     return "param_" + re.sub(r"[^a-z0-9_]+", "_", name).strip("_")
 
 
+def trial_drift_deg_h(scenario, timeline) -> float:
+    """Where a run's truth is linearised [deg/h]: the scenario's z drift (constant + temperature law) averaged over
+    the truth span. A numerical choice only (the truth is still found by navigating and minimising): a trial
+    within about 5e-4 deg/h of the answer makes the first linearisation exact to about 1e-7 deg/h, so the
+    truth needs no verification read. 0.001 deg/h (`find_true_drift`'s default) when that average is within
+    1e-4 deg/h of 0 or not finite."""
+    t = scenario.temperature
+    t_h = np.linspace(timeline.align_h, timeline.align_h + timeline.truth_h, 1001)
+    with np.errstate(all="ignore"):
+        if t.series_t_h is not None and t.series_temp_c is not None:
+            temp = np.interp(t_h, np.asarray(t.series_t_h, float), np.asarray(t.series_temp_c, float))
+        else:
+            temp = t.end_c + (t.start_c - t.end_c) * np.exp(-t_h / t.tau_h)
+        dtemp = temp - t.t0_c
+        law = t.k1_deg_h_per_c * dtemp + t.k2_deg_h_per_c2 * dtemp**2 + t.k3_deg_h_per_c_per_h * np.gradient(temp, t_h)
+        d = float(scenario.gyro.bias_deg_h[2] + np.mean(law))
+    return d if math.isfinite(d) and abs(d) >= 1e-4 else 1e-3
+
+
+class _Stages:
+    """Wall and CPU seconds of a run's stages (``t_NAME_s``, ``cpu_NAME_s``); CPU time is the process's, which is
+    the run's: a run keeps to one thread (``threads=1`` on every read)."""
+
+    def __init__(self, out: dict[str, Any]):
+        self.out = out
+
+    def __call__(self, name: str):
+        import contextlib
+
+        @contextlib.contextmanager
+        def stage():
+            w, c = time.perf_counter(), time.process_time()
+            try:
+                yield
+            finally:
+                self.out[f"t_{name}_s"] = time.perf_counter() - w
+                self.out[f"cpu_{name}_s"] = time.process_time() - c
+
+        return stage()
+
+
 def _measure(campaign: Campaign, index: int, chunk_samples: int) -> dict[str, Any]:
     from gyrodrift.logs import ImuLog
     from gyrodrift.procedure import align_log, extract_features, find_true_drift, navigate_after_alignment
+    from gyrodrift.procedure.truth import minimise_linear_criterion
 
+    verify = bool(campaign.options.get("verify", False))
     out: dict[str, Any] = {}
+    stage = _Stages(out)
     scn = campaign.scenario(index)
     out["arw_deg_rth"] = scn.gyro.arw_deg_rth
     out["vrw_ug_rthz"] = scn.accel.vrw_ug_rthz
     log = ImuLog.from_scenario(scn)
     timeline = _timeline(campaign.options)
-    t = time.perf_counter()
-    alignment = align_log(log, timeline=timeline, chunk_samples=chunk_samples)
-    out["t_align_s"] = time.perf_counter() - t
-    t = time.perf_counter()
-    noise = _noise_model(scn)
-    f = extract_features(
-        log,
-        with_truth=True,
-        timeline=timeline,
-        alignment=alignment,
-        smoother=False,  # timed on its own below
-        noise=noise,
-        chunk_samples=chunk_samples,
-    )
-    truth = f.truth
-    assert truth is not None
-    base, opt = truth.base, truth.optimum
-    assert base is not None and opt is not None  # find_true_drift always sets them
-    d_star = truth.drift_deg_h
-    if abs(d_star) >= 2e-4:  # the secant 0 -> d*: exact at both ends, estimates fall between or near them
-        lo, hi, dd = base, opt, d_star
-    else:  # too close to 0 for a secant: one more pass 0.001 deg/h away from d*
-        extra = navigate_after_alignment(log, alignment, [d_star + 1e-3], truth.hours, chunk_samples=chunk_samples)
-        lo, hi, dd = opt, extra.curves[0], 1e-3
-        base_shift = d_star  # express the curves about d = 0
-    gn = (hi.north_m - lo.north_m) / dd
-    ge = (hi.east_m - lo.east_m) / dd
-    n0, e0 = base.north_m, base.east_m
-    if abs(d_star) < 2e-4:
-        n0, e0 = opt.north_m - base_shift * gn, opt.east_m - base_shift * ge
-    out["t_passes_s"] = time.perf_counter() - t
+    with stage("align"):
+        alignment = align_log(log, timeline=timeline, chunk_samples=chunk_samples)
+    with stage("passes"):
+        noise = _noise_model(scn)
+        truth_options: dict[str, Any] = {"threads": 1}  # a run keeps to one core: workers give the parallelism
+        if not verify:  # one read: the features, and the truth linearised between 0 and the trial drift
+            truth_options.update(verify=False, trial_deg_h=trial_drift_deg_h(scn, timeline))
+        f = extract_features(
+            log,
+            with_truth=True,
+            timeline=timeline,
+            alignment=alignment,
+            smoother=False,  # timed on its own below
+            noise=noise,
+            truth_options=truth_options,
+            chunk_samples=chunk_samples,
+        )
+        truth = f.truth
+        assert truth is not None and truth.base is not None and truth.trial is not None  # find_true_drift sets them
+        base, d_star = truth.base, truth.drift_deg_h
+        n0, e0 = base.north_m, base.east_m
+        if not verify:  # the secant of the read: 0 -> trial, within about 5e-4 deg/h of d*
+            gn = (truth.trial.north_m - n0) / truth.trial_deg_h
+            ge = (truth.trial.east_m - e0) / truth.trial_deg_h
+        else:
+            opt = truth.optimum
+            assert opt is not None
+            if abs(d_star) >= 2e-4:  # the secant 0 -> d*: exact at both ends, estimates fall between or near them
+                gn, ge = (opt.north_m - n0) / d_star, (opt.east_m - e0) / d_star
+            else:  # too close to 0 for a secant: one more pass 0.001 deg/h away from d*, curves about d = 0
+                extra = navigate_after_alignment(
+                    log, alignment, [d_star + 1e-3], truth.hours, threads=1, chunk_samples=chunk_samples
+                ).curves[0]
+                gn, ge = (extra.north_m - opt.north_m) / 1e-3, (extra.east_m - opt.east_m) / 1e-3
+                n0, e0 = opt.north_m - d_star * gn, opt.east_m - d_star * ge
     out.update(
         lat0_deg=f.lat0_deg,
         lat_deg=f.lat_deg,
@@ -505,7 +560,7 @@ def _measure(campaign: Campaign, index: int, chunk_samples: int) -> dict[str, An
         drift_deg_h=d_star,
         drift_std_deg_h=float(truth.drift_std_deg_h),
         label_flagged=bool(truth.flagged),
-        truth_verified=bool(truth.verified),
+        truth_verified=bool(truth.verified) if verify else None,
         drift_curvefit_deg_h=f.drift_curvefit_deg_h,
         drift_curvefit_std_deg_h=f.drift_curvefit_std_deg_h,
         drift_align_deg_h=alignment.gyro_bias_deg_h[2],
@@ -520,23 +575,32 @@ def _measure(campaign: Campaign, index: int, chunk_samples: int) -> dict[str, An
         curve_north_per_deg_h=np.asarray(gn, np.float32).tolist(),
         curve_east_per_deg_h=np.asarray(ge, np.float32).tolist(),
     )
-    # --- the 16 h smoother: one more step when gyrodrift.procedure.smoother exists ---
-    t = time.perf_counter()
+    # --- the 16 h smoother: its own read of the first 16 h (a seventh of a run's simulation) ---
     out["drift_smoother_deg_h"], out["drift_smoother_std_deg_h"] = math.nan, math.nan
     out["smoother_error"] = None
-    if campaign.options.get("smoother", True):
-        try:  # a smoother failure is recorded beside the run's other results, which stay valid
-            out["drift_smoother_deg_h"], out["drift_smoother_std_deg_h"] = _smoother_step(log, noise, timeline)
-        except Exception as exc:
-            out["smoother_error"] = f"{type(exc).__name__}: {' '.join(str(exc).split())}"[:2000]
-    out["t_smoother_s"] = time.perf_counter() - t
-    t = time.perf_counter()
-    twin_scn = campaign.scenario(index, noise=False)
-    twin = find_true_drift(
-        ImuLog.from_scenario(twin_scn), timeline=timeline, noise=_noise_model(twin_scn), chunk_samples=chunk_samples
-    )
-    out["drift_effective_deg_h"] = twin.drift_deg_h
-    out["t_twin_s"] = time.perf_counter() - t
+    with stage("smoother"):
+        if campaign.options.get("smoother", True):
+            try:  # a smoother failure is recorded beside the run's other results, which stay valid
+                out["drift_smoother_deg_h"], out["drift_smoother_std_deg_h"] = _smoother_step(log, noise, timeline)
+            except Exception as exc:
+                out["smoother_error"] = f"{type(exc).__name__}: {' '.join(str(exc).split())}"[:2000]
+    # --- the noise-free twin: aligned on its own, navigated once at d* ---
+    with stage("twin"):
+        twin_scn = campaign.scenario(index, noise=False)
+        twin_log = ImuLog.from_scenario(twin_scn)
+        if verify:
+            twin = find_true_drift(
+                twin_log, timeline=timeline, noise=_noise_model(twin_scn), threads=1, chunk_samples=chunk_samples
+            )
+            out["drift_effective_deg_h"] = twin.drift_deg_h
+        else:  # the twin's error differs from the run's by the noise's effect: its sensitivity to the drift is the
+            # run's (same site, motion and sensor model), so one pass at d* and one linear step give its optimum
+            twin_alignment = align_log(twin_log, timeline=timeline, chunk_samples=chunk_samples)
+            at = navigate_after_alignment(
+                twin_log, twin_alignment, [d_star], truth.hours, threads=1, chunk_samples=chunk_samples
+            ).curves[0]
+            step = minimise_linear_criterion(at.north_m, at.east_m, gn, ge, truth.criterion)
+            out["drift_effective_deg_h"] = d_star + step
     return out
 
 
@@ -575,7 +639,7 @@ def _schema(campaign: Campaign):
         )
     ]
     fields += [("truth_verified", pa.bool_()), ("label_flagged", pa.bool_())]
-    fields += [(c, f64) for c in ("t_align_s", "t_passes_s", "t_smoother_s", "t_twin_s", "t_total_s")]
+    fields += [(f"{k}_{c}_s", f64) for k in ("t", "cpu") for c in STAGES + ("total",)]
     fields += [("error", s), ("smoother_error", s), ("worker", s)]
     fields += [(c, pa.list_(pa.float32())) for c in CURVE_COLUMNS]
     return pa.schema(fields)
@@ -587,7 +651,8 @@ def _parquet_recogniser(head: bytes) -> bool:
 
 @dataclass
 class CampaignSummary:
-    """What a `run_campaign` call did: runs total, already done before, done now, failed now, seconds."""
+    """What a `run_campaign` call did: runs total, already done before, done now, failed now, lost to broken
+    workers, seconds, and whether a Ctrl-C stopped it before every run was done."""
 
     total: int
     skipped: int
@@ -595,6 +660,7 @@ class CampaignSummary:
     failed: int
     lost: int
     elapsed_s: float
+    interrupted: bool = False
 
 
 class CampaignStore:
@@ -803,10 +869,15 @@ def write_run_table(
 # --- running ---------------------------------------------------------------------------------------------
 
 
-def _watch_parent(parent_pid: int) -> None:
-    """Pool-worker initializer: exit when the client that started the pool is gone (kill -9 of the client must
-    not leave workers computing runs nobody will commit)."""
+def _worker_init(parent_pid: int) -> None:
+    """Pool-worker initializer: ignore SIGINT (a Ctrl-C in the terminal reaches the whole process group; the
+    client decides: finish the runs in progress, or terminate the workers on a second Ctrl-C), and exit when the
+    client that started the pool is gone (kill -9 of the client must not leave workers computing runs nobody will
+    commit)."""
+    import signal
     import threading
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
     def watch() -> None:
         while os.getppid() == parent_pid:
@@ -816,46 +887,158 @@ def _watch_parent(parent_pid: int) -> None:
     threading.Thread(target=watch, daemon=True, name="gyrodrift-parent-watch").start()
 
 
-def _pool_map(campaign, todo, workers, on_row: Callable[[dict], None]) -> int:
-    """Process `todo` on a local process pool; a worker killed mid-run breaks the pool: a new pool takes the
+class _Interrupts:
+    """SIGINT during a campaign: the first stops new runs from being submitted (the runs in progress finish and
+    are committed; a note on stderr says so), the second raises KeyboardInterrupt (abort at once). Installed only
+    on the main thread (signal handlers live there); the previous handler comes back on exit."""
+
+    def __init__(self) -> None:
+        self.count = 0
+        self.in_progress: Callable[[], int] = lambda: 0
+        self.committing = False  # a run is being written: a second Ctrl-C waits for its rename
+        self.abort_pending = False
+        self._previous: Any = None
+        self._installed = False
+
+    @property
+    def stopping(self) -> bool:
+        return self.count > 0
+
+    def _handle(self, signum, frame) -> None:
+        import sys
+
+        self.count += 1
+        if self.count > 1:
+            if self.committing:
+                self.abort_pending = True
+                return
+            raise KeyboardInterrupt
+        n = self.in_progress()
+        sys.stderr.write(
+            f"\ncampaign: interrupted: no new runs are started; finishing and committing the {n} run(s) in progress "
+            "(Ctrl-C again aborts them at once; rerunning the same command resumes)\n"
+        )
+        sys.stderr.flush()
+
+    def __enter__(self) -> _Interrupts:
+        import signal
+        import threading
+
+        if threading.current_thread() is threading.main_thread():
+            self._previous = signal.signal(signal.SIGINT, self._handle)
+            self._installed = True
+        return self
+
+    def __exit__(self, *exc) -> None:
+        import signal
+
+        if self._installed:
+            signal.signal(signal.SIGINT, self._previous)
+
+
+def _abort_note(n: int) -> None:
+    import sys
+
+    sys.stderr.write(
+        f"\ncampaign: aborted; {n} run(s) in progress were not committed (rerunning the same command resumes)\n"
+    )
+    sys.stderr.flush()
+
+
+def _terminate_workers(pool: concurrent.futures.ProcessPoolExecutor) -> None:
+    """Stop a pool's worker processes now (they ignore SIGINT). Python 3.14 has ``terminate_workers``; before it,
+    the executor's process table."""
+    terminate = getattr(pool, "terminate_workers", None)
+    if terminate is not None:
+        terminate()
+        return
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        proc.terminate()
+
+
+def _pool_map(campaign, todo, workers, on_row: Callable[[dict], None], interrupts: _Interrupts) -> int:
+    """Process `todo` on a local process pool, at most `workers` runs handed out at a time (so a first Ctrl-C
+    leaves only the runs in progress to finish). A worker killed mid-run breaks the pool: a new pool takes the
     runs not yet committed (at most 3 times). Returns the number of runs lost to broken pools."""
+    from collections import deque
+
     remaining = list(todo)
     ctx = multiprocessing.get_context("spawn")
     for _attempt in range(4):
-        if not remaining:
+        if not remaining or interrupts.stopping:
             return 0
         finished: set[int] = set()
+        queue = deque(remaining)
+        running: dict[concurrent.futures.Future, int] = {}
+        interrupts.in_progress = running.__len__
         pool = concurrent.futures.ProcessPoolExecutor(
-            max_workers=workers, mp_context=ctx, initializer=_watch_parent, initargs=(os.getpid(),)
+            max_workers=workers, mp_context=ctx, initializer=_worker_init, initargs=(os.getpid(),)
         )
         try:
-            futures = {pool.submit(process_run, campaign, i): i for i in remaining}
-            try:
-                for fut in concurrent.futures.as_completed(futures):
-                    on_row(fut.result())
-                    finished.add(futures[fut])
-            except concurrent.futures.process.BrokenProcessPool:
-                pass
+            while True:
+                while queue and len(running) < workers and not interrupts.stopping:
+                    i = queue.popleft()
+                    running[pool.submit(process_run, campaign, i)] = i
+                if not running:
+                    break
+                done, _ = concurrent.futures.wait(running, return_when=concurrent.futures.FIRST_COMPLETED)
+                for fut in done:
+                    row = fut.result()  # BrokenProcessPool when a worker died
+                    on_row(row)
+                    finished.add(running.pop(fut))
+        except concurrent.futures.process.BrokenProcessPool:
+            pass
+        except BaseException as exc:  # a second Ctrl-C (KeyboardInterrupt) or the client's own failure
+            if isinstance(exc, KeyboardInterrupt):
+                _abort_note(len(running))
+            _terminate_workers(pool)
+            raise
         finally:
             pool.shutdown(wait=True, cancel_futures=True)
         remaining = [i for i in remaining if i not in finished]
+        if interrupts.stopping:
+            return 0
     return len(remaining)
 
 
-def _dask_map(campaign, todo, client, on_row: Callable[[dict], None]) -> int:
+def _dask_map(campaign, todo, client, on_row: Callable[[dict], None], interrupts: _Interrupts) -> int:
+    """Process `todo` on a dask cluster, as many runs handed out at a time as the cluster has threads (so a
+    first Ctrl-C leaves only the runs in progress to finish). Returns the runs lost to the infrastructure."""
+    from collections import deque
+
     from dask.distributed import as_completed
 
-    futures = [
-        client.submit(process_run, campaign, i, pure=False, key=f"campaign-{campaign.digest()[:8]}-{i}") for i in todo
-    ]
+    prefix = f"campaign-{campaign.digest()[:8]}"
+    queue = deque(todo)
+    running: set = set()
+    interrupts.in_progress = running.__len__
+    flow = as_completed()
+
+    def refill() -> None:
+        window = max(1, sum(client.nthreads().values()))
+        while queue and len(running) < window and not interrupts.stopping:
+            i = queue.popleft()
+            fut = client.submit(process_run, campaign, i, pure=False, key=f"{prefix}-{i}")
+            running.add(fut)
+            flow.add(fut)
+
     lost = 0
-    for fut in as_completed(futures):
-        try:
-            row = fut.result()
-        except Exception:  # the infrastructure failed (a worker killed too often): not the run's error
-            lost += 1
-            continue
-        on_row(row)
+    refill()
+    try:
+        for fut in flow:
+            running.discard(fut)
+            try:
+                row = fut.result()
+            except Exception:  # the infrastructure failed (a worker killed too often): not the run's error
+                lost += 1
+            else:
+                on_row(row)
+            refill()
+    except BaseException as exc:
+        if isinstance(exc, KeyboardInterrupt):
+            _abort_note(len(running))
+        client.cancel(list(running))
+        raise
     return lost
 
 
@@ -890,6 +1073,10 @@ def run_campaign(
         Process at most this many of the pending runs (lowest indices first).
     quiet : bool
         Hide the progress bar (runs done, failures, rate, time left).
+
+    SIGINT (Ctrl-C), when called on the main thread: the first stops new runs (the runs in progress finish and
+    are committed; the summary says ``interrupted``), the second aborts at once (KeyboardInterrupt; the runs in
+    progress are not committed, a run being written is renamed into place first). A rerun resumes either way.
     """
     from gyrodrift.cluster import DEFAULT_CONNECT_TIMEOUT_S, dask_client
     from gyrodrift.progress import progress
@@ -908,10 +1095,16 @@ def run_campaign(
         todo = todo[:limit]
     t0 = time.perf_counter()
     counts = {"done": 0, "failed": 0}
-    with progress(len(todo), f"campaign {campaign.name}", quiet, unit="run") as bar:
+    with _Interrupts() as interrupts, progress(len(todo), f"campaign {campaign.name}", quiet, unit="run") as bar:
 
         def on_row(row: dict) -> None:
-            store.write(row, schema)
+            interrupts.committing = True
+            try:
+                store.write(row, schema)
+            finally:
+                interrupts.committing = False
+            if interrupts.abort_pending:
+                raise KeyboardInterrupt
             counts["done"] += 1
             counts["failed"] += row.get("error") is not None
             bar.set_postfix(failed=counts["failed"], refresh=False)
@@ -925,7 +1118,15 @@ def run_campaign(
                 scheduler=scheduler,
                 connect_timeout_s=DEFAULT_CONNECT_TIMEOUT_S if connect_timeout_s is None else connect_timeout_s,
             ) as client:
-                lost = _dask_map(campaign, todo, client, on_row)
+                lost = _dask_map(campaign, todo, client, on_row, interrupts)
         else:
-            lost = _pool_map(campaign, todo, workers or os.cpu_count() or 1, on_row)
-    return CampaignSummary(campaign.count, len(done), counts["done"], counts["failed"], lost, time.perf_counter() - t0)
+            lost = _pool_map(campaign, todo, workers or os.cpu_count() or 1, on_row, interrupts)
+    return CampaignSummary(
+        campaign.count,
+        len(done),
+        counts["done"],
+        counts["failed"],
+        lost,
+        time.perf_counter() - t0,
+        interrupted=interrupts.stopping,
+    )

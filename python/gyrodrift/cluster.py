@@ -75,7 +75,16 @@ def dask_client(
     Client, LocalCluster = _import_dask()
     cluster = None
     if scheduler is None:
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=processes, dashboard_address=None)
+        # dashboard_address=None alone still makes the scheduler serve its HTTP routes on port 8787 (distributed's
+        # default_port), with a "Port 8787 is already in use" warning when another cluster has it: bind them to a
+        # free loopback port instead, with no dashboard.
+        cluster = LocalCluster(
+            n_workers=workers,
+            threads_per_worker=1,
+            processes=processes,
+            dashboard_address=None,
+            scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},
+        )
         client = Client(cluster)
     else:
         try:

@@ -12,10 +12,11 @@ conventions of `gyrodrift.kernels`: rbf ``exp(-|x - z|^2 / sigma^2)``, linear ``
 ``(x . z / sigma^2 + coef0)^degree``), the support vectors, alpha and the intercept. Every float is printed with
 17 significant digits, which round-trips a float64, so the constants are the model's bits.
 
-The only differences from Python are in the last bits: the kernel sum ``sum_i alpha_i K_i`` is accumulated in
-order (numpy hands it to BLAS, which blocks and may fuse), ``exp`` and ``cos`` are the target's libm (numpy may
-use its own SIMD versions), and an integer power is repeated multiplication (numpy calls ``pow`` for degrees
-other than 2). docs/export.md gives the measured differences.
+The generated code does the IEEE operations of Python's prediction in the same order (`gyrodrift.lssvr`,
+"prediction arithmetic": distances in feature order, the C library's ``exp``, ``b + sum_i alpha_i K_i`` (+ the
+physics estimate) as a compensated sum in support-vector order), so on the same machine it returns the same
+bits; on a navigation computer only a libm rounding ``exp`` or ``cos`` the other way can differ, by about eps
+times the size of the summed terms. docs/export.md gives the measurements and what the compiler must not do.
 
 Provenance travels with the code, as comments and as constants and functions: the training digest (SHA-256 of
 the training runs, `gyrodrift.model.training_digest`), the exporting package's version, the encoding, scaling,
@@ -505,17 +506,24 @@ int {P}_in_range(const {P}_inputs *inputs);
         for (j = 1; j < {spec.degree}; ++j) {{
             kval *= base;
         }}"""
-    decls = "        double kval;\n" + ("        double base;\n        int j;\n" if spec.kernel == "poly" else "")
+    decls = "        double kval, term, next, back;\n" + (
+        "        double base;\n        int j;\n" if spec.kernel == "poly" else ""
+    )
     libm = f"#include <math.h> /* {', '.join(spec.functions)} */\n" if spec.functions else ""
     source = f"""/*
  * {source_name}: the identified axial gyro drift model (see {header_name} for the interface).
  *
 {prov}
  *
-{_numerics_note(spec, " * ")}
+{_numerics_note(spec, " * ", "c")}
  */
 #include "{header_name}"
+#include <float.h>
 {libm}
+#if defined(FLT_EVAL_METHOD) && FLT_EVAL_METHOD == 2
+#error "gyrodrift_model.c needs double arithmetic rounded to double (x87 extended precision: use SSE2)"
+#endif
+
 {(chr(10) + chr(10)).join(data)}
 
 const {P}_range *{P}_input_ranges(void)
@@ -552,17 +560,31 @@ int {P}_in_range(const {P}_inputs *inputs)
     return 1;
 }}
 
-double {learned}(const {P}_inputs *inputs)
+/* The intercept + sum_i alpha_i K_i in support-vector order, compensated: sum[0] the rounded sum, sum[1] the
+ * sum of the rounding errors (TwoSum, exact), to be added at the end (gyrodrift.lssvr, "Sum2"). */
+static void {P}_kernel_sum(const {P}_inputs *inputs, double sum[2])
 {{
     double x[{U}_N_FEATURES];
-    double acc = 0.0;
+    double acc = {P}_intercept, err = 0.0;
     int i, k;
     {P}_features(inputs, x);
 {scale_loop}    for (i = 0; i < {U}_N_SUPPORT_VECTORS; ++i) {{
 {decls}{kernel_body}
-        acc += {P}_alpha[i] * kval;
+        term = {P}_alpha[i] * kval;
+        next = acc + term;
+        back = next - acc;
+        err += (acc - (next - back)) + (term - back);
+        acc = next;
     }}
-    return acc + {P}_intercept;
+    sum[0] = acc;
+    sum[1] = err;
+}}
+
+double {learned}(const {P}_inputs *inputs)
+{{
+    double sum[2];
+    {P}_kernel_sum(inputs, sum);
+    return sum[0] + sum[1];
 }}
 """
     if spec.physics is not None:
@@ -573,9 +595,15 @@ double {P}_physics_deg_h(const {P}_inputs *inputs)
     return {physics};
 }}
 
+/* The physics estimate is one more term of the compensated sum (not added to the rounded correction). */
 double {P}_drift_deg_h(const {P}_inputs *inputs)
 {{
-    return {P}_correction_deg_h(inputs) + {P}_physics_deg_h(inputs);
+    double sum[2], term, next, back;
+    {P}_kernel_sum(inputs, sum);
+    term = {P}_physics_deg_h(inputs);
+    next = sum[0] + term;
+    back = next - sum[0];
+    return next + (sum[1] + ((sum[0] - (next - back)) + (term - back)));
 }}
 """
     return {header_name: header, source_name: source}
@@ -588,17 +616,24 @@ def _physics_doc(spec: ExportSpec) -> str:
     return f"the input {spec.physics}, computed by the navigation computer"
 
 
-def _numerics_note(spec: ExportSpec, marker: str) -> str:
-    """Where the generated arithmetic may differ from numpy's in the last bits (comment lines)."""
-    parts = ["the kernel sum (accumulated in support-vector order; numpy hands it to BLAS)"]
-    if spec.functions:
-        parts.append(f"{' and '.join(spec.functions)} (the target's libm; numpy may use its own)")
-    if spec.kernel == "poly" and spec.degree > 2:
-        parts.append("the integer power (repeated multiplication; numpy calls pow)")
+def _numerics_note(spec: ExportSpec, marker: str, lang: str) -> str:
+    """How the generated arithmetic matches Python's, and what it needs from the compiler (comment lines)."""
+    functions = " and ".join(spec.functions)
     text = (
-        "Numerics: the same operations, in the same order, as Python's DriftModel.predict, except "
-        + ", ".join(parts)
-        + ". Compile without fast-math options (no reassociation, no contraction into fused multiply-adds)."
+        "Numerics: the same IEEE operations, in the same order, as Python's DriftModel.predict (gyrodrift.lssvr, "
+        "prediction arithmetic): features, scaling, kernel per support vector, and the intercept + sum_i alpha_i "
+        "K_i" + (" + physics estimate" if spec.physics is not None else "") + " as a compensated sum (TwoSum), "
+        "accurate to the rounding of its terms even where they cancel"
+        + (f"; {functions} from the C library (Python's: math.exp, numpy's cos)" if spec.functions else "")
+        + (
+            ". Compile without fast-math options: no reassociation, no contraction into fused multiply-adds "
+            "(-ffp-contract=off; ISO modes such as -std=c99 are off by default in gcc), double evaluated in double."
+            if lang == "c"
+            else " (pass the platform's, f64::exp / f64::cos with std, for the same bits; libm's port may differ "
+            "by an ulp)."
+            if spec.functions
+            else "."
+        )
     )
     words, lines, line = text.split(), [], ""
     for word in words:
@@ -709,14 +744,19 @@ pub fn physics_deg_h(inputs: &Inputs, {physics_math}: &Math) -> f64 {{
 /// model does not extrapolate.
 #[must_use]
 pub fn drift_deg_h(inputs: &Inputs, math: &Math) -> f64 {{
-    correction_deg_h(inputs, math) + physics_deg_h(inputs, math)
+    // the physics estimate is one more term of the compensated sum (not added to the rounded correction)
+    let (acc, err) = kernel_sum(inputs, math);
+    let term = physics_deg_h(inputs, math);
+    let next = acc + term;
+    let back = next - acc;
+    next + (err + ((acc - (next - back)) + (term - back)))
 }}
 """
     text = f"""//! {file_name}: the identified axial gyro drift model, `no_std` (only `core`), no allocation, no I/O.
 //!
 {prov}
 //!
-{_numerics_note(spec, "//! ")}
+{_numerics_note(spec, "//! ", "rust")}
 #![allow(clippy::doc_markdown, clippy::excessive_precision, clippy::needless_range_loop, clippy::unreadable_literal)]
 
 /// Version of gyrodrift that exported this module.
@@ -793,16 +833,28 @@ pub fn in_range(inputs: &Inputs, math: &Math) -> bool {{
     within(&INPUT_RANGES, &[{input_values}]) && within(&FEATURE_RANGES, &features(inputs, math))
 }}
 
+/// The intercept + `sum_i alpha_i K_i` in support-vector order, compensated: the rounded sum and the sum of the
+/// rounding errors (`TwoSum`, exact), to be added at the end (`gyrodrift.lssvr`, "Sum2").
+#[allow(clippy::trivially_copy_pass_by_ref)] // as the public functions, which take `&Math`
+fn kernel_sum(inputs: &Inputs, math: &Math) -> (f64, f64) {{
+    {x_binding} = features(inputs, math);
+{scale_loop}    let (mut acc, mut err) = (INTERCEPT, 0.0_f64);
+    for (sv, &alpha) in SUPPORT_VECTORS.iter().zip(ALPHA.iter()) {{
+{kernel_body}
+        let term = alpha * kval;
+        let next = acc + term;
+        let back = next - acc;
+        err += (acc - (next - back)) + (term - back);
+        acc = next;
+    }}
+    (acc, err)
+}}
+
 {learned_doc}
 #[must_use]
 pub fn {learned}(inputs: &Inputs, math: &Math) -> f64 {{
-    {x_binding} = features(inputs, math);
-{scale_loop}    let mut acc = 0.0_f64;
-    for (sv, &alpha) in SUPPORT_VECTORS.iter().zip(ALPHA.iter()) {{
-{kernel_body}
-        acc += alpha * kval;
-    }}
-    acc + INTERCEPT
+    let (acc, err) = kernel_sum(inputs, math);
+    acc + err
 }}
 {hybrid_fns}"""
     return {file_name: text}

@@ -75,8 +75,10 @@ UNITS: dict[str, dict[str, tuple[float, float]]] = {
     },
     "temperature": {"degC": (1.0, 0.0), "K": (1.0, -273.15), "degF": (5.0 / 9.0, -32.0 * 5.0 / 9.0)},
     "attitude": {"deg": (1.0, 0.0), "rad": (180.0 / math.pi, 0.0)},  # truth columns are stored in deg
+    "height": {"m": (1.0, 0.0), "km": (1e3, 0.0), "ft": (0.3048, 0.0)},  # reference height [m]
 }
-"""Accepted units per dimension: factor and shift to the reader's units (s, rad, rad/s, m/s, m/s^2, deg C, deg)."""
+"""Accepted units per dimension: factor and shift to the reader's units (s, rad, rad/s, m/s, m/s^2, deg C, deg,
+m)."""
 
 QUANTITIES = {
     "time": ("time",),
@@ -90,6 +92,7 @@ QUANTITIES = {
     "true_pitch": ("attitude",),
     "true_roll": ("attitude",),
     "true_yaw": ("attitude",),
+    "ref_height": ("height",),
 }
 """Quantities a column can hold (gyro_/accel_ x y z are the file's axes) and the dimensions their unit may have."""
 
@@ -107,7 +110,8 @@ class LogFormatError(InputError):
 class ColumnSpec:
     """One column of the file: its name in the file, quantity, unit and the affine map to the reader's units.
 
-    ``value = (raw * scale + offset) * factor + shift`` in s, rad, rad/s, m/s, m/s^2, deg C or deg (the truth).
+    ``value = (raw * scale + offset) * factor + shift`` in s, rad, rad/s, m/s, m/s^2, deg C, deg (the truth) or m
+    (the reference height).
     """
 
     name: str

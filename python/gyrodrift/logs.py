@@ -27,6 +27,10 @@ Columns (order free, extra columns ignored):
                                                         says otherwise: `navigate` does not need it)
   ``true_pitch_deg``, ``true_roll_deg``,        deg     optional: the true attitude at the end of the
   ``true_yaw_deg``                                      sample (simulated logs), for attitude errors
+  ``ref_height_m``                              m       optional: a known height above the ellipsoid at
+                                                        the end of the sample (barometric, map, GNSS),
+                                                        the reference of `navigate`'s damped vertical
+                                                        channel; finite, within the core's height limits
   ============================================  ======  ==============================================
 
   The header decides: all six increment columns -> ``kind = "increments"``; else all six rate columns ->
@@ -57,6 +61,7 @@ their true initial attitude (`LogTruth`, from the ``gyrodrift.scenario`` metadat
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import json
@@ -72,7 +77,7 @@ import numpy as np
 import pyarrow as pa
 
 from gyrodrift import _core
-from gyrodrift.errors import InputError, OptionError
+from gyrodrift.errors import CoreError, InputError, OptionError
 from gyrodrift.log_format import LogFormat, load_log_format
 from gyrodrift.runs import TEMPERATURE_LIMITS_C
 from gyrodrift.site import Site
@@ -87,6 +92,7 @@ __all__ = [
     "INCREMENT_COLUMNS",
     "RATE_COLUMNS",
     "TRUTH_COLUMNS",
+    "REF_HEIGHT_COLUMN",
     "MAX_RATE_DEG_S",
     "MAX_SPECIFIC_FORCE_G",
     "MIN_RATE_HZ",
@@ -101,6 +107,8 @@ RATE_COLUMNS = ("gyro_x_rad_s", "gyro_y_rad_s", "gyro_z_rad_s", "accel_x_m_s2", 
 """Rate columns: angular rate [rad/s] then specific force [m/s^2], body x y z."""
 TRUTH_COLUMNS = ("true_pitch_deg", "true_roll_deg", "true_yaw_deg")
 """Optional true attitude at the end of each sample [deg] (simulated logs)."""
+REF_HEIGHT_COLUMN = "ref_height_m"
+"""Optional reference height above the ellipsoid at the end of each sample [m] (barometric or known height)."""
 MAX_RATE_DEG_S = float(_core.MAX_ANGULAR_RATE_DEG_S)
 """Largest plausible angular rate [deg/s] on any axis (the core's limit: one limit for every reader and the core)."""
 MAX_SPECIFIC_FORCE_G = float(_core.MAX_SPECIFIC_FORCE_G)
@@ -120,6 +128,7 @@ _SITE_LIMITS = {  # key: (low, high, option, unit), inclusive, the core's limits
     "lon_deg": (-float(_core.MAX_LON_DEG), float(_core.MAX_LON_DEG), "--lon0-deg", "deg"),
     "height_m": (float(_core.MIN_HEIGHT_M), float(_core.MAX_HEIGHT_M), "--height-m", "m"),
 }
+_HEIGHT_LIMITS_M = (float(_core.MIN_HEIGHT_M), float(_core.MAX_HEIGHT_M))
 _RATE_PROBE = 1000
 
 
@@ -153,6 +162,11 @@ class LogChunk:
         System temperature [deg C] (None when the log has none and the caller did not need it).
     truth : tuple of 3 ndarrays (n,) or None
         True pitch, roll, yaw at the end of each sample [deg] when the log carries them (`true_deg` stacks them).
+    ref_height_m : ndarray (n,) or None
+        Reference height above the ellipsoid at the end of each sample [m] (``ref_height_m``), when the log has it.
+    table_angle_deg : ndarray (n,) or None
+        Turntable angle at the end of each sample [deg], when the source carries it (a scenario simulated on the
+        fly).
     """
 
     first_index: int
@@ -161,6 +175,8 @@ class LogChunk:
     dv_m_s: np.ndarray
     temp_c: np.ndarray | None = None
     truth: tuple[np.ndarray, ...] | None = None
+    ref_height_m: np.ndarray | None = None
+    table_angle_deg: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.t_s)
@@ -179,6 +195,8 @@ class LogChunk:
             self.dv_m_s[a:b],
             None if self.temp_c is None else self.temp_c[a:b],
             None if self.truth is None else tuple(c[a:b] for c in self.truth),
+            None if self.ref_height_m is None else self.ref_height_m[a:b],
+            None if self.table_angle_deg is None else self.table_angle_deg[a:b],
         )
 
 
@@ -190,6 +208,8 @@ class _Raw:
     sensors: tuple[np.ndarray, ...]  # six (n,) arrays, or (gyro (n, 3), accel (n, 3)) from the core
     temp: np.ndarray | None
     truth: tuple[np.ndarray, ...] | None
+    ref_height: np.ndarray | None = None
+    table_angle_deg: np.ndarray | None = None
 
 
 class ImuLog:
@@ -217,8 +237,8 @@ class ImuLog:
         The true static site when the source says it or the caller gave it.
     truth : LogTruth or None
         The true initial attitude (simulated logs).
-    has_temperature, has_truth_columns : bool
-        Whether chunks carry ``temp_c`` and ``truth``.
+    has_temperature, has_truth_columns, has_reference_height : bool
+        Whether chunks carry ``temp_c``, ``truth`` and ``ref_height_m``.
     """
 
     def __init__(
@@ -236,6 +256,7 @@ class ImuLog:
         truth: LogTruth | None = None,
         has_temperature: bool = True,
         has_truth_columns: bool = False,
+        has_reference_height: bool = False,
         name: str | None = None,
         raw_names: Mapping[str, str] | None = None,
         blocks: Callable[[int], Iterator[_Raw]] | None = None,
@@ -256,6 +277,7 @@ class ImuLog:
         self.truth = truth
         self.has_temperature = has_temperature
         self.has_truth_columns = has_truth_columns
+        self.has_reference_height = has_reference_height
         self._raw_names = dict(raw_names or {})
         self._blocks = blocks
         if name is None:
@@ -308,7 +330,7 @@ class ImuLog:
             raise LogError(f"{label}, row 1: missing column temp_c (system temperature, deg C; the features need it)")
         arrays: dict[str, np.ndarray] = {}
         n = None
-        for c in ["t_s", *cols, "temp_c", *TRUTH_COLUMNS]:
+        for c in ["t_s", *cols, "temp_c", *TRUTH_COLUMNS, REF_HEIGHT_COLUMN]:
             if c not in columns:
                 continue
             a = np.asarray(columns[c])
@@ -329,6 +351,7 @@ class ImuLog:
             rate, rate_source = _check_rate(rate_hz, label), "given"
         has_temp = "temp_c" in arrays
         has_truth = all(c in arrays for c in TRUTH_COLUMNS)
+        has_href = REF_HEIGHT_COLUMN in arrays
 
         def blocks(chunk_samples: int) -> Iterator[_Raw]:
             for a in range(0, n, chunk_samples):
@@ -338,6 +361,7 @@ class ImuLog:
                     tuple(arrays[c][a:b] for c in cols),
                     arrays["temp_c"][a:b] if has_temp else None,
                     tuple(arrays[c][a:b] for c in TRUTH_COLUMNS) if has_truth else None,
+                    arrays[REF_HEIGHT_COLUMN][a:b] if has_href else None,
                 )
 
         return cls(
@@ -353,6 +377,7 @@ class ImuLog:
             truth=truth,
             has_temperature=has_temp,
             has_truth_columns=has_truth,
+            has_reference_height=has_href,
             blocks=blocks,
         )
 
@@ -375,6 +400,7 @@ class ImuLog:
                     (np.asarray(c["dtheta_rad"], dtype=float), np.asarray(c["dv_m_s"], dtype=float)),
                     np.asarray(c["temp_c"], dtype=float),
                     truth,
+                    table_angle_deg=np.rad2deg(np.asarray(c["table_angle_rad"], dtype=float)),
                 )
 
         return cls(
@@ -432,6 +458,26 @@ class ImuLog:
         if not self.has_temperature:
             raise LogError(f"{self.label}, row 1: missing column temp_c (system temperature, deg C; {what} needs it)")
 
+    @contextlib.contextmanager
+    def core_errors(self, first: int = 0) -> Iterator[None]:
+        """Name this log in a `CoreError` the Rust core raises inside the block (its aligner, smoother or
+        navigators refusing this log's samples or diverging on them), so that the one-line error says which file.
+
+        The core's message is kept (the quantity, and the time ``t`` [s] counted from the first sample it was
+        given when it says one); `first` is that sample's 0-based index in the log, named as a row when it is not
+        the log's first. The ``key`` attribute is kept too. An error that already names the log passes unchanged.
+        """
+        try:
+            yield
+        except CoreError as exc:
+            text = str(exc)
+            if text.startswith(f"{self.label}: "):
+                raise
+            since = "" if first == 0 else f" (t counted from {_where(self, first).removeprefix(self.label + ', ')})"
+            err = CoreError(f"{self.label}: {text}{since}")
+            err.key = getattr(exc, "key", None)  # type: ignore[attr-defined]
+            raise err from exc
+
     # ------------------------------------------------------------------------------------------
     # Streaming
     # ------------------------------------------------------------------------------------------
@@ -486,6 +532,8 @@ class ImuLog:
             cols.append("temp_c")
         if self.has_truth_columns:
             cols.extend(TRUTH_COLUMNS)
+        if self.has_reference_height:
+            cols.append(REF_HEIGHT_COLUMN)
         return cols
 
     def _from_table(self, table: pa.Table | pa.RecordBatch, first: int) -> _Raw:
@@ -504,6 +552,7 @@ class ImuLog:
             tuple(arrays[c] for c in self._columns),
             arrays.get("temp_c"),
             tuple(arrays[c] for c in TRUTH_COLUMNS) if self.has_truth_columns else None,
+            arrays.get(REF_HEIGHT_COLUMN),
         )
 
     def _from_formatted_table(self, table: pa.Table | pa.RecordBatch, first: int) -> _Raw:
@@ -533,6 +582,7 @@ class ImuLog:
             tuple(sensors),
             values.get("temperature"),
             tuple(values[q] for q in ("true_pitch", "true_roll", "true_yaw")) if fmt.has_truth else None,
+            values.get("ref_height"),
         )
 
     def _parquet_blocks(self, chunk_samples: int) -> Iterator[_Raw]:
@@ -651,6 +701,8 @@ def _cut(raw: _Raw, n: int) -> _Raw:
         tuple(a[:n] for a in raw.sensors),
         None if raw.temp is None else raw.temp[:n],
         None if raw.truth is None else tuple(a[:n] for a in raw.truth),
+        None if raw.ref_height is None else raw.ref_height[:n],
+        None if raw.table_angle_deg is None else raw.table_angle_deg[:n],
     )
 
 
@@ -665,7 +717,9 @@ def _where(log: ImuLog, index: int, column: str | None = None) -> str:
     return f"{log.label}, row {row}" + ("" if column is None else f", column {column}")
 
 
-_CANONICAL_QUANTITY = {"t_s": "time", "temp_c": "temperature"} | {c: c[: -len("_deg")] for c in TRUTH_COLUMNS}
+_CANONICAL_QUANTITY = {"t_s": "time", "temp_c": "temperature", REF_HEIGHT_COLUMN: "ref_height"} | {
+    c: c[: -len("_deg")] for c in TRUTH_COLUMNS
+}
 
 
 def _format_column_label(log: ImuLog, column: str) -> str:
@@ -819,6 +873,7 @@ class _Validator:
             gyro, acc = _stack3(raw.sensors[:3]), _stack3(raw.sensors[3:])
         temp = None if raw.temp is None else np.asarray(raw.temp, dtype=np.float64)
         truth = None if raw.truth is None else tuple(np.asarray(c, dtype=np.float64) for c in raw.truth)
+        href = None if raw.ref_height is None else np.asarray(raw.ref_height, dtype=np.float64)
         low, high = TEMPERATURE_LIMITS_C
         clean = (
             bool(np.isfinite(t).all())
@@ -827,14 +882,17 @@ class _Validator:
             and bool((np.abs(acc) <= self.limits[1]).all())
             and (temp is None or bool(((temp >= low) & (temp <= high)).all()))
             and (truth is None or all(bool(np.isfinite(c).all()) for c in truth))
+            and (href is None or bool(((href >= _HEIGHT_LIMITS_M[0]) & (href <= _HEIGHT_LIMITS_M[1])).all()))
         )
         if not clean:
-            self._explain(t, gyro, acc, temp, truth, first)
+            self._explain(t, gyro, acc, temp, truth, first, href)
         self.prev_t = float(t[-1]) if len(t) else self.prev_t
         if log.kind == "rates":
             gyro = gyro * self.dt
             acc = acc * self.dt
-        return LogChunk(first, t, np.ascontiguousarray(gyro), np.ascontiguousarray(acc), temp, truth)
+        return LogChunk(
+            first, t, np.ascontiguousarray(gyro), np.ascontiguousarray(acc), temp, truth, href, raw.table_angle_deg
+        )
 
     def _time_ok(self, t: np.ndarray) -> bool:
         if not len(t):
@@ -842,7 +900,7 @@ class _Validator:
         full = t if self.prev_t is None else np.concatenate([[self.prev_t], t])
         return bool((np.abs(np.diff(full) - self.dt) <= GAP_TOLERANCE * self.dt).all())
 
-    def _explain(self, t, gyro, acc, temp, truth, first: int) -> None:
+    def _explain(self, t, gyro, acc, temp, truth, first: int, href=None) -> None:
         """Raise the `LogError` of the first problem of a chunk that failed the fast checks."""
         log = self.log
         names = log._columns
@@ -862,6 +920,16 @@ class _Validator:
         if truth is not None:
             for c, name in zip(truth, TRUTH_COLUMNS, strict=True):
                 self._finite(c, first, (name,))
+        if href is not None:
+            self._finite(href, first, (REF_HEIGHT_COLUMN,))
+            low, high = _HEIGHT_LIMITS_M
+            bad = (href < low) | (href > high)
+            if bad.any():
+                i = int(np.flatnonzero(bad)[0])
+                raise LogError(
+                    f"{_where(log, first + i, REF_HEIGHT_COLUMN)}: reference height {float(href[i]):.6g} m is outside "
+                    f"[{low:g}, {high:g}] m (a height above the ellipsoid in metres)"
+                )
         self._check_time(t, first)
         for j, (block, limit) in enumerate(((gyro, self.limits[0]), (acc, self.limits[1]))):
             over = np.abs(block) > limit
@@ -1072,7 +1140,9 @@ def _open_parquet(p: Path, label: str, site, require_temperature: bool) -> ImuLo
             raise LogError(f"{label}, row 1: missing column temp_c (system temperature, deg C; the features need it)")
         has_temp = "temp_c" in names
         has_truth = all(c in names for c in TRUTH_COLUMNS)
-        for c in ["t_s", *cols, *(["temp_c"] if has_temp else []), *(TRUTH_COLUMNS if has_truth else ())]:
+        has_href = REF_HEIGHT_COLUMN in names
+        optional = [*(["temp_c"] if has_temp else []), *(TRUTH_COLUMNS if has_truth else ())]
+        for c in ["t_s", *cols, *optional, *([REF_HEIGHT_COLUMN] if has_href else [])]:
             t = schema.field(c).type
             if not _numeric_type(t):
                 raise LogError(f"{label}, column {c}: expected numbers (float64), got a column of type {t}")
@@ -1104,6 +1174,7 @@ def _open_parquet(p: Path, label: str, site, require_temperature: bool) -> ImuLo
         truth=truth,
         has_temperature=has_temp,
         has_truth_columns=has_truth,
+        has_reference_height=has_href,
     )
 
 
@@ -1213,6 +1284,7 @@ def _open_csv(p: Path, label: str, site, require_temperature: bool) -> ImuLog:
         rate_source="time stamps",
         has_temperature="temp_c" in header,
         has_truth_columns=has_truth,
+        has_reference_height=REF_HEIGHT_COLUMN in header,
         raw_names={h: r for h, r in zip(header, raw_header, strict=True) if h != r},
     )
 
@@ -1335,6 +1407,7 @@ def _open_formatted(p: Path, label: str, fmt: LogFormat, site, require_temperatu
         rate_source="time stamps",
         has_temperature=fmt.has_temperature,
         has_truth_columns=fmt.has_truth,
+        has_reference_height=fmt.column("ref_height") is not None,
         log_format=fmt,
         t0_ns=t0_ns,
         raw_names=raw_names,

@@ -47,14 +47,28 @@ a singular kernel matrix - duplicated training points - or an indefinite polynom
 itself a ``ValueError``). No jitter is ever added silently: lower gamma (more regularisation) instead.
 :func:`rbf_batch_errors` is the exception to raising: it returns rows of ``+inf`` so that a tuner survives.
 
+Prediction arithmetic (`LSSVR.predict`, and the generated C and Rust of `gyrodrift.export`, operation for
+operation): the kernel of each support vector from the coordinate differences summed over the features in
+order (RBF ``exp(-d2 / (sigma * sigma))`` with the C library's ``exp`` through ``math.exp``; linear and
+polynomial: the dot product in feature order, an integer power by repeated multiplication), then
+``b + sum_i a_i K_i`` (+ an offset, the physics estimate of a hybrid model) accumulated in support-vector order
+with an error-free transformation (Knuth's TwoSum; the errors summed apart and added at the end, Ogita, Rump
+& Oishi 2005 "Sum2"). The result is as accurate as if summed in twice the working precision and then rounded,
+so the cancelling terms of a drift near zero lose nothing in the sum; what remains is the rounding of each
+term (about ``eps sum_i |a_i K_i|``, the condition of the sum). numpy's own ``exp`` (a SIMD version on some
+CPUs) and BLAS's ``K @ a`` (another order, fused multiply-adds) would differ from the generated code in the last
+bits (docs/export.md gives the numbers).
+
 Conversions for cross-checks: scikit-learn ``KernelRidge(alpha=1/gamma, kernel="rbf", gamma=1/sigma^2)``
 fitted on ``y - b`` has ``dual_coef_ == a``; LS-SVMlab 1.8 ``sig2 = sigma^2 / 2`` (docs/conventions.md).
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 import warnings
+from collections.abc import Iterable
 
 import numpy as np
 from scipy.linalg import lapack
@@ -677,13 +691,20 @@ class LSSVR(RegressorMixin, BaseEstimator):
         self.X_fit_ = X
         return self
 
-    def predict(self, X):
-        """Predict ``f(x) = sum_i alpha_i K(x_i, x) + b``.
+    def predict(self, X, offset=None):
+        """Predict ``f(x) = sum_i alpha_i K(x_i, x) + b`` (``+ offset``), with the arithmetic of the generated code.
+
+        The module docstring ("Prediction arithmetic") gives the operations: kernel values as the C/Rust export
+        computes them, and a compensated sum, so that a prediction near zero from cancelling terms is still
+        accurate to the rounding of the terms themselves.
 
         Parameters
         ----------
         X : array_like, shape (n_samples, n_features)
             Inputs scaled like the training inputs, finite.
+        offset : array_like, shape (n_samples,), optional
+            One more term of each sample's sum, in the unit of ``y`` (a hybrid model's physics estimate, deg/h):
+            added inside the compensated sum, not after its rounding.
 
         Returns
         -------
@@ -699,14 +720,45 @@ class LSSVR(RegressorMixin, BaseEstimator):
         """
         check_is_fitted(self, ("alpha_", "intercept_", "X_fit_"))
         X = _validate_data(self, X, dtype=np.float64, reset=False)
-        check_matrix_memory(X.shape[0], self.X_fit_.shape[0], 2, "predicting with the LSSVR", unit="samples")
+        check_matrix_memory(X.shape[0], self.X_fit_.shape[0], 3, "predicting with the LSSVR", unit="samples")
+        alpha = np.asarray(self.alpha_, float)
+        if offset is not None:
+            offset = np.asarray(offset, float)
+            if offset.shape != (X.shape[0],):
+                raise ValueError(f"offset has shape {offset.shape}, expected ({X.shape[0]},), one value per sample")
+            offset = offset.reshape((X.shape[0],) + (1,) * (alpha.ndim - 1))
         with np.errstate(over="ignore", invalid="ignore"):  # checked below
-            out = self._kernel(X, self.X_fit_) @ self.alpha_ + self.intercept_
+            out = _compensated_expansion(self._prediction_kernel(X), alpha, self.intercept_, offset)
         if not np.all(np.isfinite(out)):
             raise NonFiniteResultError(
                 f"LSSVR: a prediction is not finite for {self._describe()} (kernel overflow on inputs far "
                 "outside the training data?)"
             )
+        return out
+
+    def _prediction_kernel(self, X: np.ndarray) -> np.ndarray:
+        """``K(x_i, X[j])`` for each support vector ``x_i`` (rows) and sample (columns), shape (n_train, n_samples),
+        with the operations of the generated code (module docstring): features in order, the RBF kernel's ``exp``
+        from the C library (``math.exp``; numpy's own may differ by an ulp), an integer power multiplied out."""
+        kernel = check_kernel(self.kernel)
+        Z = self.X_fit_
+        acc = np.zeros((Z.shape[0], X.shape[0]))
+        for k in range(X.shape[1]):
+            if kernel == "rbf":
+                t = X[None, :, k] - Z[:, k, None]
+                acc += t * t
+            else:
+                acc += X[None, :, k] * Z[:, k, None]
+        if kernel == "linear":
+            return acc
+        sigma = check_sigma(self.sigma)
+        if kernel == "rbf":
+            arg = -acc / (sigma * sigma)
+            return np.fromiter(map(math.exp, arg.ravel()), float, arg.size).reshape(arg.shape)
+        base = acc / (sigma * sigma) + float(self.coef0)
+        out = base.copy()
+        for _ in range(1, int(self.degree)):  # checked by fit
+            out *= base
         return out
 
     def _fit_without_zero_weights(self, X, y, weights):
@@ -747,6 +799,33 @@ class LSSVR(RegressorMixin, BaseEstimator):
         """A copy of :attr:`loo_residuals_`, the exact leave-one-out residuals of the fitted model."""
         check_is_fitted(self, ("alpha_", "intercept_", "X_fit_"))
         return np.array(self.loo_residuals_, copy=True)
+
+
+def _compensated_expansion(KT: np.ndarray, alpha: np.ndarray, intercept, offset=None) -> np.ndarray:
+    """``intercept + sum_i alpha[i] * KT[i] (+ offset)``, the terms added in that order with Knuth's TwoSum
+    (``t = s + p``, ``z = t - s``, error ``(s - (t - z)) + (p - z)``, exact in binary floating point) and the
+    errors summed apart and added at the end ("Sum2", Ogita, Rump & Oishi 2005): as accurate as summing in twice
+    the working precision, then rounding. The generated C and Rust (`gyrodrift.export`) do the same operations.
+
+    ``KT`` is (n_train, n_samples); ``alpha`` (n_train,) or (n_train, n_targets); ``offset`` broadcasts against the
+    result, shape (n_samples,) or (n_samples, n_targets).
+    """
+    shape = (KT.shape[1],) + alpha.shape[1:]
+    s = np.array(np.broadcast_to(np.asarray(intercept, float), shape))
+    c = np.zeros(shape)
+    terms: Iterable[np.ndarray] = (
+        (k * a for k, a in zip(KT, alpha, strict=True))
+        if alpha.ndim == 1
+        else (k[:, None] * a for k, a in zip(KT, alpha, strict=True))
+    )
+    if offset is not None:
+        terms = itertools.chain(terms, (np.broadcast_to(offset, shape),))
+    for p in terms:
+        t = s + p
+        z = t - s
+        c += (s - (t - z)) + (p - z)
+        s = t
+    return s + c
 
 
 #: n x n float64 matrices alive at once in ``LSSVR.fit`` (distances, kernel/H, its factor, the inverse factor).

@@ -347,11 +347,11 @@ class TunedLSSVR(RegressorMixin, BaseEstimator):
         self.n_iter_ = tuning.nit if tuning is not None else 1
         return self
 
-    def predict(self, X) -> np.ndarray:
-        """The fitted LSSVR's predictions [unit of y]."""
+    def predict(self, X, offset=None) -> np.ndarray:
+        """The fitted LSSVR's predictions [unit of y] (``offset``: one more term of each sum, `LSSVR.predict`)."""
         check_is_fitted(self, "lssvr_")
         X = _validate_data(self, X, dtype=np.float64, reset=False)
-        return self.lssvr_.predict(X)
+        return self.lssvr_.predict(X, offset=offset)
 
     def fit_warnings(self) -> list[str]:
         """What ``fit`` warned about (edge of the search box, ill-conditioning), as messages."""
@@ -484,9 +484,13 @@ class DriftModel(Pipeline):
         return self
 
     def predict(self, X, **params) -> np.ndarray:
-        """Identified drift [deg/h] of each run: the LSSVR's output (plus the physics estimate for a hybrid)."""
+        """Identified drift [deg/h] of each run: the LSSVR's output (plus the physics estimate for a hybrid, added
+        inside the LSSVR's compensated sum: `LSSVR.predict`)."""
         runs = as_run_table(X)
-        return super().predict(runs, **params) + self._base(runs)
+        if self.target != "residual":
+            return super().predict(runs, **params)
+        # the last step called directly: an offset routed through Pipeline.predict would need metadata requests
+        return self.named_steps["lssvr"].predict(self[:-1].transform(runs), offset=self._base(runs), **params)
 
     def score(self, X, y=None, sample_weight=None, **params) -> float:
         """R^2 of the identified drifts (``predict``) against ``y`` (default: the runs' drifts)."""

@@ -85,8 +85,8 @@ impl ImuSimulatorConfig {
         self.temperature.validate()?;
         check_period(&Turntable::new(self.scheme.clone())?, 1.0 / self.rate_hz)?;
         if let Some(route) = &self.trajectory {
-            let traj = Trajectory::new(route, self.attitude.yaw, self.duration_s)?;
-            check_route_latitude(&traj, self.lat, self.height, self.attitude.yaw, self.duration_s)?;
+            let traj = Trajectory::new(route, self.attitude.yaw, self.height, self.duration_s)?;
+            check_route_latitude(&traj, self.lat, self.attitude.yaw, self.duration_s)?;
         }
         Ok(())
     }
@@ -322,7 +322,7 @@ impl ImuSimulator {
         let moving = match &cfg.trajectory {
             None => None,
             Some(route) => {
-                let traj = Trajectory::new(route, cfg.attitude.yaw, cfg.duration_s)?;
+                let traj = Trajectory::new(route, cfg.attitude.yaw, cfg.height, cfg.duration_s)?;
                 let mut cursor = 0;
                 let v = traj.at(&mut cursor, 0.0, cfg.attitude.yaw).vel_enu();
                 Some(Moving {
@@ -685,8 +685,9 @@ impl ImuSimulator {
                     let mv = self.moving.as_mut().expect("moving base");
                     tr.lat[i] = mv.pos[0];
                     tr.lon[i] = mv.pos[1];
-                    tr.height[i] = self.cfg.height;
-                    let v = mv.traj.at(&mut mv.cursor, t1, self.cfg.attitude.yaw).vel_enu();
+                    let kin = mv.traj.at(&mut mv.cursor, t1, self.cfg.attitude.yaw);
+                    tr.height[i] = kin.height;
+                    let v = kin.vel_enu();
                     tr.vel[3 * i..3 * i + 3].copy_from_slice(&v);
                 }
                 self.k = k;
@@ -711,9 +712,7 @@ impl ImuSimulator {
     /// The parts are measured from t0 and add up to exactly `dt` (t1 - t0 differs from dt by the rounding of
     /// t1, 3e-11 s at 72 h: 3e-9 relative, which the increments must not carry).
     fn moving_increments(&mut self, t0: f64, t1: f64, dt: f64) -> (Vec3, Vec3, Euler) {
-        let h = self.cfg.height;
         let yaw0 = self.cfg.attitude.yaw;
-        let g_h = self.cfg.height;
         let mv = self.moving.as_mut().expect("moving base");
         let c0 = mv.c0;
         let (mut w, mut f) = ([0.0f64; 3], [0.0f64; 3]);
@@ -724,7 +723,7 @@ impl ImuSimulator {
             let ub = if end > u && end < dt { end } else { dt };
             let span = ub - u;
             let (p0, r0) = (mv.pos, mv.pos_rate);
-            let (p1, r1) = rk4_position(&mv.traj, &mut mv.cursor, yaw0, h, a, span, p0, r0);
+            let (p1, r1) = rk4_position(&mv.traj, &mut mv.cursor, yaw0, a, span, p0, r0);
             for (x, wgt) in GL3 {
                 let t = a + x * span;
                 // Cubic Hermite basis on [0, 1].
@@ -734,6 +733,7 @@ impl ImuSimulator {
                     + (-2.0 * x3 + 3.0 * x2) * p1[0]
                     + (x3 - x2) * span * r1[0];
                 let kin = mv.traj.at(&mut mv.cursor, t, yaw0);
+                let h = kin.height;
                 let alpha = self.table.state_at(&mut self.cursor, t).angle;
                 let (sl, cl) = lat.sin_cos();
                 let (rm, rn) = (earth::meridian_radius(lat), earth::transverse_radius(lat));
@@ -743,7 +743,7 @@ impl ImuSimulator {
                 let wen = [-v[1] / (rm + h), v[0] / (rn + h), v[0] * sl / (cl * (rn + h))];
                 let win = crate::attitude::add(wie, wen);
                 let cor = crate::attitude::cross(crate::attitude::add(crate::attitude::scale(wie, 2.0), wen), v);
-                let g = earth::normal_gravity(lat, g_h);
+                let g = earth::normal_gravity(lat, h);
                 let fnav = [dvdt[0] + cor[0], dvdt[1] + cor[1], dvdt[2] + cor[2] + g];
                 let (sp, cp) = kin.yaw.sin_cos();
                 // Rz(-psi) x = (c x0 + s x1, -s x0 + c x1, x2).

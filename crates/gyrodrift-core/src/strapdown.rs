@@ -29,7 +29,9 @@
 //! sign of `kalman`), which keeps the coning/sculling memory, so the alignment never restarts the navigator.
 //!
 //! Vertical channel: `Fixed` holds h at its initial value and v_U = 0 (static base). `Damped` is a
-//! second-order loop towards the initial height h_ref (no other height reference on a static base):
+//! second-order loop towards a reference height h_ref: the initial height unless the caller gives one
+//! (`set_reference_height`, or one per sample with `process_with_reference`: a barometric or known height, the
+//! route's height):
 //!    v_U += (a_U - k2 (h - h_ref)) dt,   h += (v_U - k1 (h - h_ref)) dt,
 //! with k1 = 2 zeta_v w_v, k2 = w_v^2 + 2 g / R (cancelling the free-inertial instability 2 g / R),
 //! w_v = 0.01 rad/s (period 628 s), zeta_v = 0.707. A constant vertical accelerometer error b settles at
@@ -43,7 +45,9 @@ use crate::earth;
 use crate::error::{all_in_range, show_all, Unit};
 use crate::error::{check, CoreError};
 use crate::imu_error::{MAX_ACCEL_BIAS_M_S2, MAX_GYRO_BIAS_RAD_S};
-use crate::limits::{check_attitude, check_increments, check_lengths, check_site, increment_bounds};
+use crate::limits::{
+    check_attitude, check_increments, check_lengths, check_site, increment_bounds, MAX_HEIGHT_M, MIN_HEIGHT_M,
+};
 
 /// Samples per block of `Navigator::process`: a refused block is searched again for the message while in
 /// cache (96 kB of increments).
@@ -194,6 +198,22 @@ pub fn coning_sculling(dtheta: Vec3, dv: Vec3, dtheta_prev: Vec3, dv_prev: Vec3)
     (phi, add(dv, add(rot, scul)))
 }
 
+/// Check reference heights \[m\]: finite and within the height limits of `limits` (the first bad one is named by
+/// its 0-based sample index).
+fn check_reference_heights(h: &[f64]) -> Result<(), CoreError> {
+    match h.iter().position(|x| !(MIN_HEIGHT_M..=MAX_HEIGHT_M).contains(x)) {
+        None => Ok(()),
+        Some(index) => Err(CoreError::Sample {
+            key: "reference_height_m",
+            index,
+            message: format!(
+                "reference height {} m must be finite and within [{MIN_HEIGHT_M}, {MAX_HEIGHT_M}] m",
+                crate::error::sig(h[index])
+            ),
+        }),
+    }
+}
+
 /// The strapdown navigator (see the module docs).
 #[derive(Clone, Debug)]
 pub struct Navigator {
@@ -216,6 +236,8 @@ pub struct Navigator {
     accel_bias_dt: Vec3,
     k1: f64,
     k2: f64,
+    /// Reference height of the damped vertical channel \[m\].
+    h_ref: f64,
     /// Largest |dtheta| [rad] and |dv| [m/s] of one sample (`limits` rate and specific-force limits times dt).
     max_dtheta: f64,
     max_dv: f64,
@@ -246,6 +268,7 @@ impl Navigator {
             accel_bias_dt: [0.0; 3],
             k1: 2.0 * VERTICAL_ZETA * VERTICAL_OMEGA,
             k2: VERTICAL_OMEGA * VERTICAL_OMEGA + earth.two_g_over_r,
+            h_ref: cfg.height,
             max_dtheta: increment_bounds(1.0 / cfg.rate_hz).0,
             max_dv: increment_bounds(1.0 / cfg.rate_hz).1,
             cfg,
@@ -275,6 +298,19 @@ impl Navigator {
         self.accel_bias = b;
         self.accel_bias_dt = scale(b, self.dt);
         Ok(())
+    }
+
+    /// Set the reference height \[m\] of the damped vertical channel for the following samples (the initial
+    /// height until then; no effect on the `Fixed` channel). Errors name `reference_height_m`.
+    pub fn set_reference_height(&mut self, h: f64) -> Result<(), CoreError> {
+        check_reference_heights(&[h])?;
+        self.h_ref = h;
+        Ok(())
+    }
+
+    /// The reference height of the damped vertical channel \[m\].
+    pub fn reference_height(&self) -> f64 {
+        self.h_ref
     }
 
     pub fn gyro_bias(&self) -> Vec3 {
@@ -353,7 +389,7 @@ impl Navigator {
         let mut v = add(self.vel, add(dv_sf, dv_gc));
         match self.cfg.vertical {
             Vertical::Fixed => v[2] = 0.0,
-            Vertical::Damped => v[2] -= self.k2 * (self.height - self.cfg.height) * self.dt,
+            Vertical::Damped => v[2] -= self.k2 * (self.height - self.h_ref) * self.dt,
         }
         v
     }
@@ -366,7 +402,7 @@ impl Navigator {
         self.lat += (v_old[1] + v_new[1]) * half_dt * e.inv_rm_h;
         self.lon += (v_old[0] + v_new[0]) * half_dt * e.inv_rn_h_cos;
         if self.cfg.vertical == Vertical::Damped {
-            self.height += ((v_old[2] + v_new[2]) * half_dt) - self.k1 * (self.height - self.cfg.height) * self.dt;
+            self.height += ((v_old[2] + v_new[2]) * half_dt) - self.k1 * (self.height - self.h_ref) * self.dt;
         }
     }
 
@@ -426,6 +462,42 @@ impl Navigator {
         dtheta: &[f64],
         dv: &[f64],
         decimation: u64,
+        sink: F,
+    ) -> Result<(), CoreError> {
+        self.process_impl::<false, F>(dtheta, dv, &[], decimation, sink)
+    }
+
+    /// `process` with the reference height \[m\] of the damped vertical channel at the end of every sample
+    /// (`reference_m` holds one value per sample; each must be finite and within the height limits of `limits`,
+    /// else the error names `reference_height_m` and the sample, and the navigator is left as it was). The last
+    /// value stays the reference for later calls of `process`.
+    pub fn process_with_reference<F: FnMut(&NavState)>(
+        &mut self,
+        dtheta: &[f64],
+        dv: &[f64],
+        reference_m: &[f64],
+        decimation: u64,
+        sink: F,
+    ) -> Result<(), CoreError> {
+        check(
+            3 * reference_m.len() == dtheta.len(),
+            "reference_height_m",
+            format!(
+                "{} reference heights for {} samples",
+                reference_m.len(),
+                dtheta.len() / 3
+            ),
+        )?;
+        check_reference_heights(reference_m)?;
+        self.process_impl::<true, F>(dtheta, dv, reference_m, decimation, sink)
+    }
+
+    fn process_impl<const REF: bool, F: FnMut(&NavState)>(
+        &mut self,
+        dtheta: &[f64],
+        dv: &[f64],
+        reference_m: &[f64],
+        decimation: u64,
         mut sink: F,
     ) -> Result<(), CoreError> {
         check(decimation >= 1, "decimation", "must be a positive number of samples")?;
@@ -442,13 +514,20 @@ impl Navigator {
             .enumerate()
         {
             let mut bad = false;
-            let mut rest = (block_a, block_b);
+            let block_h = if REF {
+                let first = i * CHECK_BLOCK;
+                &reference_m[first..first + block_a.len() / 3]
+            } else {
+                &[]
+            };
+            let mut rest = (block_a, block_b, block_h);
             while !rest.0.is_empty() {
                 let m = (rest.0.len() / 3).min(usize::try_from(left).unwrap_or(usize::MAX));
                 let (a, a_rest) = rest.0.split_at(3 * m);
                 let (b, b_rest) = rest.1.split_at(3 * m);
-                bad |= self.run(a, b);
-                rest = (a_rest, b_rest);
+                let (h, h_rest) = if REF { rest.2.split_at(m) } else { (rest.2, rest.2) };
+                bad |= self.run::<REF>(a, b, h);
+                rest = (a_rest, b_rest, h_rest);
                 left -= m as u64;
                 if left == 0 {
                     sink(&self.state());
@@ -495,16 +574,21 @@ impl Navigator {
     /// the sensor limits (`limits::check_increments`, checked here while the values are in registers: the
     /// comparisons run beside the update at no measurable cost, where a separate pass cost 6 %); the caller
     /// then restores its saved state.
+    /// With `REF`, `reference_m` holds the reference height of each sample (already checked), set before its
+    /// update.
     #[inline(never)]
-    fn run(&mut self, dtheta: &[f64], dv: &[f64]) -> bool {
+    fn run<const REF: bool>(&mut self, dtheta: &[f64], dv: &[f64], reference_m: &[f64]) -> bool {
         // A local copy lets the state stay in registers for the whole loop.
         let mut nav = self.clone();
         let (lim_a, lim_b) = (self.max_dtheta, self.max_dv);
         let mut bad = false;
-        for (a, b) in dtheta.chunks_exact(3).zip(dv.chunks_exact(3)) {
+        for (k, (a, b)) in dtheta.chunks_exact(3).zip(dv.chunks_exact(3)).enumerate() {
             // |x| <= limit is false for NaN: one comparison per value checks both.
             bad |= !((a[0].abs() <= lim_a) & (a[1].abs() <= lim_a) & (a[2].abs() <= lim_a))
                 | !((b[0].abs() <= lim_b) & (b[1].abs() <= lim_b) & (b[2].abs() <= lim_b));
+            if REF {
+                nav.h_ref = reference_m[k];
+            }
             nav.step_inline([a[0], a[1], a[2]], [b[0], b[1], b[2]]);
         }
         *self = nav;
@@ -751,6 +835,38 @@ mod tests {
         assert_eq!(out_a, out_b);
         assert_eq!(a.quaternion(), b.quaternion());
         assert_eq!(a.state(), b.state());
+    }
+
+    #[test]
+    fn reference_heights_per_sample_or_set_once_and_refused_values() {
+        let cfg = NavigatorConfig {
+            vertical: Vertical::Damped,
+            height: 10.0,
+            ..Default::default()
+        };
+        let (dth, dv) = tumbling(500);
+        let mut a = Navigator::new(cfg.clone()).unwrap();
+        let mut b = Navigator::new(cfg).unwrap();
+        a.process_with_reference(&dth, &dv, &[25.0; 500], 50, |_| {}).unwrap();
+        b.set_reference_height(25.0).unwrap();
+        b.process(&dth, &dv, 50, |_| {}).unwrap();
+        assert_eq!(a.state(), b.state());
+        assert_eq!(a.reference_height(), 25.0);
+        // A bad value anywhere leaves the navigator as it was, naming the sample.
+        let before = a.state();
+        let mut h = vec![25.0; 500];
+        h[321] = f64::NAN;
+        let err = a.process_with_reference(&dth, &dv, &h, 50, |_| {}).unwrap_err();
+        assert_eq!(
+            (err.key(), err.to_string().contains("sample 321")),
+            ("reference_height_m", true)
+        );
+        h[321] = 30_000.0;
+        assert!(a.process_with_reference(&dth, &dv, &h, 50, |_| {}).is_err());
+        let err = a.process_with_reference(&dth, &dv, &h[..10], 50, |_| {}).unwrap_err();
+        assert_eq!(err.key(), "reference_height_m");
+        assert_eq!(a.state(), before);
+        assert!(a.set_reference_height(f64::INFINITY).is_err());
     }
 
     #[test]

@@ -9,8 +9,13 @@
 //! and the velocity in ENU is v^n = v (-sin psi, cos psi, 0) (body forward is y, yaw CCW about Up, so the
 //! heading clockwise from North is -psi), its derivative
 //!     dv^n/dt = accel (-sin psi, cos psi, 0) + v yaw_rate (-cos psi, -sin psi, 0).
-//! The route is level: the height stays at the site's. After the last segment the vehicle goes on straight
-//! at its last speed (usually 0 after a stop); with `repeat` the segments are driven again and again.
+//! Height: a segment may change the height by `climb` \[m\] along a smooth profile that starts and ends
+//! with zero vertical speed, h(t) = h0 + climb (1 - cos(pi tau / T)) / 2 (tau = t - t0, T the duration), so
+//!     v_U = climb pi / (2 T) sin(pi tau / T),   dv_U/dt = climb pi^2 / (2 T^2) cos(pi tau / T),
+//! the vertical velocity is continuous across segments and the ENU velocity is (.., .., v_U). The vehicle body
+//! stays level while it climbs (its attitude is its yaw alone). Without climbs the route is level at the
+//! site's height. After the last segment the vehicle goes on straight at its last speed and height (usually 0
+//! after a stop); with `repeat` the segments are driven again and again.
 //!
 //! Position is the one quantity without a closed form on the ellipsoid: lat' = v_N / (R_M(lat) + h),
 //! lon' = v_E / ((R_N(lat) + h) cos lat). The simulator integrates it per sample by classical Runge-Kutta
@@ -22,7 +27,8 @@
 
 use crate::earth;
 use crate::error::{check, sig, CoreError};
-use crate::limits::MAX_LAT_DEG;
+use crate::limits::{MAX_HEIGHT_M, MAX_LAT_DEG, MIN_HEIGHT_M};
+use std::f64::consts::PI;
 
 /// Highest vehicle speed [m/s] (360 km/h: above every road vehicle).
 pub const MAX_SPEED_M_S: f64 = 100.0;
@@ -30,15 +36,19 @@ pub const MAX_SPEED_M_S: f64 = 100.0;
 pub const MAX_ACCEL_M_S2: f64 = 10.0;
 /// Largest |yaw rate| [rad/s] (1 rad/s = 57.3 deg/s: a sharp turn at walking pace).
 pub const MAX_YAW_RATE_RAD_S: f64 = 1.0;
+/// Largest vertical speed [m/s] of a climb (a 10 % grade at 100 m/s).
+pub const MAX_CLIMB_RATE_M_S: f64 = 10.0;
 /// Most segments after expanding a repeated route over the run.
 pub const MAX_PIECES: usize = 1_000_000;
 
-/// One segment of the route (SI): constant acceleration and yaw rate for `duration`.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// One segment of the route (SI): constant acceleration and yaw rate for `duration`, and a height change
+/// `climb` \[m\] along the smooth profile of the module docs (0: level).
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct Segment {
     pub duration: f64,
     pub accel: f64,
     pub yaw_rate: f64,
+    pub climb: f64,
 }
 
 /// A route: standing still until `start_s`, then the segments (cycled with `repeat`).
@@ -49,7 +59,8 @@ pub struct TrajectoryConfig {
     pub repeat: bool,
 }
 
-/// A segment placed on the time line: start/end time [s], speed [m/s] and yaw [rad] at the start.
+/// A segment placed on the time line: start/end time [s], speed [m/s], yaw [rad] and height [m] at the start;
+/// `omega` = pi / duration [rad/s] of the climb profile.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Piece {
     t0: f64,
@@ -58,6 +69,9 @@ struct Piece {
     psi0: f64,
     accel: f64,
     yaw_rate: f64,
+    h0: f64,
+    climb: f64,
+    omega: f64,
 }
 
 /// Vehicle kinematics at one time (closed form).
@@ -69,20 +83,36 @@ pub struct Kinematics {
     /// Vehicle yaw \[rad\] (CCW about Up, unwrapped) and its rate [rad/s].
     pub yaw: f64,
     pub yaw_rate: f64,
+    /// Height \[m\], vertical speed (Up) [m/s] and its rate [m/s^2].
+    pub height: f64,
+    pub climb_rate: f64,
+    pub climb_accel: f64,
 }
 
 impl Kinematics {
+    fn standing(yaw: f64, height: f64, speed: f64) -> Self {
+        Kinematics {
+            speed,
+            accel: 0.0,
+            yaw,
+            yaw_rate: 0.0,
+            height,
+            climb_rate: 0.0,
+            climb_accel: 0.0,
+        }
+    }
+
     /// Velocity in ENU [m/s].
     pub fn vel_enu(&self) -> [f64; 3] {
         let (s, c) = self.yaw.sin_cos();
-        [-self.speed * s, self.speed * c, 0.0]
+        [-self.speed * s, self.speed * c, self.climb_rate]
     }
 
     /// Time derivative of the ENU velocity components [m/s^2].
     pub fn accel_enu(&self) -> [f64; 3] {
         let (s, c) = self.yaw.sin_cos();
         let vr = self.speed * self.yaw_rate;
-        [-self.accel * s - vr * c, self.accel * c - vr * s, 0.0]
+        [-self.accel * s - vr * c, self.accel * c - vr * s, self.climb_accel]
     }
 }
 
@@ -90,8 +120,10 @@ impl Kinematics {
 #[derive(Clone, Debug)]
 pub struct Trajectory {
     pieces: Vec<Piece>,
-    /// Speed and yaw after the last piece.
-    tail: (f64, f64, f64),
+    /// Time, speed, yaw and height after the last piece.
+    tail: (f64, f64, f64, f64),
+    /// Height of the standing vehicle before the route starts \[m\].
+    h0: f64,
 }
 
 /// Position (lat \[rad\], lon \[rad\]) derivative at height `h` for ENU velocity `v`.
@@ -104,8 +136,9 @@ pub fn position_rate(lat: f64, h: f64, v: [f64; 3]) -> [f64; 2] {
 }
 
 impl Trajectory {
-    /// Lay the route out from `yaw0` over [0, `duration_s`] and check it (errors name `trajectory`).
-    pub fn new(cfg: &TrajectoryConfig, yaw0: f64, duration_s: f64) -> Result<Self, CoreError> {
+    /// Lay the route out from `yaw0` and height `h0` \[m\] over [0, `duration_s`] and check it (errors name
+    /// `trajectory`).
+    pub fn new(cfg: &TrajectoryConfig, yaw0: f64, h0: f64, duration_s: f64) -> Result<Self, CoreError> {
         check(
             cfg.start_s.is_finite() && cfg.start_s >= 0.0,
             "trajectory",
@@ -136,9 +169,27 @@ impl Trajectory {
                     sig(MAX_YAW_RATE_RAD_S.to_degrees())
                 ),
             )?;
+            // Peak vertical speed and acceleration of the climb profile.
+            let (w, a) = (
+                s.climb.abs() * PI / (2.0 * s.duration),
+                s.climb.abs() * PI * PI / (2.0 * s.duration * s.duration),
+            );
+            check(
+                s.climb.is_finite() && w <= MAX_CLIMB_RATE_M_S && a <= MAX_ACCEL_M_S2,
+                "trajectory",
+                format!(
+                    "segment {}: a climb of {} m in {} s needs a vertical speed of {} m/s and acceleration {} m/s^2 \
+                     (at most {MAX_CLIMB_RATE_M_S} m/s and {MAX_ACCEL_M_S2} m/s^2)",
+                    i + 1,
+                    sig(s.climb),
+                    sig(s.duration),
+                    sig(w),
+                    sig(a)
+                ),
+            )?;
         }
         let mut pieces = Vec::new();
-        let (mut t, mut v, mut psi) = (cfg.start_s, 0.0f64, yaw0);
+        let (mut t, mut v, mut psi, mut h) = (cfg.start_s, 0.0f64, yaw0, h0);
         let cycle: f64 = cfg.segments.iter().map(|s| s.duration).sum();
         'outer: while t < duration_s && !cfg.segments.is_empty() {
             for (i, s) in cfg.segments.iter().enumerate() {
@@ -165,6 +216,17 @@ impl Trajectory {
                         sig(t + s.duration)
                     ),
                 )?;
+                let h1 = h + s.climb;
+                check(
+                    (MIN_HEIGHT_M..=MAX_HEIGHT_M).contains(&h1),
+                    "trajectory",
+                    format!(
+                        "segment {} ends at height {} m (t = {} s), outside [{MIN_HEIGHT_M}, {MAX_HEIGHT_M}] m",
+                        i + 1,
+                        sig(h1),
+                        sig(t + s.duration)
+                    ),
+                )?;
                 pieces.push(Piece {
                     t0: t,
                     t1: t + s.duration,
@@ -172,10 +234,14 @@ impl Trajectory {
                     psi0: psi,
                     accel: s.accel,
                     yaw_rate: s.yaw_rate,
+                    h0: h,
+                    climb: s.climb,
+                    omega: PI / s.duration,
                 });
                 t += s.duration;
                 v = v1;
                 psi += s.yaw_rate * s.duration;
+                h = h1;
             }
             if !cfg.repeat || cycle <= 0.0 {
                 break;
@@ -183,7 +249,8 @@ impl Trajectory {
         }
         Ok(Trajectory {
             pieces,
-            tail: (t, v, psi),
+            tail: (t, v, psi, h),
+            h0,
         })
     }
 
@@ -224,44 +291,47 @@ impl Trajectory {
     #[inline]
     pub fn at(&self, cursor: &mut usize, t: f64, yaw0: f64) -> Kinematics {
         match self.find(cursor, t) {
-            None => Kinematics {
-                speed: 0.0,
-                accel: 0.0,
-                yaw: yaw0,
-                yaw_rate: 0.0,
-            },
+            None => Kinematics::standing(yaw0, self.h0, 0.0),
             Some(i) if t < self.pieces[i].t1 => {
                 let p = &self.pieces[i];
                 let tau = t - p.t0;
+                let (height, climb_rate, climb_accel) = if p.climb == 0.0 {
+                    (p.h0, 0.0, 0.0)
+                } else {
+                    let (s, c) = (p.omega * tau).sin_cos();
+                    let half = 0.5 * p.climb;
+                    (
+                        p.h0 + half * (1.0 - c),
+                        half * p.omega * s,
+                        half * p.omega * p.omega * c,
+                    )
+                };
                 Kinematics {
                     speed: p.v0 + p.accel * tau,
                     accel: p.accel,
                     yaw: p.psi0 + p.yaw_rate * tau,
                     yaw_rate: p.yaw_rate,
+                    height,
+                    climb_rate,
+                    climb_accel,
                 }
             }
             Some(_) => {
-                let (_, v, psi) = self.tail;
-                Kinematics {
-                    speed: v,
-                    accel: 0.0,
-                    yaw: psi,
-                    yaw_rate: 0.0,
-                }
+                let (_, v, psi, h) = self.tail;
+                Kinematics::standing(psi, h, v)
             }
         }
     }
 }
 
 /// One classical Runge-Kutta step of the position from `t0` over `dt` within one piece (no boundary inside):
-/// returns (lat, lon) at t0 + dt and their rate there.
+/// returns (lat, lon) at t0 + dt and their rate there (the height is the route's closed form).
 #[inline]
 #[allow(clippy::too_many_arguments)]
 pub fn rk4_position(
     traj: &Trajectory,
     cursor: &mut usize,
     yaw0: f64,
-    h: f64,
     t0: f64,
     dt: f64,
     p0: [f64; 2],
@@ -269,30 +339,32 @@ pub fn rk4_position(
 ) -> ([f64; 2], [f64; 2]) {
     let t1 = t0 + dt;
     let tm = t0 + 0.5 * dt;
-    let vm = traj.at(cursor, tm, yaw0).vel_enu();
-    let v1 = traj.at(cursor, t1, yaw0).vel_enu();
+    let km = traj.at(cursor, tm, yaw0);
+    let k_1 = traj.at(cursor, t1, yaw0);
+    let (vm, hm, v1, h1) = (km.vel_enu(), km.height, k_1.vel_enu(), k_1.height);
     let k1 = rate0;
-    let k2 = position_rate(p0[0] + 0.5 * dt * k1[0], h, vm);
-    let k3 = position_rate(p0[0] + 0.5 * dt * k2[0], h, vm);
-    let k4 = position_rate(p0[0] + dt * k3[0], h, v1);
+    let k2 = position_rate(p0[0] + 0.5 * dt * k1[0], hm, vm);
+    let k3 = position_rate(p0[0] + 0.5 * dt * k2[0], hm, vm);
+    let k4 = position_rate(p0[0] + dt * k3[0], h1, v1);
     let p1 = [
         p0[0] + dt / 6.0 * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0]),
         p0[1] + dt / 6.0 * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1]),
     ];
-    (p1, position_rate(p1[0], h, v1))
+    (p1, position_rate(p1[0], h1, v1))
 }
 
 /// Check that a route starting at latitude `lat0` stays within the latitude limit (RK4 on a 1 s grid split
 /// at the segment boundaries).
-pub fn check_route_latitude(traj: &Trajectory, lat0: f64, h: f64, yaw0: f64, duration_s: f64) -> Result<(), CoreError> {
+pub fn check_route_latitude(traj: &Trajectory, lat0: f64, yaw0: f64, duration_s: f64) -> Result<(), CoreError> {
     let lat_max = (MAX_LAT_DEG - 0.01).to_radians();
     let mut cursor = 0usize;
     let mut p = [lat0, 0.0];
-    let mut rate = position_rate(lat0, h, traj.at(&mut cursor, 0.0, yaw0).vel_enu());
+    let k0 = traj.at(&mut cursor, 0.0, yaw0);
+    let mut rate = position_rate(lat0, k0.height, k0.vel_enu());
     let mut t = 0.0;
     while t < duration_s {
         let t1 = (t + 1.0).min(duration_s).min(traj.piece_end(&mut cursor, t));
-        let (p1, r1) = rk4_position(traj, &mut cursor, yaw0, h, t, t1 - t, p, rate);
+        let (p1, r1) = rk4_position(traj, &mut cursor, yaw0, t, t1 - t, p, rate);
         p = p1;
         rate = r1;
         t = t1;

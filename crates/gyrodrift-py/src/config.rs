@@ -94,9 +94,9 @@ pub struct SimulatorConfig {
     /// Moving base (None: static): the static period before the drive [s].
     #[pyo3(get)]
     trajectory_start_s: Option<f64>,
-    /// Moving base: the route's segments (duration [s], acceleration [m/s^2], yaw rate [rad/s]).
+    /// Moving base: the route's segments (duration [s], acceleration [m/s^2], yaw rate [rad/s], climb [m]).
     #[pyo3(get)]
-    trajectory_segments: Option<Vec<(f64, f64, f64)>>,
+    trajectory_segments: Option<Vec<(f64, f64, f64, f64)>>,
     /// Moving base: the segments are cycled until the end of the run.
     #[pyo3(get)]
     trajectory_repeat: bool,
@@ -155,7 +155,7 @@ impl SimulatorConfig {
         drift_k2_rad_s_per_c2: Option<f64>,
         drift_k3_rad_s_per_c_per_s: Option<f64>,
         trajectory_start_s: Option<f64>,
-        trajectory_segments: Option<Vec<(f64, f64, f64)>>,
+        trajectory_segments: Option<Vec<(f64, f64, f64, f64)>>,
         trajectory_repeat: bool,
     ) -> PyResult<Self> {
         let d = ImuSimulatorConfig::default();
@@ -216,10 +216,11 @@ impl SimulatorConfig {
                     segments: trajectory_segments
                         .unwrap_or_default()
                         .into_iter()
-                        .map(|(duration, accel, yaw_rate)| Segment {
+                        .map(|(duration, accel, yaw_rate, climb)| Segment {
                             duration,
                             accel,
                             yaw_rate,
+                            climb,
                         })
                         .collect(),
                     repeat: trajectory_repeat,
@@ -305,10 +306,12 @@ impl SimulatorConfig {
             drift_k2_rad_s_per_c2: e.drift_k2,
             drift_k3_rad_s_per_c_per_s: e.drift_k3,
             trajectory_start_s: inner.trajectory.as_ref().map(|t| t.start_s),
-            trajectory_segments: inner
-                .trajectory
-                .as_ref()
-                .map(|t| t.segments.iter().map(|s| (s.duration, s.accel, s.yaw_rate)).collect()),
+            trajectory_segments: inner.trajectory.as_ref().map(|t| {
+                t.segments
+                    .iter()
+                    .map(|s| (s.duration, s.accel, s.yaw_rate, s.climb))
+                    .collect()
+            }),
             trajectory_repeat: inner.trajectory.as_ref().is_some_and(|t| t.repeat),
             inner,
         }

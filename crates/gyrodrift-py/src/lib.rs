@@ -348,6 +348,34 @@ fn array_n3<'py>(obj: &Bound<'py, PyAny>, key: &'static str) -> PyResult<PyReado
         .map_err(|_| arg_err(key, format!("{expected}, got {}", type_name(obj))))
 }
 
+/// An (n,) float64 C-contiguous array from any 1-D array-like of real numbers (converted as in `array_n3`).
+fn array_1<'py>(obj: &Bound<'py, PyAny>, key: &'static str) -> PyResult<PyReadonlyArray1<'py, f64>> {
+    if let Ok(a) = obj.extract::<PyReadonlyArray1<'py, f64>>() {
+        if a.is_c_contiguous() {
+            return Ok(a);
+        }
+    }
+    let expected = "expected an (n,) array of real numbers (float64; float32 and integers are converted)";
+    let np = obj.py().import("numpy")?;
+    let arr = np
+        .call_method1("asarray", (obj,))
+        .map_err(|_| arg_err(key, format!("{expected}, got {}", type_name(obj))))?;
+    let dtype = arr.getattr("dtype")?;
+    let kind: String = dtype.getattr("kind")?.extract()?;
+    if !matches!(kind.as_str(), "f" | "i" | "u") {
+        return Err(arg_err(key, format!("{expected}, got dtype {}", dtype.str()?)));
+    }
+    let shape: Vec<usize> = arr.getattr("shape")?.extract()?;
+    if shape.len() != 1 {
+        return Err(arg_err(key, format!("{expected}, got shape {shape:?}")));
+    }
+    let kwargs = pyo3::types::PyDict::new(obj.py());
+    kwargs.set_item("dtype", "float64")?;
+    np.call_method("ascontiguousarray", (arr,), Some(&kwargs))?
+        .extract::<PyReadonlyArray1<'py, f64>>()
+        .map_err(|_| arg_err(key, format!("{expected}, got {}", type_name(obj))))
+}
+
 /// Both increment arrays of a `process` call (see `array_n3`).
 fn increments<'py>(
     dtheta: &Bound<'py, PyAny>,
@@ -392,14 +420,29 @@ impl Navigator {
         self.inner.samples_done()
     }
 
+    /// Reference height [m] of the damped vertical channel for the following samples (initially the configured
+    /// height).
+    fn set_reference_height(&mut self, height_m: f64) -> PyResult<()> {
+        self.inner.set_reference_height(height_m).map_err(core_err)
+    }
+
+    /// The reference height [m] of the damped vertical channel.
+    #[getter]
+    fn reference_height_m(&self) -> f64 {
+        self.inner.reference_height()
+    }
+
     /// Navigate the samples; returns the state after every `decimation`-th sample counted from the run start.
-    #[pyo3(signature = (dtheta_rad, dv_m_s, decimation = 1))]
+    /// `reference_height_m` (n,) [m], optional: the damped vertical channel's reference height at the end of
+    /// every sample (the last one stays the reference afterwards).
+    #[pyo3(signature = (dtheta_rad, dv_m_s, decimation = 1, reference_height_m = None))]
     fn process<'py>(
         &mut self,
         py: Python<'py>,
         dtheta_rad: &Bound<'py, PyAny>,
         dv_m_s: &Bound<'py, PyAny>,
         decimation: i64,
+        reference_height_m: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyDict>> {
         if decimation < 1 {
             return Err(arg_err(
@@ -411,13 +454,27 @@ impl Navigator {
         let (a, b) = increments(dtheta_rad, dv_m_s)?;
         let (dth, dv) = (flat(&a, "dtheta_rad")?, flat(&b, "dv_m_s")?);
         let n = dth.len() / 3;
+        let href = reference_height_m
+            .map(|h| array_1(h, "reference_height_m"))
+            .transpose()?;
+        let href = href
+            .as_ref()
+            .map(|h| {
+                h.as_slice()
+                    .map_err(|_| arg_err("reference_height_m", "expected a contiguous array"))
+            })
+            .transpose()?;
         let inner = &mut self.inner;
         let cols = py
             .detach(|| {
                 let done = inner.samples_done();
                 let n_out = ((done + n as u64) / decimation - done / decimation) as usize;
                 let mut cols = NavColumns::with_capacity(n_out);
-                inner.process(dth, dv, decimation, |s| cols.push(s)).map(|()| cols)
+                match href {
+                    None => inner.process(dth, dv, decimation, |s| cols.push(s)),
+                    Some(h) => inner.process_with_reference(dth, dv, h, decimation, |s| cols.push(s)),
+                }
+                .map(|()| cols)
             })
             .map_err(core_err)?;
         let m = cols.t.len();
@@ -501,6 +558,10 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
         m.add("MAX_INDEX_POSITIONS", t::MAX_INDEX_POSITIONS)?;
         m.add("MAX_VEHICLE_SPEED_M_S", gyrodrift_core::trajectory::MAX_SPEED_M_S)?;
         m.add("MAX_VEHICLE_ACCEL_M_S2", gyrodrift_core::trajectory::MAX_ACCEL_M_S2)?;
+        m.add(
+            "MAX_VEHICLE_CLIMB_RATE_M_S",
+            gyrodrift_core::trajectory::MAX_CLIMB_RATE_M_S,
+        )?;
         m.add(
             "MAX_VEHICLE_YAW_RATE_DEG_S",
             gyrodrift_core::trajectory::MAX_YAW_RATE_RAD_S.to_degrees(),

@@ -59,7 +59,8 @@ def campaign_command(source, out, workers, scheduler, connect_timeout_s, limit, 
     Each run is simulated in the worker (no log written), aligned, navigated for the 12 h features and the 72 h
     truth, its 12 h curve fit, 16 h smoother estimate and linear 72 h error curves computed, and its noise-free
     twin's truth (the simulated effective drift) found; one Parquet file per run under OUT/runs/, each written
-    atomically. Rerunning the same command resumes an interrupted campaign.
+    atomically. Rerunning the same command resumes an interrupted campaign. Ctrl-C once: no new runs, the runs in
+    progress are finished and committed (exit 130); twice: abort at once.
     """
     from gyrodrift.campaign import CampaignStore, load_campaign, read_runs, run_campaign, write_run_table
     from gyrodrift.errors import OptionError
@@ -103,6 +104,7 @@ def campaign_command(source, out, workers, scheduler, connect_timeout_s, limit, 
         "failed_now": summary.failed,
         "not_committed": summary.lost,
         "elapsed_s": round(summary.elapsed_s, 3),
+        "interrupted": summary.interrupted,
     }
     if as_json:
         print_json(doc)
@@ -111,8 +113,11 @@ def campaign_command(source, out, workers, scheduler, connect_timeout_s, limit, 
         quiet=quiet,
         as_json=as_json,
         detail=f"{campaign.name}: {summary.done} run(s) done now ({summary.failed} failed), {summary.skipped} "
-        f"already done, {summary.total - summary.skipped - summary.done} pending, in {summary.elapsed_s:.1f} s",
+        f"already done, {summary.total - summary.skipped - summary.done} pending, in {summary.elapsed_s:.1f} s"
+        + ("; interrupted: rerun the same command to resume" if summary.interrupted else ""),
     )
+    if summary.interrupted:
+        click.get_current_context().exit(130)  # the shell's code for a SIGINT; the runs in progress were committed
 
 
 def _export(campaign, index: int, out, quiet: bool, as_json: bool) -> None:

@@ -220,6 +220,8 @@ def navigate_command(
         print_json(s)
     written = [out_dir / name for name in nav_files(plot)]
     source = f"initial state from {_INITIAL_WORDS[s['initial_source']]}"
+    if s.get("vertical") == "damped":
+        source += f", vertical channel damped to the {s['vertical_reference']}"
     if s["final_pos_err_nmi"] is not None:
         detail = (
             f"{s['hours_navigated']:.3f} h, {source}: final position error {s['final_pos_err_nmi']:.4f} nmi, "

@@ -22,7 +22,7 @@ from gyrodrift.ins.simulate import PARQUET_OPTIONS, ImuData
 from gyrodrift.ins.stream import Track, run_navigators
 from gyrodrift.ins.track import ReferenceTrack, load_track, route_of
 from gyrodrift.ins.vehicle import table_angles_deg, vehicle_attitude_rad
-from gyrodrift.logs import DEFAULT_CHUNK_SAMPLES, ImuLog, LogError, LogTruth, open_log
+from gyrodrift.logs import DEFAULT_CHUNK_SAMPLES, REF_HEIGHT_COLUMN, ImuLog, LogChunk, LogError, LogTruth, open_log
 from gyrodrift.site import Site
 from gyrodrift.units import DEG, DEG_PER_H, HOUR, MICRO_G
 
@@ -35,6 +35,7 @@ __all__ = [
     "NAV_ERROR_COLUMNS",
     "VEHICLE_COLUMNS",
     "SUMMARY_FORMAT",
+    "VERTICAL_CHANNELS",
 ]
 
 NAV_COLUMNS = (
@@ -101,6 +102,9 @@ class NavResult:
                 return c
         raise KeyError(f"no checkpoint at {t_h} h")
 
+
+VERTICAL_CHANNELS = ("fixed", "damped")
+"""The core navigator's vertical channels (`navigate`'s ``vertical``)."""
 
 INITIAL_SOURCES = ("auto", "truth", "alignment")
 """Where `navigate` takes its initial state from (besides a mapping of given values)."""
@@ -223,7 +227,7 @@ def navigate(
     site: Site | Mapping[str, float] | None = None,
     timeline: Any = None,
     decimation_s: float = 1.0,
-    vertical: str = "fixed",
+    vertical: str | None = None,
     reference: Any = None,
     out_dir: str | os.PathLike[str] | OutputFolder | None = None,
     plot: bool = False,
@@ -262,9 +266,12 @@ def navigate(
         The alignment span for ``initial="alignment"`` (default: `gyrodrift.procedure.DEFAULT_TIMELINE`, 4 h).
     decimation_s : float
         Keep the state every `decimation_s` [s] (rounded to whole samples, counted from the navigation start).
-    vertical : {"fixed", "damped"}
-        Vertical channel of the core navigator ("fixed": height held, static base or a level route; "damped": a
-        second-order loop towards the initial height).
+    vertical : {"fixed", "damped"}, optional
+        Vertical channel of the core navigator: "fixed" holds the height (static base, level route); "damped" is a
+        second-order loop towards a reference height, the log's ``ref_height_m`` column (barometric or known
+        height) when it has one, else the reference track's height (the simulated route's, or `reference`'s),
+        else the initial height. Default: "damped" when the log has ``ref_height_m``, else "fixed".
+        ``summary["vertical"]`` and ``summary["vertical_reference"]`` say which channel and reference were used.
     reference : ReferenceTrack or path, optional
         Moving base: the true track the position errors are computed against, interpolated to the kept samples
         (`gyrodrift.ins.track`: a `ReferenceTrack` or a GNSS CSV/Parquet file with ``t_s, lat_deg, lon_deg,
@@ -291,7 +298,9 @@ def navigate(
         ``{pitch,roll,yaw}_err_arcsec`` (computed minus true). The summary holds one checkpoint per whole hour
         of navigation ``{t_h, lat_deg, lon_deg, lat_err_arcsec, lon_err_arcsec, pos_err_nmi}``,
         ``final_pos_err_nmi`` and ``max_pos_err_nmi`` (over kept samples, checkpoints and the final state),
-        ``initial_source`` and ``start_s`` (log time of the navigation start [s]).
+        ``initial_source`` and ``start_s`` (log time of the navigation start [s]), ``vertical`` and
+        ``vertical_reference``. On a moving base with the table angle (an imu.parquet, an in-memory run or a
+        scenario navigated on the fly) also the vehicle's attitude (`VEHICLE_COLUMNS`).
     """
     from gyrodrift import _core
 
@@ -310,6 +319,8 @@ def navigate(
     accel_est = _vector3("accel_bias_ug", accel_bias_ug)
     if plot and out_dir is None:
         raise OptionError("navigate: --plot needs --out (the figure is written next to nav.parquet)")
+    if vertical is not None and vertical not in VERTICAL_CHANNELS:
+        raise OptionError(f"navigate: vertical must be one of {', '.join(VERTICAL_CHANNELS)}, got {vertical!r}")
     if out_dir is not None:  # checked before any work; the log itself is never one of the outputs
         source_path = imu if isinstance(imu, (str, os.PathLike)) else getattr(imu, "path", None)
         out_dir = output_folder(out_dir, "navigate", nav_files(plot), inputs=[source_path] if source_path else ())
@@ -363,6 +374,8 @@ def navigate(
     ref = _reference_track(reference, imu)
     if ref is not None:
         ref.require_cover(start / rate, (start + n_total) / rate, f"navigating {log.label}")
+    channel = vertical or ("damped" if log.has_reference_height else "fixed")
+    heights, vertical_ref = _vertical_reference(channel, log, ref)
     nav = _core.Navigator(
         _core.NavigatorConfig(
             lat_rad=init["lat_deg"] * DEG,
@@ -373,20 +386,26 @@ def navigate(
             roll_rad=init["roll_deg"] * DEG,
             yaw_rad=init["yaw_deg"] * DEG,
             rate_hz=float(rate),
-            vertical=vertical,
+            vertical=channel,
         )
     )
     nav.set_gyro_bias([b * DEG_PER_H for b in gyro_est])
     nav.set_accel_bias([b * MICRO_G for b in accel_est])
 
     true_deg = np.empty((n_total // dec, 3)) if log.has_truth_columns else None
+    # A scenario navigated on the fly carries its table angle in the chunks: kept for the vehicle attitude.
+    table_kept = np.empty(n_total // dec) if ref is not None and log.format == "scenario" else None
 
-    def keep_truth(piece, done: int) -> None:  # the true attitude at the kept samples (copied)
+    def keep(piece: LogChunk, done: int) -> None:  # the true attitude and table angle at the kept samples (copied)
         first = (dec - 1 - done) % dec
         k = len(range(first, len(piece), dec))
-        assert true_deg is not None and piece.truth is not None  # only observed when the log has them
-        for j, column in enumerate(piece.truth):
-            true_deg[(done + first) // dec : (done + first) // dec + k, j] = column[first::dec]
+        rows = slice((done + first) // dec, (done + first) // dec + k)
+        if true_deg is not None:
+            assert piece.truth is not None  # every chunk of a log with truth columns carries them
+            for j, column in enumerate(piece.truth):
+                true_deg[rows, j] = column[first::dec]
+        if table_kept is not None and piece.table_angle_deg is not None:
+            table_kept[rows] = piece.table_angle_deg[first::dec]
 
     (track,) = run_navigators(
         log,
@@ -394,7 +413,8 @@ def navigate(
         n_samples=n_total,
         start=start,
         decimation=dec,
-        observe=keep_truth if true_deg is not None else None,
+        observe=keep if true_deg is not None or table_kept is not None else None,
+        reference=heights,
         chunk_samples=chunk_samples,
         quiet=quiet,
     )
@@ -408,10 +428,12 @@ def navigate(
         compensate_drift_deg_h=float(compensate_drift_deg_h),
         gyro_est=gyro_est,
         accel_est=accel_est,
+        vertical=channel,
+        vertical_reference=vertical_ref,
     )
     truth_at = _truth_at(ref, log.site)
     kept_idx = start + dec * np.arange(1, n_total // dec + 1) - 1  # 0-based log samples of the kept states
-    table_deg = table_angles_deg(imu, kept_idx) if ref is not None else None
+    table_deg = table_kept if table_kept is not None else table_angles_deg(imu, kept_idx) if ref is not None else None
     vehicle = None
     if table_deg is not None:
         k = track.kept
@@ -440,6 +462,32 @@ class _Run:
     compensate_drift_deg_h: float
     gyro_est: list[float]
     accel_est: list[float]
+    vertical: str = "fixed"
+    vertical_reference: str | None = None
+
+
+def _vertical_reference(
+    channel: str, log: ImuLog, ref: ReferenceTrack | None
+) -> tuple[Callable[[LogChunk], np.ndarray] | None, str | None]:
+    """The damped channel's reference heights per piece of the log and what the summary calls them: the log's
+    ``ref_height_m`` column, else the reference track's height at the samples' times, else the initial height
+    (None: the navigator keeps its own). A fixed channel has no reference."""
+    if channel != "damped":
+        return None, None
+    if log.has_reference_height:
+
+        def from_log(piece: LogChunk) -> np.ndarray:
+            assert piece.ref_height_m is not None  # every chunk of a log with the column carries it
+            return piece.ref_height_m
+
+        return from_log, f"{REF_HEIGHT_COLUMN} column of {log.label}"
+    if ref is not None:
+
+        def from_track(piece: LogChunk) -> np.ndarray:
+            return ref.at(piece.t_s)[2]
+
+        return from_track, f"height of the reference track {ref.label}"
+    return None, "initial height"
 
 
 TruthAt = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
@@ -546,6 +594,8 @@ def _summary(
         "decimation_s": run.dec / rate,
         "initial_source": run.initial_source,
         "start_s": run.start / rate,
+        "vertical": run.vertical,
+        "vertical_reference": run.vertical_reference,
         "compensate_drift_deg_h": run.compensate_drift_deg_h,
         "gyro_bias_deg_h": run.gyro_est,
         "accel_bias_ug": run.accel_est,

@@ -173,6 +173,9 @@ class Attitude:
 SEGMENT_KINDS = ("straight", "turn", "accelerate", "stop")
 """The kinds of route segment of ``[trajectory] segments``."""
 
+WAYPOINT_ROUTE_KEYS = ("waypoints", "turn_rate_deg_s", "accel_m_s2")
+"""Keys of ``[trajectory]`` for a route given by waypoints (`gyrodrift.ins.waypoints`) instead of segments."""
+
 DRIVE_H = 72.0
 """Default length of the drive after the static period [h] (the paper's 1 nmi / 72 h)."""
 
@@ -180,13 +183,15 @@ DRIVE_H = 72.0
 @dataclass(frozen=True)
 class Segment:
     """One segment of a land-vehicle route, resolved: ``kind`` (one of `SEGMENT_KINDS`), ``duration_s`` [s],
-    longitudinal acceleration ``accel_m_s2`` [m/s^2] (accelerate; negative brakes) and turn rate
-    ``rate_deg_s`` [deg/s] (turn; positive counter-clockwise about Up, i.e. a left turn)."""
+    longitudinal acceleration ``accel_m_s2`` [m/s^2] (accelerate; negative brakes), turn rate
+    ``rate_deg_s`` [deg/s] (turn; positive counter-clockwise about Up, i.e. a left turn) and height change
+    ``climb_m`` [m] (any kind but stop; a smooth profile starting and ending with zero vertical speed)."""
 
     kind: str
     duration_s: float
     accel_m_s2: float = 0.0
     rate_deg_s: float = 0.0
+    climb_m: float = 0.0
 
     def to_toml_dict(self) -> dict[str, Any]:
         """The segment as its TOML table (only the keys its kind takes)."""
@@ -195,16 +200,18 @@ class Segment:
             out["accel_m_s2"] = self.accel_m_s2
         if self.kind == "turn":
             out["rate_deg_s"] = self.rate_deg_s
+        if self.climb_m != 0.0:
+            out["climb_m"] = self.climb_m
         return out
 
 
 @dataclass(frozen=True)
 class Trajectory:
     """A moving base: the vehicle stands still for ``static_h`` [h] (alignment and identification), then drives
-    ``segments`` in order (cycled to the end of the run with ``repeat``). The route is level at the site's
-    height; the vehicle's initial yaw is ``[attitude] yaw_deg`` and ``[attitude] pitch_deg``/``roll_deg`` are
-    the IMU's mounting tilt on the vehicle. After the last segment (without ``repeat``) the vehicle goes on
-    straight at its last speed."""
+    ``segments`` in order (cycled to the end of the run with ``repeat``). The route starts at the site's height
+    and changes it by the segments' ``climb_m`` (the vehicle body stays level); the vehicle's initial yaw is
+    ``[attitude] yaw_deg`` and ``[attitude] pitch_deg``/``roll_deg`` are the IMU's mounting tilt on the vehicle.
+    After the last segment (without ``repeat``) the vehicle goes on straight at its last speed."""
 
     static_h: float = 16.0
     repeat: bool = False
@@ -350,7 +357,7 @@ class Scenario:
             return {}
         return {
             "trajectory_start_s": tr.static_h * HOUR,
-            "trajectory_segments": [(g.duration_s, g.accel_m_s2, g.rate_deg_s * DEG) for g in tr.segments],
+            "trajectory_segments": [(g.duration_s, g.accel_m_s2, g.rate_deg_s * DEG, g.climb_m) for g in tr.segments],
             "trajectory_repeat": tr.repeat,
         }
 
@@ -514,6 +521,8 @@ class _Validator:
         allowed = [f.name for f in dataclasses.fields(cls)]
         if name == "temperature":
             allowed = allowed + ["series_csv"]
+        if name == "trajectory":
+            allowed = allowed + list(WAYPOINT_ROUTE_KEYS)
         for key in table:
             if key not in allowed:
                 raise self.fail(name, key, f"unknown key (expected one of: {', '.join(allowed)})")
@@ -710,7 +719,15 @@ class _Validator:
         repeat = t.get("repeat", d.repeat)
         if not isinstance(repeat, bool):
             raise self.fail("trajectory", "repeat", f"expected true or false, got {_type_name(repeat)} {_show(repeat)}")
-        raw = t.get("segments", [])
+        if "waypoints" in t:
+            if "segments" in t:
+                raise self.fail("trajectory", "waypoints", "give segments or waypoints, not both")
+            raw = self.waypoint_segments(data, t, repeat)
+        else:
+            for k in WAYPOINT_ROUTE_KEYS[1:]:
+                if k in t:
+                    raise self.fail("trajectory", k, "only with waypoints")
+            raw = t.get("segments", [])
         if not isinstance(raw, (list, tuple)):
             raise self.fail("trajectory", "segments", f"expected an array of tables, got {_type_name(raw)}")
         segments: list[Segment] = []
@@ -723,10 +740,66 @@ class _Validator:
             segments.append(seg)
         return Trajectory(static_h=static_h, repeat=repeat, segments=tuple(segments))
 
+    def waypoint_segments(self, data: Mapping[str, Any], t: Mapping[str, Any], repeat: bool) -> list[dict[str, Any]]:
+        """The segments of a ``waypoints`` route (`gyrodrift.ins.waypoints`), from the site and initial yaw."""
+        from gyrodrift.ins.waypoints import Waypoint, WaypointError, waypoint_route
+
+        sec, c = "trajectory", _limits()
+        raw = t["waypoints"]
+        if not isinstance(raw, (list, tuple)) or not raw:
+            raise self.fail(sec, "waypoints", f"expected a non-empty array of tables, got {_show(raw)}")
+        rate = self.positive_at_most(sec, t, "turn_rate_deg_s", 3.0, c.MAX_VEHICLE_YAW_RATE_DEG_S, " deg/s")
+        accel = self.positive_at_most(sec, t, "accel_m_s2", 2.0, c.MAX_VEHICLE_ACCEL_M_S2, " m/s^2")
+        points = []
+        keys = ("lat_deg", "lon_deg", "height_m", "speed_m_s", "leg_s")
+        for i, w in enumerate(raw):
+            name = f"waypoints[{i}]"
+            if not isinstance(w, Mapping):
+                raise self.fail(sec, name, f"expected a table, got {_type_name(w)} {_show(w)}")
+            for k in w:
+                if k not in keys:
+                    raise self.fail(sec, f"{name}.{k}", f"unknown key (expected: {', '.join(keys)})")
+            for k in ("lat_deg", "lon_deg"):
+                if k not in w:
+                    raise self.fail(sec, name, f"missing {k}")
+            if ("speed_m_s" in w) == ("leg_s" in w):
+                raise self.fail(sec, name, "give exactly one of speed_m_s and leg_s")
+            named = {f"{name}.{k}": v for k, v in w.items()}
+
+            def value(k: str, lo: float, hi: float, named=named, name=name) -> float:
+                return self.in_range(sec, named, f"{name}.{k}", math.nan, lo, hi)
+
+            lim = (c.MAX_LAT_DEG - 0.01, c.MAX_LON_DEG)
+            points.append(
+                Waypoint(
+                    lat_deg=value("lat_deg", -lim[0], lim[0]),
+                    lon_deg=value("lon_deg", -lim[1], lim[1]),
+                    height_m=value("height_m", c.MIN_HEIGHT_M, c.MAX_HEIGHT_M) if "height_m" in w else None,
+                    speed_m_s=value("speed_m_s", 0.0, c.MAX_VEHICLE_SPEED_M_S) if "speed_m_s" in w else None,
+                    leg_s=value("leg_s", 0.0, c.MAX_DURATION_S) if "leg_s" in w else None,
+                )
+            )
+            p = points[-1]
+            if (p.speed_m_s is not None and p.speed_m_s <= 0) or (p.leg_s is not None and p.leg_s <= 0):
+                raise self.fail(sec, name, "the speed (or leg time) must be > 0")
+        site, yaw0 = self.site(data), self.attitude(data).yaw_deg
+        try:
+            return waypoint_route(
+                (site.lat_deg, site.lon_deg, site.height_m),
+                yaw0,
+                points,
+                turn_rate_deg_s=rate,
+                accel_m_s2=accel,
+                repeat=repeat,
+            )
+        except WaypointError as exc:
+            key = "waypoints" if exc.index is None else f"waypoints[{exc.index}]"
+            raise self.fail(sec, key if exc.key is None else f"{key}.{exc.key}", str(exc)) from None
+
     _SEGMENT_KEYS: ClassVar[dict[str, tuple[str, ...]]] = {
-        "straight": ("duration_s",),
-        "turn": ("rate_deg_s", "duration_s", "angle_deg"),
-        "accelerate": ("accel_m_s2", "duration_s", "to_speed_m_s"),
+        "straight": ("duration_s", "climb_m"),
+        "turn": ("rate_deg_s", "duration_s", "angle_deg", "climb_m"),
+        "accelerate": ("accel_m_s2", "duration_s", "to_speed_m_s", "climb_m"),
         "stop": ("duration_s",),
     }
 
@@ -797,7 +870,18 @@ class _Validator:
             raise self.fail(
                 sec, key, f"the speed after this segment, {end:.6g} m/s, is outside [0, {max_speed:.6g}] m/s"
             )
-        return Segment(kind=kind, duration_s=duration, accel_m_s2=accel, rate_deg_s=rate)
+        climb = self.number(sec, g, "climb_m", 0.0)
+        # Peak vertical speed and acceleration of the smooth climb profile (gyrodrift-core `trajectory`).
+        w, a = abs(climb) * math.pi / (2 * duration), abs(climb) * math.pi**2 / (2 * duration**2)
+        if w > c.MAX_VEHICLE_CLIMB_RATE_M_S or a > c.MAX_VEHICLE_ACCEL_M_S2:
+            raise self.fail(
+                sec,
+                f"{key}.climb_m",
+                f"a climb of {climb:.6g} m in {duration:.6g} s needs a vertical speed of {w:.3g} m/s and "
+                f"acceleration {a:.3g} m/s^2 (at most {c.MAX_VEHICLE_CLIMB_RATE_M_S:.6g} m/s and "
+                f"{c.MAX_VEHICLE_ACCEL_M_S2:.6g} m/s^2: a longer segment or a smaller climb)",
+            )
+        return Segment(kind=kind, duration_s=duration, accel_m_s2=accel, rate_deg_s=rate, climb_m=climb)
 
     def read_series_csv(self, value: Any) -> tuple[tuple[float, ...], tuple[float, ...]]:
         sec, key = "temperature", "series_csv"

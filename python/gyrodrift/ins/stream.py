@@ -3,13 +3,16 @@
 `run_navigators` reads a `gyrodrift.logs.ImuLog` (a file, in-memory arrays or a scenario simulated on the fly)
 once, from sample ``start`` to ``start + n_samples``, and hands every chunk to each navigator in turn (or on
 threads: the core releases the GIL); the next chunks are read and checked on a thread meanwhile
-(`prefetched`). Chunks are split at whole hours counted from ``start``, so the state at
+(`prefetched`), unless ``threads=1`` keeps the whole read on the calling thread (a process that must use one
+core, such as a campaign worker). Chunks are split at whole hours counted from ``start``, so the state at
 every hour is exact (not decimated). Every ``decimation``-th state (counted from ``start``, as the core counts
 its own samples) is copied into arrays allocated once for the whole run, so memory does not grow with the log
 beyond those outputs and nothing keeps a chunk of the log alive.
 
 The navigators are built by the caller (`gyrodrift.ins.navigate`, `gyrodrift.procedure.passes`): anything with
-``process(dtheta_rad, dv_m_s, decimation) -> dict`` and ``state() -> dict`` (`gyrodrift._core.Navigator`).
+``process(dtheta_rad, dv_m_s, decimation) -> dict`` and ``state() -> dict`` (`gyrodrift._core.Navigator`; with
+``reference``, ``process(dtheta_rad, dv_m_s, decimation, reference_height_m)``: the damped vertical channel's
+reference height per sample).
 """
 
 from __future__ import annotations
@@ -114,6 +117,7 @@ def run_navigators(
     decimation: int = 1,
     keys: Sequence[str] = STATE_KEYS,
     observe: Callable[[LogChunk, int], None] | None = None,
+    reference: Callable[[LogChunk], np.ndarray] | None = None,
     threads: int | None = None,
     chunk_samples: int = DEFAULT_CHUNK_SAMPLES,
     quiet: bool = True,
@@ -136,9 +140,13 @@ def run_navigators(
     observe : callable, optional
         ``observe(chunk, done)`` for every navigated piece of the log (`chunk` a `LogChunk` of views, `done` the
         samples navigated before it); must not keep references to the views.
+    reference : callable, optional
+        ``reference(chunk)``: the reference height [m] at the end of each sample of a piece, handed to every
+        navigator's ``process`` (the damped vertical channel's reference: a log column, a route's height).
     threads : int, optional
         Threads running the navigators of one piece side by side (default: one per navigator, at most the
-        number of CPUs; 1 = in turn). Results do not depend on it.
+        number of CPUs, and the log read ahead on one more thread). 1 = everything on the calling thread:
+        navigators in turn and no read-ahead. Results do not depend on it.
     chunk_samples, quiet, desc
         Read size, progress switch and label.
 
@@ -156,8 +164,9 @@ def run_navigators(
     pos = 0
     n_threads = min(len(navigators), os.cpu_count() or 1) if threads is None else max(1, min(threads, len(navigators)))
     pool = ThreadPoolExecutor(max_workers=n_threads) if n_threads > 1 else None
-    with progress(n_samples, desc, quiet) as bar, pool or contextlib.nullcontext():
-        for chunk in prefetched(log.chunks(chunk_samples, stop=stop)):
+    with log.core_errors(start), progress(n_samples, desc, quiet) as bar, pool or contextlib.nullcontext():
+        chunks = log.chunks(chunk_samples, stop=stop)
+        for chunk in chunks if threads == 1 else prefetched(chunks):
             if chunk.first_index + len(chunk) <= start:
                 continue
             if chunk.first_index < start:
@@ -169,10 +178,11 @@ def run_navigators(
                 if observe is not None:
                     observe(piece, done)
                 dth, dv = piece.dtheta_rad, piece.dv_m_s
+                args = (dth, dv, dec) if reference is None else (dth, dv, dec, reference(piece))
                 if pool is None:
-                    outs = [nav.process(dth, dv, dec) for nav in navigators]
+                    outs = [nav.process(*args) for nav in navigators]
                 else:
-                    outs = list(pool.map(lambda nav, dth=dth, dv=dv: nav.process(dth, dv, dec), navigators))
+                    outs = list(pool.map(lambda nav, args=args: nav.process(*args), navigators))
                 k = (done + b - a) // dec - done // dec  # kept states in this piece
                 for track, out in zip(tracks, outs, strict=True):
                     for key in keys:

@@ -66,6 +66,9 @@ def align_log(
     ------
     LogError
         Bad rows in the first hours, a log shorter than the alignment, or no site known for the log.
+    CoreError
+        The core's aligner refuses the log (e.g. no static base: an estimate leaves its range); the message names
+        the log, the quantity and the time (`ImuLog.core_errors`).
     """
     from gyrodrift import _core
 
@@ -83,19 +86,20 @@ def align_log(
         "fine_s": align_s - float(timeline.coarse_s),
     }
     config.update(dict(aligner_options or {}))
-    aligner = _core.Aligner(_core.AlignerConfig(**config))
     n_align = log.samples_for(align_s)
     used = 0
-    with progress(n_align, f"align {log.name}", quiet) as bar:
-        for chunk in log.chunks(chunk_samples):
-            k = int(aligner.process(np.ascontiguousarray(chunk.dtheta_rad), np.ascontiguousarray(chunk.dv_m_s)))
-            used += k
-            bar.update(k)
-            if aligner.done:
-                break
-    if not aligner.done:
-        raise LogError(f"{log.label}: the aligner did not finish after {used} samples")
-    r = aligner.result()
+    with log.core_errors():  # the core's refusals name the log
+        aligner = _core.Aligner(_core.AlignerConfig(**config))
+        with progress(n_align, f"align {log.name}", quiet) as bar:
+            for chunk in log.chunks(chunk_samples):
+                k = int(aligner.process(np.ascontiguousarray(chunk.dtheta_rad), np.ascontiguousarray(chunk.dv_m_s)))
+                used += k
+                bar.update(k)
+                if aligner.done:
+                    break
+        if not aligner.done:
+            raise LogError(f"{log.label}: the aligner did not finish after {used} samples")
+        r = aligner.result()
     hist_std = np.asarray(r["hist_std"], dtype=float)
     hist_t = np.asarray(r["hist_t_s"], dtype=float)
     names = list(getattr(_core.Aligner, "STATE_NAMES", []))

@@ -19,6 +19,8 @@ same first read; ``RunFeatures.label_flagged`` when the label is beyond the 1 nm
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
@@ -87,6 +89,7 @@ def extract_features(
     alignment: Alignment | None = None,
     smoother: bool = True,
     noise: SensorNoise | None = None,
+    truth_options: Mapping[str, Any] | None = None,
     chunk_samples: int = 100_000,
     quiet: bool = True,
 ) -> RunFeatures:
@@ -110,6 +113,8 @@ def extract_features(
         Also run the 16 h smoother (`smooth_log`, one more read of the first 16 h).
     noise : SensorNoise, optional
         Noise model of the smoother and of the truth's label sigma (default: measured from the log).
+    truth_options : mapping, optional
+        More keywords of `find_true_drift` with `with_truth` (``trial_deg_h``, ``verify``, ``threads``, ...).
     chunk_samples, quiet
         Read size and progress switch.
 
@@ -139,6 +144,7 @@ def extract_features(
             noise=noise,
             chunk_samples=chunk_samples,
             quiet=quiet,
+            **dict(truth_options or {}),
         )
         assert truth.base is not None and truth.alignment is not None  # find_true_drift always sets them
         return _from_curve(log, truth.base, truth.temperature, hours, truth.alignment, truth, lat0_deg, smoothed)

@@ -79,7 +79,8 @@ def navigate_after_alignment(
         Collect temperature statistics over the first `temperature_hours` of navigation.
     threads : int, optional
         Threads navigating the passes of one chunk side by side (default: one per pass, at most the number of
-        CPUs; 1 = in turn). Results do not depend on it: each navigator sees the same samples in order.
+        CPUs, and the log read ahead on one more thread; 1 = everything on the calling thread: passes in turn,
+        no read-ahead). Results do not depend on it: each navigator sees the same samples in order.
     chunk_samples, quiet, desc
         Chunking of the read, progress bar switch and label.
     reference : gyrodrift.ins.track.ReferenceTrack, optional

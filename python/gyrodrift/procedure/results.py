@@ -235,12 +235,14 @@ class TrueDrift:
         Verification reads that moved ``d*`` (0 when the first linearisation was exact enough).
     last_step_deg_h : float
         The move the last re-linearisation asked for [deg/h] (below `tolerance_deg_h` unless the
-        refinements ran out).
+        refinements ran out; NaN without the verification read).
     alignment : Alignment
     base : NavCurve
         The uncompensated navigation (z drift 0), kept for the features.
-    optimum : NavCurve
-        The verification navigation at ``d*``.
+    optimum : NavCurve or None
+        The verification navigation at ``d*`` (None without the verification read).
+    trial : NavCurve or None
+        The first read's navigation at ``trial_deg_h`` (with ``base``, the first linearisation's secant).
     temperature : TemperatureStats or None
         Temperature over the features window of the first read (when asked).
     drift_std_deg_h : float
@@ -272,6 +274,7 @@ class TrueDrift:
     alignment: Alignment | None = field(default=None, repr=False)
     base: NavCurve | None = field(default=None, repr=False)
     optimum: NavCurve | None = field(default=None, repr=False)
+    trial: NavCurve | None = field(default=None, repr=False)
     temperature: Any = field(default=None, repr=False)
     drift_std_deg_h: float = math.nan
     flagged: bool = False
@@ -300,7 +303,7 @@ class TrueDrift:
             "verified": bool(self.verified),
             "sensitivity_nmi_per_deg_h": self.sensitivity_nmi_per_deg_h,
             "refinements": self.refinements,
-            "last_step_deg_h": self.last_step_deg_h,
+            "last_step_deg_h": self.last_step_deg_h if math.isfinite(self.last_step_deg_h) else None,
             "alignment_z_drift_deg_h": None if self.alignment is None else self.alignment.z_drift_deg_h,
             "alignment_z_drift_std_deg_h": None if self.alignment is None else self.alignment.z_drift_std_deg_h,
             "grid": {

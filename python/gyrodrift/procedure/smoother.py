@@ -104,15 +104,16 @@ def smooth_log(
         "thermal": bool(thermal),
     }
     config.update(dict(options or {}))
-    sm = _core.Smoother(_core.SmootherConfig(**config))
-    with progress(int(sm.n_samples), f"smooth {log.name}", quiet) as bar:
-        for chunk in log.chunks(chunk_samples, stop=int(sm.n_samples)):
-            temp = np.ascontiguousarray(chunk.temp_c, dtype=float) if thermal and chunk.temp_c is not None else None
-            k = int(sm.process(np.ascontiguousarray(chunk.dtheta_rad), np.ascontiguousarray(chunk.dv_m_s), temp))
-            bar.update(k)
-            if sm.done:
-                break
-    r = sm.result()
+    with log.core_errors():  # the core's refusals name the log
+        sm = _core.Smoother(_core.SmootherConfig(**config))
+        with progress(int(sm.n_samples), f"smooth {log.name}", quiet) as bar:
+            for chunk in log.chunks(chunk_samples, stop=int(sm.n_samples)):
+                temp = np.ascontiguousarray(chunk.temp_c, dtype=float) if thermal and chunk.temp_c is not None else None
+                k = int(sm.process(np.ascontiguousarray(chunk.dtheta_rad), np.ascontiguousarray(chunk.dv_m_s), temp))
+                bar.update(k)
+                if sm.done:
+                    break
+        r = sm.result()
 
     def vec(key: str, scale: float) -> tuple[float, float, float]:
         v = np.asarray(r[key], dtype=float).reshape(3) / scale

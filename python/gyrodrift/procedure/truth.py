@@ -22,7 +22,9 @@ then simulate the compensation and keep the drift that minimises the position er
    optimum by more than ``tolerance_deg_h`` (1e-7 deg/h), ``d*`` moves and is verified again (at most
    ``max_refinements`` = 3 times). At 0.003 deg/h the first linearisation is off by 1e-7 to 2e-6 deg/h and one
    refinement converges (next step < 1e-10 deg/h); at 0.05 deg/h it is off by up to 7e-5 deg/h and one refinement
-   still converges.
+   still converges. ``verify=False`` skips this read: ``d*`` is then the first linearisation's minimum, exact to
+   about 1e-7 deg/h when ``trial_deg_h`` lies within about 5e-4 deg/h of it (the campaigns take the scenario's
+   nominal drift as the trial); with the default trial, about 2e-6 deg/h for a drift of 0.003 deg/h.
 
 The drift is the total constant to subtract from the z-gyro output (measured - estimate) [deg/h]; the
 alignment's own z estimate plays no part.
@@ -163,6 +165,8 @@ def find_true_drift(
     decimation_s: float = 60.0,
     temperature_hours: float | None = None,
     noise: SensorNoise | Mapping[str, Any] | None = None,
+    verify: bool = True,
+    threads: int | None = None,
     chunk_samples: int = 100_000,
     quiet: bool = True,
 ) -> TrueDrift:
@@ -196,6 +200,11 @@ def find_true_drift(
         Also collect the temperature over the first hours of navigation (the features use 12 h).
     noise : SensorNoise or mapping, optional
         ARW and VRW of the label's covariance analysis (default: measured from the log's first hour).
+    verify : bool
+        Navigate ``d*`` and its neighbours in a second read (and refine); False: one read, ``d*`` from the first
+        linearisation, and ``optimum`` None, ``verify_drift_deg_h`` / ``verify_nmi`` empty, ``verified`` False.
+    threads : int, optional
+        Threads of each read (`navigate_after_alignment`; 1 = all on the calling thread).
     chunk_samples, quiet
         Read size and progress switch.
 
@@ -222,6 +231,7 @@ def find_true_drift(
         hours,
         decimation_s=decimation_s,
         temperature_hours=temperature_hours,
+        threads=threads,
         chunk_samples=chunk_samples,
         quiet=quiet,
         desc="truth pass 1",
@@ -233,7 +243,10 @@ def find_true_drift(
     ref_d, ref_n, ref_e = 0.0, c0.north_m, c0.east_m  # the linearisation point and its curves
     d_star = minimise_linear_criterion(ref_n, ref_e, gn, ge, criterion)
     refinements = 0
-    while True:
+    step = math.nan
+    verify_d = verify_nmi = np.zeros(0)
+    second: PassResult | None = None
+    while verify:
         verify_d = np.array([d_star - step_deg_h, d_star, d_star + step_deg_h])
         second = navigate_after_alignment(
             log,
@@ -241,6 +254,7 @@ def find_true_drift(
             list(verify_d),
             hours,
             decimation_s=decimation_s,
+            threads=threads,
             chunk_samples=chunk_samples,
             quiet=quiet,
             desc="truth verify",
@@ -255,8 +269,10 @@ def find_true_drift(
             break
         d_star += step
         refinements += 1
-    verify_nmi = np.array([float(criterion_value(c.north_m, c.east_m, criterion)) for c in second.curves])
-    verified = bool(verify_nmi[1] <= verify_nmi[0] and verify_nmi[1] <= verify_nmi[2])
+    verified = False
+    if second is not None:
+        verify_nmi = np.array([float(criterion_value(c.north_m, c.east_m, criterion)) for c in second.curves])
+        verified = bool(verify_nmi[1] <= verify_nmi[0] and verify_nmi[1] <= verify_nmi[2])
     grid = d_star + np.linspace(-grid_half_width_deg_h, grid_half_width_deg_h, grid_points)
     off = grid - ref_d
     # One curve at a time: the (grid_points, samples) matrix would cost memory in proportion to the hours.
@@ -300,7 +316,8 @@ def find_true_drift(
         last_step_deg_h=float(step),
         alignment=alignment,
         base=c0,
-        optimum=mid,
+        optimum=None if second is None else second.curves[1],
+        trial=c1,
         temperature=first.temperature,
         drift_std_deg_h=sigma,
         flagged=flagged,

@@ -1,0 +1,82 @@
+"""Cost of `DriftModel.predict`'s arithmetic (the generated code's operations, compensated sum) against numpy's.
+
+    python benchmarks/bench_predict.py [--rows 1,1000,100000] [--train 22,200,1000] [--repeat 5]
+
+`DriftModel.predict` computes each kernel value with the operations of the exported C/Rust (distances summed over
+the features in order, the C library's ``exp`` through ``math.exp``) and sums ``b + sum_i alpha_i K_i + physics``
+with TwoSum in support-vector order (`gyrodrift.lssvr`, "prediction arithmetic"). The reference, in the same run:
+the same pipeline with numpy's kernel (scipy's distances, numpy's SIMD ``exp``) summed by BLAS, ``K @ alpha + b +
+physics``, which is what predict did before. Models: hybrids on the 12 h inversion (the default of `gyrodrift
+fit`) fitted on `--train` synthetic runs from three sites; rows drawn over the training range. CPU time
+(``time.process_time``, best of `--repeat`), so that other jobs on the machine matter less. Only reports.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from gyrodrift.kernels import kernel_matrix
+from gyrodrift.model import fit_drift_model, physics_estimate
+from gyrodrift.runs import RunTable
+
+
+def synthetic_runs(n: int, rng: np.random.Generator) -> RunTable:
+    """``n`` runs at three sites, drift from the latitude error and the temperatures [deg/h]."""
+    lat0 = rng.choice([20.5, 34.1, 51.3], n)
+    err = rng.uniform(-120.0, 120.0, n)
+    tmin = rng.uniform(10.0, 50.0, n)
+    tmax = tmin + rng.uniform(0.5, 8.0, n)
+    drift = 0.01 * np.sin(err / 60.0) + 0.002 * (tmin + tmax - 60.0) / 40.0 + rng.normal(0.0, 3e-4, n)
+    return RunTable(
+        run=np.array([f"r{i}" for i in range(n)]),
+        lat_deg=lat0 + err / 3600.0,
+        lat0_deg=lat0,
+        temp_min_c=tmin,
+        temp_max_c=tmax,
+        drift_deg_h=drift,
+        source="bench",
+    )
+
+
+def numpy_predict(model, runs: RunTable) -> np.ndarray:
+    """The reference: numpy's kernel summed by BLAS, plus the physics estimate."""
+    est = model.lssvr
+    K = kernel_matrix(model[:-1].transform(runs), est.X_fit_, kernel=est.kernel, sigma=est.sigma)
+    return K @ est.alpha_ + est.intercept_ + physics_estimate(runs, model.physics_column)
+
+
+def cpu_seconds(fn, repeat: int) -> float:
+    best = float("inf")
+    for _ in range(repeat):
+        start = time.process_time()
+        fn()
+        best = min(best, time.process_time() - start)
+    return best
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--rows", default="1,1000,100000", help="rows predicted per call, comma-separated")
+    parser.add_argument("--train", default="22,200,1000", help="training runs (support vectors), comma-separated")
+    parser.add_argument("--repeat", type=int, default=5)
+    args = parser.parse_args()
+    rng = np.random.default_rng(1)
+    print("training runs, rows: predict [s CPU], numpy kernel + BLAS [s CPU], ratio; max |diff| / |predict|")
+    for n_train in (int(v) for v in args.train.split(",")):
+        model = fit_drift_model(
+            synthetic_runs(n_train, rng), encoding="physics", target="residual", gamma=100.0, sigma=0.7
+        )
+        for n_rows in (int(v) for v in args.rows.split(",")):
+            rows = synthetic_runs(n_rows, rng)
+            ours = cpu_seconds(lambda m=model, r=rows: m.predict(r), args.repeat)
+            ref = cpu_seconds(lambda m=model, r=rows: numpy_predict(m, r), args.repeat)
+            pred = model.predict(rows)
+            diff = float(np.max(np.abs(pred - numpy_predict(model, rows)) / np.abs(pred)))
+            print(f"{n_train:6d} {n_rows:7d}: {ours:.3g} {ref:.3g} {ours / ref:5.1f}x; {diff:.2g}")
+
+
+if __name__ == "__main__":
+    main()
