@@ -23,8 +23,9 @@ drift (one read, one navigator per method). Methods:
 * hybrid (the default of ``gyrodrift fit``): 12 h inversion + LSSVR correction learnt on label - inversion;
 * hybrid on the curve fit: the same with the curve fit as its physics column;
 * 16 h Kalman smoother (`gyrodrift.procedure.smoother`): forward filter + RTS over alignment + 12 h with zero
-  velocity and the known position, its +-1.645 sigma as the interval; and the hybrid on it (the smoother as the
-  physics column). Its reported 1-sigma is the physical limit of these 16 h: every method's held-out RMS is also
+  velocity and the known position, its thermal model (drift = eps_z + k_z (T - T_ref), T the log's temperature)
+  reporting the drift at the end of the 16 h, its +-1.645 sigma as the interval; and the hybrid on it (that
+  end-of-span drift as the physics column). Its reported 1-sigma is the physical limit of these 16 h: every method's held-out RMS is also
   given as a ratio to it (the rms of the held-out runs' sigmas).
 
 Labels carry their 1-sigma (``truth``'s covariance analysis, ``drift_std_deg_h``), so the models are fitted as
