@@ -15,7 +15,9 @@ its 1-sigma. Two references:
 * the 72 h effective drift, ``truth`` (final) of the run's noise-free twin over the 72 h navigation: what the
   system needs (the temperature keeps changing after the 16 h, so this z-score also holds the model's gap).
 
-The same z-scores for the constant-drift estimate (the thermal state conditioned on k_z = 0) beside them.
+The same z-scores for the constant-drift estimate (the thermal state conditioned on k_z = 0) beside them, and for
+the end drift with a fleet prior on k_z (`fleet_coefficient_prior` of the other seeds' estimates, leave one out;
+`SmootherEstimate.end_drift_with_coefficient_prior`).
 Only reports; never fails on a slow machine.
 """
 
@@ -31,6 +33,7 @@ import numpy as np
 from gyrodrift.ins.scenario import Scenario
 from gyrodrift.logs import ImuLog
 from gyrodrift.procedure import find_true_drift, smooth_log
+from gyrodrift.procedure.smoother import fleet_coefficient_prior
 
 K1 = 0.0002
 T0 = 28.0
@@ -93,6 +96,7 @@ def one(args: tuple[int, float]) -> dict:
         "k_std": est.thermal_coeff_std_deg_h_per_c,
         "end": spec["constant_deg_h"] + K1 * (temp_end - T0),
         "effective": effective,
+        "estimate": est,
     }
 
 
@@ -113,7 +117,14 @@ def main() -> None:
             rows = list(pool.map(one, jobs))
     else:
         rows = [one(j) for j in jobs]
-    col = {k: np.array([r[k] for r in rows]) for k in rows[0] if k != "model"}
+    col = {k: np.array([r[k] for r in rows]) for k in rows[0] if k not in ("model", "estimate")}
+    ests = [r["estimate"] for r in rows]
+    fleet = []
+    for i, e in enumerate(ests):
+        mean, std = fleet_coefficient_prior(ests[:i] + ests[i + 1 :])
+        fleet.append(e.end_drift_with_coefficient_prior(mean, std))
+    col["fleet"] = np.array([f[0] for f in fleet])
+    col["fleet_std"] = np.array([f[1] for f in fleet])
     models = [r["model"] for r in rows]
     print(
         f"{args.seeds} seeds at {args.rate_hz:g} Hz, 16 h smoother; models reported: {models.count('thermal')} thermal"
@@ -124,6 +135,8 @@ def main() -> None:
         "constant model vs simulated end drift": (col["const"] - col["end"]) / col["const_std"],
         "constant model vs 72 h effective drift": (col["const"] - col["effective"]) / col["const_std"],
         "k_z vs simulated k1": (col["k"] - K1) / col["k_std"],
+        "fleet-prior end drift vs simulated end drift": (col["fleet"] - col["end"]) / col["fleet_std"],
+        "fleet-prior end drift vs 72 h effective drift": (col["fleet"] - col["effective"]) / col["fleet_std"],
     }
     for name, v in z.items():
         print(f"  z-score rms {rms(v):5.2f}  mean {np.mean(v):+5.2f}  {name}")
@@ -134,6 +147,10 @@ def main() -> None:
     print(
         f"  constant: rms error vs end {rms(col['const'] - col['end']):.2e}, vs effective "
         f"{rms(col['const'] - col['effective']):.2e}, reported 1-sigma (rms) {rms(col['const_std']):.2e} deg/h"
+    )
+    print(
+        f"  fleet k_z prior: rms error vs end {rms(col['fleet'] - col['end']):.2e}, vs effective "
+        f"{rms(col['fleet'] - col['effective']):.2e}, reported 1-sigma (rms) {rms(col['fleet_std']):.2e} deg/h"
     )
     print(
         f"  k_z: mean {np.mean(col['k']):.2e}, spread {np.std(col['k']):.2e}, reported 1-sigma (rms) "

@@ -25,8 +25,10 @@ drift (one read, one navigator per method). Methods:
 * 16 h Kalman smoother (`gyrodrift.procedure.smoother`): forward filter + RTS over alignment + 12 h with zero
   velocity and the known position, its thermal model (drift = eps_z + k_z (T - T_ref), T the log's temperature)
   reporting the drift at the end of the 16 h, its +-1.645 sigma as the interval; and the hybrid on it (that
-  end-of-span drift as the physics column). Its reported 1-sigma is the physical limit of these 16 h: every method's held-out RMS is also
-  given as a ratio to it (the rms of the held-out runs' sigmas).
+  end-of-span drift as the physics column). Its reported 1-sigma is the physical limit of these 16 h: every
+  method's held-out RMS is also given as a ratio to it (the rms of the held-out runs' sigmas);
+* 16 h smoother, fleet k_z prior: the smoother's end drift re-weighted with the training runs' pooled k_z as the
+  prior of the coefficient (`fleet_coefficient_prior`, `SmootherEstimate.end_drift_with_coefficient_prior`).
 
 Labels carry their 1-sigma (``truth``'s covariance analysis, ``drift_std_deg_h``), so the models are fitted as
 weighted LS-SVMs (`gyrodrift fit` does the same with such a table).
@@ -51,6 +53,7 @@ from gyrodrift.ins.scenario import Scenario
 from gyrodrift.logs import ImuLog
 from gyrodrift.model import fit_drift_model
 from gyrodrift.procedure import align_log, extract_features, find_true_drift, navigate_after_alignment, smooth_log
+from gyrodrift.procedure.smoother import fleet_coefficient_prior
 from gyrodrift.runs import RunTable
 from gyrodrift.tuning import SearchBoundWarning
 
@@ -142,6 +145,7 @@ def measure_run(spec: dict) -> dict:
         "drift_smoother_deg_h": f.drift_smoother_deg_h,
         "drift_smoother_std_deg_h": f.drift_smoother_std_deg_h,
         "drift_std_deg_h": f.drift_std_deg_h,
+        "smoother_estimate": f.smoother,
     }
     if spec["held_out"]:
         twin = scenario(spec, noise=False, rate_hz=spec["rate_hz"], k1=spec["k1"])
@@ -221,7 +225,7 @@ def run_study(
     rows = _map(measure_run, specs, workers)
     if not quiet:
         print(f"simulated and measured {len(rows)} runs in {time.perf_counter() - t_start:.0f} s", flush=True)
-    records = [{k: v for k, v in r.items() if k != "effective_deg_h"} for r in rows]
+    records = [{k: v for k, v in r.items() if k not in ("effective_deg_h", "smoother_estimate")} for r in rows]
     table = RunTable.from_records(records, source="simulated fleet")
     train, test = table.select(np.arange(n_train)), table.select(np.arange(n_train, n_train + n_test))
     effective = np.array([r["effective_deg_h"] for r in rows[n_train:]])
@@ -255,6 +259,11 @@ def run_study(
     methods["12 h curve fit"] = {"pred": cf, "lo": cf - z90 * cf_std, "hi": cf + z90 * cf_std}
     sm, sm_std = test.column("drift_smoother_deg_h"), test.column("drift_smoother_std_deg_h")
     methods["16 h Kalman smoother"] = {"pred": sm, "lo": sm - z90 * sm_std, "hi": sm + z90 * sm_std}
+    # The smoother's end drift with the training runs' k_z as its prior (what the fleet knows of the coefficient).
+    fleet_prior = fleet_coefficient_prior([r["smoother_estimate"] for r in rows[:n_train]])
+    fleet = np.array([r["smoother_estimate"].end_drift_with_coefficient_prior(*fleet_prior) for r in rows[n_train:]])
+    fp, fp_std = fleet[:, 0], fleet[:, 1]
+    methods["16 h smoother, fleet k_z prior"] = {"pred": fp, "lo": fp - z90 * fp_std, "hi": fp + z90 * fp_std}
     names = list(methods)
     held_specs = specs[n_train:]
     nav = _map(
@@ -303,6 +312,7 @@ def run_study(
         results["methods"][name] = entry
     results["label_error_rms"] = float(np.sqrt(np.mean((test.drift_deg_h - effective) ** 2)))
     results["smoother_sigma_rms"] = float(np.sqrt(np.mean(sm_std**2)))
+    results["fleet_prior"] = (*fleet_prior, float(np.sqrt(np.mean(fp_std**2))))
     results["label_sigma_rms"] = float(np.sqrt(np.mean(test.column("drift_std_deg_h") ** 2)))
     if four_latitudes:
         four = four_latitude_features(rate_hz)
@@ -346,6 +356,11 @@ def print_report(r: dict) -> None:
         f"(truth's covariance analysis): {r['label_sigma_rms']:.2e} deg/h (observed {r['label_error_rms']:.2e})"
     )
     print(f"default held-out RMS / smoother's sigma: {default / limit:.2f} (target <= 1.3)")
+    k_mean, k_std, fp_sigma = r["fleet_prior"]
+    print(
+        f"fleet k_z prior from the training runs' smoothers: {k_mean:.2e} +- {k_std:.2e} deg/h/degC; the smoother's "
+        f"1-sigma with it (rms over the held-out runs): {fp_sigma:.2e} deg/h"
+    )
     print("held-out RMS (vs effective drift) / smoother's sigma:")
     for name, m in r["methods"].items():
         print(f"  {name:38s} {m['rms_eff'] / limit:5.2f}")

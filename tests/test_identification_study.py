@@ -27,6 +27,8 @@ def test_study_runs_and_reports(study, capsys):
     assert "16 h Kalman smoother" in out and "smoother's sigma" in out
     smoother = r["methods"]["16 h Kalman smoother"]
     assert 0 < r["smoother_sigma_rms"] < smoother["max_eff"] + 1e-3
+    # The fleet's k_z as the coefficient's prior narrows the smoother's end-drift 1-sigma.
+    assert "fleet k_z prior" in out and 0 < r["fleet_prior"][2] < r["smoother_sigma_rms"]
     assert r["n_train"] == 8 and r["n_test"] == 4 and int(np.sum(r["out_of_range"])) >= 2
     for m in r["methods"].values():
         assert 0 <= m["under_1nmi"] <= 4 and np.all(np.isfinite(m["final_nmi"]))

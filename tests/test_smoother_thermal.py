@@ -8,13 +8,15 @@ seeds (the 30-seed runs at full size are in benchmarks/bench_smoother_thermal.py
 """
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
+from gyrodrift.errors import InputError
 from gyrodrift.ins.scenario import Scenario
 from gyrodrift.logs import ImuLog, LogError
-from gyrodrift.procedure.smoother import smooth_log
+from gyrodrift.procedure.smoother import fleet_coefficient_prior, smooth_log
 
 RLG = {"arw_deg_rth": 0.0005, "vrw_ug_rthz": 5.0}
 K1 = 0.0002
@@ -103,3 +105,38 @@ def test_end_of_span_z_scores_over_a_few_seeds():
         z.append((est.navigation_drift_deg_h - end_drift(s, 8.0)) / est.navigation_drift_std_deg_h)
     rms = float(np.sqrt(np.mean(np.square(z))))
     assert 0.3 < rms < 2.0, (rms, z)
+
+
+def test_a_coefficient_prior_reweights_the_end_drift_exactly():
+    log = ImuLog.from_scenario(warm_up(noise=RLG, seed=6))
+    est = smooth_log(log, hours=8.0)
+    # The filter's own prior gives the end drift back; a prior pinning k_z to 0 gives the constant model.
+    d, s = est.end_drift_with_coefficient_prior(0.0, est.thermal_prior_std_deg_h_per_c)
+    assert d == pytest.approx(est.drift_end_deg_h, abs=1e-12) and s == pytest.approx(est.drift_end_std_deg_h)
+    d0, s0 = est.end_drift_with_coefficient_prior(0.0, 1e-9)
+    assert d0 == pytest.approx(est.drift_deg_h, abs=1e-3 * est.drift_std_deg_h)
+    assert s0 == pytest.approx(est.drift_std_deg_h, rel=1e-3)
+    # Pinned at the simulated k1: the end drift of the data's constant at that slope, nearer the truth on average.
+    d1, s1 = est.end_drift_with_coefficient_prior(K1, 1e-9)
+    assert s1 < est.drift_end_std_deg_h and abs(d1 - end_drift(warm_up(seed=6), 8.0)) < 4 * s1
+    with pytest.raises(InputError, match="k_z prior"):
+        est.end_drift_with_coefficient_prior(0.0, 0.0)
+    # The constant model ignores it.
+    flat = smooth_log(log, hours=8.0, thermal=False)
+    assert flat.end_drift_with_coefficient_prior(K1, 1e-5) == (flat.drift_deg_h, flat.drift_std_deg_h)
+
+
+def test_fleet_coefficient_prior_is_the_random_effects_mean():
+    est = smooth_log(ImuLog.from_scenario(warm_up(seed=7, hours=6.0, rate=2.0)), hours=6.0)
+
+    def with_k(k, s):
+        return replace(est, thermal_coeff_deg_h_per_c=k, thermal_coeff_std_deg_h_per_c=s)
+
+    # Scatter as the sigmas say: no between-unit spread, the pooled mean's own 1-sigma.
+    mean, std = fleet_coefficient_prior([with_k(1e-4, 1e-4), with_k(2e-4, 1e-4), with_k(3e-4, 1e-4)])
+    assert mean == pytest.approx(2e-4) and std == pytest.approx(1e-4 / math.sqrt(3))
+    # Ten times the scatter: tau^2 = (Q - 2) / (sum w - sum w^2 / sum w) adds the unit-to-unit spread.
+    mean, std = fleet_coefficient_prior([with_k(0.0, 1e-4), with_k(1e-3, 1e-4), with_k(2e-3, 1e-4)])
+    assert mean == pytest.approx(1e-3) and std == pytest.approx(math.sqrt(1e-8 / 3 + (200 - 2) / 2e8))
+    with pytest.raises(InputError, match="at least 2"):
+        fleet_coefficient_prior([with_k(1e-4, 1e-4), replace(est, model="constant")])

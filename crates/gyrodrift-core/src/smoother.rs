@@ -44,8 +44,8 @@
 //!   C_k = P_{k|k} Phi_k' P_{k+1|k}^-1,  x_{k|N} = x_{k|k} + C_k (x_{k+1|N} - x_{k+1|k}),
 //!   P_{k|N} = P_{k|k} + C_k (P_{k+1|N} - P_{k+1|k}) C_k'
 //! (the usual RTS recursion; the known input shifts the prediction and the smoothed mean alike). The total z
-//! drift at update k is the navigator's z bias before that update plus the smoothed eps_z (+ b_gm,z + b_rrw,z,
-//! + k_z (T_k - T_ref) under the thermal model).
+//! drift at update k is the navigator's z bias before that update plus the smoothed eps_z (+ b_gm,z + b_rrw,z;
+//! plus k_z (T_k - T_ref) under the thermal model).
 //! P_{k+1|k}^-1 is applied through a Cholesky factor of its correlation matrix (states span 1e-24 to 1e-6 in
 //! their SI variances).
 
@@ -442,6 +442,11 @@ pub struct SmootherResult {
     pub drift_ref_std: f64,
     pub thermal_coeff: f64,
     pub thermal_coeff_std: f64,
+    /// Covariance of the thermal model's end drift eps_z + k_z (T_end - T_ref) (+ b_gm,z + b_rrw,z) with k_z
+    /// [rad^2/s^2/degC] (NaN without the state): with `drift_end_std` under the thermal model and
+    /// `thermal_coeff_std`, the joint covariance of the two, e.g. to condition the end drift on another prior of
+    /// k_z.
+    pub end_coeff_cov: f64,
     pub temp_ref: f64,
     pub temp_end: f64,
     pub temp_range: f64,
@@ -877,6 +882,12 @@ impl Forward {
             };
         record(m - 1, last, &xs, &ps, &mut hist);
         let (drift_end, drift_end_std) = total(last, &xs, &ps);
+        // Covariance of the thermal model's end drift with k_z (unconditioned; the last step's smoothed = filtered P).
+        let end_coeff_cov = k_th.map_or(f64::NAN, |k| {
+            let mut a = e_total.clone();
+            a[k] = last.dtemp;
+            (&ps * a)[k]
+        });
         let diverged = |message: &str| CoreError::Diverged {
             key: "dv_m_s",
             t_s: t_end,
@@ -926,6 +937,7 @@ impl Forward {
             drift_ref_std,
             thermal_coeff,
             thermal_coeff_std,
+            end_coeff_cov,
             temp_ref: some(self.temp_ref),
             temp_end: some(self.temp_last),
             temp_range: some(temp_range),

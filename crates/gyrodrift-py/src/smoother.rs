@@ -229,6 +229,7 @@ impl Smoother {
         d.set_item("drift_ref_std_rad_s", r.drift_ref_std)?;
         d.set_item("thermal_coeff_rad_s_per_c", r.thermal_coeff)?;
         d.set_item("thermal_coeff_std_rad_s_per_c", r.thermal_coeff_std)?;
+        d.set_item("end_coeff_cov_rad2_s2_per_c", r.end_coeff_cov)?;
         d.set_item("temp_ref_c", r.temp_ref)?;
         d.set_item("temp_end_c", r.temp_end)?;
         d.set_item("temp_range_c", r.temp_range)?;

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from gyrodrift.earth import NMI_M
+from gyrodrift.errors import InputError
 from gyrodrift.site import Site
 from gyrodrift.units import DEG, DEG_PER_H, MICRO_G
 
@@ -571,6 +572,10 @@ class SmootherEstimate:
     temp_ref_c, temp_end_c, temp_range_c : float
         T_ref, the temperature at the end of the span and its range after the coarse alignment [degC] (NaN
         without the thermal state).
+    end_coeff_cov : float
+        Covariance of the thermal model's end drift with k_z [(deg/h)^2/degC] (NaN without the thermal state).
+    thermal_prior_std_deg_h_per_c : float
+        The filter's prior 1-sigma of k_z (mean 0) [deg/h/degC] (NaN without the thermal state).
     gyro_bias_deg_h, gyro_bias_std_deg_h : tuple of 3 floats
         Constant gyro biases, body x y z, and their 1-sigma [deg/h].
     accel_bias_ug, accel_bias_std_ug : tuple of 3 floats
@@ -600,6 +605,8 @@ class SmootherEstimate:
     temp_ref_c: float
     temp_end_c: float
     temp_range_c: float
+    end_coeff_cov: float
+    thermal_prior_std_deg_h_per_c: float
     gyro_bias_deg_h: tuple[float, float, float]
     gyro_bias_std_deg_h: tuple[float, float, float]
     accel_bias_ug: tuple[float, float, float]
@@ -625,6 +632,31 @@ class SmootherEstimate:
         """1-sigma of `navigation_drift_deg_h` [deg/h]."""
         return self.drift_end_std_deg_h if self.model == "thermal" else self.drift_std_deg_h
 
+    def end_drift_with_coefficient_prior(self, mean_deg_h_per_c: float, std_deg_h_per_c: float) -> tuple[float, float]:
+        """The end-of-span drift and its 1-sigma [deg/h] with another prior on k_z, N(mean, std^2) [deg/h/degC]
+        (e.g. a fleet's coefficient, `fleet_coefficient_prior`) in place of the filter's N(0, prior std^2).
+
+        Exact for the linear-Gaussian model: the joint posterior of (end drift d, k_z) is re-weighted by the ratio
+        of the two priors. With V_k, c = cov(d, k_z), the new k_z precision is
+        ``L = 1/V_k - 1/s0^2 + 1/std^2`` and mean ``k* = (k/V_k + mean/std^2) / L``; then
+        ``d* = d + (c/V_k)(k* - k)``, ``var = V_d - c^2/V_k + (c/V_k)^2 / L``. Under the constant model (no
+        thermal state, or a temperature that did not vary) the navigation drift is returned unchanged.
+        """
+        if self.model != "thermal":
+            return self.navigation_drift_deg_h, self.navigation_drift_std_deg_h
+        if not (math.isfinite(mean_deg_h_per_c) and math.isfinite(std_deg_h_per_c) and std_deg_h_per_c > 0.0):
+            raise InputError(
+                f"a k_z prior needs a finite mean and a positive finite 1-sigma, got {mean_deg_h_per_c!r}, "
+                f"{std_deg_h_per_c!r} deg/h/degC"
+            )
+        vk = self.thermal_coeff_std_deg_h_per_c**2
+        lever = self.end_coeff_cov / vk
+        precision = 1.0 / vk - 1.0 / self.thermal_prior_std_deg_h_per_c**2 + 1.0 / std_deg_h_per_c**2
+        k_new = (self.thermal_coeff_deg_h_per_c / vk + mean_deg_h_per_c / std_deg_h_per_c**2) / precision
+        drift = self.drift_end_deg_h + lever * (k_new - self.thermal_coeff_deg_h_per_c)
+        var = self.drift_end_std_deg_h**2 - lever * self.end_coeff_cov + lever**2 / precision
+        return drift, math.sqrt(max(var, 0.0))
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary (user units; the history as lists; NaN as null)."""
 
@@ -649,6 +681,7 @@ class SmootherEstimate:
             "temp_ref_c": num(self.temp_ref_c),
             "temp_end_c": num(self.temp_end_c),
             "temp_range_c": num(self.temp_range_c),
+            "end_coeff_cov": num(self.end_coeff_cov),
             "gyro_bias_deg_h": list(self.gyro_bias_deg_h),
             "gyro_bias_std_deg_h": list(self.gyro_bias_std_deg_h),
             "accel_bias_ug": list(self.accel_bias_ug),

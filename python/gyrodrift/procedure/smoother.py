@@ -22,11 +22,13 @@ exactly the posterior of the model without it).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import math
+from collections.abc import Iterable, Mapping
 from typing import Any
 
 import numpy as np
 
+from gyrodrift.errors import InputError
 from gyrodrift.logs import ImuLog, LogError
 from gyrodrift.procedure.noise import SensorNoise, estimate_white_noise
 from gyrodrift.procedure.results import SmootherEstimate
@@ -34,7 +36,7 @@ from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 from gyrodrift.progress import progress
 from gyrodrift.units import ARCSEC, DEG, DEG_PER_H, HOUR, MICRO_G
 
-__all__ = ["smooth_log"]
+__all__ = ["smooth_log", "fleet_coefficient_prior"]
 
 
 def smooth_log(
@@ -105,7 +107,8 @@ def smooth_log(
     }
     config.update(dict(options or {}))
     with log.core_errors():  # the core's refusals name the log
-        sm = _core.Smoother(_core.SmootherConfig(**config))
+        sm_config = _core.SmootherConfig(**config)
+        sm = _core.Smoother(sm_config)
         with progress(int(sm.n_samples), f"smooth {log.name}", quiet) as bar:
             for chunk in log.chunks(chunk_samples, stop=int(sm.n_samples)):
                 temp = np.ascontiguousarray(chunk.temp_c, dtype=float) if thermal and chunk.temp_c is not None else None
@@ -134,6 +137,10 @@ def smooth_log(
         temp_ref_c=float(r["temp_ref_c"]),
         temp_end_c=float(r["temp_end_c"]),
         temp_range_c=float(r["temp_range_c"]),
+        end_coeff_cov=float(r["end_coeff_cov_rad2_s2_per_c"]) / DEG_PER_H**2,
+        thermal_prior_std_deg_h_per_c=(
+            float(sm_config.thermal_sigma_rad_s_per_c) / DEG_PER_H if sm_config.thermal else math.nan
+        ),
         gyro_bias_deg_h=vec("gyro_bias_rad_s", DEG_PER_H),
         gyro_bias_std_deg_h=vec("gyro_bias_std_rad_s", DEG_PER_H),
         accel_bias_ug=vec("accel_bias_m_s2", MICRO_G),
@@ -148,3 +155,29 @@ def smooth_log(
         max_position_error_m=float(r["max_position_error_m"]),
         updates=int(r["updates"]),
     )
+
+
+def fleet_coefficient_prior(estimates: Iterable[SmootherEstimate]) -> tuple[float, float]:
+    """A prior for one more unit's thermal coefficient k_z from a fleet's smoother estimates [deg/h/degC].
+
+    The random-effects pooled mean of the runs' k_z (weights 1 / sigma_i^2; DerSimonian-Laird between-unit
+    variance tau^2 = max(0, (Q - (n - 1)) / (sum w - sum w^2 / sum w)), Q the weighted squared deviations) and
+    the 1-sigma of a new unit's k_z about it, ``sqrt(1 / sum w + tau^2)`` (the pooled mean's own uncertainty plus
+    the unit-to-unit spread). Runs without the thermal model are left out; `InputError` with fewer than two.
+    Use with `SmootherEstimate.end_drift_with_coefficient_prior`.
+    """
+    pairs = [
+        (e.thermal_coeff_deg_h_per_c, e.thermal_coeff_std_deg_h_per_c)
+        for e in estimates
+        if e.model == "thermal"
+        and math.isfinite(e.thermal_coeff_std_deg_h_per_c)
+        and e.thermal_coeff_std_deg_h_per_c > 0
+    ]
+    if len(pairs) < 2:
+        raise InputError(f"a fleet prior of k_z needs at least 2 runs with the thermal model, got {len(pairs)}")
+    k = np.array([p[0] for p in pairs])
+    w = 1.0 / np.array([p[1] for p in pairs]) ** 2
+    mean = float(np.sum(w * k) / np.sum(w))
+    q = float(np.sum(w * (k - mean) ** 2))
+    tau2 = max(0.0, (q - (len(k) - 1)) / float(np.sum(w) - np.sum(w**2) / np.sum(w)))
+    return mean, math.sqrt(1.0 / float(np.sum(w)) + tau2)
