@@ -87,6 +87,8 @@ NOISE_KEYS = {
 }
 """Noise-grade keys and the scenario section each sets; the noise-free twin sets every one but correlation_s to 0."""
 TWIN_OFF = ("arw_deg_rth", "bias_instability_deg_h", "rrw_deg_h_rth", "vrw_ug_rthz")
+BOOL_COLUMNS = ("truth_verified", "label_flagged")
+"""The yes/no columns of a run (empty when unknown)."""
 STAGES = ("align", "passes", "smoother", "twin")
 """The timed stages of a run (columns ``t_STAGE_s`` wall and ``cpu_STAGE_s`` CPU seconds, and ``_total``)."""
 TIMELINE_KEYS = ("align_h", "features_h", "truth_h")
@@ -638,7 +640,7 @@ def _schema(campaign: Campaign):
             "hours_truth",
         )
     ]
-    fields += [("truth_verified", pa.bool_()), ("label_flagged", pa.bool_())]
+    fields += [(c, pa.bool_()) for c in BOOL_COLUMNS]
     fields += [(f"{k}_{c}_s", f64) for k in ("t", "cpu") for c in STAGES + ("total",)]
     fields += [("error", s), ("smoother_error", s), ("worker", s)]
     fields += [(c, pa.list_(pa.float32())) for c in CURVE_COLUMNS]
@@ -833,7 +835,9 @@ def run_table(runs: CampaignRuns, source: str = "<campaign>"):
     records = []
     for i, run in enumerate(ok["run"]):
         rec: dict[str, Any] = {"run": str(run)}
-        rec.update({k: float(v[i]) for k, v in num.items() if k in base or math.isfinite(v[i])})
+        for k, v in num.items():  # a flag (a bool column of the store) stays a bool
+            if k in base or math.isfinite(v[i]):
+                rec[k] = bool(v[i]) if k in BOOL_COLUMNS else float(v[i])
         records.append(rec)
     return RunTable.from_records(records, source=source)
 
