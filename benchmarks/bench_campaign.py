@@ -255,6 +255,8 @@ def cluster(campaign, n_runs: int, warm) -> dict:
         rows = read_runs(folder, curves=False)
         out[f"{workers}w_cpu_per_run_s"] = float(np.mean(rows.numbers("cpu_total_s")))
         out[f"{workers}w_wall_per_run_s"] = float(np.mean(rows.numbers("t_total_s")))
+        # the share of the wall time the workers spent inside runs: 1 = no worker waited for the client
+        out[f"{workers}w_busy"] = float(np.sum(rows.numbers("t_total_s"))) / (workers * out[f"{workers}w_s"])
         folders[workers] = folder
     a, b = read_runs(folders[1]), read_runs(folders[2])
     assert a.curves is not None and b.curves is not None
@@ -388,7 +390,8 @@ def main() -> None:
         print(
             f"  per run in the workers: CPU {r['1w_cpu_per_run_s']:.3f} s (1 worker) / {r['2w_cpu_per_run_s']:.3f} s "
             f"(2 workers), wall {r['1w_wall_per_run_s']:.3f} s / {r['2w_wall_per_run_s']:.3f} s; cluster start "
-            f"{r['1w_start_s']:.1f} s / {r['2w_start_s']:.1f} s (not timed); load average now {load()}"
+            f"{r['1w_start_s']:.1f} s / {r['2w_start_s']:.1f} s (not timed); workers busy inside runs "
+            f"{r['1w_busy']:.0%} / {r['2w_busy']:.0%} of the wall time; load average now {load()}"
         )
     if not args.skip_memory:
         for m in memory(args.campaign, [float(h) for h in args.memory_hours.split(",")]):

@@ -87,6 +87,8 @@ NOISE_KEYS = {
 }
 """Noise-grade keys and the scenario section each sets; the noise-free twin sets every one but correlation_s to 0."""
 TWIN_OFF = ("arw_deg_rth", "bias_instability_deg_h", "rrw_deg_h_rth", "vrw_ug_rthz")
+BOOL_COLUMNS = ("truth_verified", "label_flagged")
+"""The yes/no columns of a run (empty when unknown)."""
 STAGES = ("align", "passes", "smoother", "twin")
 """The timed stages of a run (columns ``t_STAGE_s`` wall and ``cpu_STAGE_s`` CPU seconds, and ``_total``)."""
 TIMELINE_KEYS = ("align_h", "features_h", "truth_h")
@@ -184,6 +186,7 @@ class Campaign:
         scenario.setdefault("run", {})["seed"] = seed
         params: dict[str, Any] = {}
         grade = None
+        defaults = self.base_defaults()
         for name in self.param_names:
             value = self.vary[name].sample(rng)
             params[name] = value
@@ -192,7 +195,7 @@ class Campaign:
                 for key, v in self.grades[grade].items():
                     scenario.setdefault(NOISE_KEYS[key], {})[key] = v
             else:
-                _set_path(scenario, name, value, self.base_defaults())
+                _set_path(scenario, name, value, defaults)
         return RunSpec(index, run_id(index), seed, params, grade, scenario)
 
     def base_defaults(self) -> dict[str, dict[str, Any]]:
@@ -638,7 +641,7 @@ def _schema(campaign: Campaign):
             "hours_truth",
         )
     ]
-    fields += [("truth_verified", pa.bool_()), ("label_flagged", pa.bool_())]
+    fields += [(c, pa.bool_()) for c in BOOL_COLUMNS]
     fields += [(f"{k}_{c}_s", f64) for k in ("t", "cpu") for c in STAGES + ("total",)]
     fields += [("error", s), ("smoother_error", s), ("worker", s)]
     fields += [(c, pa.list_(pa.float32())) for c in CURVE_COLUMNS]
@@ -833,7 +836,9 @@ def run_table(runs: CampaignRuns, source: str = "<campaign>"):
     records = []
     for i, run in enumerate(ok["run"]):
         rec: dict[str, Any] = {"run": str(run)}
-        rec.update({k: float(v[i]) for k, v in num.items() if k in base or math.isfinite(v[i])})
+        for k, v in num.items():  # a flag (a bool column of the store) stays a bool
+            if k in base or math.isfinite(v[i]):
+                rec[k] = bool(v[i]) if k in BOOL_COLUMNS else float(v[i])
         records.append(rec)
     return RunTable.from_records(records, source=source)
 
@@ -956,6 +961,41 @@ def _terminate_workers(pool: concurrent.futures.ProcessPoolExecutor) -> None:
         proc.terminate()
 
 
+def _pool_round(pool, campaign, queue, workers: int, on_row, interrupts: _Interrupts, finished: set[int]) -> None:
+    """Hand out the runs of `queue` to `pool`, at most `workers` at a time, committing each as it finishes
+    (into `finished`); returns when all are done or a first Ctrl-C has let the runs in progress finish.
+    BrokenProcessPool when a worker died (the runs of the batch that did finish are committed first)."""
+    running: dict[concurrent.futures.Future, int] = {}
+    interrupts.in_progress = running.__len__
+
+    def refill() -> None:
+        while queue and len(running) < workers and not interrupts.stopping:
+            i = queue.popleft()
+            running[pool.submit(process_run, campaign, i)] = i
+
+    try:
+        refill()
+        while running:
+            done, _ = concurrent.futures.wait(running, return_when=concurrent.futures.FIRST_COMPLETED)
+            rows, broken = [], None
+            for fut in done:
+                i = running.pop(fut)
+                try:
+                    rows.append((i, fut.result()))
+                except concurrent.futures.process.BrokenProcessPool as exc:
+                    broken = exc
+            if broken is None:
+                refill()  # the idle workers start their next runs while the client commits these
+            for i, row in rows:
+                on_row(row)
+                finished.add(i)
+            if broken is not None:
+                raise broken
+    except KeyboardInterrupt:  # a second Ctrl-C
+        _abort_note(len(running))
+        raise
+
+
 def _pool_map(campaign, todo, workers, on_row: Callable[[dict], None], interrupts: _Interrupts) -> int:
     """Process `todo` on a local process pool, at most `workers` runs handed out at a time (so a first Ctrl-C
     leaves only the runs in progress to finish). A worker killed mid-run breaks the pool: a new pool takes the
@@ -968,29 +1008,14 @@ def _pool_map(campaign, todo, workers, on_row: Callable[[dict], None], interrupt
         if not remaining or interrupts.stopping:
             return 0
         finished: set[int] = set()
-        queue = deque(remaining)
-        running: dict[concurrent.futures.Future, int] = {}
-        interrupts.in_progress = running.__len__
         pool = concurrent.futures.ProcessPoolExecutor(
             max_workers=workers, mp_context=ctx, initializer=_worker_init, initargs=(os.getpid(),)
         )
         try:
-            while True:
-                while queue and len(running) < workers and not interrupts.stopping:
-                    i = queue.popleft()
-                    running[pool.submit(process_run, campaign, i)] = i
-                if not running:
-                    break
-                done, _ = concurrent.futures.wait(running, return_when=concurrent.futures.FIRST_COMPLETED)
-                for fut in done:
-                    row = fut.result()  # BrokenProcessPool when a worker died
-                    on_row(row)
-                    finished.add(running.pop(fut))
+            _pool_round(pool, campaign, deque(remaining), workers, on_row, interrupts, finished)
         except concurrent.futures.process.BrokenProcessPool:
             pass
-        except BaseException as exc:  # a second Ctrl-C (KeyboardInterrupt) or the client's own failure
-            if isinstance(exc, KeyboardInterrupt):
-                _abort_note(len(running))
+        except BaseException:  # a second Ctrl-C or the client's own failure: the workers stop now
             _terminate_workers(pool)
             raise
         finally:
@@ -1027,13 +1052,13 @@ def _dask_map(campaign, todo, client, on_row: Callable[[dict], None], interrupts
     try:
         for fut in flow:
             running.discard(fut)
+            refill()  # the idle worker starts its next run while the client commits this one
             try:
                 row = fut.result()
             except Exception:  # the infrastructure failed (a worker killed too often): not the run's error
                 lost += 1
             else:
                 on_row(row)
-            refill()
     except BaseException as exc:
         if isinstance(exc, KeyboardInterrupt):
             _abort_note(len(running))
