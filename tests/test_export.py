@@ -452,6 +452,26 @@ def test_a_hybrids_physics_estimate_is_a_term_of_the_sum_also_with_metadata_rout
         model.lssvr.predict(X, offset=physics[:-1])
 
 
+@pytest.mark.skipif(CC is None, reason="no C compiler (cc) on PATH")
+def test_the_c_source_refuses_x87_extended_precision(tmp_path):
+    """Double rounding in 80-bit registers would break the compensated sum's exact error terms: no silent build."""
+    model = _model(gyrodrift.load_paper().train, "lat_only", "standard", "rbf")
+    for name, text in export.export_model(model, "c").items():
+        (tmp_path / name).write_text(text)
+    x87 = subprocess.run(
+        [CC, *CFLAGS, "-m32", "-mfpmath=387", "-fsyntax-only", "gyrodrift_model.c"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    if "unrecognized" in x87.stderr or "not supported" in x87.stderr:
+        pytest.skip(f"{CC} cannot target x87: {x87.stderr[:200]}")
+    assert x87.returncode != 0 and "x87 extended precision" in x87.stderr, x87.stderr
+    sse = subprocess.run([CC, *CFLAGS, "-fsyntax-only", "gyrodrift_model.c"], cwd=tmp_path, capture_output=True)
+    assert sse.returncode == 0, sse.stderr
+
+
 # --- C ------------------------------------------------------------------------------------------------------
 
 _C_PUBLIC = (

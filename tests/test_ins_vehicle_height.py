@@ -141,3 +141,39 @@ def test_bad_height_column_is_named_by_file_row_and_column(tmp_path):
         assert f"{path}, row 9, column ref_height_m: {expected}" in str(info.value)
     with pytest.raises(Exception, match="vertical must be one of fixed, damped"):
         navigate(imu, vertical="baro")
+
+
+def test_a_formatted_log_names_its_own_height_column(tmp_path):
+    """A log in its own format maps a column to ``quantity = "ref_height"`` in feet: read in metres, and a bad
+    value is named by the file's line and its own column."""
+    s = hills(duration_h=0.05)
+    imu = simulate(s)
+    cols = {k: np.asarray(v) for k, v in imu.columns.items()}
+    n = len(cols["t_s"])
+    baro_ft = np.full(n, 120.0 / 0.3048)
+    baro_ft[11] = np.inf
+    names = {"Time": "t_s", "Baro": None}
+    for ax in "xyz":
+        names[f"Gx{ax}"] = f"dtheta_{ax}_rad"
+        names[f"Ax{ax}"] = f"dv_{ax}_m_s"
+    table = pa.table({k: (baro_ft if v is None else cols[v]) for k, v in names.items()})
+    path = tmp_path / "baro.csv"
+    pacsv.write_csv(table, path)
+    fmt = tmp_path / "baro.format.toml"
+    lines = [
+        '[columns.Time]\nquantity = "time"\nunit = "s"\n',
+        '[columns.Baro]\nquantity = "ref_height"\nunit = "ft"\n',
+    ]
+    for ax in "xyz":
+        lines.append(f'[columns.Gx{ax}]\nquantity = "gyro_{ax}"\nunit = "rad"\n')
+        lines.append(f'[columns.Ax{ax}]\nquantity = "accel_{ax}"\nunit = "m/s"\n')
+    fmt.write_text("\n".join(lines))
+    log = open_log(path, site={"lat_deg": 28.0, "lon_deg": 113.0}, format=fmt, require_temperature=False)
+    assert log.has_reference_height
+    first = next(log.chunks(5, stop=5))
+    assert first.ref_height_m is not None
+    np.testing.assert_allclose(first.ref_height_m, 120.0, rtol=1e-15)
+    with pytest.raises(LogError) as info:
+        for _ in log.chunks(1000):
+            pass
+    assert f"{path}, row 13, column Baro" in str(info.value) and "expected a finite number" in str(info.value)

@@ -133,3 +133,15 @@ def test_bad_waypoint_routes_name_the_file_key_and_waypoint(change, message):
     assert message in str(info.value)
     with pytest.raises(ScenarioError, match=r"\[trajectory\] accel_m_s2: only with waypoints"):
         Scenario.from_dict({"trajectory": {"accel_m_s2": 1.0, "segments": []}}, source="wp.toml")
+
+
+def test_a_repeated_waypoint_route_past_the_latitude_limit_names_the_waypoints():
+    with pytest.raises(ScenarioError) as info:
+        Scenario.from_dict(
+            {
+                "site": {"lat_deg": 88.0},
+                "trajectory": {"static_h": 0.0, "repeat": True, "waypoints": [WAYPOINTS[0] | {"lat_deg": 88.5}]},
+            },
+            source="wp.toml",
+        )
+    assert str(info.value).startswith("wp.toml: [trajectory] waypoints: the route reaches latitude 88.99")

@@ -33,6 +33,7 @@ or half-written runs. The results are one Parquet dataset (`read_runs`, ``pyarro
 from __future__ import annotations
 
 import concurrent.futures
+import contextlib
 import hashlib
 import importlib.util
 import json
@@ -43,7 +44,7 @@ import re
 import socket
 import time
 import tomllib
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -483,26 +484,16 @@ def trial_drift_deg_h(scenario, timeline) -> float:
     return d if math.isfinite(d) and abs(d) >= 1e-4 else 1e-3
 
 
-class _Stages:
-    """Wall and CPU seconds of a run's stages (``t_NAME_s``, ``cpu_NAME_s``); CPU time is the process's, which is
-    the run's: a run keeps to one thread (``threads=1`` on every read)."""
-
-    def __init__(self, out: dict[str, Any]):
-        self.out = out
-
-    def __call__(self, name: str):
-        import contextlib
-
-        @contextlib.contextmanager
-        def stage():
-            w, c = time.perf_counter(), time.process_time()
-            try:
-                yield
-            finally:
-                self.out[f"t_{name}_s"] = time.perf_counter() - w
-                self.out[f"cpu_{name}_s"] = time.process_time() - c
-
-        return stage()
+@contextlib.contextmanager
+def _stage(out: dict[str, Any], name: str) -> Iterator[None]:
+    """Time a stage of a run into ``out``: ``t_NAME_s`` wall and ``cpu_NAME_s`` CPU seconds (the process's CPU
+    time, which is the run's: a run keeps to one thread, ``threads=1`` on every read)."""
+    w, c = time.perf_counter(), time.process_time()
+    try:
+        yield
+    finally:
+        out[f"t_{name}_s"] = time.perf_counter() - w
+        out[f"cpu_{name}_s"] = time.process_time() - c
 
 
 def _measure(campaign: Campaign, index: int, chunk_samples: int) -> dict[str, Any]:
@@ -512,15 +503,14 @@ def _measure(campaign: Campaign, index: int, chunk_samples: int) -> dict[str, An
 
     verify = bool(campaign.options.get("verify", False))
     out: dict[str, Any] = {}
-    stage = _Stages(out)
     scn = campaign.scenario(index)
     out["arw_deg_rth"] = scn.gyro.arw_deg_rth
     out["vrw_ug_rthz"] = scn.accel.vrw_ug_rthz
     log = ImuLog.from_scenario(scn)
     timeline = _timeline(campaign.options)
-    with stage("align"):
+    with _stage(out, "align"):
         alignment = align_log(log, timeline=timeline, chunk_samples=chunk_samples)
-    with stage("passes"):
+    with _stage(out, "passes"):
         noise = _noise_model(scn)
         truth_options: dict[str, Any] = {"threads": 1}  # a run keeps to one core: workers give the parallelism
         if not verify:  # one read: the features, and the truth linearised between 0 and the trial drift
@@ -581,14 +571,14 @@ def _measure(campaign: Campaign, index: int, chunk_samples: int) -> dict[str, An
     # --- the 16 h smoother: its own read of the first 16 h (a seventh of a run's simulation) ---
     out["drift_smoother_deg_h"], out["drift_smoother_std_deg_h"] = math.nan, math.nan
     out["smoother_error"] = None
-    with stage("smoother"):
+    with _stage(out, "smoother"):
         if campaign.options.get("smoother", True):
             try:  # a smoother failure is recorded beside the run's other results, which stay valid
                 out["drift_smoother_deg_h"], out["drift_smoother_std_deg_h"] = _smoother_step(log, noise, timeline)
             except Exception as exc:
                 out["smoother_error"] = f"{type(exc).__name__}: {' '.join(str(exc).split())}"[:2000]
     # --- the noise-free twin: aligned on its own, navigated once at d* ---
-    with stage("twin"):
+    with _stage(out, "twin"):
         twin_scn = campaign.scenario(index, noise=False)
         twin_log = ImuLog.from_scenario(twin_scn)
         if verify:

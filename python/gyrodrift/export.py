@@ -519,10 +519,13 @@ int {P}_in_range(const {P}_inputs *inputs);
  */
 #include "{header_name}"
 #include <float.h>
-{libm}
 #if defined(FLT_EVAL_METHOD) && FLT_EVAL_METHOD == 2
 #error "gyrodrift_model.c needs double arithmetic rounded to double (x87 extended precision: use SSE2)"
 #endif
+#ifdef __clang__
+#pragma STDC FP_CONTRACT OFF /* Python rounds every product; gcc: compile with -ffp-contract=off or -std=c99 */
+#endif
+{libm}
 
 {(chr(10) + chr(10)).join(data)}
 

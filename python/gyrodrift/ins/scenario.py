@@ -564,6 +564,8 @@ class _Validator:
             section, toml_key = where if where is not None else (None, None)
             if toml_key in ("series_t_h", "series_temp_c") and "series_csv" in data.get("temperature", {}):
                 toml_key = "series_csv"
+            if toml_key == "segments" and "waypoints" in data.get("trajectory", {}):
+                toml_key = "waypoints"  # the segments were made from them
             msg = str(exc)
             if key and msg.startswith(f"{key}: "):
                 msg = msg[len(key) + 2 :]
