@@ -127,10 +127,11 @@ def scenario(
     )
 
 
-def measure_run(spec: dict) -> dict:
-    """Features, label and curve fit of the noisy run; the effective drift of its noise-free twin if held out."""
+def measure_run(spec: dict, smoother: bool = True) -> dict:
+    """Features, label and curve fit of the noisy run (and the 16 h smoother unless ``smoother=False``); the
+    effective drift of its noise-free twin if held out."""
     log = ImuLog.from_scenario(scenario(spec, noise=True, rate_hz=spec["rate_hz"], k1=spec["k1"]))
-    f = extract_features(log, with_truth=True)
+    f = extract_features(log, with_truth=True, smoother=smoother)
     base = f.truth.base
     cf = fit_error_curves(base.t_h * 3600.0, base.lat_err_arcsec, base.lon_err_arcsec, f.lat0_deg, hours=12.0)
     out = {
@@ -145,8 +146,10 @@ def measure_run(spec: dict) -> dict:
         "drift_smoother_deg_h": f.drift_smoother_deg_h,
         "drift_smoother_std_deg_h": f.drift_smoother_std_deg_h,
         "drift_std_deg_h": f.drift_std_deg_h,
-        "smoother_estimate": f.smoother,
+        "label_flagged": f.label_flagged,
     }
+    if f.smoother is not None:
+        out["smoother_estimate"] = f.smoother  # for the fleet k_z prior (not a run-table column)
     if spec["held_out"]:
         twin = scenario(spec, noise=False, rate_hz=spec["rate_hz"], k1=spec["k1"])
         out["effective_deg_h"] = find_true_drift(ImuLog.from_scenario(twin)).drift_deg_h
@@ -377,6 +380,66 @@ def print_report(r: dict) -> None:
     print(f"elapsed {r['elapsed_s']:.0f} s")
 
 
+def _measure_light(spec: dict) -> dict:
+    return measure_run(spec, smoother=False)
+
+
+def coverage_study(
+    seeds, n_train: int = 24, n_test: int = 24, n_hot: int = 2, rate_hz: float = 2.0, workers: int = 1
+) -> dict:
+    """Coverage of the default model's 90 % interval over several fleets (one per seed), without the smoother,
+    the navigation or the four-latitude check: per seed the share of held-out runs whose effective drift (and
+    whose label) the interval covers, in range and flagged, and the half-width of the hot runs over that of
+    the runs in range. Returns per-seed arrays and prints nothing."""
+    rows_cov: list[list[float]] = []
+    for seed in seeds:
+        specs = draw_fleet(n_train, n_test, n_hot, seed, rate_hz)
+        rows = _map(_measure_light, specs, workers)
+        table = RunTable.from_records(
+            [{k: v for k, v in r.items() if k != "effective_deg_h"} for r in rows], source=f"fleet {seed}"
+        )
+        train, test = table.select(np.arange(n_train)), table.select(np.arange(n_train, n_train + n_test))
+        effective = np.array([r["effective_deg_h"] for r in rows[n_train:]])
+        model = fit_drift_model(train, encoding="physics", target="residual", rng=0)
+        pred, lo, hi = model.predict_interval(test, COVERAGE)
+        flagged = model.check_inputs(test).outside
+        hot = np.arange(n_test) < n_hot
+        cov = (lo <= effective) & (effective <= hi)
+        half = (hi - lo) / 2
+        rows_cov.append(
+            [
+                float(np.mean(cov)),
+                float(np.mean((lo <= test.drift_deg_h) & (test.drift_deg_h <= hi))),
+                float(np.mean(cov[~flagged])) if (~flagged).any() else math.nan,
+                float(np.mean(cov[flagged])) if flagged.any() else math.nan,
+                float(np.mean(half[hot]) / np.mean(half[~flagged])) if hot.any() and (~flagged).any() else math.nan,
+            ]
+        )
+    a = np.array(rows_cov)
+    return {
+        "seeds": list(seeds),
+        "coverage_eff": a[:, 0],
+        "coverage_truth": a[:, 1],
+        "coverage_in_range": a[:, 2],
+        "coverage_flagged": a[:, 3],
+        "hot_half_width_ratio": a[:, 4],
+    }
+
+
+def print_coverage(c: dict, n_test: int) -> None:
+    """The coverage numbers docs/identification.md quotes (mean and standard deviation over the seeds)."""
+    print(f"default model's 90 % interval over {len(c['seeds'])} fleets of {n_test} held-out runs:")
+    for key, what in (
+        ("coverage_eff", "covers the effective drift"),
+        ("coverage_truth", "covers the label (noisy truth)"),
+        ("coverage_in_range", "effective drift, runs in range"),
+        ("coverage_flagged", "effective drift, flagged runs"),
+        ("hot_half_width_ratio", "half-width hot / in range"),
+    ):
+        v = c[key]
+        print(f"  {what:34s} mean {np.nanmean(v):.3f}  sd {np.nanstd(v):.3f}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--train", type=int, default=24)
@@ -386,7 +449,24 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=1, help="processes simulating runs side by side")
     ap.add_argument("--k1", type=float, default=K1_DEG_H_PER_C, help="temperature law [deg/h/degC]")
     ap.add_argument("--tau-max-h", type=float, default=6.0, help="longest warm-up time constant [h]")
+    ap.add_argument(
+        "--coverage-seeds",
+        type=int,
+        default=0,
+        help="instead of the study: the interval's coverage over this many fleets (seeds 1..N, --train training "
+        "and 2 x --held-out held-out runs each, 2 Hz, no smoother and no navigation)",
+    )
     args = ap.parse_args()
+    if args.coverage_seeds:
+        print(
+            f"python examples/identification_study.py --coverage-seeds {args.coverage_seeds} --train {args.train} "
+            f"--held-out {args.held_out} --hot {args.hot}"
+        )
+        c = coverage_study(
+            range(1, args.coverage_seeds + 1), args.train, 2 * args.held_out, args.hot, 2.0, args.workers
+        )
+        print_coverage(c, 2 * args.held_out)
+        return
     print(
         f"python examples/identification_study.py --train {args.train} --held-out {args.held_out} --hot {args.hot} "
         f"--seed {args.seed} --k1 {args.k1:g} --tau-max-h {args.tau_max_h:g}"

@@ -51,3 +51,12 @@ def test_same_drift_at_four_latitudes(study):
         assert np.ptp(four[name]) < 5e-5, name  # measured ~1e-5
     assert np.ptp(four["paper-encoding LSSVM (temp_range)"]) > 5e-5
     assert abs(four["12 h physics inversion"][0] - 0.00368) < 2e-5
+
+
+def test_coverage_over_seeds_runs_at_reduced_size(study, capsys):
+    """The --coverage-seeds mode (docs/identification.md quotes it at 18 fleets): one fleet of 10 + 4 runs."""
+    module, _ = study
+    c = module.coverage_study([1], n_train=10, n_test=4, n_hot=1, rate_hz=2.0)
+    assert c["coverage_eff"].shape == (1,) and 0.0 <= c["coverage_eff"][0] <= 1.0
+    module.print_coverage(c, 4)
+    assert "covers the effective drift" in capsys.readouterr().out

@@ -1,4 +1,4 @@
-"""Jackknife intervals of the drift model: the order statistic, its coverage, and its journey through files."""
+"""Intervals of the drift model: the order statistic, its coverage, its widening, and its journey through files."""
 
 import json
 import math
@@ -9,7 +9,7 @@ from click.testing import CliRunner
 
 from gyrodrift.cli import main
 from gyrodrift.datasets import load_paper, paper_csv_path
-from gyrodrift.model import fit_drift_model, jackknife_half_width
+from gyrodrift.model import fit_drift_model, jackknife_half_width, make_drift_model
 from gyrodrift.model_io import load_model, save_model
 from gyrodrift.runs import RunTable
 
@@ -46,7 +46,8 @@ def test_interval_covers_new_runs_at_about_its_coverage():
     rng = np.random.default_rng(11)
     covered = []
     for _ in range(12):
-        model = fit_drift_model(_synthetic(rng, 40, 2e-4), method="grid", rng=0)
+        # a 15 x 15 grid: the fit tunes 11 times (the model, then its 10 calibration folds)
+        model = make_drift_model(method="grid", grid_size=15).fit(_synthetic(rng, 40, 2e-4))
         test = _synthetic(rng, 500, 2e-4)
         _, lo, hi = model.predict_interval(test, 0.9)
         covered.append(np.mean((lo <= test.drift_deg_h) & (test.drift_deg_h <= hi)))
@@ -136,3 +137,66 @@ def test_predict_refuses_a_coverage_that_is_not_a_probability(tmp_path, bad):
 
     with pytest.raises(OptionError, match="coverage must be within"):
         jackknife_half_width([1.0, 2.0], float(bad))
+
+
+def _heteroscedastic_runs(rng, n):
+    """Runs whose drift is a known function of the temperature plus a run-to-run scatter (the "effective" drift
+    a perfect method could know), labelled with noise of a known, run-dependent 1-sigma (drift_std_deg_h, as
+    truth's covariance analysis gives it; 5e-5 to 3e-4 deg/h, around the 1.5e-4 of RLG-grade labels at mid
+    latitudes). Returns (table of labels, effective drifts)."""
+    from gyrodrift.baselines import latitude_error_at
+    from gyrodrift.units import HOUR
+
+    lat0 = rng.uniform(20.0, 60.0, n)
+    tmin = rng.uniform(15.0, 25.0, n)
+    tmax = tmin + rng.uniform(8.0, 15.0, n)
+    effective = 0.002 + 0.0002 * (tmax - 30.0) + rng.normal(0.0, 1e-4, n)
+    seen = effective - 0.0001 * (tmax - tmin) + rng.normal(0.0, 1.5e-4, n)  # what the 12 h navigation saw
+    sigma = rng.uniform(5e-5, 3e-4, n)
+    table = RunTable(
+        run=np.array([f"r{i}" for i in range(n)], dtype=object),
+        lat_deg=lat0 + latitude_error_at(12 * HOUR, seen, lat0) / 3600.0,
+        lat0_deg=lat0,
+        temp_min_c=tmin,
+        temp_max_c=tmax,
+        drift_deg_h=effective + rng.normal(0.0, sigma),
+        extra={"drift_std_deg_h": sigma},
+    )
+    return table, effective
+
+
+def test_weighted_interval_is_calibrated_over_many_draws():
+    """Weighted hybrid models on 30 runs with heteroscedastic label noise, 8 draws of 300 new runs: the 90 %
+    interval covers the new runs' labels 0.83-0.96 of the time on average, and their effective drifts at least
+    as often, while the same intervals at 0.6 or 1.6 times their width fall outside that band (the band tells a
+    calibrated interval from others)."""
+    rng = np.random.default_rng(2024)
+    covered: dict = {0.6: [], 1.0: [], 1.6: [], "effective": []}
+    for _ in range(8):
+        train, _ = _heteroscedastic_runs(rng, 30)
+        test, effective = _heteroscedastic_runs(rng, 300)
+        model = make_drift_model(encoding="physics", target="residual", method="grid", grid_size=15).fit(train)
+        assert model.training["weighted"]
+        pred, lo, hi = model.predict_interval(test, 0.9)
+        for factor in (0.6, 1.0, 1.6):
+            covered[factor].append(np.mean(np.abs(test.drift_deg_h - pred) <= factor * (hi - lo) / 2))
+        covered["effective"].append(np.mean((lo <= effective) & (effective <= hi)))
+    mean = {k: float(np.mean(v)) for k, v in covered.items()}
+    assert 0.83 <= mean[1.0] <= 0.96, mean
+    assert mean[0.6] < 0.83 and mean[1.6] > 0.96, mean
+    assert mean["effective"] >= mean[1.0] - 0.01, mean
+
+
+def test_far_outside_the_training_range_the_interval_widens_markedly_and_is_flagged():
+    rng = np.random.default_rng(5)
+    train, _ = _heteroscedastic_runs(rng, 40)
+    inside, _ = _heteroscedastic_runs(rng, 100)
+    far = inside.replace(temp_min_c=inside.temp_min_c + 30.0, temp_max_c=inside.temp_max_c + 30.0)
+    model = fit_drift_model(train, encoding="physics", target="residual", method="grid", rng=0)
+    _, lo_in, hi_in = model.predict_interval(inside, 0.9)
+    _, lo_far, hi_far = model.predict_interval(far, 0.9)
+    # the spread model's length scales are fitted (not a kernel width at its search-box edge): 30 degC beyond
+    # the training runs, about 3 of their temperature standard deviations, is far on that scale
+    assert np.min(hi_far - lo_far) > 3.0 * np.median(hi_in - lo_in)
+    assert model.check_inputs(far).outside.all()
+    assert np.all(model.spread_.length_scales() < 1e3)

@@ -84,7 +84,8 @@ def test_features_csv_round_trips_through_read_runs_csv(tmp_path):
     header = path.read_text().splitlines()[0]
     assert header == (
         "run,lat_deg,lat0_deg,temp_min_c,temp_max_c,temp_start_c,temp_end_c,drift_curvefit_deg_h,"
-        "drift_curvefit_std_deg_h,drift_smoother_deg_h,drift_smoother_std_deg_h,drift_deg_h,drift_std_deg_h"
+        "drift_curvefit_std_deg_h,drift_smoother_deg_h,drift_smoother_std_deg_h,drift_deg_h,drift_std_deg_h,"
+        "label_flagged"
     )
     runs = read_runs_csv(path, require_truth=True)
     assert list(runs.run) == ["a", "b"]

@@ -26,11 +26,21 @@ Three parameters of the model itself (not of a step):
   ``drift_std_deg_h`` column (weighted LS-SVM, ``C_i = gamma w_i``, ``w_i = mean(s^2) / s_i^2``), ``"none"``
   never does.
 
-Uncertainty (``predict_interval``, ``check_inputs``): the interval is a normalised jackknife, its half-width
-``q v(x)`` where ``v`` is the LSSVR's Gaussian-process predictive scale (``LSSVR.predictive_scale``, larger
-away from the training inputs) and ``q`` the conformal quantile of the leave-one-out residuals divided by their
-own leave-one-out scale. ``check_inputs`` flags runs whose inputs lie outside the training runs' range, per
-input and jointly (Mahalanobis distance of the scaled inputs beyond the largest among the training runs).
+* ``calibration_folds``: how the interval is calibrated (below); 10 by default, 0 for the closed-form
+  leave-one-out residuals.
+
+Uncertainty (``predict_interval``, ``check_inputs``): a normalised cross-validation interval for the label a
+new run would get (conservative for its drift itself by the label noise's share). Its half-width is
+``q sqrt(spread(x)^2 + s_rms^2)``: ``spread`` the 1-sigma of the drift from a Gaussian process fitted to the
+LSSVR's target with a linear trend, one RBF length scale per input, the label 1-sigmas as known noise and a
+run-to-run term (`gyrodrift.spread.SpreadGP`; larger away from the training runs), ``s_rms`` the training runs'
+rms label 1-sigma, ``q`` the conformal quantile (``jackknife_half_width``) of the scores
+``r_i / sqrt(m_i^2 + s_i^2)``, where ``r_i`` is run i's residual under the model fitted and tuned without run
+i's fold (``calibration_folds`` folds; the LSSVR's own leave-one-out residuals are optimistic once gamma and
+sigma were tuned on them), ``m_i`` that model's spread at the run and ``s_i`` its label 1-sigma
+(docs/identification.md, "Intervals and extrapolation", has the coverage measured over 18 fleets).
+``check_inputs`` flags runs whose inputs lie outside the training runs' range, per input and jointly
+(Mahalanobis distance of the scaled inputs beyond the largest among the training runs).
 """
 
 from __future__ import annotations
@@ -44,7 +54,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from sklearn.base import BaseEstimator, RegressorMixin, TransformerMixin
+from sklearn.base import BaseEstimator, RegressorMixin, TransformerMixin, clone
 from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import MinMaxScaler, StandardScaler
 from sklearn.utils.validation import check_is_fitted
@@ -53,9 +63,16 @@ from gyrodrift.baselines import physics_inversion
 from gyrodrift.choices import PHYSICS_COLUMNS, SCALINGS, TARGETS
 from gyrodrift.encodings import encode, feature_names
 from gyrodrift.errors import InputError, OptionError
-from gyrodrift.lssvr import LSSVR, _validate_data, check_sample_weight, condition_warning_message
+from gyrodrift.lssvr import (
+    LSSVR,
+    IllConditionedWarning,
+    _validate_data,
+    check_sample_weight,
+    condition_warning_message,
+)
 from gyrodrift.progress import progress
 from gyrodrift.runs import RunTable, as_run_table
+from gyrodrift.spread import SpreadGP
 from gyrodrift.tuning import (
     DEFAULT_BOUNDS,
     SearchBoundWarning,
@@ -80,6 +97,13 @@ __all__ = [
     "min_runs_for_coverage",
     "training_digest",
 ]
+
+
+DEFAULT_CALIBRATION_FOLDS = 10
+"""Folds of the interval's calibration (``DriftModel(calibration_folds=...)``): each run's residual comes from a
+model fitted and tuned without its fold. 0: the LSSVR's closed-form leave-one-out residuals instead (no refit,
+optimistic when gamma and sigma were tuned on them)."""
+_MIN_FOLD_RUNS = 3
 
 
 def make_scaler(scaling: str):
@@ -425,11 +449,13 @@ class DriftModel(Pipeline):
         target: str = "drift",
         physics_column: str = "drift_inversion_deg_h",
         label_weighting: str = "auto",
+        calibration_folds: int = DEFAULT_CALIBRATION_FOLDS,
     ) -> None:
         super().__init__(steps, transform_input=transform_input, memory=memory, verbose=verbose)
         self.target = target
         self.physics_column = physics_column
         self.label_weighting = label_weighting
+        self.calibration_folds = calibration_folds
 
     def _check_options(self) -> None:
         if self.target not in TARGETS:
@@ -440,6 +466,9 @@ class DriftModel(Pipeline):
             )
         if self.label_weighting not in ("auto", "none"):
             raise OptionError(f"unknown label weighting {self.label_weighting!r}; expected auto or none")
+        folds = self.calibration_folds
+        if isinstance(folds, bool) or not isinstance(folds, (int, np.integer)) or folds < 0 or folds == 1:
+            raise OptionError(f"calibration_folds must be 0 (leave-one-out) or an integer >= 2, got {folds!r}")
 
     def _base(self, runs: RunTable) -> np.ndarray:
         """What the LSSVR's output is added to [deg/h]: the physics estimate (residual target) or 0."""
@@ -447,11 +476,15 @@ class DriftModel(Pipeline):
             return physics_estimate(runs, self.physics_column)
         return np.zeros(len(runs))
 
-    def fit(self, X, y=None, **params) -> DriftModel:
+    def fit(self, X, y=None, *, spread_theta=None, interval_calibration=None, **params) -> DriftModel:
         """Fit on runs (RunTable or structured array) and drifts ``y`` [deg/h] (default: the runs' own).
 
         With ``label_weighting="auto"`` and a ``drift_std_deg_h`` value for every run the LS-SVM is weighted
         by ``label_weights``; with ``target="residual"`` it is fitted on ``y`` minus the physics estimate.
+        Then the interval's spread model (`gyrodrift.spread.SpreadGP`) and its calibration scores (module
+        docstring). ``spread_theta`` and ``interval_calibration`` (out-of-fold residuals and spreads, a model
+        file's record) are used as given: no likelihood is maximised and no fold is refitted, how a saved model
+        is rebuilt.
         """
         self._check_options()
         runs = as_run_table(X)
@@ -481,7 +514,42 @@ class DriftModel(Pipeline):
         cov = np.atleast_2d(np.cov(Z, rowvar=False))
         self.input_precision_ = np.linalg.pinv(cov)
         self.mahalanobis_limit_ = float(self._mahalanobis(Z).max())
+        label_std = trained.column("drift_std_deg_h") if trained.has_column("drift_std_deg_h") else None
+        self.spread_ = SpreadGP(theta=spread_theta).fit(Z, trained.drift_deg_h - self._base(trained), label_std)
+        s = np.zeros(len(trained)) if label_std is None else np.asarray(label_std, float)
+        if interval_calibration is not None:
+            residuals, spreads = (np.asarray(v, float) for v in interval_calibration)
+            if not (residuals.shape == spreads.shape == (len(trained),)) or not np.all(np.isfinite(residuals)):
+                raise InputError(f"the interval's calibration must hold {len(trained)} residuals and spreads")
+        elif self.calibration_folds == 0 or len(trained) < 2 * _MIN_FOLD_RUNS:
+            residuals = np.asarray(self.loo_residuals_deg_h, float)
+            spreads = np.sqrt(np.maximum(self.spread_.loo_std_**2 - s**2, 0.0))
+        else:
+            residuals, spreads = self._out_of_fold(trained)
+        self.interval_residuals_, self.interval_spreads_ = residuals, spreads
+        self.label_std_rms_ = float(np.sqrt(np.mean(s**2)))
+        self.interval_scores_ = residuals / np.sqrt(spreads**2 + s**2)
         return self
+
+    def _out_of_fold(self, trained: RunTable) -> tuple[np.ndarray, np.ndarray]:
+        """``(r, m)`` [deg/h]: ``r_i`` the residual of run i under a model fitted and tuned on the other folds
+        (``calibration_folds`` folds, run i in fold ``i mod K``), ``m_i`` that model's spread at run i (its
+        hyperparameters those of the full model's spread, refitted on the fold's runs without a new likelihood
+        search: what matters here is that gamma and sigma are tuned without the fold)."""
+        n = len(trained)
+        k = min(int(self.calibration_folds), n)
+        fold = np.arange(n) % k
+        residuals, spreads = np.empty(n), np.empty(n)
+        with warnings.catch_warnings():  # the full model's warnings are the ones that count
+            warnings.simplefilter("ignore", SearchBoundWarning)
+            warnings.simplefilter("ignore", IllConditionedWarning)
+            for j in range(k):
+                part = clone(self).set_params(calibration_folds=0, lssvr__callback=None)
+                part.fit(trained.select(fold != j), spread_theta=self.spread_.theta_)
+                held = trained.select(fold == j)
+                spreads[fold == j] = part.spread_.predict_std(part[:-1].transform(held))
+                residuals[fold == j] = held.drift_deg_h - part.predict(held)
+        return residuals, spreads
 
     def predict(self, X, **params) -> np.ndarray:
         """Identified drift [deg/h] of each run: the LSSVR's output (plus the physics estimate for a hybrid, added
@@ -548,29 +616,34 @@ class DriftModel(Pipeline):
         """What fitting warned about: tuned values on the edge of their search box, ill-conditioning."""
         return self.named_steps["lssvr"].fit_warnings()
 
-    def normalised_loo_residuals(self) -> np.ndarray:
-        """Leave-one-out residuals divided by their own predictive scale (``LSSVR.loo_scale_``) [deg/h]."""
-        lssvr = self.lssvr
-        return np.asarray(lssvr.loo_residuals_, float) / lssvr.loo_scale_
+    def interval_scores(self) -> np.ndarray:
+        """The calibration scores of the interval (dimensionless, signed): each training run's out-of-fold
+        residual divided by its predicted spread (module docstring)."""
+        check_is_fitted(self, "interval_scores_")
+        return np.array(self.interval_scores_, float)
 
-    def predict_std_scale(self, runs) -> np.ndarray:
-        """The LSSVR's predictive scale ``v(x)`` of each run (dimensionless; ``LSSVR.predictive_scale``)."""
-        return self.lssvr.predictive_scale(self[:-1].transform(as_run_table(runs)))
+    def predict_spread(self, runs) -> np.ndarray:
+        """The spread model's 1-sigma of each run's drift [deg/h] (`SpreadGP.predict_std`; label noise
+        excluded); grows away from the training runs on the scale of its fitted length scales."""
+        check_is_fitted(self, "spread_")
+        return self.spread_.predict_std(self[:-1].transform(as_run_table(runs)))
 
     def predict_interval(self, runs, coverage: float = 0.9) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Identified drift and its interval [deg/h]: ``(pred, lo, hi)``.
 
-        A normalised jackknife interval: half-width ``q v(x)``, with ``v`` the LSSVR's Gaussian-process
-        predictive scale at the run's inputs (it grows away from the training inputs) and ``q`` the
-        ``jackknife_half_width`` of the leave-one-out residuals divided by their own leave-one-out scale. For
-        runs exchangeable with the training runs it covers about ``coverage`` of them (tests/test_intervals.py);
-        it is not a Bayesian posterior. When gamma and sigma were tuned on the LOO error, the same residuals
-        were minimised by the tuning, so it is slightly optimistic.
+        A normalised cross-validation interval for the run's label (the `truth` a new run would get, with the
+        training runs' rms label 1-sigma ``label_std_rms_``): half-width ``q sqrt(spread(x)^2 + s_rms^2)``, with
+        ``spread`` the spread model's 1-sigma of the drift at the run (`predict_spread`, wider away from the
+        training runs) and ``q`` the ``jackknife_half_width`` of the calibration scores (`interval_scores`). For
+        runs exchangeable with the training runs it covers about ``coverage`` of their labels, and at least as
+        many of their drifts themselves (the label noise is in the width: conservative for the drift by its
+        share). Not a Bayesian posterior. tests/test_intervals.py, docs/identification.md.
         """
-        q = jackknife_half_width(self.normalised_loo_residuals(), coverage)
+        q = jackknife_half_width(self.interval_scores(), coverage)
         runs = as_run_table(runs)
         pred = self.predict(runs)
-        half = q * self.predict_std_scale(runs) if math.isfinite(q) else np.full(len(runs), math.inf)
+        scale = np.sqrt(self.predict_spread(runs) ** 2 + self.label_std_rms_**2)
+        half = q * scale if math.isfinite(q) else np.full(len(runs), math.inf)
         return pred, pred - half, pred + half
 
     def _mahalanobis(self, Z: np.ndarray) -> np.ndarray:
@@ -618,10 +691,11 @@ def make_drift_model(
     target: str = "drift",
     physics_column: str = "drift_inversion_deg_h",
     label_weighting: str = "auto",
+    calibration_folds: int = DEFAULT_CALIBRATION_FOLDS,
     **lssvr_params: Any,
 ) -> DriftModel:
     """An unfitted :class:`DriftModel`: ``RunEncoder(encoding)``, the scaler, ``TunedLSSVR(**lssvr_params)``;
-    ``target``, ``physics_column`` and ``label_weighting`` as in the module docstring."""
+    ``target``, ``physics_column``, ``label_weighting`` and ``calibration_folds`` as in the module docstring."""
     feature_names(encoding)
     TunedLSSVR(**lssvr_params)  # unknown names fail here, with scikit-learn's message
     model = DriftModel(
@@ -633,6 +707,7 @@ def make_drift_model(
         target=target,
         physics_column=physics_column,
         label_weighting=label_weighting,
+        calibration_folds=calibration_folds,
     )
     model._check_options()
     return model
@@ -652,6 +727,16 @@ def select_labelled_runs(runs: RunTable, max_label_std_deg_h: float | None = DEF
     std = runs.column("drift_std_deg_h")
     bad = std > max_label_std_deg_h  # NaN (unknown) is kept; infinite (unlabelable) is left out
     return runs.select(~bad), [str(r) for r in runs.run[bad]]
+
+
+FLAGGED_LABELS = ("exclude", "keep")
+"""What `fit_drift_model` does with runs whose ``label_flagged`` is true: leave them out (default) or keep them
+(weighted by their ``drift_std_deg_h`` when the fit is weighted)."""
+
+
+def flagged_labels_mask(runs: RunTable) -> np.ndarray:
+    """True for the runs whose ``label_flagged`` column is true (unknown and absent: False)."""
+    return np.asarray(runs.column("label_flagged") == 1.0, bool)
 
 
 def _tick(bar, callback, intermediate_result):
@@ -679,11 +764,16 @@ def fit_drift_model(
     physics_column: str = "drift_inversion_deg_h",
     label_weighting: str = "auto",
     max_label_std_deg_h: float | None = None,
+    calibration_folds: int = DEFAULT_CALIBRATION_FOLDS,
+    flagged_labels: str = "exclude",
 ) -> DriftModel:
     """Build and fit a drift model on runs with known drift (``make_drift_model`` then ``fit``).
 
     ``max_label_std_deg_h``: leave out runs whose label 1-sigma exceeds it (``select_labelled_runs``; the
-    model's ``training_["left_out"]`` names them). ``target``, ``physics_column``, ``label_weighting``: the
+    model's ``training_["left_out"]`` names them). ``flagged_labels``: ``"exclude"`` leaves out the runs whose
+    ``label_flagged`` is true (named in ``training_["left_out"]`` and ``training_["flagged_left_out"]``),
+    ``"keep"`` keeps them (``training_["flagged_kept"]``), down-weighted by their label 1-sigma when the fit is
+    weighted. ``target``, ``physics_column``, ``label_weighting``: the
     module docstring.
 
     With ``gamma`` and ``sigma`` both given no tuning is done; otherwise they are tuned by ``method``
@@ -694,6 +784,12 @@ def fit_drift_model(
     """
     if not train.has_truth:
         raise InputError(f"{train.source}: every training run needs drift_deg_h")
+    if flagged_labels not in FLAGGED_LABELS:
+        raise OptionError(f"unknown flagged_labels {flagged_labels!r}; expected one of {', '.join(FLAGGED_LABELS)}")
+    flags = flagged_labels_mask(train)
+    flagged_names = [str(r) for r in train.run[flags]]
+    if flagged_labels == "exclude":
+        train = train.select(~flags)
     train, left_out = select_labelled_runs(train, max_label_std_deg_h)
     if len(train) < 3:
         raise InputError(f"{train.source}: need at least 3 training runs, got {len(train)}")
@@ -705,6 +801,7 @@ def fit_drift_model(
         target=target,
         physics_column=physics_column,
         label_weighting=label_weighting,
+        calibration_folds=calibration_folds,
         objective=objective,
         method=method,
         gamma=gamma,
@@ -724,5 +821,8 @@ def fit_drift_model(
                 model.set_params(lssvr__callback=None)
     else:
         model.fit(train)
-    model.training_["left_out"] = left_out
+    excluded = flagged_names if flagged_labels == "exclude" else []
+    model.training_["left_out"] = excluded + left_out
+    model.training_["flagged_left_out"] = excluded
+    model.training_["flagged_kept"] = [] if excluded else [r for r in flagged_names if r not in left_out]
     return model

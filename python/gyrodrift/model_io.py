@@ -5,12 +5,14 @@ Layout (``schema_version`` 3)::
     {"format": "gyrodrift-drift-model", "schema_version": 3, "gyrodrift_version": "...",
      "encoding": "physics", "scaling": "standard", "feature_names": [...],
      "target": "drift" or "residual", "physics_column": "drift_inversion_deg_h", "label_weighting": "auto",
+     "calibration_folds": 10,
      "lssvr_params": {"gamma": null, "sigma": null, "objective": "loo_mae", "method": "cpso", "bounds": [...],
                       "n_particles": 30, "max_iter": 100, "w": 0.75, "c1": 2.0, "c2": 2.0, "chaos_steps": 10,
                       "grid_size": 40, "n_folds": 5, "random_state": 0 or null},
      "tuning": {...TuningResult...} or null,
      "fitted": {"gamma": ..., "sigma": ..., "intercept_deg_h": ..., "condition_number": ...,
-                "on_search_bound": [...], "loo_residuals_deg_h": [...]},
+                "on_search_bound": [...], "loo_residuals_deg_h": [...], "spread_theta": [...],
+                "interval_residuals_deg_h": [...], "interval_spreads_deg_h": [...]},
      "warnings": ["...", ...],
      "training": {"n_runs": ..., "sha256": ..., "source": ..., "weighted": true/false, "left_out": [...],
                   "runs": [{"run": ..., "lat_deg": ..., ..., "drift_std_deg_h": ...}, ...]}}
@@ -22,8 +24,13 @@ weighted labels) still load: they are ``target = "drift"`` models with unweighte
 Loading rebuilds the model with :func:`gyrodrift.model.make_drift_model` from the parameters and fits it on the
 training runs with the recorded tuning (no search is repeated); nothing is set into fitted scikit-learn
 internals. The same code and data give the same floats, so a loaded model reproduces the saved model's
-predictions to the bit (tested). ``fitted`` is a record for readers, checked against the refit. Floats are
-written with ``repr`` precision.
+predictions to the bit (tested). ``fitted`` is a record for readers, checked against the refit, except two
+entries the refit takes as given: ``spread_theta`` (the log hyperparameters of the interval's Gaussian process,
+`gyrodrift.spread.SpreadGP`: no likelihood is maximised again) and ``interval_residuals_deg_h`` and
+``interval_spreads_deg_h`` (the interval's calibration from ``calibration_folds`` re-tuned folds: no fold is
+refitted). Files without them (written
+before) get both recomputed, with leave-one-out scores (``calibration_folds`` 0). Floats are written with
+``repr`` precision.
 
 Schema 1 files (gyrodrift before the pipeline model: fitted internals, no training runs) are refused with a
 message saying how to refit them.
@@ -126,6 +133,7 @@ def model_to_dict(model: DriftModel) -> dict:
         "target": model.target,
         "physics_column": model.physics_column,
         "label_weighting": model.label_weighting,
+        "calibration_folds": int(model.calibration_folds),
         "lssvr_params": params,
         "tuning": model.tuning.to_dict() if model.tuning is not None else None,
         "fitted": {
@@ -135,6 +143,9 @@ def model_to_dict(model: DriftModel) -> dict:
             "condition_number": float(lssvr.condition_number_),
             "on_search_bound": list(est.on_search_bound_),
             "loo_residuals_deg_h": np.asarray(model.loo_residuals_deg_h, float).tolist(),
+            "spread_theta": np.asarray(model.spread_.theta_, float).tolist(),
+            "interval_residuals_deg_h": np.asarray(model.interval_residuals_, float).tolist(),
+            "interval_spreads_deg_h": np.asarray(model.interval_spreads_, float).tolist(),
         },
         "warnings": model.fit_warnings(),
         "training": {
@@ -317,13 +328,17 @@ def model_from_dict(doc: dict, where: str = "<model>") -> DriftModel:
         raise ModelFileError(f"{tw}: key 'left_out' must be a list of run names")
     if training_digest(runs) != sha:
         raise ModelFileError(f"{where}: the training runs do not match their sha256 (key 'training.sha256'): edited?")
+    spread = _spread_record(doc.get("fitted"), len(runs), where)
+    folds = doc.get("calibration_folds", 0)  # files written before the cross-validated calibration: LOO
+    if isinstance(folds, bool) or not isinstance(folds, int) or folds < 0 or folds == 1:
+        raise ModelFileError(f"{where}: key 'calibration_folds' must be 0 or an integer >= 2, got {folds!r}")
     try:
-        model = make_drift_model(encoding=encoding, scaling=scaling, **hybrid, **params)
+        model = make_drift_model(encoding=encoding, scaling=scaling, calibration_folds=folds, **hybrid, **params)
         with warnings.catch_warnings():
             # the file's "warnings" already say so; a loaded model does not repeat them
             warnings.simplefilter("ignore", SearchBoundWarning)
             warnings.simplefilter("ignore", IllConditionedWarning)
-            model.fit(runs, lssvr__tuning=tuning)
+            model.fit(runs, lssvr__tuning=tuning, **spread)
             model.training_["left_out"] = list(left_out)
     except GyrodriftError as exc:
         raise ModelFileError(
@@ -333,6 +348,23 @@ def model_from_dict(doc: dict, where: str = "<model>") -> DriftModel:
         raise ModelFileError(f"{where}: bad model parameters: {exc}") from None
     _check_fitted(doc.get("fitted"), model, where)
     return model
+
+
+def _spread_record(fitted: Any, n_runs: int, where: str) -> dict:
+    """``spread_theta`` and the interval's calibration of the file's ``fitted`` record, as `DriftModel.fit` keywords
+    (none for files written before them: the spread model is then fitted again, deterministically)."""
+    if not isinstance(fitted, dict):
+        return {}
+    fw = where + " [fitted]"
+    out: dict[str, Any] = {}
+    if "spread_theta" in fitted:
+        out["spread_theta"] = _numbers(_need(fitted, "spread_theta", list, fw), fw, "spread_theta")
+    keys = ("interval_residuals_deg_h", "interval_spreads_deg_h")
+    if any(k in fitted for k in keys):
+        out["interval_calibration"] = tuple(_numbers(_need(fitted, k, list, fw), fw, k, n_runs) for k in keys)
+        if min(out["interval_calibration"][1]) < 0:
+            raise ModelFileError(f"{fw}: key 'interval_spreads_deg_h' must hold spreads >= 0")
+    return out
 
 
 def _check_fitted(fitted: Any, model: DriftModel, where: str) -> None:

@@ -21,7 +21,12 @@ Optional numeric columns (``OPTIONAL_COLUMNS``; empty cell or absent = unknown, 
 ``drift_curvefit_std_deg_h``  deg/h   its least-squares 1-sigma
 ``drift_smoother_deg_h``      deg/h   drift from a smoother over the whole log (a physics base)
 ``drift_smoother_std_deg_h``  deg/h   its 1-sigma
+``label_flagged``             bool    ``true`` when `truth` flagged the label (its 1-sigma beyond the
+                                      1 nmi / 72 h budget): ``fit`` leaves such runs out by default
 ============================  ======  ============================================================
+
+``label_flagged`` cells are ``true``/``false`` (or ``1``/``0``, any case; empty = unknown); a table keeps
+the flag in ``extra`` as 1.0/0.0 (NaN unknown), written back as ``true``/``false``.
 
 The latitude error used by the models is ``lat_deg - lat0_deg`` (computed minus true).
 """
@@ -51,8 +56,26 @@ OPTIONAL_COLUMNS = (
     "drift_curvefit_std_deg_h",
     "drift_smoother_deg_h",
     "drift_smoother_std_deg_h",
+    "label_flagged",
 )
-"""Optional per-run numbers [deg/h] a table may carry (NaN where unknown); see the module docstring."""
+"""Optional per-run values a table may carry (NaN where unknown): numbers [deg/h] and the flag
+``label_flagged`` (``FLAG_COLUMNS``); see the module docstring."""
+
+FLAG_COLUMNS = ("label_flagged",)
+"""Optional columns holding a yes/no flag (1.0/0.0 in ``RunTable.extra``, ``true``/``false`` in a CSV)."""
+
+_FLAG_TEXT = {"true": 1.0, "false": 0.0, "1": 1.0, "0": 0.0}
+
+
+def _parse_flag(text: str, where: str, column: str) -> float:
+    """A flag cell: ``true``/``false``/``1``/``0`` (any case) -> 1.0/0.0, empty -> NaN (unknown)."""
+    if text == "":
+        return math.nan
+    value = _FLAG_TEXT.get(text.lower())
+    if value is None:
+        raise RunTableError(f"{where}, column {column}: expected true or false, got {text!r}")
+    return value
+
 
 KNOWN_COLUMNS: tuple[str, ...] = (
     "run",
@@ -164,7 +187,8 @@ class RunTable:
         return name in self.extra and bool(np.all(np.isfinite(self.extra[name])))
 
     def column(self, name: str) -> np.ndarray:
-        """An optional column [deg/h] (``OPTIONAL_COLUMNS``): NaN for every run when the table has none."""
+        """An optional column (``OPTIONAL_COLUMNS``; [deg/h], or 1.0/0.0 for a flag): NaN for every run when the
+        table has none."""
         if name not in OPTIONAL_COLUMNS:
             raise RunTableError(
                 f"{self.source}: unknown optional column {name!r}; expected one of {', '.join(OPTIONAL_COLUMNS)}"
@@ -214,7 +238,12 @@ class RunTable:
             for key, value in values.items():
                 cols[key].append(value)
             for key in OPTIONAL_COLUMNS:
-                if key in rec:
+                if key in FLAG_COLUMNS and key in rec:
+                    v = rec[key]
+                    if v is not None and not isinstance(v, bool):
+                        raise RunTableError(f"{where}, key {key}: expected true or false, got {v!r}")
+                    extra.setdefault(key, [math.nan] * (i - 1)).append(math.nan if v is None else float(v))
+                elif key in rec:
                     v = rec[key]
                     value = (
                         math.nan
@@ -280,7 +309,7 @@ class RunTable:
                 rec["split"] = str(self.split[i])
             for name, values in self.extra.items():
                 if math.isfinite(values[i]):
-                    rec[name] = float(values[i])
+                    rec[name] = bool(values[i]) if name in FLAG_COLUMNS else float(values[i])
             out.append(rec)
         return out
 
@@ -304,7 +333,16 @@ class RunTable:
         writer.writerow(columns)
         for rec in self.records():
             writer.writerow(
-                ["" if rec.get(c) is None else repr(rec[c]) if isinstance(rec[c], float) else rec[c] for c in columns]
+                [
+                    ""
+                    if rec.get(c) is None
+                    else str(rec[c]).lower()
+                    if isinstance(rec[c], bool)
+                    else repr(rec[c])
+                    if isinstance(rec[c], float)
+                    else rec[c]
+                    for c in columns
+                ]
             )
         with atomic_write(path, recognise=recognise_header("run,"), what="run table") as handle:
             handle.write(buf.getvalue())
@@ -556,6 +594,9 @@ def read_runs_csv(path, *, lat0_deg: float | None = None, require_truth: bool = 
                 raise RunTableError(f"{where}, column split: expected 'train' or 'test', got {sp!r}")
             split.append(sp)
             for h in optional:
+                if h in FLAG_COLUMNS:
+                    extra[h].append(_parse_flag(cell[h], where, h))
+                    continue
                 v = math.nan if cell[h] == "" else _parse_float(cell[h], where, h, "a number in deg/h")
                 _check_optional(where, h, v)
                 extra[h].append(v)

@@ -117,6 +117,14 @@ _split_option = click.option(
 )
 @click.option("--no-label-weights", is_flag=True, help="Do not weight the runs by drift_std_deg_h. Default: weighted.")
 @click.option(
+    "--flagged-labels",
+    type=click.Choice(["exclude", "keep"]),
+    default="exclude",
+    show_default=True,
+    help="Runs whose label_flagged is true (truth's label 1-sigma beyond the 1 nmi / 72 h budget): leave them "
+    "out, or keep them, down-weighted by their drift_std_deg_h.",
+)
+@click.option(
     "--scaling",
     type=click.Choice(list(SCALINGS)),
     default="standard",
@@ -165,6 +173,7 @@ def fit(
     physics_column,
     max_label_std_deg_h,
     no_label_weights,
+    flagged_labels,
     scaling,
     objective,
     method,
@@ -215,17 +224,32 @@ def fit(
                 physics_column=physics_column,
                 label_weighting="none" if no_label_weights else "auto",
                 max_label_std_deg_h=DEFAULT_MAX_LABEL_STD_DEG_H if max_label_std_deg_h is None else max_label_std_deg_h,
+                flagged_labels=flagged_labels,
             )
     except (IllConditionedError, NotPositiveDefiniteError) as exc:
         if gamma is None:
             raise
         raise OptionError(f"--gamma {gamma:g} --sigma {sigma:g}: {exc}") from None
     training = model.training
-    if training.get("left_out"):
+    flagged_out, flagged_kept = training.get("flagged_left_out", []), training.get("flagged_kept", [])
+    if flagged_out:
+        click.echo(
+            f"note: left out {len(flagged_out)} run(s) whose label truth flagged (label_flagged: 1-sigma beyond the "
+            f"1 nmi / 72 h budget; --flagged-labels keep keeps them down-weighted): {', '.join(flagged_out)}",
+            err=True,
+        )
+    too_uncertain = [r for r in training["left_out"] if r not in flagged_out]
+    if too_uncertain:
         limit = DEFAULT_MAX_LABEL_STD_DEG_H if max_label_std_deg_h is None else max_label_std_deg_h
         click.echo(
-            f"note: left out {len(training['left_out'])} run(s) whose drift_std_deg_h exceeds {limit:g} deg/h "
-            f"(too uncertain to label): {', '.join(training['left_out'])}",
+            f"note: left out {len(too_uncertain)} run(s) whose drift_std_deg_h exceeds {limit:g} deg/h "
+            f"(too uncertain to label): {', '.join(too_uncertain)}",
+            err=True,
+        )
+    if flagged_kept:
+        how = "down-weighted by their drift_std_deg_h" if training["weighted"] else "unweighted (no label weights)"
+        click.echo(
+            f"note: kept {len(flagged_kept)} run(s) whose label truth flagged, {how}: {', '.join(flagged_kept)}",
             err=True,
         )
     if training["weighted"]:
@@ -278,7 +302,8 @@ def fit(
     "--coverage",
     type=FiniteFloat(0.0, 1.0, min_open=True, max_open=True),
     default=None,
-    help="Add a jackknife interval of this coverage [-] (e.g. 0.9) from the model's leave-one-out residuals. "
+    help="Add an interval of the drift of this coverage [-] (e.g. 0.9), calibrated on the model's out-of-fold "
+    "residuals and wider away from its training runs. "
     "Default: no interval.",
 )
 @_lat0_option

@@ -14,6 +14,8 @@ __all__ = [
     "site_options",
     "site_from_options",
     "log_format_option",
+    "noise_options",
+    "noise_from_options",
     "json_option",
     "quiet_option",
     "print_json",
@@ -69,6 +71,56 @@ def log_format_option(f):
         "delimiter (docs/procedure.md, 'Logs in their own format'; examples/logs/). Default: the native columns "
         "(t_s, dtheta_x_rad, ...).",
     )(f)
+
+
+def noise_options(f):
+    """Add ``--noise FILE``, ``--gyro-arw-deg-rth`` and ``--accel-vrw-ug-rthz``: the sensor noise the smoother and
+    the label's 1-sigma assume (`gyrodrift.procedure.noise.SensorNoise`); default: measured from the log."""
+    from pathlib import Path
+
+    f = click.option(
+        "--accel-vrw-ug-rthz",
+        type=FiniteFloat(0.0, 1e6, min_open=True),
+        default=None,
+        help="Accelerometer velocity random walk [ug/sqrt(Hz)] (with --gyro-arw-deg-rth, or over --noise's). "
+        "Default: measured from the log.",
+    )(f)
+    f = click.option(
+        "--gyro-arw-deg-rth",
+        type=FiniteFloat(0.0, 1e3, min_open=True),
+        default=None,
+        help="Gyro angle random walk [deg/sqrt(h)] (with --accel-vrw-ug-rthz, or over --noise's). Default: "
+        "measured from the log.",
+    )(f)
+    return click.option(
+        "--noise",
+        "noise_file",
+        type=click.Path(dir_okay=False, path_type=Path),
+        default=None,
+        help="Noise file (TOML): [gyro] arw_deg_rth, [accel] vrw_ug_rthz, optionally [gyro] "
+        "bias_instability_deg_h, correlation_s, rrw_deg_h_rth (a scenario file works). Default: measured from "
+        "the log.",
+    )(f)
+
+
+def noise_from_options(noise_file, gyro_arw_deg_rth: float | None, accel_vrw_ug_rthz: float | None):
+    """The `SensorNoise` of the noise options, or None (measure it from the log)."""
+    from dataclasses import replace
+
+    from gyrodrift.procedure.noise import SensorNoise, load_noise_file
+
+    if noise_file is None:
+        if (gyro_arw_deg_rth is None) != (accel_vrw_ug_rthz is None):
+            raise click.UsageError("give --gyro-arw-deg-rth and --accel-vrw-ug-rthz together (or --noise FILE)")
+        if gyro_arw_deg_rth is None or accel_vrw_ug_rthz is None:
+            return None
+        return SensorNoise(arw_deg_rth=gyro_arw_deg_rth, vrw_ug_rthz=accel_vrw_ug_rthz, source="given")
+    noise = load_noise_file(noise_file)
+    if gyro_arw_deg_rth is not None:
+        noise = replace(noise, arw_deg_rth=gyro_arw_deg_rth)
+    if accel_vrw_ug_rthz is not None:
+        noise = replace(noise, vrw_ug_rthz=accel_vrw_ug_rthz)
+    return noise
 
 
 def json_option(f):

@@ -9,6 +9,8 @@ import click
 from gyrodrift.cli.options import (
     json_option,
     log_format_option,
+    noise_from_options,
+    noise_options,
     print_json,
     quiet_option,
     say_wrote,
@@ -80,6 +82,14 @@ def _open(path, site, log_format=None):
     default=None,
     help="Also write the hourly latitude-error curves (run, t_h, lat_err_arcsec) to this CSV. Default: none.",
 )
+@click.option(
+    "--smoother/--no-smoother",
+    default=True,
+    show_default=True,
+    help="Run the 16 h smoother (drift_smoother_deg_h and its 1-sigma): one more read of each log's first 16 h, "
+    "about as long as the features themselves. --no-smoother leaves those columns empty. Default: --smoother.",
+)
+@noise_options
 @json_option
 @quiet_option
 def features_command(
@@ -95,19 +105,25 @@ def features_command(
     scheduler,
     connect_timeout_s,
     curves,
+    smoother,
+    noise_file,
+    gyro_arw_deg_rth,
+    accel_vrw_ug_rthz,
     as_json,
     quiet,
 ):
     """Align each LOG, navigate 12 h and write one run-table row per log to --out.
 
     Columns: run (the log's stem), lat_deg (latitude at navigation hour 12), lat0_deg, temp_min_c,
-    temp_max_c, temp_start_c, temp_end_c (over those 12 h), and drift_deg_h with --with-truth.
+    temp_max_c, temp_start_c, temp_end_c (over those 12 h), the 12 h curve fit and the 16 h smoother with their
+    1-sigmas, and with --with-truth drift_deg_h, its 1-sigma drift_std_deg_h and label_flagged.
     """
     from gyrodrift.procedure.fleet import features_table
     from gyrodrift.procedure.writers import check_features_outputs, write_features_csv
 
     if workers is not None and scheduler is not None:
         raise click.UsageError("give --workers or --scheduler, not both")
+    noise = noise_from_options(noise_file, gyro_arw_deg_rth, accel_vrw_ug_rthz)
     check_features_outputs(out, curves, inputs=logs)
     rows = features_table(
         [str(p) for p in logs],
@@ -119,6 +135,8 @@ def features_command(
         scheduler=scheduler,
         connect_timeout_s=connect_timeout_s,
         quiet=quiet,
+        smoother=smoother,
+        noise=noise,
     )
     write_features_csv(rows, out, curves=curves, inputs=logs)
     if as_json:
@@ -152,17 +170,33 @@ def features_command(
     help="Also save the result: folder for true_drift.json, criterion.png, alignment.json and "
     "alignment_z_sigma.png, new, empty, or holding only gyrodrift's outputs (docs/outputs.md). Default: print only.",
 )
+@noise_options
 @json_option
 @quiet_option
-def truth_command(log, criterion, hours, lat0_deg, lon0_deg, height_m, log_format, out_dir, as_json, quiet):
+def truth_command(
+    log,
+    criterion,
+    hours,
+    lat0_deg,
+    lon0_deg,
+    height_m,
+    log_format,
+    out_dir,
+    noise_file,
+    gyro_arw_deg_rth,
+    accel_vrw_ug_rthz,
+    as_json,
+    quiet,
+):
     """Find the z-gyro drift [deg/h] minimising the position error of the navigation after alignment."""
     from gyrodrift.atomic import OutputFolder
     from gyrodrift.procedure.truth import find_true_drift
     from gyrodrift.procedure.writers import ALIGNMENT_FILES, TRUTH_FILES, write_alignment, write_truth
 
+    noise = noise_from_options(noise_file, gyro_arw_deg_rth, accel_vrw_ug_rthz)
     out = None if out_dir is None else OutputFolder(out_dir, "truth", TRUTH_FILES + ALIGNMENT_FILES, inputs=[log])
     imu = _open(log, site_from_options(lat0_deg, lon0_deg, height_m), log_format)
-    res = find_true_drift(imu, criterion=criterion, hours=hours, quiet=quiet)
+    res = find_true_drift(imu, criterion=criterion, hours=hours, noise=noise, quiet=quiet)
     if out is not None:
         with out.publish() as stage:
             write_truth(res, stage)
@@ -294,9 +328,23 @@ def evaluate_command(
     help="Also save the result: folder for identification.json, alignment.json and alignment_z_sigma.png, new, "
     "empty, or holding only gyrodrift's outputs (docs/outputs.md). Default: print only.",
 )
+@noise_options
 @json_option
 @quiet_option
-def identify_command(log, model_path, lat0_deg, lon0_deg, height_m, log_format, out_dir, as_json, quiet):
+def identify_command(
+    log,
+    model_path,
+    lat0_deg,
+    lon0_deg,
+    height_m,
+    log_format,
+    out_dir,
+    noise_file,
+    gyro_arw_deg_rth,
+    accel_vrw_ug_rthz,
+    as_json,
+    quiet,
+):
     """Align LOG, navigate 12 h and identify its axial drift with the model."""
     from gyrodrift.atomic import OutputFolder
     from gyrodrift.procedure.identify import identify
@@ -308,10 +356,11 @@ def identify_command(log, model_path, lat0_deg, lon0_deg, height_m, log_format, 
         write_identification,
     )
 
+    noise = noise_from_options(noise_file, gyro_arw_deg_rth, accel_vrw_ug_rthz)
     files = IDENTIFICATION_FILES + ALIGNMENT_FILES
     out = None if out_dir is None else OutputFolder(out_dir, "identify", files, inputs=[log, model_path])
     imu = _open(log, site_from_options(lat0_deg, lon0_deg, height_m), log_format)
-    res = identify(imu, model_path, quiet=quiet)
+    res = identify(imu, model_path, noise=noise, quiet=quiet)
     doc = identification_document(res)
     if out is not None:
         with out.publish() as stage:

@@ -176,5 +176,10 @@ def features_run_table(features: list[RunFeatures], source: str = "<features>") 
                 "drift_smoother_std_deg_h",
                 "drift_std_deg_h",
             )
-        },
+        }
+        | (
+            {"label_flagged": np.array([float(f.label_flagged) for f in features])}
+            if all(f.truth is not None for f in features)
+            else {}
+        ),
     )

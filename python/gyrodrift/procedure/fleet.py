@@ -18,6 +18,7 @@ from gyrodrift.cluster import DEFAULT_CONNECT_TIMEOUT_S, DaskMissingError, Sched
 from gyrodrift.log_format import LogFormat, load_log_format
 from gyrodrift.logs import LogError, Site, open_log
 from gyrodrift.procedure.features import extract_features
+from gyrodrift.procedure.noise import SensorNoise
 from gyrodrift.procedure.results import RunFeatures
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 from gyrodrift.progress import progress
@@ -38,6 +39,8 @@ def _features_task(
     criterion: str,
     lat0_deg: float | None,
     chunk_samples: int,
+    smoother: bool = True,
+    noise: SensorNoise | None = None,
 ) -> RunFeatures:
     log = open_log(path, site=site, format=log_format)
     return extract_features(
@@ -46,6 +49,8 @@ def _features_task(
         with_truth=with_truth,
         criterion=criterion,
         lat0_deg=lat0_deg,
+        smoother=smoother,
+        noise=noise,
         chunk_samples=chunk_samples,
         quiet=True,
     )
@@ -66,6 +71,8 @@ def features_table(
     connect_timeout_s: float = DEFAULT_CONNECT_TIMEOUT_S,
     chunk_samples: int = 100_000,
     quiet: bool = True,
+    smoother: bool = True,
+    noise: SensorNoise | None = None,
 ) -> list[RunFeatures]:
     """Extract the features (and optionally the true drift) of every log.
 
@@ -80,8 +87,9 @@ def features_table(
         The log format description of every log (`gyrodrift.log_format`, CLI ``--format``); None: native columns.
     lat0_deg : float, optional
         True latitude for the table (default: each log's site latitude).
-    timeline, with_truth, criterion, chunk_samples
-        As in `extract_features`.
+    timeline, with_truth, criterion, chunk_samples, smoother, noise
+        As in `extract_features` (``smoother=False`` skips the 16 h smoother's read of each log: its columns
+        are then empty).
     workers : int, optional
         Run on a ``dask.distributed.LocalCluster`` with this many workers (one thread each).
     scheduler : str, optional
@@ -122,7 +130,7 @@ def features_table(
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
         raise LogError(f"run name(s) {', '.join(dup)} appear more than once (run = the log's file stem)")
-    args = (site, fmt, timeline, with_truth, criterion, lat0_deg, chunk_samples)
+    args = (site, fmt, timeline, with_truth, criterion, lat0_deg, chunk_samples, smoother, noise)
     start = time.monotonic()
 
     def done(bar, i: int, res: RunFeatures) -> None:

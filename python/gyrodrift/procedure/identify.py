@@ -5,10 +5,11 @@ maps the run's features (latitude at 12 h, temperature over the 12 h) to the axi
 constant to subtract from the z gyro. Beside it the result carries the physics inversion of the same latitude
 error (`gyrodrift.baselines.physics_inversion`), the 12 h curve fit of the latitude and longitude error curves
 with its 1-sigma (`gyrodrift.curve_fit`), the 16 h smoother's drift with its 1-sigma (`gyrodrift.procedure.smoother`:
-the Cramer-Rao line of these 16 h) and the alignment's own z-drift estimate with its 1-sigma. The
-model's interval is a normalised jackknife interval (``DriftModel.predict_interval``, default coverage 90 %):
-the leave-one-out residuals of its training runs scaled by the LSSVR's predictive scale, wider where the run's
-inputs are far from the training runs'. A run outside the training runs' range (per input or jointly,
+the Cramer-Rao line of these 16 h) and the alignment's own z-drift estimate with its 1-sigma. The model's
+interval is a normalised cross-validation interval for the run's label (``DriftModel.predict_interval``, default
+coverage 90 %; conservative for the drift itself): the out-of-fold residuals of its training runs scaled by the
+spread of a Gaussian process with fitted length scales (`gyrodrift.spread`), wider where the run's inputs are
+far from the training runs'. A run outside the training runs' range (per input or jointly,
 ``DriftModel.check_inputs``) is flagged (``outside_training_range``, ``range_warnings``): its drift is an
 extrapolation. ``model_std_deg_h`` stays None: the interval is empirical, not a Gaussian 1-sigma.
 """
@@ -24,6 +25,7 @@ from gyrodrift.baselines import physics_inversion
 from gyrodrift.logs import ImuLog
 from gyrodrift.model import DriftModel, min_runs_for_coverage
 from gyrodrift.procedure.features import extract_features, features_run_table
+from gyrodrift.procedure.noise import SensorNoise
 from gyrodrift.procedure.results import Identification, RunFeatures
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 
@@ -31,8 +33,9 @@ __all__ = ["identify", "NO_UNCERTAINTY_NOTE", "INTERVAL_NOTE"]
 
 NO_UNCERTAINTY_NOTE = "the LSSVR gives a point estimate, no predictive uncertainty"
 INTERVAL_NOTE = (
-    "normalised jackknife interval from the model's leave-one-out residuals on its {n} training runs, scaled by "
-    "the LSSVR's predictive scale at this run (empirical; wider away from the training runs)"
+    "normalised cross-validation interval of the run's label: the out-of-fold residuals of the model's {n} "
+    "training runs, scaled by the spread of a Gaussian process with fitted length scales at this run (empirical; "
+    "wider away from the training runs)"
 )
 
 
@@ -55,6 +58,7 @@ def identify(
     features: RunFeatures | None = None,
     chunk_samples: int = 100_000,
     coverage: float = 0.9,
+    noise: SensorNoise | None = None,
     quiet: bool = True,
 ) -> Identification:
     """Identify the axial drift of a run with a fitted drift model.
@@ -70,7 +74,9 @@ def identify(
     features : RunFeatures, optional
         Reuse features already extracted from this log.
     coverage : float
-        Coverage of the jackknife interval (0.9: 90 %).
+        Coverage of the interval (0.9: 90 %).
+    noise : SensorNoise, optional
+        Noise model of the 16 h smoother (default: measured from the log).
 
     Returns
     -------
@@ -81,7 +87,9 @@ def identify(
 
         model = load_model(model)
     if features is None:
-        features = extract_features(log, timeline=timeline, lat0_deg=lat0_deg, chunk_samples=chunk_samples, quiet=quiet)
+        features = extract_features(
+            log, timeline=timeline, lat0_deg=lat0_deg, noise=noise, chunk_samples=chunk_samples, quiet=quiet
+        )
     table = features_run_table([features], source=log.label)
     drift = float(model.predict(table)[0])
     interval, note = None, NO_UNCERTAINTY_NOTE

@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -27,7 +28,7 @@ from gyrodrift.errors import InputError
 from gyrodrift.logs import ImuLog
 from gyrodrift.units import DEG, DEG_PER_H, DEG_PER_SQRT_H, HOUR, MICRO_G
 
-__all__ = ["SensorNoise", "estimate_white_noise", "NOISE_FLOOR"]
+__all__ = ["SensorNoise", "estimate_white_noise", "load_noise_file", "NOISE_FLOOR"]
 
 NOISE_FLOOR = {"arw_deg_rth": 1e-5, "vrw_ug_rthz": 0.05}
 """Smallest densities the filters are given (a noise-free log still needs some process noise: without it the
@@ -118,6 +119,38 @@ class SensorNoise:
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
+
+
+def load_noise_file(path) -> SensorNoise:
+    """A `SensorNoise` from a TOML file with ``[gyro]`` and ``[accel]`` tables (a scenario file, or the
+    ``scenario_noise`` block of `gyrodrift allan` saved as TOML); other keys of those tables (biases, ...) are
+    ignored. ``arw_deg_rth`` and ``vrw_ug_rthz`` are required. Errors (`InputError`) name the file and the key.
+    """
+    import tomllib
+
+    p = Path(path)
+    try:
+        data = tomllib.loads(p.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise InputError(f"{p}: cannot read the noise file: {exc.strerror}") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{p}: not a UTF-8 text file (expected a TOML noise file)") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{p}: not a valid TOML file: {exc}") from None
+    block = {part: data[part] for part in ("gyro", "accel") if isinstance(data.get(part), Mapping)}
+    for key, part in (("arw_deg_rth", "gyro"), ("vrw_ug_rthz", "accel")):
+        if key not in block.get(part, {}):
+            raise InputError(
+                f"{p}: missing key [{part}] {key} (expected a [gyro] arw_deg_rth and an [accel] vrw_ug_rthz)"
+            )
+    for part, sub in block.items():
+        for key, value in sub.items():
+            if key in _KEYS and (isinstance(value, bool) or not isinstance(value, int | float)):
+                raise InputError(f"{p}: key [{part}] {key}: expected a number, got {value!r}")
+    try:
+        return SensorNoise.from_block(block, source=str(p))
+    except InputError as exc:
+        raise InputError(f"{p}: {exc}") from None
 
 
 def _robust_sigma(d2: np.ndarray) -> np.ndarray:

@@ -392,11 +392,13 @@ class RunFeatures:
         return (self.lat_deg - self.lat0_deg) * 3600.0
 
     def row(self) -> dict[str, Any]:
-        """The run-table row (``RUN_TABLE_COLUMNS``, plus ``drift_deg_h`` and ``drift_std_deg_h`` when known)."""
+        """The run-table row (``RUN_TABLE_COLUMNS``, plus ``drift_deg_h``, ``drift_std_deg_h`` and
+        ``label_flagged`` when known)."""
         r = {column: getattr(self, column) for column in RUN_TABLE_COLUMNS}
         if math.isfinite(self.drift_deg_h):
             r["drift_deg_h"] = self.drift_deg_h
             r["drift_std_deg_h"] = self.drift_std_deg_h
+            r["label_flagged"] = bool(self.label_flagged)
         return r
 
 

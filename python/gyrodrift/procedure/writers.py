@@ -169,22 +169,31 @@ def write_identification(res: Identification, out: str | os.PathLike[str] | Stag
     return {"json": stage.folder / "identification.json"}
 
 
+def _cell(value) -> str:
+    """A run-table cell: text as is, a flag ``true``/``false``, a float by ``repr``, NaN (unknown) empty."""
+    if isinstance(value, str):
+        return value
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return repr(float(value)) if math.isfinite(value) else ""
+
+
 def features_csv_text(features: Sequence[RunFeatures]) -> str:
-    """The run table of `features`: ``RUN_TABLE_COLUMNS`` (+ ``drift_deg_h`` and its 1-sigma ``drift_std_deg_h``
-    when every run has a truth).
+    """The run table of `features`: ``RUN_TABLE_COLUMNS`` (+ ``drift_deg_h``, its 1-sigma ``drift_std_deg_h`` and
+    ``label_flagged`` (``true``/``false``: `truth` flagged the label) when every run has a truth).
 
     Floats are written with ``repr`` (shortest exact round trip), so a latitude keeps its 1e-12 deg digits.
     Readable by `gyrodrift.runs.read_runs_csv`.
     """
     with_truth = bool(features) and all(math.isfinite(f.drift_deg_h) for f in features)
-    cols = list(RUN_TABLE_COLUMNS) + (["drift_deg_h", "drift_std_deg_h"] if with_truth else [])
+    cols = list(RUN_TABLE_COLUMNS) + (["drift_deg_h", "drift_std_deg_h", "label_flagged"] if with_truth else [])
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(cols)
     for f in features:
         r = f.row()
         # an unknown value (NaN: e.g. no curve fit) is an empty cell, which read_runs_csv reads as unknown
-        w.writerow([r[c] if c == "run" else repr(float(r[c])) if math.isfinite(r[c]) else "" for c in cols])
+        w.writerow([_cell(r[c]) for c in cols])
     return buf.getvalue()
 
 

@@ -1,0 +1,157 @@
+"""The predictive spread of a drift model: a Gaussian process whose length scales are fitted to the runs.
+
+The drift model's point estimate is the LSSVR's (`gyrodrift.model`); its interval needs, for every run, how
+far that estimate may be from the run's drift. `SpreadGP` models the LSSVR's target (the drift, or a hybrid's
+label minus physics) over the model's scaled inputs as a Gaussian process (scikit-learn
+``GaussianProcessRegressor``)::
+
+    y_i = b + beta'z_i + g(z_i) + u_i + n_i,
+    b ~ N(0, c0), beta ~ N(0, sd(y)^2 I), g ~ GP(0, c1 RBF(l_1 .. l_d)), u_i ~ N(0, tau^2), n_i ~ N(0, s_i^2)
+
+on the inputs standardised by the GP itself (z; so its bounds hold whatever the model's scaling), with a
+constant ``b`` (the LSSVR's unregularised bias), a linear trend ``beta`` whose prior is one standard deviation
+of the target per standard deviation of each input (fixed, ``DotProduct``: its posterior is learnt from the
+runs, and its uncertainty grows linearly with the distance from them, which is what makes an extrapolation
+wider even where the RBF part found an input irrelevant), one RBF length scale per input (ARD), ``u`` the
+run-to-run variation the inputs do not explain (a ``WhiteKernel``) and ``n`` the label noise, whose 1-sigma
+``s_i`` is known (``drift_std_deg_h``, passed as the GP's ``alpha``; zero when the table has none, then ``tau``
+absorbs it). The hyperparameters (c0, c1, l, tau) are fitted by maximising the marginal likelihood (ML-II,
+L-BFGS from one start and ``n_restarts`` random ones, seeded).
+
+What it gives (unit of y, deg/h):
+
+* ``predict_std(Z)``: the predictive standard deviation of a new run's drift, without label noise,
+  ``sqrt(var(b + beta'z + g(z)) + tau^2)``. Far from the training inputs (on the scale of the fitted length
+  scales, not of a tuned kernel width) ``g`` reverts to its prior and the trend's uncertainty grows with the
+  distance;
+* ``loo_std_``: the leave-one-out predictive standard deviation of each training label, noise included,
+  ``1 / sqrt((K_y^-1)_ii)`` with ``K_y = K + diag(tau^2 + s_i^2)`` (Rasmussen & Williams 2006, eq. 5.12).
+
+The model's interval (`gyrodrift.model.DriftModel.predict_interval`) is a normalised jackknife on these: the
+scores ``|r_i| / loo_std_i`` of the LSSVR's leave-one-out residuals, their conformal quantile ``q``, and the
+half-width ``q predict_std(x)``.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+from scipy.linalg import cho_solve
+from sklearn.exceptions import ConvergenceWarning
+from sklearn.gaussian_process import GaussianProcessRegressor
+from sklearn.gaussian_process.kernels import RBF, ConstantKernel, DotProduct, WhiteKernel
+
+from gyrodrift.errors import InputError
+from gyrodrift.kernels import check_matrix_memory
+
+__all__ = ["SpreadGP", "LENGTH_SCALE_BOUNDS"]
+
+LENGTH_SCALE_BOUNDS = (0.3, 1e3)
+"""Bounds of the RBF length scales [standard deviations of the training inputs]. Below 0.3 a length scale is
+shorter than the spacing of a few dozen runs and the likelihood rewards interpolating single runs (measured on
+the identification study's fleets: lengths of 0.02 made every new run an extrapolation); above 1e3 an input
+does not matter."""
+
+_AMPLITUDE_BOUNDS = (1e-4, 1e4)
+_NOISE_BOUNDS = (1e-6, 1e1)
+_JITTER = 1e-10
+
+
+def _kernel(n_inputs: int):
+    return (
+        ConstantKernel(1.0, _AMPLITUDE_BOUNDS)
+        + ConstantKernel(1.0, _AMPLITUDE_BOUNDS) * RBF(np.ones(n_inputs), LENGTH_SCALE_BOUNDS)
+        + WhiteKernel(0.1, _NOISE_BOUNDS)
+        + ConstantKernel(1.0, "fixed") * DotProduct(0.0, "fixed")
+    )
+
+
+class SpreadGP:
+    """A Gaussian process fitted for its predictive spread (module docstring).
+
+    Parameters (keyword-only)
+    -------------------------
+    theta : array_like or None
+        Log hyperparameters of a previous fit (``theta_``): used as they are, nothing is optimised (how a
+        saved model is rebuilt). None: fitted by ML-II.
+    n_restarts : int
+        Random restarts of the likelihood optimiser (seeded by ``random_state``).
+    random_state : int
+
+    Attributes (after ``fit``)
+    --------------------------
+    gp_ : GaussianProcessRegressor
+    theta_ : ndarray
+        The fitted log hyperparameters (``gp_.kernel_.theta``).
+    loo_std_ : ndarray, shape (n_runs,)
+        Leave-one-out predictive 1-sigma of each training label, label noise included [unit of y].
+    """
+
+    def __init__(self, *, theta=None, n_restarts: int = 0, random_state: int = 0) -> None:
+        self.theta = theta
+        self.n_restarts = n_restarts
+        self.random_state = random_state
+
+    def fit(self, Z, y, label_std=None) -> SpreadGP:
+        """Fit on inputs ``Z`` (n_runs, n_inputs), targets ``y`` (n_runs,) and label 1-sigmas ``label_std``
+        (n_runs,; same unit as y; None or NaN: unknown, taken as 0)."""
+        Z = np.asarray(Z, float)
+        y = np.asarray(y, float)
+        n = len(y)
+        if Z.ndim != 2 or Z.shape[0] != n or n < 3:
+            raise InputError(f"the spread model needs at least 3 runs with inputs, got Z {Z.shape}, y {y.shape}")
+        check_matrix_memory(n, n, 4, "fitting the interval's Gaussian process", unit="runs")
+        s = np.zeros(n) if label_std is None else np.nan_to_num(np.asarray(label_std, float), nan=0.0)
+        self.z_mean_ = Z.mean(axis=0)
+        z_scale = Z.std(axis=0)
+        self.z_scale_ = np.where(z_scale > 0, z_scale, 1.0)
+        self.y_mean_ = float(y.mean())
+        self.y_scale_ = float(y.std()) or float(np.max(s)) or 1.0
+        alpha = (s / self.y_scale_) ** 2 + _JITTER
+        kernel = _kernel(Z.shape[1])
+        fixed = self.theta is not None
+        if fixed:
+            kernel = kernel.clone_with_theta(np.asarray(self.theta, float))
+        gp = GaussianProcessRegressor(
+            kernel,
+            alpha=alpha,
+            optimizer=None if fixed else "fmin_l_bfgs_b",
+            n_restarts_optimizer=0 if fixed else self.n_restarts,
+            random_state=self.random_state,
+        )
+        with warnings.catch_warnings():  # a length scale at its upper bound: that input does not matter
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            gp.fit(self._z(Z), (y - self.y_mean_) / self.y_scale_)
+        self.gp_ = gp
+        self.theta_ = np.array(gp.kernel_.theta, float)
+        inv_diag = np.diag(cho_solve((gp.L_, True), np.eye(n)))
+        self.loo_std_ = self.y_scale_ / np.sqrt(inv_diag)
+        return self
+
+    def _z(self, Z) -> np.ndarray:
+        return (np.asarray(Z, float) - self.z_mean_) / self.z_scale_
+
+    def predict_std(self, Z) -> np.ndarray:
+        """Predictive 1-sigma of a new run's drift at each row of ``Z`` [unit of y], label noise excluded
+        (the run-to-run variation ``tau`` included)."""
+        Z = np.asarray(Z, float)
+        check_matrix_memory(len(Z), len(self.loo_std_), 3, "the interval's Gaussian process", unit="runs")
+        _, std = self.gp_.predict(self._z(Z), return_std=True)  # includes the WhiteKernel's tau^2
+        return self.y_scale_ * np.asarray(std, float)
+
+    def _part(self, kind):
+        """The fitted kernel's component of type ``kind`` (the first one)."""
+        return next(v for v in self.gp_.kernel_.get_params().values() if isinstance(v, kind))
+
+    def length_scales(self) -> np.ndarray:
+        """The fitted RBF length scales [standard deviations of each training input]."""
+        return np.atleast_1d(np.asarray(self._part(RBF).length_scale, float))
+
+    def describe(self) -> str:
+        """The fitted kernel in words (for reports)."""
+        tau = self.y_scale_ * np.sqrt(self._part(WhiteKernel).noise_level)
+        return (
+            f"RBF length scales {', '.join(f'{v:.3g}' for v in self.length_scales())} (input standard deviations), "
+            f"unexplained run-to-run 1-sigma {tau:.2e} deg/h"
+        )
