@@ -139,6 +139,7 @@ def _model_entry(name: str, family: str, model: DriftModel, data, **extra) -> di
         _, lo, hi = model.predict_interval(data.test, 0.9)
         true = data.test.drift_deg_h
         extra["interval_90_half_width_deg_h"] = float(np.mean(hi - lo) / 2)  # mean: it depends on the run
+        extra["interval_90_half_widths_deg_h"] = [float(h) for h in (hi - lo) / 2]  # per test run
         extra["test_covered_by_interval_90"] = int(np.sum((lo <= true) & (true <= hi)))
     return score(
         name,
