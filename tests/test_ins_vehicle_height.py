@@ -177,3 +177,39 @@ def test_a_formatted_log_names_its_own_height_column(tmp_path):
         for _ in log.chunks(1000):
             pass
     assert f"{path}, row 13, column Baro" in str(info.value) and "expected a finite number" in str(info.value)
+
+
+def test_evaluate_damps_the_vertical_channel_on_a_moving_base(tmp_path):
+    """`evaluate_compensation` on the hilly drive navigates with the damped channel: towards the route's height for
+    the scenario simulated on the fly (whose route is also the reference track: before, such a log was compared
+    with the static site, 6.8 nmi off), towards the log's ``ref_height_m`` column for a file that has one. Both
+    stay on the route to metres, and agree with each other."""
+    from gyrodrift.logs import ImuLog
+    from gyrodrift.procedure.evaluate import evaluate_compensation
+    from gyrodrift.procedure.timeline import Timeline
+
+    s = Scenario.from_dict(
+        {
+            "site": {"height_m": 120.0},
+            "run": {"rate_hz": 20.0, "duration_h": 0.4},
+            "rotation": {"scheme": "reciprocating"},
+            "attitude": {"yaw_deg": 25.0},
+            "trajectory": {"static_h": 0.1, "repeat": True, "segments": HILLS},
+        },
+        source="hills.toml",
+    )
+    timeline = Timeline(align_h=0.1, features_h=0.1, truth_h=0.25, coarse_s=60.0)
+    on_the_fly = evaluate_compensation(ImuLog.from_scenario(s), 0.0, timeline=timeline, decimation_s=10.0).to_dict()
+    assert on_the_fly["reference"] == "<route>"
+    assert on_the_fly["vertical"] == "damped"
+    assert on_the_fly["vertical_reference"] == "height of the reference track <route>"
+
+    imu = simulate(s, out_dir=tmp_path / "sim")
+    true_h = pq.read_table(imu, columns=["true_height_m"]).column(0).to_numpy()
+    baro = _with_height_column(imu, true_h, tmp_path / "baro.parquet")
+    from_column = evaluate_compensation(open_log(baro), 0.0, timeline=timeline, decimation_s=10.0).to_dict()
+    assert from_column["vertical"] == "damped"
+    assert from_column["vertical_reference"].startswith("ref_height_m column of ")
+
+    a, b = on_the_fly["before"]["max_pos_err_nmi"], from_column["before"]["max_pos_err_nmi"]
+    assert a < 1e-3 and abs(a - b) < 1e-5, (a, b)

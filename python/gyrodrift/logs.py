@@ -262,8 +262,10 @@ class ImuLog:
         blocks: Callable[[int], Iterator[_Raw]] | None = None,
         log_format: LogFormat | None = None,
         t0_ns: int | None = None,
+        scenario: Any = None,
     ):
         self.path = path
+        self.scenario = scenario  # the `gyrodrift.ins.Scenario` of a log simulated on the fly (its route), else None
         self.log_format = log_format
         self._t0_ns = t0_ns
         self.label = label
@@ -418,6 +420,7 @@ class ImuLog:
             has_truth_columns=True,
             name="scenario",
             blocks=blocks,
+            scenario=s,
         )
 
     # ------------------------------------------------------------------------------------------

@@ -36,6 +36,7 @@ __all__ = [
     "VEHICLE_COLUMNS",
     "SUMMARY_FORMAT",
     "VERTICAL_CHANNELS",
+    "vertical_reference",
 ]
 
 NAV_COLUMNS = (
@@ -375,7 +376,7 @@ def navigate(
     if ref is not None:
         ref.require_cover(start / rate, (start + n_total) / rate, f"navigating {log.label}")
     channel = vertical or ("damped" if log.has_reference_height else "fixed")
-    heights, vertical_ref = _vertical_reference(channel, log, ref)
+    heights, vertical_ref = vertical_reference(channel, log, ref)
     nav = _core.Navigator(
         _core.NavigatorConfig(
             lat_rad=init["lat_deg"] * DEG,
@@ -466,7 +467,7 @@ class _Run:
     vertical_reference: str | None = None
 
 
-def _vertical_reference(
+def vertical_reference(
     channel: str, log: ImuLog, ref: ReferenceTrack | None
 ) -> tuple[Callable[[LogChunk], np.ndarray] | None, str | None]:
     """The damped channel's reference heights per piece of the log and what the summary calls them: the log's

@@ -90,6 +90,8 @@ def evaluate_compensation(
         source=source,
         reference=ref,
         start_s=alignment.samples_used / alignment.rate_hz,
+        vertical=res.vertical,
+        vertical_reference=res.vertical_reference,
     )
 
 

@@ -20,6 +20,7 @@ import numpy as np
 
 from gyrodrift.errors import OptionError
 from gyrodrift.ins.nav_errors import position_errors
+from gyrodrift.ins.navigate import vertical_reference
 from gyrodrift.ins.stream import run_navigators
 from gyrodrift.logs import ImuLog, LogError
 from gyrodrift.procedure.results import Alignment, NavCurve, PassResult, TemperatureStats
@@ -125,9 +126,13 @@ def navigate_after_alignment(
         temp["max"] = max(temp["max"], float(tc.max()))
         temp["end"] = float(tc[-1])
 
+    # The vertical channel as `navigate` chooses it: damped towards the log's ref_height_m column, else towards
+    # the reference track's height (moving base); held fixed on a static base without a height column.
+    channel = "damped" if log.has_reference_height or reference is not None else "fixed"
+    heights, vertical_ref = vertical_reference(channel, log, reference)
     navs = []
     for d in drifts_deg_h:
-        nav = _core.Navigator(alignment.navigator_config())
+        nav = _core.Navigator(alignment.navigator_config(vertical=channel))
         nav.set_gyro_bias(alignment.gyro_compensation_rad_s(float(d)))
         nav.set_accel_bias(alignment.accel_compensation_m_s2())
         navs.append(nav)
@@ -141,6 +146,7 @@ def navigate_after_alignment(
         decimation=dec,
         keys=("lat_rad", "lon_rad"),
         observe=temperature,
+        reference=heights,
         threads=threads,
         chunk_samples=chunk_samples,
         quiet=quiet,
@@ -183,4 +189,10 @@ def navigate_after_alignment(
         temperature_stats = TemperatureStats(
             float(temperature_hours), temp["start"], temp["end"], float(temp["min"]), float(temp["max"])
         )
-    return PassResult(curves=curves, temperature=temperature_stats, hours=float(hours))
+    return PassResult(
+        curves=curves,
+        temperature=temperature_stats,
+        hours=float(hours),
+        vertical=channel,
+        vertical_reference=vertical_ref,
+    )

@@ -103,8 +103,9 @@ class Alignment:
         """Its 1-sigma at the end of alignment [deg/h]."""
         return self.gyro_bias_std_deg_h[2]
 
-    def navigator_config(self) -> _core.NavigatorConfig:
-        """SI config of `_core.Navigator` starting at the end of alignment (static site, aligned state)."""
+    def navigator_config(self, vertical: str = "fixed") -> _core.NavigatorConfig:
+        """SI config of `_core.Navigator` starting at the end of alignment (static site, aligned state), with the
+        vertical channel `vertical` ("fixed" or "damped")."""
         from gyrodrift import _core
 
         return _core.NavigatorConfig(
@@ -116,7 +117,7 @@ class Alignment:
             roll_rad=self.roll_deg * DEG,
             yaw_rad=self.yaw_deg * DEG,
             rate_hz=float(self.rate_hz),
-            vertical="fixed",
+            vertical=vertical,
         )
 
     def gyro_compensation_rad_s(self, z_drift_deg_h: float) -> list[float]:
@@ -198,11 +199,14 @@ class TemperatureStats:
 
 @dataclass(frozen=True)
 class PassResult:
-    """Curves of the navigators of one read (in the order of the drifts asked) and the temperature."""
+    """Curves of the navigators of one read (in the order of the drifts asked) and the temperature; the vertical
+    channel the navigators used and its reference height's source (as in `Evaluation`)."""
 
     curves: list[NavCurve]
     temperature: TemperatureStats | None
     hours: float
+    vertical: str = "fixed"
+    vertical_reference: str | None = None
 
 
 @dataclass(frozen=True)
@@ -421,6 +425,9 @@ class Evaluation:
     start_s : float
         Log time of the navigation start [s] (the end of the alignment): curve time t_h is log time
         start_s + 3600 t_h.
+    vertical, vertical_reference : str, str or None
+        The navigators' vertical channel ("fixed" on a static base; "damped" on a moving base or when the log has
+        a ``ref_height_m`` column) and what its reference height was (the column, the reference track's height).
     """
 
     run: str
@@ -432,6 +439,8 @@ class Evaluation:
     source: str = "given"
     reference: Any = field(default=None, repr=False)
     start_s: float = 0.0
+    vertical: str = "fixed"
+    vertical_reference: str | None = None
 
     @property
     def before_final_nmi(self) -> float:
@@ -449,6 +458,8 @@ class Evaluation:
             "drift_deg_h": self.drift_deg_h,
             "drift_source": self.source,
             "reference": None if self.reference is None else self.reference.label,
+            "vertical": self.vertical,
+            "vertical_reference": self.vertical_reference,
             "hours": self.hours,
             "before": {"final_pos_err_nmi": self.before.final_nmi, "max_pos_err_nmi": self.before.max_nmi},
             "after": {"final_pos_err_nmi": self.after.final_nmi, "max_pos_err_nmi": self.after.max_nmi},
