@@ -328,22 +328,7 @@ fn array_n3<'py>(obj: &Bound<'py, PyAny>, key: &'static str) -> PyResult<PyReado
         }
     }
     let expected = "expected an (n, 3) array of real numbers (float64; float32 and integers are converted)";
-    let np = obj.py().import("numpy")?;
-    let arr = np
-        .call_method1("asarray", (obj,))
-        .map_err(|_| arg_err(key, format!("{expected}, got {}", type_name(obj))))?;
-    let dtype = arr.getattr("dtype")?;
-    let kind: String = dtype.getattr("kind")?.extract()?;
-    if !matches!(kind.as_str(), "f" | "i" | "u") {
-        return Err(arg_err(key, format!("{expected}, got dtype {}", dtype.str()?)));
-    }
-    let shape: Vec<usize> = arr.getattr("shape")?.extract()?;
-    if shape.len() != 2 || shape[1] != 3 {
-        return Err(arg_err(key, format!("{expected}, got shape {shape:?}")));
-    }
-    let kwargs = pyo3::types::PyDict::new(obj.py());
-    kwargs.set_item("dtype", "float64")?;
-    np.call_method("ascontiguousarray", (arr,), Some(&kwargs))?
+    real_f64_array(obj, key, expected, |shape| shape.len() == 2 && shape[1] == 3)?
         .extract::<PyReadonlyArray2<'py, f64>>()
         .map_err(|_| arg_err(key, format!("{expected}, got {}", type_name(obj))))
 }
@@ -356,6 +341,20 @@ fn array_1<'py>(obj: &Bound<'py, PyAny>, key: &'static str) -> PyResult<PyReadon
         }
     }
     let expected = "expected an (n,) array of real numbers (float64; float32 and integers are converted)";
+    real_f64_array(obj, key, expected, |shape| shape.len() == 1)?
+        .extract::<PyReadonlyArray1<'py, f64>>()
+        .map_err(|_| arg_err(key, format!("{expected}, got {}", type_name(obj))))
+}
+
+/// `obj` as a float64 C-contiguous numpy array (numpy converts real dtypes and copies when needed), or a
+/// `CoreError` naming `key`, what was `expected` and what came: not an array, a dtype that is not real (complex,
+/// bool, strings, objects), or a shape `shape_ok` refuses.
+fn real_f64_array<'py>(
+    obj: &Bound<'py, PyAny>,
+    key: &'static str,
+    expected: &str,
+    shape_ok: impl Fn(&[usize]) -> bool,
+) -> PyResult<Bound<'py, PyAny>> {
     let np = obj.py().import("numpy")?;
     let arr = np
         .call_method1("asarray", (obj,))
@@ -366,14 +365,12 @@ fn array_1<'py>(obj: &Bound<'py, PyAny>, key: &'static str) -> PyResult<PyReadon
         return Err(arg_err(key, format!("{expected}, got dtype {}", dtype.str()?)));
     }
     let shape: Vec<usize> = arr.getattr("shape")?.extract()?;
-    if shape.len() != 1 {
+    if !shape_ok(&shape) {
         return Err(arg_err(key, format!("{expected}, got shape {shape:?}")));
     }
     let kwargs = pyo3::types::PyDict::new(obj.py());
     kwargs.set_item("dtype", "float64")?;
-    np.call_method("ascontiguousarray", (arr,), Some(&kwargs))?
-        .extract::<PyReadonlyArray1<'py, f64>>()
-        .map_err(|_| arg_err(key, format!("{expected}, got {}", type_name(obj))))
+    np.call_method("ascontiguousarray", (arr,), Some(&kwargs))
 }
 
 /// Both increment arrays of a `process` call (see `array_n3`).
