@@ -43,7 +43,6 @@ import os
 import re
 import socket
 import time
-import tomllib
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -52,6 +51,7 @@ from typing import Any
 import numpy as np
 
 from gyrodrift.errors import InputError, OptionError, OutputError
+from gyrodrift.toml_input import read_toml
 
 __all__ = [
     "CAMPAIGN_FORMAT",
@@ -383,12 +383,7 @@ def parse_campaign(data: Mapping[str, Any], source: str = "<campaign>") -> Campa
 def load_campaign(path: str | os.PathLike[str]) -> Campaign:
     """Read and validate a campaign file (TOML); `CampaignError` naming the file and key otherwise."""
     p = Path(path)
-    try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as exc:
-        raise CampaignError(f"{p}: not a valid TOML file: {exc}") from None
-    except UnicodeDecodeError:
-        raise CampaignError(f"{p}: not a UTF-8 text file") from None
+    data = read_toml(p, CampaignError, expected="a campaign TOML file")
     return parse_campaign(data, source=str(p))
 
 

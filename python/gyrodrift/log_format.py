@@ -35,15 +35,14 @@ from __future__ import annotations
 
 import math
 import os
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from gyrodrift.errors import InputError
+from gyrodrift.toml_input import read_toml
 
 __all__ = ["LogFormatError", "LogFormat", "ColumnSpec", "load_log_format", "QUANTITIES", "UNITS"]
 
@@ -210,24 +209,8 @@ def load_log_format(path: str | os.PathLike[str] | LogFormat) -> LogFormat:
     """
     if isinstance(path, LogFormat):
         return path
-    p = Path(path)
     source = str(path)
-    try:
-        raw = p.read_bytes()
-    except FileNotFoundError:
-        raise LogFormatError(f"{source}: no such file (expected a log format TOML file)") from None
-    except OSError as exc:
-        raise LogFormatError(f"{source}: cannot read: {exc.strerror or exc}") from None
-    if len(raw) > MAX_FORMAT_BYTES:
-        raise LogFormatError(f"{source}: {len(raw)} bytes, a log format file holds at most {MAX_FORMAT_BYTES}")
-    try:
-        data = tomllib.loads(raw.decode("utf-8"))
-    except UnicodeDecodeError:
-        raise LogFormatError(f"{source}: not UTF-8 text") from None
-    except (tomllib.TOMLDecodeError, ValueError) as exc:
-        raise LogFormatError(f"{source}: invalid TOML: {exc}") from None
-    except RecursionError:
-        raise LogFormatError(f"{source}: invalid TOML: arrays or tables nested too deeply") from None
+    data = read_toml(path, LogFormatError, expected="a log format TOML file", max_bytes=MAX_FORMAT_BYTES)
     return LogFormat.from_dict(data, source)
 
 

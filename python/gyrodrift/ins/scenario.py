@@ -17,7 +17,6 @@ import csv
 import dataclasses
 import math
 import os
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -25,6 +24,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, cast
 
 from gyrodrift.errors import InputError
 from gyrodrift.site import Site
+from gyrodrift.toml_input import read_toml
 from gyrodrift.units import ARCSEC, DEG, DEG_PER_H, DEG_PER_SQRT_H, HOUR, MICRO_G
 
 if TYPE_CHECKING:
@@ -382,24 +382,7 @@ def load_scenario(path: str | os.PathLike[str]) -> Scenario:
     """
     p = Path(path)
     source = str(path)
-    try:
-        raw = p.read_bytes()
-    except FileNotFoundError:
-        raise ScenarioError(f"{source}: no such file") from None
-    except OSError as exc:
-        raise ScenarioError(f"{source}: cannot read: {exc.strerror or exc}") from None
-    if len(raw) > MAX_SCENARIO_BYTES:
-        raise ScenarioError(f"{source}: {len(raw)} bytes, a scenario file holds at most {MAX_SCENARIO_BYTES}")
-    try:
-        data = tomllib.loads(raw.decode("utf-8"))
-    except UnicodeDecodeError:
-        raise ScenarioError(f"{source}: not UTF-8 text") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"{source}: invalid TOML: {exc}") from None
-    except ValueError as exc:  # e.g. an integer of more than 4300 digits
-        raise ScenarioError(f"{source}: invalid TOML: {exc}") from None
-    except RecursionError:
-        raise ScenarioError(f"{source}: invalid TOML: arrays or tables nested too deeply") from None
+    data = read_toml(p, ScenarioError, expected="a scenario TOML file", max_bytes=MAX_SCENARIO_BYTES)
     return Scenario.from_dict(data, source=source, base_dir=p.parent)
 
 

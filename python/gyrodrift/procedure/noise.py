@@ -26,6 +26,7 @@ import numpy as np
 
 from gyrodrift.errors import InputError
 from gyrodrift.logs import ImuLog
+from gyrodrift.toml_input import read_toml
 from gyrodrift.units import DEG, DEG_PER_H, DEG_PER_SQRT_H, HOUR, MICRO_G
 
 __all__ = ["SensorNoise", "estimate_white_noise", "load_noise_file", "NOISE_FLOOR"]
@@ -126,17 +127,8 @@ def load_noise_file(path) -> SensorNoise:
     ``scenario_noise`` block of `gyrodrift allan` saved as TOML); other keys of those tables (biases, ...) are
     ignored. ``arw_deg_rth`` and ``vrw_ug_rthz`` are required. Errors (`InputError`) name the file and the key.
     """
-    import tomllib
-
     p = Path(path)
-    try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise InputError(f"{p}: cannot read the noise file: {exc.strerror}") from None
-    except UnicodeDecodeError:
-        raise InputError(f"{p}: not a UTF-8 text file (expected a TOML noise file)") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{p}: not a valid TOML file: {exc}") from None
+    data = read_toml(p, InputError, expected="a TOML noise file with [gyro] and [accel] tables")
     block = {part: data[part] for part in ("gyro", "accel") if isinstance(data.get(part), Mapping)}
     for key, part in (("arw_deg_rth", "gyro"), ("vrw_ug_rthz", "accel")):
         if key not in block.get(part, {}):
