@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from gyrodrift.earth import NMI_M
-from gyrodrift.errors import InputError
+from gyrodrift.fleet_prior import drift_with_coefficient_prior
 from gyrodrift.site import Site
 from gyrodrift.units import DEG, DEG_PER_H, MICRO_G
 
@@ -657,18 +657,16 @@ class SmootherEstimate:
         """
         if self.model != "thermal":
             return self.navigation_drift_deg_h, self.navigation_drift_std_deg_h
-        if not (math.isfinite(mean_deg_h_per_c) and math.isfinite(std_deg_h_per_c) and std_deg_h_per_c > 0.0):
-            raise InputError(
-                f"a k_z prior needs a finite mean and a positive finite 1-sigma, got {mean_deg_h_per_c!r}, "
-                f"{std_deg_h_per_c!r} deg/h/degC"
-            )
-        vk = self.thermal_coeff_std_deg_h_per_c**2
-        lever = self.end_coeff_cov / vk
-        precision = 1.0 / vk - 1.0 / self.thermal_prior_std_deg_h_per_c**2 + 1.0 / std_deg_h_per_c**2
-        k_new = (self.thermal_coeff_deg_h_per_c / vk + mean_deg_h_per_c / std_deg_h_per_c**2) / precision
-        drift = self.drift_end_deg_h + lever * (k_new - self.thermal_coeff_deg_h_per_c)
-        var = self.drift_end_std_deg_h**2 - lever * self.end_coeff_cov + lever**2 / precision
-        return drift, math.sqrt(max(var, 0.0))
+        return drift_with_coefficient_prior(
+            self.drift_end_deg_h,
+            self.drift_end_std_deg_h,
+            self.thermal_coeff_deg_h_per_c,
+            self.thermal_coeff_std_deg_h_per_c,
+            self.end_coeff_cov,
+            self.thermal_prior_std_deg_h_per_c,
+            mean_deg_h_per_c,
+            std_deg_h_per_c,
+        )
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary (user units; the history as lists; NaN as null)."""

@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from gyrodrift.errors import InputError
+from gyrodrift.fleet_prior import pooled_coefficient_prior
 from gyrodrift.logs import ImuLog, LogError
 from gyrodrift.procedure.noise import SensorNoise, estimate_white_noise
 from gyrodrift.procedure.results import SmootherEstimate
@@ -166,18 +166,7 @@ def fleet_coefficient_prior(estimates: Iterable[SmootherEstimate]) -> tuple[floa
     the unit-to-unit spread). Runs without the thermal model are left out; `InputError` with fewer than two.
     Use with `SmootherEstimate.end_drift_with_coefficient_prior`.
     """
-    pairs = [
-        (e.thermal_coeff_deg_h_per_c, e.thermal_coeff_std_deg_h_per_c)
-        for e in estimates
-        if e.model == "thermal"
-        and math.isfinite(e.thermal_coeff_std_deg_h_per_c)
-        and e.thermal_coeff_std_deg_h_per_c > 0
-    ]
-    if len(pairs) < 2:
-        raise InputError(f"a fleet prior of k_z needs at least 2 runs with the thermal model, got {len(pairs)}")
-    k = np.array([p[0] for p in pairs])
-    w = 1.0 / np.array([p[1] for p in pairs]) ** 2
-    mean = float(np.sum(w * k) / np.sum(w))
-    q = float(np.sum(w * (k - mean) ** 2))
-    tau2 = max(0.0, (q - (len(k) - 1)) / float(np.sum(w) - np.sum(w**2) / np.sum(w)))
-    return mean, math.sqrt(1.0 / float(np.sum(w)) + tau2)
+    thermal = [e for e in estimates if e.model == "thermal"]
+    return pooled_coefficient_prior(
+        [e.thermal_coeff_deg_h_per_c for e in thermal], [e.thermal_coeff_std_deg_h_per_c for e in thermal]
+    )

@@ -1,0 +1,83 @@
+"""A fleet's prior on the thermal coefficient k_z, and a run's end drift re-weighted by it.
+
+One run's 16 h determine its z-gyro thermal coefficient k_z [deg/h/degC] only loosely (the drift's change during
+the warm-up is seen through hours of heading-error growth), so the smoother's end-of-span drift carries most of
+that uncertainty. Units of one type share their coefficient more or less: pooling the training runs' k_z gives a
+prior for one more unit that is far tighter than the filter's own wide N(0, s0^2).
+
+Two pure functions on plain numbers or numpy arrays (the procedure's `SmootherEstimate`, the drift model's
+``drift_smoother_fleet_deg_h`` physics base and the exported code all use them):
+
+* `pooled_coefficient_prior`: random-effects pooled mean of the runs' k_z (weights 1/sigma_i^2,
+  DerSimonian-Laird between-unit variance) and the 1-sigma of a new unit's k_z about it;
+* `drift_with_coefficient_prior`: the end drift and its 1-sigma with another prior on k_z, exact for the
+  linear-Gaussian model (the joint posterior of (end drift, k_z) re-weighted by the ratio of the two priors).
+
+Units: drifts [deg/h], coefficients [deg/h/degC], ``cov`` = cov(end drift, k_z) [deg/h x deg/h/degC].
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from gyrodrift.errors import InputError
+
+__all__ = ["pooled_coefficient_prior", "drift_with_coefficient_prior"]
+
+
+def pooled_coefficient_prior(coeff, coeff_std) -> tuple[float, float]:
+    """A prior N(mean, std^2) for one more unit's k_z from the runs' estimates ``coeff`` +- ``coeff_std``.
+
+    The weighted mean with w_i = 1 / sigma_i^2, the between-unit variance
+    ``tau^2 = max(0, (Q - (n - 1)) / (sum w - sum w^2 / sum w))`` (Q the weighted squared deviations,
+    DerSimonian & Laird 1986), and ``std = sqrt(1 / sum w + tau^2)`` (the pooled mean's own uncertainty plus the
+    unit-to-unit spread). Entries with a non-finite value or a non-positive or non-finite sigma are skipped (runs
+    without the thermal model); `InputError` with fewer than two usable runs.
+    """
+    k = np.asarray(coeff, float).ravel()
+    s = np.asarray(coeff_std, float).ravel()
+    if k.shape != s.shape:
+        raise InputError(f"k_z estimates and 1-sigmas differ in length ({k.size} vs {s.size})")
+    use = np.isfinite(k) & np.isfinite(s) & (s > 0.0)
+    if int(use.sum()) < 2:
+        raise InputError(f"a fleet prior of k_z needs at least 2 runs with the thermal model, got {int(use.sum())}")
+    k, w = k[use], 1.0 / s[use] ** 2
+    mean = float(np.sum(w * k) / np.sum(w))
+    q = float(np.sum(w * (k - mean) ** 2))
+    tau2 = max(0.0, (q - (k.size - 1)) / float(np.sum(w) - np.sum(w**2) / np.sum(w)))
+    return mean, math.sqrt(1.0 / float(np.sum(w)) + tau2)
+
+
+def drift_with_coefficient_prior(drift, drift_std, coeff, coeff_std, cov, prior_std, mean, std):
+    """The end drift and its 1-sigma [deg/h] with the prior N(mean, std^2) on k_z in place of N(0, prior_std^2).
+
+    ``drift``, ``drift_std``: the smoother's end-of-span drift and 1-sigma; ``coeff``, ``coeff_std``: its k_z and
+    1-sigma; ``cov``: cov(end drift, k_z); ``prior_std``: the filter's own k_z prior 1-sigma s0. With
+    V_k = coeff_std^2 and lever = cov / V_k, the new k_z precision is ``L = 1/V_k - 1/s0^2 + 1/std^2``, mean
+    ``k* = (k/V_k + mean/std^2) / L``; then ``d* = d + lever (k* - k)``, ``var = V_d - lever cov + lever^2 / L``.
+    Elementwise over arrays (numpy broadcasting). Where the run has no thermal estimate (``coeff`` or ``cov`` not
+    finite: the constant model), ``drift`` and ``drift_std`` are returned unchanged. The operations are exactly
+    these, in this order (the exported code repeats them bit for bit).
+    """
+    if not (math.isfinite(mean) and math.isfinite(std) and std > 0.0):
+        raise InputError(f"a k_z prior needs a finite mean and a positive finite 1-sigma, got {mean!r}, {std!r}")
+    d = np.asarray(drift, float)
+    vd = np.asarray(drift_std, float) ** 2
+    k = np.asarray(coeff, float)
+    vk = np.asarray(coeff_std, float) ** 2
+    c = np.asarray(cov, float)
+    s0 = np.asarray(prior_std, float)
+    thermal = np.isfinite(k) & np.isfinite(vk) & (vk > 0.0) & np.isfinite(c) & np.isfinite(s0) & (s0 > 0.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        lever = c / vk
+        precision = 1.0 / vk - 1.0 / (s0 * s0) + 1.0 / (std * std)
+        k_new = (k / vk + mean / (std * std)) / precision
+        d_new = d + lever * (k_new - k)
+        var = vd - lever * c + lever * lever / precision
+    d_out = np.where(thermal, d_new, d)
+    std_out = np.where(thermal, np.sqrt(np.maximum(np.where(thermal, var, vd), 0.0)), np.sqrt(vd))
+    if d_out.ndim == 0:
+        return float(d_out), float(std_out)
+    return d_out, std_out
