@@ -15,15 +15,23 @@ A run is one initial alignment on a static base. Columns, with their units in th
 
 Optional numeric columns (``OPTIONAL_COLUMNS``; empty cell or absent = unknown, NaN):
 
-============================  ======  ============================================================
-``drift_std_deg_h``           deg/h   1-sigma of the label ``drift_deg_h`` (weights the training runs)
-``drift_curvefit_deg_h``      deg/h   drift from the 12 h curve fit (`gyrodrift.curve_fit`)
-``drift_curvefit_std_deg_h``  deg/h   its least-squares 1-sigma
-``drift_smoother_deg_h``      deg/h   drift from a smoother over the whole log (a physics base)
-``drift_smoother_std_deg_h``  deg/h   its 1-sigma
-``label_flagged``             bool    ``true`` when `truth` flagged the label (its 1-sigma beyond the
-                                      1 nmi / 72 h budget): ``fit`` leaves such runs out by default
-============================  ======  ============================================================
+========================================  ==========  ==================================================
+``drift_std_deg_h``                       deg/h       1-sigma of the label ``drift_deg_h`` (weights the
+                                                      training runs)
+``drift_curvefit_deg_h``                  deg/h       drift from the 12 h curve fit (`gyrodrift.curve_fit`)
+``drift_curvefit_std_deg_h``              deg/h       its least-squares 1-sigma
+``drift_smoother_deg_h``                  deg/h       drift from the 16 h smoother (a physics base)
+``drift_smoother_std_deg_h``              deg/h       its 1-sigma
+``smoother_coeff_deg_h_per_c``            deg/h/degC  the smoother's thermal coefficient k_z (empty under
+                                                      its constant model)
+``smoother_coeff_std_deg_h_per_c``        deg/h/degC  its 1-sigma
+``smoother_end_coeff_cov``                (deg/h)^2   cov(drift_smoother_deg_h, k_z) (the joint
+                                          /degC       posterior's off-diagonal term)
+``smoother_coeff_prior_std_deg_h_per_c``  deg/h/degC  the smoother's own prior 1-sigma of k_z
+``label_flagged``                         bool        ``true`` when `truth` flagged the label (its 1-sigma
+                                                      beyond the 1 nmi / 72 h budget): ``fit`` leaves
+                                                      such runs out by default
+========================================  ==========  ==================================================
 
 ``label_flagged`` cells are ``true``/``false`` (or ``1``/``0``, any case; empty = unknown); a table keeps
 the flag in ``extra`` as 1.0/0.0 (NaN unknown), written back as ``true``/``false``.
@@ -56,9 +64,13 @@ OPTIONAL_COLUMNS = (
     "drift_curvefit_std_deg_h",
     "drift_smoother_deg_h",
     "drift_smoother_std_deg_h",
+    "smoother_coeff_deg_h_per_c",
+    "smoother_coeff_std_deg_h_per_c",
+    "smoother_end_coeff_cov",
+    "smoother_coeff_prior_std_deg_h_per_c",
     "label_flagged",
 )
-"""Optional per-run values a table may carry (NaN where unknown): numbers [deg/h] and the flag
+"""Optional per-run values a table may carry (NaN where unknown): numbers (units in the names) and the flag
 ``label_flagged`` (``FLAG_COLUMNS``); see the module docstring."""
 
 FLAG_COLUMNS = ("label_flagged",)
