@@ -84,8 +84,9 @@ def test_features_csv_round_trips_through_read_runs_csv(tmp_path):
     header = path.read_text().splitlines()[0]
     assert header == (
         "run,lat_deg,lat0_deg,temp_min_c,temp_max_c,temp_start_c,temp_end_c,drift_curvefit_deg_h,"
-        "drift_curvefit_std_deg_h,drift_smoother_deg_h,drift_smoother_std_deg_h,drift_deg_h,drift_std_deg_h,"
-        "label_flagged"
+        "drift_curvefit_std_deg_h,drift_smoother_deg_h,drift_smoother_std_deg_h,smoother_coeff_deg_h_per_c,"
+        "smoother_coeff_std_deg_h_per_c,smoother_end_coeff_cov,smoother_coeff_prior_std_deg_h_per_c,drift_deg_h,"
+        "drift_std_deg_h,label_flagged"
     )
     runs = read_runs_csv(path, require_truth=True)
     assert list(runs.run) == ["a", "b"]

@@ -86,8 +86,10 @@ def _open(path, site, log_format=None):
     "--smoother/--no-smoother",
     default=True,
     show_default=True,
-    help="Run the 16 h smoother (drift_smoother_deg_h and its 1-sigma): one more read of each log's first 16 h, "
-    "about as long as the features themselves. --no-smoother leaves those columns empty. Default: --smoother.",
+    help="Run the 16 h smoother (drift_smoother_deg_h and its 1-sigma [deg/h]; under its thermal model also k_z "
+    "and its 1-sigma [deg/h/degC], cov(end drift, k_z) [(deg/h)^2/degC] and its prior 1-sigma of k_z): one more "
+    "read of each log's first 16 h, about as long as the features themselves. --no-smoother leaves those columns "
+    "empty. Default: --smoother.",
 )
 @noise_options
 @json_option
@@ -116,7 +118,10 @@ def features_command(
 
     Columns: run (the log's stem), lat_deg (latitude at navigation hour 12), lat0_deg, temp_min_c,
     temp_max_c, temp_start_c, temp_end_c (over those 12 h), the 12 h curve fit and the 16 h smoother with their
-    1-sigmas, and with --with-truth drift_deg_h, its 1-sigma drift_std_deg_h and label_flagged.
+    1-sigmas [deg/h], the smoother's thermal coefficient k_z with its 1-sigma, covariance with the end drift and
+    prior 1-sigma (smoother_coeff_deg_h_per_c, smoother_coeff_std_deg_h_per_c, smoother_end_coeff_cov,
+    smoother_coeff_prior_std_deg_h_per_c; empty under its constant model), and with --with-truth drift_deg_h, its
+    1-sigma drift_std_deg_h and label_flagged.
     """
     from gyrodrift.procedure.fleet import features_table
     from gyrodrift.procedure.writers import check_features_outputs, write_features_csv

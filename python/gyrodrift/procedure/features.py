@@ -7,11 +7,16 @@ the latitude at navigation hour 12 (exact state after the sample at 12 h), the h
 the last navigation sample, the lowest and the highest. The 12 h curve fit (`gyrodrift.curve_fit`) of the
 same navigation's latitude and longitude error curves (every 60 s) gives ``drift_curvefit_deg_h`` and its
 1-sigma ``drift_curvefit_std_deg_h``. The 16 h smoother (`gyrodrift.procedure.smoother`, one more read of the
-same 16 h) gives ``drift_smoother_deg_h`` and its 1-sigma ``drift_smoother_std_deg_h``.
+same 16 h) gives ``drift_smoother_deg_h`` and its 1-sigma ``drift_smoother_std_deg_h`` and, under its thermal
+model, its thermal coefficient k_z, the k_z 1-sigma, cov(end drift, k_z) and its prior 1-sigma of k_z
+(``SMOOTHER_THERMAL_COLUMNS``, what a fleet prior on k_z needs: `gyrodrift.fleet_prior`).
 
 A row of the run table (``gyrodrift.runs``): ``run`` (the log's stem), ``lat_deg``, ``lat0_deg`` (the true
 site latitude), ``temp_min_c``, ``temp_max_c``, ``temp_start_c``, ``temp_end_c``, ``drift_curvefit_deg_h``,
-``drift_curvefit_std_deg_h``, ``drift_smoother_deg_h``, ``drift_smoother_std_deg_h`` and, when the truth is
+``drift_curvefit_std_deg_h``, ``drift_smoother_deg_h``, ``drift_smoother_std_deg_h``,
+``smoother_coeff_deg_h_per_c``, ``smoother_coeff_std_deg_h_per_c`` [deg/h/degC], ``smoother_end_coeff_cov``
+[(deg/h)^2/degC], ``smoother_coeff_prior_std_deg_h_per_c`` [deg/h/degC] (empty under the smoother's constant
+model or without it) and, when the truth is
 asked, ``drift_deg_h`` and its 1-sigma ``drift_std_deg_h`` (`gyrodrift.procedure.truth`, found over 72 h in the
 same first read; ``RunFeatures.label_flagged`` when the label is beyond the 1 nmi / 72 h budget).
 """
@@ -30,7 +35,15 @@ from gyrodrift.logs import ImuLog
 from gyrodrift.procedure.align import align_log
 from gyrodrift.procedure.noise import SensorNoise
 from gyrodrift.procedure.passes import navigate_after_alignment
-from gyrodrift.procedure.results import Alignment, NavCurve, RunFeatures, SmootherEstimate, TemperatureStats, TrueDrift
+from gyrodrift.procedure.results import (
+    SMOOTHER_THERMAL_COLUMNS,
+    Alignment,
+    NavCurve,
+    RunFeatures,
+    SmootherEstimate,
+    TemperatureStats,
+    TrueDrift,
+)
 from gyrodrift.procedure.smoother import smooth_log
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 from gyrodrift.procedure.truth import find_true_drift
@@ -74,6 +87,7 @@ def _from_curve(
         drift_smoother_deg_h=math.nan if smoothed is None else smoothed.navigation_drift_deg_h,
         drift_smoother_std_deg_h=math.nan if smoothed is None else smoothed.navigation_drift_std_deg_h,
         smoother=smoothed,
+        **({} if smoothed is None else smoothed.thermal_columns()),
         drift_std_deg_h=math.nan if truth is None else truth.drift_std_deg_h,
         label_flagged=False if truth is None else truth.flagged,
     )
@@ -174,6 +188,7 @@ def features_run_table(features: list[RunFeatures], source: str = "<features>") 
                 "drift_curvefit_std_deg_h",
                 "drift_smoother_deg_h",
                 "drift_smoother_std_deg_h",
+                *SMOOTHER_THERMAL_COLUMNS,
                 "drift_std_deg_h",
             )
         }

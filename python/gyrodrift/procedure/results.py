@@ -34,6 +34,7 @@ __all__ = [
     "PassResult",
     "TrueDrift",
     "RUN_TABLE_COLUMNS",
+    "SMOOTHER_THERMAL_COLUMNS",
     "RunFeatures",
     "Evaluation",
     "Identification",
@@ -330,8 +331,25 @@ RUN_TABLE_COLUMNS = (
     "drift_curvefit_std_deg_h",
     "drift_smoother_deg_h",
     "drift_smoother_std_deg_h",
+    "smoother_coeff_deg_h_per_c",
+    "smoother_coeff_std_deg_h_per_c",
+    "smoother_end_coeff_cov",
+    "smoother_coeff_prior_std_deg_h_per_c",
 )
-"""Columns written by `gyrodrift features` (plus ``drift_deg_h`` and ``drift_std_deg_h`` with the truth)."""
+"""Columns written by `gyrodrift features` (plus ``drift_deg_h``, ``drift_std_deg_h`` and ``label_flagged`` with the
+truth). The last four are the smoother's thermal coefficient k_z [deg/h/degC], its 1-sigma, cov(end drift, k_z)
+[(deg/h)^2/degC] and the filter's prior 1-sigma of k_z [deg/h/degC] (`SmootherEstimate`): what a fleet prior on
+k_z needs (`gyrodrift.fleet_prior`); empty (NaN) under the smoother's constant model or without the smoother."""
+
+SMOOTHER_THERMAL_COLUMNS = RUN_TABLE_COLUMNS[-4:]
+"""The run-table columns of the smoother's thermal model, in the order of `SMOOTHER_THERMAL_FIELDS`."""
+SMOOTHER_THERMAL_FIELDS = (
+    "thermal_coeff_deg_h_per_c",
+    "thermal_coeff_std_deg_h_per_c",
+    "end_coeff_cov",
+    "thermal_prior_std_deg_h_per_c",
+)
+"""The `SmootherEstimate` attributes the columns `SMOOTHER_THERMAL_COLUMNS` hold."""
 
 
 @dataclass(frozen=True)
@@ -359,6 +377,13 @@ class RunFeatures:
         The 16 h smoother's drift carried into navigation and its 1-sigma [deg/h]
         (`SmootherEstimate.navigation_drift_deg_h`: the end-of-span drift under its thermal model; NaN when not
         run).
+    smoother_coeff_deg_h_per_c, smoother_coeff_std_deg_h_per_c : float
+        The smoother's thermal coefficient k_z and its 1-sigma [deg/h/degC] (NaN under its constant model or when
+        not run).
+    smoother_end_coeff_cov : float
+        cov(``drift_smoother_deg_h``, k_z) [(deg/h)^2/degC] (NaN likewise).
+    smoother_coeff_prior_std_deg_h_per_c : float
+        The smoother's own prior 1-sigma of k_z (mean 0) [deg/h/degC] (NaN likewise).
     drift_std_deg_h : float
         1-sigma of the truth label (NaN without truth) [deg/h].
     label_flagged : bool
@@ -389,6 +414,10 @@ class RunFeatures:
     drift_std_deg_h: float = math.nan
     label_flagged: bool = False
     smoother: SmootherEstimate | None = field(default=None, repr=False)
+    smoother_coeff_deg_h_per_c: float = math.nan
+    smoother_coeff_std_deg_h_per_c: float = math.nan
+    smoother_end_coeff_cov: float = math.nan
+    smoother_coeff_prior_std_deg_h_per_c: float = math.nan
 
     @property
     def lat_err_arcsec(self) -> float:
@@ -644,6 +673,16 @@ class SmootherEstimate:
     def navigation_drift_std_deg_h(self) -> float:
         """1-sigma of `navigation_drift_deg_h` [deg/h]."""
         return self.drift_end_std_deg_h if self.model == "thermal" else self.drift_std_deg_h
+
+    def thermal_columns(self) -> dict[str, float]:
+        """The run-table columns of the thermal model (`SMOOTHER_THERMAL_COLUMNS`): k_z and its 1-sigma
+        [deg/h/degC], cov(end drift, k_z) [(deg/h)^2/degC] and the prior 1-sigma of k_z [deg/h/degC]; all NaN
+        under the constant model (the navigation drift is then the constant's, with no k_z behind it)."""
+        thermal = self.model == "thermal"
+        return {
+            column: float(getattr(self, name)) if thermal else math.nan
+            for column, name in zip(SMOOTHER_THERMAL_COLUMNS, SMOOTHER_THERMAL_FIELDS, strict=True)
+        }
 
     def end_drift_with_coefficient_prior(self, mean_deg_h_per_c: float, std_deg_h_per_c: float) -> tuple[float, float]:
         """The end-of-span drift and its 1-sigma [deg/h] with another prior on k_z, N(mean, std^2) [deg/h/degC]

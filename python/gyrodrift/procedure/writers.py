@@ -71,8 +71,11 @@ EVALUATION_CURVE_COLUMNS = (
 """Columns of ``position_error.parquet``: one row per kept time of each pass (``before`` then ``after``)."""
 IDENTIFICATION_FILES = ("identification.json",)
 CURVES_COLUMNS = ("run", "t_h", "lat_err_arcsec")
-RUN_TABLE_RECOGNISER = recognise_header(",".join(RUN_TABLE_COLUMNS) + ",", ",".join(RUN_TABLE_COLUMNS) + "\n")
-"""Recognises a run table written by `write_features_csv` (the only kind of file it replaces)."""
+_RUN_TABLE_HEAD = ",".join(RUN_TABLE_COLUMNS[: RUN_TABLE_COLUMNS.index("drift_smoother_std_deg_h") + 1])
+RUN_TABLE_RECOGNISER = recognise_header(_RUN_TABLE_HEAD + ",", _RUN_TABLE_HEAD + "\n")
+"""Recognises a run table written by `write_features_csv` (the only kind of file it replaces): its header starts
+with the columns up to ``drift_smoother_std_deg_h``, so a table written before the smoother's thermal columns
+(``SMOOTHER_THERMAL_COLUMNS``) is still gyrodrift's."""
 CURVES_RECOGNISER = recognise_header(",".join(CURVES_COLUMNS) + "\n")
 """Recognises a curves table written by `write_features_csv` (``curves=``)."""
 
@@ -154,12 +157,17 @@ def write_evaluation(ev: Evaluation, out: str | os.PathLike[str] | Stage) -> dic
 
 
 def identification_document(res: Identification) -> dict[str, Any]:
-    """`Identification.to_dict` with non-finite numbers as null (JSON has no NaN)."""
+    """`Identification.to_dict` with non-finite numbers as null, also inside its ``features`` (JSON has no NaN;
+    e.g. the smoother's thermal columns are NaN under its constant model)."""
 
     def num(x: Any) -> Any:
+        if isinstance(x, dict):
+            return {k: num(v) for k, v in x.items()}
+        if isinstance(x, list):
+            return [num(v) for v in x]
         return None if isinstance(x, float) and not math.isfinite(x) else x
 
-    return {k: num(v) for k, v in res.to_dict().items()}
+    return num(res.to_dict())
 
 
 def write_identification(res: Identification, out: str | os.PathLike[str] | Stage) -> dict[str, Path]:
