@@ -338,6 +338,96 @@ def test_cli_campaign_and_study(store, tmp_path):
     html = (tmp_path / "study" / "report.html").read_text()
     assert html.index("Summary") < html.index("Methods on the held-out runs") and "data:image/png;base64" in html
     assert math.isfinite(doc["methods"]["12 h curve fit"]["metrics"]["coverage_eff"])
+    # the fleet-prior smoother: the training runs' k_z pooled, each held-out run re-weighted (checked by hand here)
+    from gyrodrift.fleet_prior import drift_with_coefficient_prior, pooled_coefficient_prior
+    from gyrodrift.study import FLEET_ROW, split_runs
+
+    fleet = doc["methods"][FLEET_ROW]
+    runs = read_runs(out, curves=False)
+    train, test = split_runs(len(runs), 0.17, 0)
+    col = {c: runs.numbers(c) for c in runs.columns if c.startswith(("smoother_", "drift_smoother"))}
+    mean, std = pooled_coefficient_prior(
+        col["smoother_coeff_deg_h_per_c"][train], col["smoother_coeff_std_deg_h_per_c"][train]
+    )
+    d, sd = drift_with_coefficient_prior(
+        col["drift_smoother_deg_h"][test],
+        col["drift_smoother_std_deg_h"][test],
+        col["smoother_coeff_deg_h_per_c"][test],
+        col["smoother_coeff_std_deg_h_per_c"][test],
+        col["smoother_end_coeff_cov"][test],
+        col["smoother_coeff_prior_std_deg_h_per_c"][test],
+        mean,
+        std,
+    )
+    np.testing.assert_allclose(fleet["pred_deg_h"], d, rtol=0, atol=1e-15)
+    assert not np.allclose(d, col["drift_smoother_deg_h"][test])  # the prior moved them
+    m = fleet["metrics"]
+    assert 0 <= m["coverage_eff"] <= 1 and m["own_sigma_rms"] == pytest.approx(np.sqrt(np.mean(sd**2)))
+    assert "16 h smoother with the training fleet's k_z prior" in res.output
+    assert len(doc["train_size"]["rms_eff"][FLEET_ROW]) == len(doc["train_size"]["sizes"])
+    assert doc["methods"]["hybrid default"]["note"].startswith("physics base ")
+
+
+def test_runs_carry_the_smoothers_thermal_columns(store, tmp_path):
+    from gyrodrift.campaign import _noise_model, _timeline
+    from gyrodrift.logs import ImuLog
+    from gyrodrift.procedure.results import SMOOTHER_THERMAL_COLUMNS
+    from gyrodrift.procedure.smoother import smooth_log
+    from gyrodrift.runs import read_runs_csv
+
+    out, src = store
+    runs = read_runs(out, curves=False)
+    for c in SMOOTHER_THERMAL_COLUMNS:  # the tiny fleet warms up: every run under the thermal model
+        assert np.all(np.isfinite(runs.numbers(c))), c
+    campaign = load_campaign(src)
+    scn = campaign.scenario(3)
+    est = smooth_log(ImuLog.from_scenario(scn), timeline=_timeline(campaign.options), noise=_noise_model(scn))
+    assert est.model == "thermal"
+    assert runs.numbers("drift_smoother_deg_h")[3] == est.navigation_drift_deg_h
+    for c, v in est.thermal_columns().items():
+        assert runs.numbers(c)[3] == v, c
+    write_run_table(runs, tmp_path / "runs.csv")
+    table = read_runs_csv(tmp_path / "runs.csv")
+    for c in SMOOTHER_THERMAL_COLUMNS:
+        np.testing.assert_array_equal(table.column(c), runs.numbers(c))
+
+
+def test_a_store_written_before_the_thermal_columns_reads_resumes_and_studies(store, tmp_path):
+    """Run files without the four thermal columns (the previous schema): read as NaN, whichever file comes
+    first; a resumed campaign adds runs with them; the study says its fleet row is unavailable."""
+    import shutil
+
+    import pyarrow.parquet as pq
+
+    from gyrodrift.procedure.results import SMOOTHER_THERMAL_COLUMNS
+    from gyrodrift.study import FLEET_ROW, run_study
+
+    out, src = store
+    old = tmp_path / "old"
+    shutil.copytree(out, old)
+    for path in (old / "runs").iterdir():
+        t = pq.read_table(path)
+        pq.write_table(t.drop_columns(list(SMOOTHER_THERMAL_COLUMNS)), path)
+    runs = read_runs(old)
+    assert len(runs) == 12
+    for c in SMOOTHER_THERMAL_COLUMNS:
+        assert np.all(np.isnan(runs.numbers(c))), c
+    assert np.all(np.isfinite(runs.numbers("drift_smoother_deg_h")))
+    study = run_study(runs, test_fraction=0.17, seed=0, max_iter=3, train_sizes=[10])
+    assert FLEET_ROW not in study.methods and "16 h smoother" in study.methods
+    assert any(f"the '{FLEET_ROW}' row is unavailable" in n for n in study.notes), study.notes
+    # resume: the last run again with today's code (the first file read is an old one); the old files stay as
+    # they were, the table mixes both
+    (old / "runs" / "run-000011.parquet").unlink()
+    before = {p.name: p.read_bytes() for p in (old / "runs").iterdir()}
+    summary = run_campaign(load_campaign(src), old, workers=1)
+    assert (summary.skipped, summary.done, summary.failed) == (11, 1, 0)
+    assert before == {p.name: p.read_bytes() for p in (old / "runs").iterdir() if p.name in before}
+    mixed = read_runs(old, curves=False)
+    fresh = read_runs(out, curves=False)
+    for c in SMOOTHER_THERMAL_COLUMNS:
+        v = mixed.numbers(c)
+        assert v[11] == fresh.numbers(c)[11] and np.all(np.isnan(v[:11])), c
 
 
 def test_one_read_path_matches_the_verified_path(tmp_path):

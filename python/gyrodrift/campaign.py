@@ -416,15 +416,33 @@ def _noise_model(scenario):
     return SensorNoise.from_block({"gyro": data["gyro"], "accel": data["accel"]}, source="scenario")
 
 
-def _smoother_step(log, noise, timeline) -> tuple[float, float]:
-    """The 16 h smoother's z drift carried into navigation and its 1-sigma [deg/h] (the end-of-span drift under
-    its thermal model; NaN, NaN when the module is absent)."""
+SMOOTHER_COLUMNS = (
+    "drift_smoother_deg_h",
+    "drift_smoother_std_deg_h",
+    "smoother_coeff_deg_h_per_c",
+    "smoother_coeff_std_deg_h_per_c",
+    "smoother_end_coeff_cov",
+    "smoother_coeff_prior_std_deg_h_per_c",
+)
+"""The smoother's columns of a run: its drift carried into navigation and 1-sigma [deg/h], and under its thermal
+model k_z and its 1-sigma [deg/h/degC], cov(end drift, k_z) [(deg/h)^2/degC] and its prior 1-sigma of k_z
+[deg/h/degC] (`gyrodrift.procedure.results.SMOOTHER_THERMAL_COLUMNS`; NaN under the constant model). A store
+written before the last four existed reads them as NaN (`read_runs`)."""
+
+
+def _smoother_step(log, noise, timeline) -> dict[str, float]:
+    """The 16 h smoother's ``SMOOTHER_COLUMNS`` (the drift is the end-of-span drift under its thermal model; all
+    NaN when the module is absent)."""
     if not smoother_available():
-        return math.nan, math.nan
+        return dict.fromkeys(SMOOTHER_COLUMNS, math.nan)
     from gyrodrift.procedure.smoother import smooth_log
 
     res = smooth_log(log, timeline=timeline, noise=noise)
-    return float(res.navigation_drift_deg_h), float(res.navigation_drift_std_deg_h)
+    return {
+        "drift_smoother_deg_h": float(res.navigation_drift_deg_h),
+        "drift_smoother_std_deg_h": float(res.navigation_drift_std_deg_h),
+        **res.thermal_columns(),
+    }
 
 
 def linear_error_nmi(north0_m, east0_m, north_per_deg_h, east_per_deg_h, drift_deg_h) -> np.ndarray:
@@ -564,12 +582,12 @@ def _measure(campaign: Campaign, index: int, chunk_samples: int) -> dict[str, An
         curve_east_per_deg_h=np.asarray(ge, np.float32).tolist(),
     )
     # --- the 16 h smoother: its own read of the first 16 h (a seventh of a run's simulation) ---
-    out["drift_smoother_deg_h"], out["drift_smoother_std_deg_h"] = math.nan, math.nan
+    out.update(dict.fromkeys(SMOOTHER_COLUMNS, math.nan))
     out["smoother_error"] = None
     with _stage(out, "smoother"):
         if campaign.options.get("smoother", True):
             try:  # a smoother failure is recorded beside the run's other results, which stay valid
-                out["drift_smoother_deg_h"], out["drift_smoother_std_deg_h"] = _smoother_step(log, noise, timeline)
+                out.update(_smoother_step(log, noise, timeline))
             except Exception as exc:
                 out["smoother_error"] = f"{type(exc).__name__}: {' '.join(str(exc).split())}"[:2000]
     # --- the noise-free twin: aligned on its own, navigated once at d* ---
@@ -618,8 +636,7 @@ def _schema(campaign: Campaign):
             "drift_effective_deg_h",
             "drift_curvefit_deg_h",
             "drift_curvefit_std_deg_h",
-            "drift_smoother_deg_h",
-            "drift_smoother_std_deg_h",
+            *SMOOTHER_COLUMNS,
             "drift_align_deg_h",
             "drift_align_std_deg_h",
             "uncompensated_final_nmi",
@@ -785,7 +802,11 @@ def read_runs(path: str | os.PathLike[str], *, curves: bool = True) -> CampaignR
 
     store = CampaignStore(path)
     store.manifest()
-    dataset = ds.dataset(store.runs_dir, format="parquet")
+    # one schema over every run file and the current code's: a store written before a column existed (resumed by
+    # newer code, or read as it is) gets that column as null in its older runs, whichever file comes first
+    found = ds.dataset(store.runs_dir, format="parquet")
+    schemas = [f.physical_schema for f in found.get_fragments()] + [_schema(store.campaign())]
+    dataset = ds.dataset(store.runs_dir, format="parquet", schema=pa.unify_schemas(schemas))
     names = [n for n in dataset.schema.names if n not in CURVE_COLUMNS]
     table = dataset.to_table(columns=names + (list(CURVE_COLUMNS) if curves else []))
     table = table.take(pc.sort_indices(table, [("index", "ascending")]))
@@ -840,7 +861,7 @@ def write_run_table(
     from gyrodrift.procedure.writers import RUN_TABLE_RECOGNISER
 
     ok = runs.select(runs.ok)
-    optional = ("drift_std_deg_h", "drift_smoother_deg_h", "drift_smoother_std_deg_h")
+    optional = ("drift_std_deg_h", *SMOOTHER_COLUMNS)
     cols = list(RUN_TABLE_COLUMNS) + ["drift_deg_h"]
     cols += [c for c in optional if c not in cols and np.isfinite(ok.numbers(c)).any()]
     values = {c: ok.numbers(c) for c in cols if c != "run"}

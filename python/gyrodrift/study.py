@@ -9,8 +9,16 @@ on the held-out ones:
 * Gaussian-process regression (scikit-learn, RBF + white noise, same inputs), a linear model (least squares,
   same inputs);
 * the 12 h physics inversion, the 12 h curve fit, the alignment's own z estimate (no training);
-* the hybrid default of ``gyrodrift fit`` (12 h inversion + LSSVR correction on label - inversion);
-* the 16 h smoother, when the campaign holds its column (`gyrodrift.procedure.smoother`).
+* the hybrid default: ``gyrodrift fit``'s defaults (``physics`` encoding, CPSO on the LOO MAE, residual target on
+  the physics base its ``physics_column`` default picks, flagged labels and labels with a 1-sigma above
+  ``DEFAULT_MAX_LABEL_STD_DEG_H`` left out), except the study's ``max_iter``; the row's note names the base it
+  resolved to;
+* the 16 h smoother, when the campaign holds its column (`gyrodrift.procedure.smoother`);
+* the 16 h smoother with the training fleet's k_z prior (``FLEET_ROW``): the training runs' thermal coefficients
+  pooled (`gyrodrift.fleet_prior.pooled_coefficient_prior`) and each held-out run's end drift re-weighted by
+  that prior (`gyrodrift.fleet_prior.drift_with_coefficient_prior`; runs under the smoother's constant model pass
+  unchanged), its interval the re-weighted 1-sigma; unavailable (a note says why) when fewer than two training
+  runs carry a thermal k_z, e.g. a campaign stored before those columns existed.
 
 Metrics (deg/h): RMS and max identification error against the simulated effective drift (the truth of the
 run's noise-free twin) and against the 72 h truth of the noisy run; the share of held-out runs under 1 nmi at
@@ -36,14 +44,24 @@ import numpy as np
 
 from gyrodrift.errors import InputError, OptionError
 
-__all__ = ["COVERAGE", "MethodResult", "StudyResult", "run_study", "split_runs"]
+__all__ = ["COVERAGE", "FLEET_ROW", "MethodResult", "StudyResult", "run_study", "split_runs"]
 
 COVERAGE = 0.9
 """Nominal coverage of the intervals compared [-]."""
 Z90 = 1.6448536269514722
 ONE_NMI = 1.0
 LEARNED = ("CPSO-LSSVM (LOO)", "GP regression", "linear model", "hybrid default")
-"""Methods refitted for the training-size curve (the others are fixed or cost more per fit)."""
+"""Methods refitted for the training-size curve (the others are fixed or cost more per fit; the fleet-prior
+smoother's prior is pooled again from each subset)."""
+FLEET_ROW = "16 h smoother, fleet k_z prior"
+"""The smoother's end drift with the training runs' pooled thermal coefficient as prior (module docstring)."""
+THERMAL = (
+    "smoother_coeff_deg_h_per_c",
+    "smoother_coeff_std_deg_h_per_c",
+    "smoother_end_coeff_cov",
+    "smoother_coeff_prior_std_deg_h_per_c",
+)
+"""The smoother's thermal columns of a campaign run (`gyrodrift.campaign.SMOOTHER_COLUMNS`)."""
 
 
 @dataclass
@@ -134,8 +152,37 @@ def _rms(x) -> float:
     return float(np.sqrt(np.mean(x**2))) if len(x) else math.nan
 
 
+def _column(runs, name: str) -> np.ndarray:
+    """A numeric column of campaign runs [its unit], all NaN when the store has no such column."""
+    return runs.numbers(name) if name in runs.columns else np.full(len(runs), math.nan)
+
+
+def _fleet_prior(train_runs) -> tuple[float, float] | str:
+    """The pooled k_z prior (mean, 1-sigma) [deg/h/degC] of the training runs, or why there is none."""
+    from gyrodrift.fleet_prior import pooled_coefficient_prior
+
+    try:
+        return pooled_coefficient_prior(_column(train_runs, THERMAL[0]), _column(train_runs, THERMAL[1]))
+    except InputError as exc:
+        return str(exc)
+
+
+def _with_fleet_prior(test_runs, prior: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
+    """The held-out runs' smoother end drift and 1-sigma [deg/h] re-weighted by the k_z prior ``(mean, std)``."""
+    from gyrodrift.fleet_prior import drift_with_coefficient_prior
+
+    d, s = drift_with_coefficient_prior(
+        test_runs.numbers("drift_smoother_deg_h"),
+        test_runs.numbers("drift_smoother_std_deg_h"),
+        *(_column(test_runs, c) for c in THERMAL),
+        *prior,
+    )
+    return np.atleast_1d(np.asarray(d, float)), np.atleast_1d(np.asarray(s, float))
+
+
 def _fit_learned(name: str, train, *, seed: int, max_iter: int):
-    """A fitted learned method; returns ``predict(table) -> (pred, lo | None, hi | None)``."""
+    """A fitted learned method; returns ``(predict, note)``: ``predict(table) -> (pred, lo | None, hi | None)``
+    and what the fit chose that the name does not say (the hybrid's physics base), or ""."""
     from sklearn.gaussian_process import GaussianProcessRegressor
     from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
     from sklearn.linear_model import LinearRegression
@@ -143,7 +190,7 @@ def _fit_learned(name: str, train, *, seed: int, max_iter: int):
     from sklearn.preprocessing import StandardScaler
 
     from gyrodrift.encodings import encode
-    from gyrodrift.model import fit_drift_model
+    from gyrodrift.model import DEFAULT_MAX_LABEL_STD_DEG_H, fit_drift_model
 
     common: dict[str, Any] = dict(encoding="physics", rng=seed, quiet=True, max_iter=max_iter)
     specs: dict[str, dict[str, Any]] = {
@@ -151,7 +198,10 @@ def _fit_learned(name: str, train, *, seed: int, max_iter: int):
         "CPSO-LSSVM (LOO)": dict(method="cpso", objective="loo_mae"),
         "PSO-LSSVM (LOO)": dict(method="pso", objective="loo_mae"),
         "grid-LSSVM (LOO)": dict(method="grid", objective="loo_mae"),
-        "hybrid default": dict(method="cpso", objective="loo_mae", target="residual"),
+        # `gyrodrift fit`'s defaults: its physics column default (no physics_column given), its label limit
+        "hybrid default": dict(
+            method="cpso", objective="loo_mae", target="residual", max_label_std_deg_h=DEFAULT_MAX_LABEL_STD_DEG_H
+        ),
     }
     if name in specs:
         model = fit_drift_model(train, **common, **specs[name])
@@ -159,12 +209,19 @@ def _fit_learned(name: str, train, *, seed: int, max_iter: int):
         def predict(t):
             return model.predict_interval(t, COVERAGE)
 
-        return predict
+        note = ""
+        if model.target == "residual":
+            base = getattr(model, "physics_column_", None) or model.physics_column
+            note = f"physics base {base}"
+            prior = getattr(model, "coefficient_prior_", None)
+            if prior is not None:
+                note += f" (pooled k_z prior {prior[0]:.3e} +- {prior[1]:.3e} deg/h/degC)"
+        return predict, note
     X = encode(train, "physics")
     y = train.drift_deg_h
     if name == "linear model":
         lin = make_pipeline(StandardScaler(), LinearRegression()).fit(X, y)
-        return lambda t: (lin.predict(encode(t, "physics")), None, None)
+        return (lambda t: (lin.predict(encode(t, "physics")), None, None)), ""
     if name == "GP regression":
         scale = float(np.std(y)) or 1e-3
         kernel = ConstantKernel(1.0) * RBF(length_scale=np.ones(X.shape[1])) + WhiteKernel(0.1)
@@ -181,7 +238,7 @@ def _fit_learned(name: str, train, *, seed: int, max_iter: int):
             mean, std = gp.predict(encode(t, "physics"), return_std=True)
             return mean * scale, (mean - Z90 * std) * scale, (mean + Z90 * std) * scale
 
-        return predict_gp
+        return predict_gp, ""
     raise ValueError(name)
 
 
@@ -261,8 +318,9 @@ def run_study(
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", SearchBoundWarning)
         for name in learned:
-            pred, lo, hi = _fit_learned(name, train, seed=seed, max_iter=max_iter)(test)
-            methods[name] = MethodResult(name, np.asarray(pred, float), lo, hi)
+            predict, note = _fit_learned(name, train, seed=seed, max_iter=max_iter)
+            pred, lo, hi = predict(test)
+            methods[name] = MethodResult(name, np.asarray(pred, float), lo, hi, note=note)
     for w in {str(w.message) for w in caught if issubclass(w.category, SearchBoundWarning)}:
         notes.append(f"tuning warned: {w}")
     methods["12 h physics inversion"] = MethodResult("12 h physics inversion", physics_inversion(test))
@@ -270,11 +328,37 @@ def run_study(
     methods["12 h curve fit"] = MethodResult("12 h curve fit", cf, cf - Z90 * cf_std, cf + Z90 * cf_std)
     al, al_std = test_df.numbers("drift_align_deg_h"), test_df.numbers("drift_align_std_deg_h")
     methods["alignment z estimate"] = MethodResult("alignment z estimate", al, al - Z90 * al_std, al + Z90 * al_std)
+    train_df = ok.select(tr_idx)
     if has_smoother:
         sm = test_df.numbers("drift_smoother_deg_h")
         methods["16 h smoother"] = MethodResult("16 h smoother", sm, sm - Z90 * smoother_std, sm + Z90 * smoother_std)
+        prior = _fleet_prior(train_df)
+        if isinstance(prior, str):
+            notes.append(
+                f"the '{FLEET_ROW}' row is unavailable: {prior} among the training runs (a campaign stored before "
+                "the smoother's thermal columns existed, or runs under its constant model)"
+            )
+        else:
+            d, s = _with_fleet_prior(test_df, prior)
+            methods[FLEET_ROW] = MethodResult(
+                FLEET_ROW,
+                d,
+                d - Z90 * s,
+                d + Z90 * s,
+                note=f"pooled k_z prior {prior[0]:.3e} +- {prior[1]:.3e} deg/h/degC",
+            )
+            own = _rms(s)
+            methods[FLEET_ROW].metrics["own_sigma_rms"] = own
+            notes.append(
+                f"{FLEET_ROW}: k_z prior {prior[0]:.3e} +- {prior[1]:.3e} deg/h/degC pooled from the training runs "
+                f"({int(np.sum(np.isfinite(_column(train_df, THERMAL[0]))))} with a thermal k_z); RMS of its own "
+                f"1-sigma over the held-out runs {own:.2e} deg/h"
+            )
     for m in methods.values():
-        m.metrics = _metrics(m, test_df, effective, truth, limit)
+        m.metrics = {**_metrics(m, test_df, effective, truth, limit), **m.metrics}
+    if FLEET_ROW in methods:
+        m = methods[FLEET_ROW].metrics
+        m["ratio_to_own_sigma"] = m["rms_eff"] / m["own_sigma_rms"] if m["own_sigma_rms"] > 0 else math.nan
     # --- curves ----------------------------------------------------------------------------------------
     n_train = len(tr_idx)
     if train_sizes is None:
@@ -287,9 +371,17 @@ def run_study(
             values = []
             for s in train_sizes:
                 sub = train.select(np.sort(order[:s]))
-                pred = _fit_learned(name, sub, seed=seed, max_iter=max_iter)(test)[0]
+                pred = _fit_learned(name, sub, seed=seed, max_iter=max_iter)[0](test)[0]
                 values.append(_rms(effective - np.asarray(pred, float)))
             size_curve["rms_eff"][name] = values
+    if FLEET_ROW in methods:  # the prior pooled again from each nested subset of the training runs
+        values = []
+        for s in train_sizes:
+            prior = _fleet_prior(train_df.select(np.sort(order[:s])))
+            values.append(
+                math.nan if isinstance(prior, str) else _rms(effective - _with_fleet_prior(test_df, prior)[0])
+            )
+        size_curve["rms_eff"][FLEET_ROW] = values
     for name in ("12 h physics inversion", "12 h curve fit") + (("16 h smoother",) if has_smoother else ()):
         size_curve["rms_eff"][name] = [methods[name].metrics["rms_eff"]] * len(train_sizes)
     grades = np.array(["(base)" if g is None else str(g) for g in test_df["grade"]], dtype=object)

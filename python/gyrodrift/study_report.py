@@ -14,6 +14,7 @@ import math
 from typing import Any
 
 from gyrodrift.atomic import Stage, write_json
+from gyrodrift.study import FLEET_ROW
 
 __all__ = ["FIGURES", "STUDY_FILES", "summary_lines", "write_study_report"]
 
@@ -52,8 +53,21 @@ def summary_lines(doc: dict) -> list[str]:
             f"default is at {_f(hyb['ratio_to_limit'])}x it, the 12 h inversion at "
             f"{_f(methods['12 h physics inversion']['metrics']['ratio_to_limit'])}x."
         )
+        fleet = methods.get(FLEET_ROW)
+        if fleet is not None:
+            m = fleet["metrics"]
+            lines.append(
+                f"16 h smoother with the training fleet's k_z prior: {_f(m['ratio_to_limit'])}x the physical limit, "
+                f"{_f(m.get('ratio_to_own_sigma'))}x its own (tighter) 1-sigma, 90 % coverage "
+                f"{_pct(m.get('coverage_eff'))}."
+            )
+        else:
+            lines.append("No fleet-prior smoother row (see the notes).")
     else:
         lines.append("No smoother estimates in this campaign: no physical-limit line.")
+    for name, m in methods.items():
+        if m.get("note"):
+            lines.append(f"{name}: {m['note']}.")
     return lines
 
 
@@ -127,6 +141,7 @@ def make_figures(doc: dict) -> dict[str, bytes]:
             "12 h curve fit",
             "CPSO-LSSVM (LOO)",
             "16 h smoother",
+            FLEET_ROW,
         )
         if n in methods
     ]
