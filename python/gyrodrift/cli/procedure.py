@@ -408,6 +408,13 @@ def identify_command(
         f"{res.smoother_drift_deg_h:.6f} +- {res.smoother_drift_std_deg_h:.6f} deg/h (1-sigma: the Cramer-Rao "
         "line of these 16 h)"
     )
+    if res.coefficient_prior_deg_h_per_c is not None:
+        mean, std = res.coefficient_prior_deg_h_per_c
+        click.echo(
+            f"  16 h smoother with the training fleet's k_z prior ({mean:.2e} +- {std:.2e} deg/h/degC), the model's "
+            f"physics base: {res.smoother_fleet_drift_deg_h:.6f} +- {res.smoother_fleet_drift_std_deg_h:.6f} deg/h "
+            f"(1-sigma); the model's learned correction {res.drift_deg_h - res.smoother_fleet_drift_deg_h:+.6f} deg/h"
+        )
     click.echo(
         f"  alignment z estimate: {res.alignment_z_drift_deg_h:.6f} +- {res.alignment_z_drift_std_deg_h:.6f} "
         f"deg/h (1-sigma)"

@@ -12,6 +12,11 @@ spread of a Gaussian process with fitted length scales (`gyrodrift.spread`), wid
 far from the training runs'. A run outside the training runs' range (per input or jointly,
 ``DriftModel.check_inputs``) is flagged (``outside_training_range``, ``range_warnings``): its drift is an
 extrapolation. ``model_std_deg_h`` stays None: the interval is empirical, not a Gaussian 1-sigma.
+
+A hybrid whose physics base is the fleet-prior smoother (``DriftModel.physics_column_ ==
+"drift_smoother_fleet_deg_h"``) gets the run's smoother columns, its thermal ones included (``features_run_table``),
+and the result reports that base, the smoother's end drift re-weighted by the model's pooled k_z prior
+(``DriftModel.coefficient_prior_``), with its 1-sigma: the model's drift is that base plus its learned correction.
 """
 
 from __future__ import annotations
@@ -22,6 +27,7 @@ import os
 import numpy as np
 
 from gyrodrift.baselines import physics_inversion
+from gyrodrift.fleet_prior import drift_with_coefficient_prior
 from gyrodrift.logs import ImuLog
 from gyrodrift.model import DriftModel, min_runs_for_coverage
 from gyrodrift.procedure.features import extract_features, features_run_table
@@ -29,7 +35,10 @@ from gyrodrift.procedure.noise import SensorNoise
 from gyrodrift.procedure.results import Identification, RunFeatures
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 
-__all__ = ["identify", "NO_UNCERTAINTY_NOTE", "INTERVAL_NOTE"]
+__all__ = ["identify", "fleet_base", "model_physics_column", "FLEET_BASE", "NO_UNCERTAINTY_NOTE", "INTERVAL_NOTE"]
+
+FLEET_BASE = "drift_smoother_fleet_deg_h"
+"""The physics base of a hybrid that starts from the smoother with the training fleet's k_z prior."""
 
 NO_UNCERTAINTY_NOTE = "the LSSVR gives a point estimate, no predictive uncertainty"
 INTERVAL_NOTE = (
@@ -47,6 +56,31 @@ def _training_error(model: DriftModel) -> tuple[float | None, str | None]:
     if model.tuning is not None:
         return float(model.tuning.fitness), str(model.tuning.objective)
     return None, None
+
+
+def model_physics_column(model: DriftModel) -> str | None:
+    """The physics base a fitted model adds its output to (its resolved ``physics_column_``, else the option
+    ``physics_column``), or None when it is fitted on the drift itself (``target="drift"``)."""
+    if model.target != "residual":
+        return None
+    return str(getattr(model, "physics_column_", None) or model.physics_column)
+
+
+def fleet_base(features: RunFeatures, prior: tuple[float, float]) -> tuple[float, float]:
+    """The run's smoother end drift and 1-sigma [deg/h] with the k_z prior ``(mean, std)`` [deg/h/degC] in place
+    of the smoother's own (`gyrodrift.fleet_prior.drift_with_coefficient_prior` of the run-table columns: what
+    the model's fleet base computes); unchanged under the smoother's constant model."""
+    mean, std = (float(v) for v in prior)
+    return drift_with_coefficient_prior(
+        features.drift_smoother_deg_h,
+        features.drift_smoother_std_deg_h,
+        features.smoother_coeff_deg_h_per_c,
+        features.smoother_coeff_std_deg_h_per_c,
+        features.smoother_end_coeff_cov,
+        features.smoother_coeff_prior_std_deg_h_per_c,
+        mean,
+        std,
+    )
 
 
 def identify(
@@ -106,6 +140,9 @@ def identify(
     physics = float(physics_inversion(table, t_h=features.hours)[0])
     check = model.check_inputs(table)
     err, kind = _training_error(model)
+    base_column = model_physics_column(model)
+    prior = getattr(model, "coefficient_prior_", None) if base_column == FLEET_BASE else None
+    fleet = (math.nan, math.nan) if prior is None else fleet_base(features, prior)
     al = features.alignment
     return Identification(
         run=features.run,
@@ -126,4 +163,8 @@ def identify(
         smoother_drift_std_deg_h=features.drift_smoother_std_deg_h,
         outside_training_range=bool(check.outside[0]),
         range_warnings=tuple(check.messages(table)),
+        model_physics_column=base_column,
+        smoother_fleet_drift_deg_h=float(fleet[0]),
+        smoother_fleet_drift_std_deg_h=float(fleet[1]),
+        coefficient_prior_deg_h_per_c=None if prior is None else (float(prior[0]), float(prior[1])),
     )

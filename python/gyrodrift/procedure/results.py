@@ -531,6 +531,16 @@ class Identification:
         The run's inputs lie outside the model's training runs' range (per input or jointly): an extrapolation.
     range_warnings : tuple of str
         What lies outside, one line each.
+    model_physics_column : str or None
+        The physics base of a hybrid model (``DriftModel.physics_column_``, e.g. ``"drift_smoother_fleet_deg_h"``);
+        None for a model fitted on the drift itself.
+    smoother_fleet_drift_deg_h, smoother_fleet_drift_std_deg_h : float
+        With the fleet base: the 16 h smoother's end drift with the training fleet's k_z prior and its 1-sigma
+        [deg/h] (`gyrodrift.fleet_prior.drift_with_coefficient_prior`), the base the model adds its learned
+        correction to (``drift_deg_h`` minus it is that correction); NaN with any other base.
+    coefficient_prior_deg_h_per_c : tuple of 2 floats or None
+        With the fleet base: the model's pooled k_z prior (mean, 1-sigma) [deg/h/degC]
+        (``DriftModel.coefficient_prior_``); None otherwise.
     """
 
     run: str
@@ -551,6 +561,10 @@ class Identification:
     range_warnings: tuple[str, ...] = ()
     smoother_drift_deg_h: float = math.nan
     smoother_drift_std_deg_h: float = math.nan
+    model_physics_column: str | None = None
+    smoother_fleet_drift_deg_h: float = math.nan
+    smoother_fleet_drift_std_deg_h: float = math.nan
+    coefficient_prior_deg_h_per_c: tuple[float, float] | None = None
 
     @property
     def smoother_model(self) -> str | None:
@@ -570,6 +584,12 @@ class Identification:
             "smoother_drift_deg_h": self.smoother_drift_deg_h,
             "smoother_drift_std_deg_h": self.smoother_drift_std_deg_h,
             "smoother_model": self.smoother_model,
+            "model_physics_column": self.model_physics_column,
+            "smoother_fleet_drift_deg_h": self.smoother_fleet_drift_deg_h,
+            "smoother_fleet_drift_std_deg_h": self.smoother_fleet_drift_std_deg_h,
+            "coefficient_prior_deg_h_per_c": (
+                None if self.coefficient_prior_deg_h_per_c is None else list(self.coefficient_prior_deg_h_per_c)
+            ),
             "outside_training_range": self.outside_training_range,
             "range_warnings": list(self.range_warnings),
             "alignment_z_drift_deg_h": self.alignment_z_drift_deg_h,
