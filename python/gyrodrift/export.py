@@ -6,7 +6,9 @@ extremes over the 12 h [deg C]), exactly as ``DriftModel.predict`` does. A hybri
 returns its physics estimate plus the learned correction: the 12 h inversion of the latitude error is computed
 inside (`PHYSICS_EXPRESSIONS`, the operations of `gyrodrift.baselines.physics_inversion`); the 12 h curve fit and
 the 16 h smoother are computed by the navigation computer itself and passed in as one more input
-(`PHYSICS_INPUTS`, deg/h). The learned part is the encoding's features
+(`PHYSICS_INPUTS`, deg/h); the fleet-prior smoother (`FLEET_PHYSICS`) takes the smoother's end drift and its k_z
+estimate as inputs and re-weights them inside with the training fleet's k_z prior, baked in as two constants (the
+operations of `gyrodrift.fleet_prior.drift_with_coefficient_prior`). The learned part is the encoding's features
 (`FEATURE_EXPRESSIONS`, the same operations as `gyrodrift.encodings.encode`), the scaler, the kernel (the
 conventions of `gyrodrift.kernels`: rbf ``exp(-|x - z|^2 / sigma^2)``, linear ``x . z``, polynomial
 ``(x . z / sigma^2 + coef0)^degree``), the support vectors, alpha and the intercept. Every float is printed with
@@ -43,7 +45,9 @@ from gyrodrift.encodings import encode
 from gyrodrift.errors import InputError, OptionError
 
 __all__ = [
+    "COEFFICIENT_INPUTS",
     "FEATURE_EXPRESSIONS",
+    "FLEET_PHYSICS",
     "INPUTS",
     "LANGUAGES",
     "PHYSICS_EXPRESSIONS",
@@ -54,6 +58,7 @@ __all__ = [
     "export_model",
     "export_spec",
     "output_names",
+    "physics_column",
 ]
 
 LANGUAGES: dict[str, tuple[str, ...]] = {
@@ -73,9 +78,29 @@ RAW_INPUTS: dict[str, str] = {
 PHYSICS_INPUTS: dict[str, str] = {
     "drift_curvefit_deg_h": "axial drift from the navigation computer's 12 h curve fit of the latitude error [deg/h]",
     "drift_smoother_deg_h": "axial drift from the navigation computer's 16 h smoother over the alignment log [deg/h]",
+    "smoother_coeff_deg_h_per_c": "the smoother's thermal coefficient k_z [deg/h/degC] (NaN under its constant model)",
+    "smoother_coeff_std_deg_h_per_c": "1-sigma of the smoother's k_z [deg/h/degC] (NaN under its constant model)",
+    "smoother_end_coeff_cov": "cov(smoother end drift, k_z) [deg/h x deg/h/degC] (NaN under its constant model)",
+    "smoother_coeff_prior_std_deg_h_per_c": "the smoother's own prior 1-sigma of k_z [deg/h/degC] "
+    "(NaN under its constant model)",
 }
-"""Physics estimates of a hybrid model that the navigation computer computes itself: run-table columns passed
-to the generated function as one more input (`gyrodrift.choices.PHYSICS_COLUMNS` other than the inversion)."""
+"""Inputs of a hybrid's physics estimate that the navigation computer computes itself (run-table columns,
+`gyrodrift.runs.OPTIONAL_COLUMNS`), passed to the generated function after the raw inputs: the 12 h curve fit,
+the 16 h smoother's end drift, and for the fleet-prior smoother (`FLEET_PHYSICS`) the smoother's k_z estimate
+(`COEFFICIENT_INPUTS`)."""
+
+FLEET_PHYSICS = "drift_smoother_fleet_deg_h"
+"""The physics column of the fleet-prior smoother: the smoother's end drift re-weighted by the training fleet's
+prior on k_z (`gyrodrift.fleet_prior.drift_with_coefficient_prior`, the prior baked into the code)."""
+
+COEFFICIENT_INPUTS: tuple[str, ...] = (
+    "smoother_coeff_deg_h_per_c",
+    "smoother_coeff_std_deg_h_per_c",
+    "smoother_end_coeff_cov",
+    "smoother_coeff_prior_std_deg_h_per_c",
+)
+"""The smoother's k_z estimate (`FLEET_PHYSICS` reads them; the last inputs of the struct): NaN for a run whose
+smoother used its constant model, whose base is then its end drift unchanged. The range check skips them there."""
 
 INPUTS: dict[str, str] = {**RAW_INPUTS, **PHYSICS_INPUTS}
 """Every input a generated function can read, in the order of its fields, with its unit."""
@@ -135,6 +160,8 @@ FEATURE_EXPRESSIONS: dict[str, FeatureExpression] = {
 """Every feature name of every encoding, as generated C and Rust (tests/test_export.py checks that none is
 missing: a new encoding must add its features here)."""
 
+_FLEET_ARGS = ", ".join(f"{{{name}}}" for name in ("drift_smoother_deg_h", *COEFFICIENT_INPUTS))
+
 PHYSICS_EXPRESSIONS: dict[str, FeatureExpression] = {
     # gyrodrift.model.physics_estimate: physics_inversion(runs, t_h=12.0), the same operations as the feature
     "drift_inversion_deg_h": FeatureExpression(("lat_deg", "lat0_deg"), _DRIFT_EQUIV, _DRIFT_EQUIV, "deg/h", ("cos",)),
@@ -142,9 +169,18 @@ PHYSICS_EXPRESSIONS: dict[str, FeatureExpression] = {
         name: FeatureExpression((name,), f"{{{name}}}", f"{{{name}}}", "deg/h")
         for name in ("drift_curvefit_deg_h", "drift_smoother_deg_h")
     },
+    # drift_with_coefficient_prior(drift, ., coeff, coeff_std, cov, prior_std, *coefficient_prior_)[0]: a function
+    # of the generated code (`_fleet_functions`) holding the fleet prior as constants
+    FLEET_PHYSICS: FeatureExpression(
+        ("drift_smoother_deg_h", *COEFFICIENT_INPUTS),
+        f"gyrodrift_model_fleet_base_deg_h({_FLEET_ARGS})",
+        f"fleet_base_deg_h({_FLEET_ARGS})",
+        "deg/h",
+    ),
 }
-"""The physics estimate of a hybrid model (``physics_column``, `gyrodrift.choices.PHYSICS_COLUMNS`) in generated
-code: the 12 h inversion computed from the latitudes, or an input (`PHYSICS_INPUTS`) read as it is."""
+"""The physics estimate of a hybrid model (``physics_column_``, `gyrodrift.choices.PHYSICS_COLUMNS`) in generated
+code: the 12 h inversion computed from the latitudes, an input (`PHYSICS_INPUTS`) read as it is, or the smoother's
+end drift re-weighted by the fleet's k_z prior (`FLEET_PHYSICS`)."""
 
 _PREFIX = "gyrodrift_model"
 
@@ -155,8 +191,10 @@ class ExportSpec:
 
     ``input_ranges`` and ``feature_ranges`` hold (min, max) of each input (``inputs``, `INPUTS`: the raw inputs the
     features or the physics estimate read, then a physics column passed in) and of each feature (``feature_names``)
-    over the training runs, in their units; ``physics`` is the hybrid's physics column (None when the model
-    learns the drift itself, ``target="drift"``); ``mean``/
+    over the training runs, in their units (the k_z inputs, `COEFFICIENT_INPUTS`, over the runs with a thermal
+    estimate); ``physics`` is the hybrid's physics column (None when the model learns the drift itself,
+    ``target="drift"``); ``coefficient_prior`` the fleet's k_z prior (mean, 1-sigma) [deg/h/degC] of the
+    fleet-prior base (`FLEET_PHYSICS`), else None; ``mean``/
     ``scale`` (standard: ``(x - mean) / scale``) or ``scale``/``offset`` (minmax: ``x * scale + offset``)
     the scaler; ``support_vectors`` are in scaled units.
     """
@@ -165,6 +203,7 @@ class ExportSpec:
     scaling: str
     target: str
     physics: str | None
+    coefficient_prior: tuple[float, float] | None
     feature_names: tuple[str, ...]
     inputs: tuple[str, ...]
     functions: tuple[str, ...]
@@ -183,6 +222,26 @@ class ExportSpec:
     feature_ranges: tuple[tuple[float, float], ...]
     training: dict
     model_sha256: str | None
+
+
+def physics_column(model) -> str | None:
+    """The physics column of a hybrid ``model`` (the resolved ``physics_column_`` of a model fitted with
+    ``physics_column="auto"``, else ``physics_column``), or None when it learns the drift itself."""
+    if str(getattr(model, "target", "drift")) != "residual":
+        return None
+    resolved = getattr(model, "physics_column_", None)
+    physics = str(resolved if resolved is not None else model.physics_column)
+    if physics == "auto":
+        raise InputError("the hybrid model's physics column was never resolved (physics_column_); refit it")
+    return physics
+
+
+def _thermal(coeff, coeff_std, cov, prior_std) -> np.ndarray:
+    """Where a run has the smoother's thermal estimate of k_z: the test of
+    `gyrodrift.fleet_prior.drift_with_coefficient_prior` (elsewhere its base is the end drift unchanged)."""
+    vk = np.asarray(coeff_std, float) ** 2
+    s0 = np.asarray(prior_std, float)
+    return np.isfinite(coeff) & np.isfinite(vk) & (vk > 0.0) & np.isfinite(cov) & np.isfinite(s0) & (s0 > 0.0)
 
 
 def output_names(lang: str) -> tuple[str, ...]:
@@ -211,7 +270,7 @@ def export_spec(model, *, model_sha256: str | None = None) -> ExportSpec:
     is folded into alpha and the intercept.
     """
     target = str(getattr(model, "target", "drift"))
-    physics = str(model.physics_column) if target == "residual" else None
+    physics = physics_column(model)
     if target not in ("drift", "residual"):
         raise InputError(f"unknown model target {target!r}; expected drift or residual")
     if physics is not None and physics not in PHYSICS_EXPRESSIONS:
@@ -219,6 +278,14 @@ def export_spec(model, *, model_sha256: str | None = None) -> ExportSpec:
             f"physics column {physics!r} of the hybrid model has no C/Rust expression in "
             "gyrodrift.export.PHYSICS_EXPRESSIONS; it cannot be exported"
         )
+    prior = None
+    if physics == FLEET_PHYSICS:
+        prior = getattr(model, "coefficient_prior_", None)
+        if prior is None or len(prior) != 2:
+            raise InputError(f"the hybrid model on {FLEET_PHYSICS} has no fleet k_z prior (coefficient_prior_)")
+        prior = (float(prior[0]), float(prior[1]))
+        if not (math.isfinite(prior[0]) and math.isfinite(prior[1]) and prior[1] > 0.0):
+            raise InputError(f"the model's fleet k_z prior needs a finite mean and a positive 1-sigma, got {prior}")
     names = tuple(model.feature_names)
     missing = [name for name in names if name not in FEATURE_EXPRESSIONS]
     if missing:
@@ -251,12 +318,20 @@ def export_spec(model, *, model_sha256: str | None = None) -> ExportSpec:
         mean, scale = np.asarray(scaler.mean_, float), np.asarray(scaler.scale_, float)
     elif model.scaling == "minmax":
         scale, offset = np.asarray(scaler.scale_, float), np.asarray(scaler.min_, float)
-    input_values = [runs.column(n) if n in PHYSICS_INPUTS else getattr(runs, n) for n in inputs]
+    input_ranges = []
+    for name in inputs:
+        values = runs.column(name) if name in PHYSICS_INPUTS else getattr(runs, name)
+        if name in COEFFICIENT_INPUTS:  # the runs with a thermal estimate (the others do not read them)
+            values = values[_thermal(*(runs.column(n) for n in COEFFICIENT_INPUTS))]
+        if values.size == 0 or not np.all(np.isfinite(values)):
+            raise InputError(f"input {name} of the model is missing for some training runs; it cannot be exported")
+        input_ranges.append((float(values.min()), float(values.max())))
     return ExportSpec(
         encoding=model.encoding,
         scaling=model.scaling,
         target=target,
         physics=physics,
+        coefficient_prior=prior,
         feature_names=names,
         inputs=inputs,
         functions=functions,
@@ -271,7 +346,7 @@ def export_spec(model, *, model_sha256: str | None = None) -> ExportSpec:
         mean=mean,
         scale=scale,
         offset=offset,
-        input_ranges=_ranges(np.column_stack(input_values)),
+        input_ranges=tuple(input_ranges),
         feature_ranges=_ranges(encode(runs, model.encoding)),
         training=training,
         model_sha256=model_sha256,
@@ -335,18 +410,30 @@ def _provenance_lines(spec: ExportSpec) -> list[str]:
     if spec.physics is None:
         lines.append("Target: drift (the learned function is the drift)")
     else:
-        how = (
-            "computed here from lat_deg and lat0_deg (gyrodrift.baselines.physics_inversion at 12 h)"
-            if spec.physics == "drift_inversion_deg_h"
-            else "an input, computed by the navigation computer"
-        )
+        if spec.physics == "drift_inversion_deg_h":
+            how = "computed here from lat_deg and lat0_deg (gyrodrift.baselines.physics_inversion at 12 h)"
+        elif spec.physics == FLEET_PHYSICS:
+            how = (
+                "computed here from the smoother's end drift and k_z estimate with the training fleet's k_z prior "
+                "(gyrodrift.fleet_prior.drift_with_coefficient_prior); the end drift unchanged on a run whose "
+                "smoother used its constant model (NaN k_z inputs)"
+            )
+        else:
+            how = "an input, computed by the navigation computer"
         lines.append(
             "Target: residual (hybrid): drift = physics estimate + learned correction; "
             f"physics estimate: {spec.physics} [deg/h], {how}"
         )
+    if spec.coefficient_prior is not None:
+        mean, std = spec.coefficient_prior
+        lines.append(
+            f"Fleet k_z prior: mean = {_lit(mean)}, 1-sigma = {_lit(std)} [deg/h/degC] (pooled over the training "
+            "runs' k_z: gyrodrift.fleet_prior.pooled_coefficient_prior)"
+        )
     lines.append("Inputs read, with their range over the training runs (the range check refuses inputs outside it):")
     for name, (lo, hi) in zip(spec.inputs, spec.input_ranges, strict=True):
-        lines.append(f"  {name}: [{_lit(lo)}, {_lit(hi)}], {INPUTS[name]}")
+        note = " (over the runs with k_z; not checked where the run has none)" if name in COEFFICIENT_INPUTS else ""
+        lines.append(f"  {name}: [{_lit(lo)}, {_lit(hi)}]{note}, {INPUTS[name]}")
     lines.append("Features, with their range over the training runs (checked too):")
     for name, (lo, hi) in zip(spec.feature_names, spec.feature_ranges, strict=True):
         lines.append(f"  {name}: [{_lit(lo)}, {_lit(hi)}] {FEATURE_EXPRESSIONS[name].unit}")
@@ -403,6 +490,13 @@ def _c_files(spec: ExportSpec) -> dict[str, str]:
 double {P}_drift_deg_h(const {P}_inputs *inputs);"""
     else:
         physics_macro = f'#define {U}_PHYSICS "{spec.physics}"\n'
+        if spec.coefficient_prior is not None:
+            mean, std = spec.coefficient_prior
+            physics_macro += (
+                f"/* The training fleet's prior on k_z [deg/h/degC]: mean and 1-sigma. */\n"
+                f"#define {U}_COEFF_PRIOR_MEAN_DEG_H_PER_C {_lit(mean)}\n"
+                f"#define {U}_COEFF_PRIOR_STD_DEG_H_PER_C {_lit(std)}\n"
+            )
         drift_decl = f"""/* The physics estimate [deg/h]: {_physics_doc(spec)}. */
 double {P}_physics_deg_h(const {P}_inputs *inputs);
 
@@ -509,7 +603,15 @@ int {P}_in_range(const {P}_inputs *inputs);
     decls = "        double kval, term, next, back;\n" + (
         "        double base;\n        int j;\n" if spec.kernel == "poly" else ""
     )
-    libm = f"#include <math.h> /* {', '.join(spec.functions)} */\n" if spec.functions else ""
+    fleet = spec.physics == FLEET_PHYSICS
+    used = [*spec.functions, *(["isfinite"] if fleet else [])]
+    libm = f"#include <math.h> /* {', '.join(used)} */\n" if used else ""
+    input_count = f"{U}_N_INPUTS"
+    fleet_functions = ""
+    if fleet:
+        args = ", ".join(f"inputs->{name}" for name in COEFFICIENT_INPUTS)
+        input_count = f"{P}_thermal({args}) ? {U}_N_INPUTS : {U}_N_INPUTS - {len(COEFFICIENT_INPUTS)}"
+        fleet_functions = _c_fleet_functions() + "\n\n"
     source = f"""/*
  * {source_name}: the identified axial gyro drift model (see {header_name} for the interface).
  *
@@ -529,7 +631,7 @@ int {P}_in_range(const {P}_inputs *inputs);
 
 {(chr(10) + chr(10)).join(data)}
 
-const {P}_range *{P}_input_ranges(void)
+{fleet_functions}const {P}_range *{P}_input_ranges(void)
 {{
     return {P}_input_range_table;
 }}
@@ -547,9 +649,10 @@ void {P}_features(const {P}_inputs *inputs, double features[{U}_N_FEATURES])
 int {P}_in_range(const {P}_inputs *inputs)
 {{
     const double u[{U}_N_INPUTS] = {{{input_values}}};
+    const int n_inputs = {input_count};
     double x[{U}_N_FEATURES];
     int k;
-    for (k = 0; k < {U}_N_INPUTS; ++k) {{
+    for (k = 0; k < n_inputs; ++k) {{
         if (!(u[k] >= {P}_input_range_table[k].min && u[k] <= {P}_input_range_table[k].max)) {{
             return 0;
         }}
@@ -612,10 +715,45 @@ double {P}_drift_deg_h(const {P}_inputs *inputs)
     return {header_name: header, source_name: source}
 
 
+def _c_fleet_functions() -> str:
+    """The C of the fleet-prior base (`FLEET_PHYSICS`): `gyrodrift.fleet_prior.drift_with_coefficient_prior`'s
+    end drift, operation for operation (``x**2`` in numpy is ``x * x``)."""
+    P, U = _PREFIX, _PREFIX.upper()
+    return f"""/* 1 when the smoother's k_z estimate is there (its thermal model), 0 for a constant-model run (NaN k_z):
+ * the test of gyrodrift.fleet_prior.drift_with_coefficient_prior. */
+static int {P}_thermal(double coeff, double coeff_std, double cov, double prior_std)
+{{
+    const double vk = coeff_std * coeff_std;
+    return isfinite(coeff) && isfinite(vk) && vk > 0.0 && isfinite(cov) && isfinite(prior_std) && prior_std > 0.0;
+}}
+
+/* The smoother's end drift [deg/h] with the fleet's prior N(mean, std^2) on k_z in place of its own N(0, s0^2),
+ * the operations of gyrodrift.fleet_prior.drift_with_coefficient_prior in order; the end drift itself on a
+ * constant-model run. */
+static double {P}_fleet_base_deg_h(double drift, double coeff, double coeff_std, double cov, double prior_std)
+{{
+    const double mean = {U}_COEFF_PRIOR_MEAN_DEG_H_PER_C, std = {U}_COEFF_PRIOR_STD_DEG_H_PER_C;
+    const double vk = coeff_std * coeff_std;
+    double lever, precision, coeff_new;
+    if (!{P}_thermal(coeff, coeff_std, cov, prior_std)) {{
+        return drift;
+    }}
+    lever = cov / vk;
+    precision = 1.0 / vk - 1.0 / (prior_std * prior_std) + 1.0 / (std * std);
+    coeff_new = (coeff / vk + mean / (std * std)) / precision;
+    return drift + lever * (coeff_new - coeff);
+}}"""
+
+
 def _physics_doc(spec: ExportSpec) -> str:
     """What the physics estimate of a hybrid is, for a comment."""
     if spec.physics == "drift_inversion_deg_h":
         return "the 12 h inversion of the latitude error, w_ie dL / (cos(lat0) (1 - cos(w_ie 12 h)))"
+    if spec.physics == FLEET_PHYSICS:
+        return (
+            "the smoother's end drift with the fleet's k_z prior in place of its own (the end drift itself when "
+            "the k_z inputs are NaN: the smoother's constant model)"
+        )
     return f"the input {spec.physics}, computed by the navigation computer"
 
 
@@ -662,6 +800,29 @@ def _rust_range_table(name: str, count: str, names, ranges) -> str:
         for n, (lo, hi) in zip(names, ranges, strict=True)
     )
     return f"static {name}: [Range; {count}] = [\n{rows}\n];"
+
+
+_RUST_FLEET_FUNCTIONS = """/// True when the smoother's k_z estimate is there (its thermal model), false for a
+/// constant-model run (NaN k_z): the test of `gyrodrift.fleet_prior.drift_with_coefficient_prior`.
+fn thermal(coeff: f64, coeff_std: f64, cov: f64, prior_std: f64) -> bool {
+    let vk = coeff_std * coeff_std;
+    coeff.is_finite() && vk.is_finite() && vk > 0.0 && cov.is_finite() && prior_std.is_finite() && prior_std > 0.0
+}
+
+/// The smoother's end drift [deg/h] with the fleet's prior N(mean, std^2) on k_z in place of its own N(0, s0^2),
+/// the operations of `gyrodrift.fleet_prior.drift_with_coefficient_prior` in order; the end drift itself on a
+/// constant-model run.
+fn fleet_base_deg_h(drift: f64, coeff: f64, coeff_std: f64, cov: f64, prior_std: f64) -> f64 {
+    let (mean, std) = (COEFF_PRIOR_MEAN_DEG_H_PER_C, COEFF_PRIOR_STD_DEG_H_PER_C);
+    let vk = coeff_std * coeff_std;
+    if !thermal(coeff, coeff_std, cov, prior_std) {
+        return drift;
+    }
+    let lever = cov / vk;
+    let precision = 1.0 / vk - 1.0 / (prior_std * prior_std) + 1.0 / (std * std);
+    let coeff_new = (coeff / vk + mean / (std * std)) / precision;
+    drift + lever * (coeff_new - coeff)
+}"""
 
 
 def _rust_files(spec: ExportSpec) -> dict[str, str]:
@@ -722,6 +883,25 @@ def _rust_files(spec: ExportSpec) -> dict[str, str]:
         for _ in 1..{spec.degree} {{
             kval *= base;
         }}"""
+    if spec.physics == FLEET_PHYSICS:
+        args = ", ".join(f"inputs.{name}" for name in COEFFICIENT_INPUTS)
+        in_range_fn = f"""{_RUST_FLEET_FUNCTIONS}
+
+/// True when every input and every feature lies within its training range (NaN never does); the k_z inputs are
+/// not checked on a run without them (the smoother's constant model: its base is the end drift).
+#[must_use]
+pub fn in_range(inputs: &Inputs, math: &Math) -> bool {{
+    let n = if thermal({args}) {{ N_INPUTS }} else {{ N_INPUTS - {len(COEFFICIENT_INPUTS)} }};
+    within(&INPUT_RANGES[..n], &[{input_values}][..n]) && within(&FEATURE_RANGES, &features(inputs, math))
+}}
+"""
+    else:
+        in_range_fn = f"""/// True when every input and every feature lies within its training range (NaN never does).
+#[must_use]
+pub fn in_range(inputs: &Inputs, math: &Math) -> bool {{
+    within(&INPUT_RANGES, &[{input_values}]) && within(&FEATURE_RANGES, &features(inputs, math))
+}}
+"""
     x_binding = "let x" if spec.scaling == "none" else "let mut x"
     learned = "drift_deg_h" if spec.physics is None else "correction_deg_h"
     if spec.physics is None:
@@ -733,6 +913,13 @@ def _rust_files(spec: ExportSpec) -> dict[str, str]:
         learned_doc = "/// The learned correction [deg/h] added to the physics estimate ([`physics_deg_h`])."
         physics_macro = f"""/// Physics estimate of the hybrid model (`physics_column`).
 pub const PHYSICS: &str = "{spec.physics}";
+"""
+        if spec.coefficient_prior is not None:
+            mean, std = spec.coefficient_prior
+            physics_macro += f"""/// Mean of the training fleet's prior on k_z [deg/h/degC].
+pub const COEFF_PRIOR_MEAN_DEG_H_PER_C: f64 = {_lit(mean)};
+/// 1-sigma of the training fleet's prior on k_z [deg/h/degC].
+pub const COEFF_PRIOR_STD_DEG_H_PER_C: f64 = {_lit(std)};
 """
         expr = PHYSICS_EXPRESSIONS[spec.physics]
         physics_math = "math" if expr.functions else "_math"
@@ -830,12 +1017,7 @@ fn within(ranges: &[Range], values: &[f64]) -> bool {{
     ranges.iter().zip(values.iter()).all(|(r, &v)| v >= r.min && v <= r.max)
 }}
 
-/// True when every input and every feature lies within its training range (NaN never does).
-#[must_use]
-pub fn in_range(inputs: &Inputs, math: &Math) -> bool {{
-    within(&INPUT_RANGES, &[{input_values}]) && within(&FEATURE_RANGES, &features(inputs, math))
-}}
-
+{in_range_fn}
 /// The intercept + `sum_i alpha_i K_i` in support-vector order, compensated: the rounded sum and the sum of the
 /// rounding errors (`TwoSum`, exact), to be added at the end (`gyrodrift.lssvr`, "Sum2").
 #[allow(clippy::trivially_copy_pass_by_ref)] // as the public functions, which take `&Math`

@@ -38,12 +38,13 @@ def export_command(model_file: Path, lang: str, out_dir: Path, as_json: bool, qu
     The code carries the model's provenance and the training ranges of its inputs, with a function saying
     whether an input lies within them (docs/export.md). A hybrid model (the default of `fit`) returns its
     physics estimate plus the learned correction: the 12 h inversion is computed from the latitudes; the curve
-    fit or the smoother is one more input [deg/h] that the navigation computer computes.
+    fit or the smoother is one more input [deg/h] that the navigation computer computes; the fleet-prior smoother
+    is computed from the smoother's end drift and k_z estimate (inputs) with the fleet's k_z prior (constants).
     """
     import hashlib
 
     from gyrodrift.atomic import OutputFolder
-    from gyrodrift.export import export_model, output_names
+    from gyrodrift.export import export_model, output_names, physics_column
     from gyrodrift.model_io import load_model
 
     names = output_names(lang)
@@ -55,7 +56,7 @@ def export_command(model_file: Path, lang: str, out_dir: Path, as_json: bool, qu
         for name, text in files.items():
             stage.file(name).write_text(text, encoding="utf-8")
     paths = [out_dir / name for name in names]
-    physics = model.physics_column if model.target == "residual" else None
+    physics = physics_column(model)
     if as_json:
         print_json(
             {
