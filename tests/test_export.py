@@ -41,6 +41,7 @@ from gyrodrift.choices import DEFAULT_ENCODING, ENCODINGS, PHYSICS_COLUMNS, SCAL
 from gyrodrift.cli import main
 from gyrodrift.encodings import encode
 from gyrodrift.errors import InputError, OptionError
+from gyrodrift.fleet_prior import drift_with_coefficient_prior
 from gyrodrift.kernels import kernel_matrix
 from gyrodrift.lssvr import LSSVR
 from gyrodrift.model import fit_drift_model, physics_estimate
@@ -82,18 +83,45 @@ def _synthetic_runs(rng: np.random.Generator, n: int = 24) -> RunTable:
 
 
 def _hybrid_runs(rng: np.random.Generator) -> RunTable:
-    """The synthetic runs with the curve-fit and smoother columns (the drift plus noise [deg/h]) and label
-    1-sigmas (one beyond `gyrodrift fit`'s default limit of 1e-3 deg/h, so that run is left out)."""
+    """The synthetic runs with the curve-fit and smoother columns (the drift plus noise [deg/h]), the smoother's
+    k_z estimate (NaN on 5 runs: its constant model) and label 1-sigmas (one beyond `gyrodrift fit`'s default
+    limit of 1e-3 deg/h, so that run is left out)."""
     runs = _synthetic_runs(rng)
     n = len(runs)
     std = rng.uniform(5e-5, 4e-4, n)
     std[3] = 2e-3
+    d_std, k_std = rng.uniform(5e-5, 2e-4, n), rng.uniform(5e-5, 3e-4, n)
+    constant = np.isin(np.arange(n), rng.choice(n, 5, replace=False))
+    kz = {
+        "smoother_coeff_deg_h_per_c": rng.normal(2e-4, 4e-5, n) + rng.normal(0.0, k_std),
+        "smoother_coeff_std_deg_h_per_c": k_std,
+        "smoother_end_coeff_cov": rng.uniform(-0.9, 0.9, n) * d_std * k_std,
+        "smoother_coeff_prior_std_deg_h_per_c": np.full(n, 1e-2),
+    }
     extra = {
         "drift_std_deg_h": std,
         "drift_curvefit_deg_h": runs.drift_deg_h + rng.normal(0.0, 4e-4, n),
-        "drift_smoother_deg_h": runs.drift_deg_h + rng.normal(0.0, 1e-4, n),
+        "drift_smoother_deg_h": runs.drift_deg_h + rng.normal(0.0, d_std),
+        "drift_smoother_std_deg_h": d_std,
+        **{name: np.where(constant, np.nan, v) for name, v in kz.items()},
     }
     return runs.replace(extra=extra, source="synthetic-hybrid")
+
+
+def _thermal(runs: RunTable) -> np.ndarray:
+    """Rows with the smoother's thermal k_z (the test of `drift_with_coefficient_prior`; the others: NaN)."""
+    k, sk, c, s0 = (runs.column(name) for name in export.COEFFICIENT_INPUTS)
+    return np.isfinite(k) & np.isfinite(sk * sk) & (sk * sk > 0) & np.isfinite(c) & np.isfinite(s0) & (s0 > 0)
+
+
+def _physics(model, rows: RunTable) -> np.ndarray:
+    """A hybrid's physics estimate of each row [deg/h]: `physics_estimate`, or for the fleet-prior smoother
+    `drift_with_coefficient_prior` with the model's fleet prior."""
+    column = export.physics_column(model)
+    if column != export.FLEET_PHYSICS:
+        return physics_estimate(rows, column)
+    names = ("drift_smoother_deg_h", "drift_smoother_std_deg_h", *export.COEFFICIENT_INPUTS)
+    return drift_with_coefficient_prior(*(rows.column(n) for n in names), *model.coefficient_prior_)[0]
 
 
 def _value(runs: RunTable, name: str) -> np.ndarray:
@@ -106,9 +134,9 @@ def _probe_rows(train: RunTable, rng: np.random.Generator) -> RunTable:
     error (N_ROWS in all); the physics columns the training runs have too."""
     n = N_ROWS - len(train)
     cols = {}
-    for name in [*RAW, *(c for c in export.PHYSICS_INPUTS if train.has_column(c))]:
+    for name in [*RAW, *(c for c in export.PHYSICS_INPUTS if np.isfinite(train.column(c)).any())]:
         v = _value(train, name)
-        lo, hi = float(v.min()), float(v.max())
+        lo, hi = float(np.nanmin(v)), float(np.nanmax(v))
         span = hi - lo or 0.5
         cols[name] = rng.uniform(lo - 0.1 * span, hi + 0.1 * span, n)
     on_site = rng.random(n) < 0.8  # mostly at a training site, so that the other inputs decide the range check
@@ -117,6 +145,10 @@ def _probe_rows(train: RunTable, rng: np.random.Generator) -> RunTable:
     span = float(err.max() - err.min())
     cols["lat_deg"] = cols["lat0_deg"] + rng.uniform(err.min() - 0.1 * span, err.max() + 0.1 * span, n) / 3600.0
     cols["temp_max_c"] = np.maximum(cols["temp_max_c"], cols["temp_min_c"])
+    constant = rng.random(n) < 1 / 3  # a third of the rows without k_z: the smoother's constant model
+    for name in export.COEFFICIENT_INPUTS:
+        if name in cols:
+            cols[name][constant] = np.nan
     return RunTable(
         run=np.array([f"p{i}" for i in range(N_ROWS)]),
         drift_deg_h=np.full(N_ROWS, np.nan),
@@ -139,7 +171,7 @@ def _used_inputs(model) -> list[str]:
     """The inputs a model reads: those of its features and, for a hybrid, of its physics estimate."""
     exprs = [export.FEATURE_EXPRESSIONS[f] for f in model.feature_names]
     if model.target == "residual":
-        exprs.append(export.PHYSICS_EXPRESSIONS[model.physics_column])
+        exprs.append(export.PHYSICS_EXPRESSIONS[export.physics_column(model)])
     return [n for n in ALL if any(n in e.inputs for e in exprs)]
 
 
@@ -171,13 +203,18 @@ def _expected(model, rows: RunTable) -> dict:
     X = model[:-1].transform(rows)
     K = _kernel_terms(est, X)
     inside = np.ones(len(rows), bool)
+    thermal = _thermal(rows)
     for name in _used_inputs(model):
         v, t = _value(rows, name), _value(train, name)
-        inside &= (v >= t.min()) & (v <= t.max())
+        if name in export.COEFFICIENT_INPUTS:  # over the training runs with k_z; checked on rows with k_z only
+            t = t[_thermal(train)]
+            inside &= ~thermal | ((v >= t.min()) & (v <= t.max()))
+        else:
+            inside &= (v >= t.min()) & (v <= t.max())
     feats, tfeats = encode(rows, model.encoding), encode(train, model.encoding)
     inside &= np.all((feats >= tfeats.min(axis=0)) & (feats <= tfeats.max(axis=0)), axis=1)
     pred = model.predict(rows)
-    physics = physics_estimate(rows, model.physics_column) if model.target == "residual" else np.zeros(len(rows))
+    physics = _physics(model, rows) if model.target == "residual" else np.zeros(len(rows))
     terms = K * est.alpha_
     # numpy's kernel (scipy's distances, numpy's exp and power) summed by BLAS: the arithmetic before the export
     # and Python agreed on theirs
@@ -284,8 +321,9 @@ ALL_CASES = [*CASE_IDS, COS_CASE, DEFAULT_CASE]
 
 
 def _rows_text(rows: RunTable) -> str:
-    """One line per row: every input of `ALL` (0 for a physics column the rows do not have)."""
-    values = np.nan_to_num(np.column_stack([_value(rows, n) for n in ALL]), nan=0.0)
+    """One line per row: every input of `ALL` (nan where the row has none: a physics column the rows do not have,
+    k_z under the smoother's constant model)."""
+    values = np.column_stack([_value(rows, n) for n in ALL])
     return "".join(" ".join(repr(float(v)) for v in row) + "\n" for row in values)
 
 
@@ -614,7 +652,7 @@ def test_c_summary(c_driver):
         "hybrid": [v for k, v in C_RESULTS.items() if k.startswith("hybrid")],
         **{
             f"hybrid {p}": [v for k, v in C_RESULTS.items() if k.startswith("hybrid") and k.endswith(p)]
-            for p in ("inversion", "curvefit", "smoother")
+            for p in ("inversion", "curvefit", "smoother", "smoother_fleet")
         },
         "default fit": [C_RESULTS[DEFAULT_CASE]] if DEFAULT_CASE in C_RESULTS else [],
     }
@@ -738,16 +776,17 @@ fn {module}() {{
         "all target drift": [v for k, v in results.items() if "hybrid" not in k and k != DEFAULT_CASE],
         **{
             f"hybrid {p}": [v for k, v in results.items() if k.startswith("hybrid") and k.endswith(p)]
-            for p in ("inversion", "curvefit", "smoother")
+            for p in ("inversion", "curvefit", "smoother", "smoother_fleet")
         },
         "default fit": [results[DEFAULT_CASE]],
     }
     print(f"\nRust: {len(results)} models, cargo test build of all {compile_s:.1f} s")
     for label, values in groups.items():
-        print(
-            f"  {label} ({len(values)}): max |rs - py| / |py| {max(v[0] for v in values):.3g}, "
-            f"rows with the same bits {min(v[1] for v in values):.1%}"
-        )
+        if values:
+            print(
+                f"  {label} ({len(values)}): max |rs - py| / |py| {max(v[0] for v in values):.3g}, "
+                f"rows with the same bits {min(v[1] for v in values):.1%}"
+            )
 
 
 # --- the command --------------------------------------------------------------------------------------------
