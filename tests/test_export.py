@@ -206,9 +206,9 @@ def _expected(model, rows: RunTable) -> dict:
     thermal = _thermal(rows)
     for name in _used_inputs(model):
         v, t = _value(rows, name), _value(train, name)
-        if name in export.COEFFICIENT_INPUTS:  # over the training runs with k_z; checked on rows with k_z only
+        if name in export.COEFFICIENT_INPUTS:  # over the training runs with k_z; NaN on a row without
             t = t[_thermal(train)]
-            inside &= ~thermal | ((v >= t.min()) & (v <= t.max()))
+            inside &= np.where(thermal, (v >= t.min()) & (v <= t.max()), ~np.isfinite(v))
         else:
             inside &= (v >= t.min()) & (v <= t.max())
     feats, tfeats = encode(rows, model.encoding), encode(train, model.encoding)

@@ -159,7 +159,8 @@ def _expected(model, rows: RunTable) -> dict:
         get = (lambda r, n=name: r.column(n)) if name in export.PHYSICS_INPUTS else (lambda r, n=name: getattr(r, n))
         t = get(train)[thermal_train] if name in KZ else get(train)
         ok = (get(rows) >= t.min()) & (get(rows) <= t.max())
-        inside &= ok | ~thermal if name in KZ else ok
+        # without a thermal k_z, every k_z input NaN (the constant model; some but not all: neither)
+        inside &= np.where(thermal, ok, ~np.isfinite(get(rows))) if name in KZ else ok
     feats, tfeats = encode(rows, model.encoding), encode(train, model.encoding)
     inside &= np.all((feats >= tfeats.min(axis=0)) & (feats <= tfeats.max(axis=0)), axis=1)
     return {"base": base, "pred": pred, "inside": inside, "thermal": thermal}

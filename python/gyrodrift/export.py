@@ -100,7 +100,8 @@ COEFFICIENT_INPUTS: tuple[str, ...] = (
     "smoother_coeff_prior_std_deg_h_per_c",
 )
 """The smoother's k_z estimate (`FLEET_PHYSICS` reads them; the last inputs of the struct): NaN for a run whose
-smoother used its constant model, whose base is then its end drift unchanged. The range check skips them there."""
+smoother used its constant model, whose base is then its end drift unchanged. The range check wants them all NaN
+there (some but not all is neither model: `DriftModel.predict` refuses such a run), else within their range."""
 
 INPUTS: dict[str, str] = {**RAW_INPUTS, **PHYSICS_INPUTS}
 """Every input a generated function can read, in the order of its fields, with its unit."""
@@ -432,7 +433,7 @@ def _provenance_lines(spec: ExportSpec) -> list[str]:
         )
     lines.append("Inputs read, with their range over the training runs (the range check refuses inputs outside it):")
     for name, (lo, hi) in zip(spec.inputs, spec.input_ranges, strict=True):
-        note = " (over the runs with k_z; not checked where the run has none)" if name in COEFFICIENT_INPUTS else ""
+        note = " (over the runs with k_z; must be NaN where the run has none)" if name in COEFFICIENT_INPUTS else ""
         lines.append(f"  {name}: [{_lit(lo)}, {_lit(hi)}]{note}, {INPUTS[name]}")
     lines.append("Features, with their range over the training runs (checked too):")
     for name, (lo, hi) in zip(spec.feature_names, spec.feature_ranges, strict=True):
@@ -607,11 +608,17 @@ int {P}_in_range(const {P}_inputs *inputs);
     used = [*spec.functions, *(["isfinite"] if fleet else [])]
     libm = f"#include <math.h> /* {', '.join(used)} */\n" if used else ""
     input_count = f"{U}_N_INPUTS"
-    fleet_functions = ""
+    fleet_functions = no_coefficient = ""
     if fleet:
         args = ", ".join(f"inputs->{name}" for name in COEFFICIENT_INPUTS)
         input_count = f"{P}_thermal({args}) ? {U}_N_INPUTS : {U}_N_INPUTS - {len(COEFFICIENT_INPUTS)}"
         fleet_functions = _c_fleet_functions() + "\n\n"
+        no_coefficient = f"""    for (k = n_inputs; k < {U}_N_INPUTS; ++k) {{
+        if (isfinite(u[k])) {{
+            return 0; /* without a thermal k_z, a k_z input that is not NaN: neither model of the smoother */
+        }}
+    }}
+"""
     source = f"""/*
  * {source_name}: the identified axial gyro drift model (see {header_name} for the interface).
  *
@@ -657,7 +664,7 @@ int {P}_in_range(const {P}_inputs *inputs)
             return 0;
         }}
     }}
-    {P}_features(inputs, x);
+{no_coefficient}    {P}_features(inputs, x);
     for (k = 0; k < {U}_N_FEATURES; ++k) {{
         if (!(x[k] >= {P}_feature_range_table[k].min && x[k] <= {P}_feature_range_table[k].max)) {{
             return 0;
@@ -887,12 +894,15 @@ def _rust_files(spec: ExportSpec) -> dict[str, str]:
         args = ", ".join(f"inputs.{name}" for name in COEFFICIENT_INPUTS)
         in_range_fn = f"""{_RUST_FLEET_FUNCTIONS}
 
-/// True when every input and every feature lies within its training range (NaN never does); the k_z inputs are
-/// not checked on a run without them (the smoother's constant model: its base is the end drift).
+/// True when every input and every feature lies within its training range (NaN never does); on a run without a
+/// thermal k_z (the smoother's constant model: its base is the end drift) the k_z inputs must all be NaN instead.
 #[must_use]
 pub fn in_range(inputs: &Inputs, math: &Math) -> bool {{
+    let u = [{input_values}];
     let n = if thermal({args}) {{ N_INPUTS }} else {{ N_INPUTS - {len(COEFFICIENT_INPUTS)} }};
-    within(&INPUT_RANGES[..n], &[{input_values}][..n]) && within(&FEATURE_RANGES, &features(inputs, math))
+    within(&INPUT_RANGES[..n], &u[..n])
+        && u[n..].iter().all(|v| !v.is_finite())
+        && within(&FEATURE_RANGES, &features(inputs, math))
 }}
 """
     else:
