@@ -126,3 +126,48 @@ def test_a_model_with_another_base_reports_no_fleet_base(training):
     assert math.isnan(res.smoother_fleet_drift_deg_h) and res.coefficient_prior_deg_h_per_c is None
     doc = identification_document(res)
     assert doc["smoother_fleet_drift_deg_h"] is None and doc["coefficient_prior_deg_h_per_c"] is None
+
+
+@needs_fleet_base
+def test_identify_command_prints_the_fleet_base_of_a_saved_model(training, tmp_path):
+    from click.testing import CliRunner
+
+    from gyrodrift.cli import main
+    from gyrodrift.ins import Scenario, simulate
+    from gyrodrift.model_io import save_model
+
+    model = fit_drift_model(
+        training, encoding="physics", target="residual", physics_column=FLEET_BASE, gamma=10.0, sigma=1.0
+    )
+    save_model(model, tmp_path / "m.json")
+    scn = {
+        "site": {"lat_deg": 40.0},
+        "run": {"duration_h": 16.1, "rate_hz": 1.0, "seed": 4},
+        "gyro": {"bias_deg_h": [0.004, -0.003, 0.002], "arw_deg_rth": 0.0005},
+        "accel": {"bias_ug": [20.0, -10.0, 5.0], "vrw_ug_rthz": 5.0},
+        "temperature": {"start_c": 18.0, "end_c": 36.0, "tau_h": 4.0, "t0_c": 28.0, "k1_deg_h_per_c": 2e-4},
+    }
+    log = simulate(Scenario.from_dict(scn), out_dir=tmp_path / "run", quiet=True)
+    r = CliRunner().invoke(main, ["identify", str(log), "--model", str(tmp_path / "m.json"), "--json"])
+    assert r.exit_code == 0, r.output
+    doc = json.loads(r.stdout)
+    assert doc["model_physics_column"] == FLEET_BASE and doc["smoother_model"] == "thermal"
+    f = doc["features"]
+    mean, std = doc["coefficient_prior_deg_h_per_c"]
+    assert (mean, std) == pytest.approx(model.coefficient_prior_, rel=1e-15)
+    base, base_std = drift_with_coefficient_prior(
+        f["drift_smoother_deg_h"],
+        f["drift_smoother_std_deg_h"],
+        f["smoother_coeff_deg_h_per_c"],
+        f["smoother_coeff_std_deg_h_per_c"],
+        f["smoother_end_coeff_cov"],
+        f["smoother_coeff_prior_std_deg_h_per_c"],
+        mean,
+        std,
+    )
+    assert doc["smoother_fleet_drift_deg_h"] == base and doc["smoother_fleet_drift_std_deg_h"] == base_std
+    r = CliRunner().invoke(main, ["identify", str(log), "--model", str(tmp_path / "m.json")])
+    assert r.exit_code == 0, r.output
+    line = next(x for x in r.stdout.splitlines() if "training fleet's k_z prior" in x)
+    assert f"{base:.6f} +- {base_std:.6f} deg/h" in line
+    assert f"learned correction {doc['drift_deg_h'] - base:+.6f} deg/h" in line
