@@ -138,8 +138,10 @@ def test_hybrid_learns_only_the_correction_and_round_trips(tmp_path):
     path = tmp_path / "hybrid.json"
     save_model(hybrid, path)
     doc = json.loads(path.read_text())
-    assert doc["schema_version"] == 3 and doc["target"] == "residual"
-    assert doc["physics_column"] == "drift_inversion_deg_h"
+    assert doc["schema_version"] == 4 and doc["target"] == "residual"
+    # "auto" on a table without smoother columns: the 12 h inversion
+    assert doc["physics_column"] == "auto" and doc["fitted"]["physics_column"] == "drift_inversion_deg_h"
+    assert doc["fitted"]["coefficient_prior"] is None
     again = load_model(path)
     np.testing.assert_array_equal(again.predict(test), hybrid.predict(test))
 
@@ -164,8 +166,11 @@ def test_hybrid_on_a_column_needs_it_for_every_run():
     m = fit_drift_model(
         with_cf, encoding="physics", target="residual", physics_column="drift_curvefit_deg_h", gamma=5.0, sigma=1.0
     )
-    with pytest.raises(ValueError, match="drift_curvefit_deg_h .* missing for run"):
+    with pytest.raises(ValueError, match="drift_curvefit_deg_h .* missing: the table has no such column"):
         m.predict(runs)
+    gap = with_cf.replace(extra={"drift_curvefit_deg_h": np.where(np.arange(12) == 3, np.nan, physics_inversion(runs))})
+    with pytest.raises(ValueError, match="drift_curvefit_deg_h .* missing for run.s. r3$"):
+        m.predict(gap)
 
 
 def test_physics_encoding_is_latitude_free_and_the_paper_one_is_not():
@@ -305,7 +310,7 @@ def test_hybrid_on_a_missing_column_is_one_line(tmp_path):
         main,
         ["fit", str(data), "--out", str(tmp_path / "m.json"), "--physics-column", "drift_curvefit_deg_h", "--quiet"],
     )
-    assert r.exit_code == 1 and "column drift_curvefit_deg_h" in r.output and "missing for run" in r.output
+    assert r.exit_code == 1 and "column drift_curvefit_deg_h" in r.output and "no such column" in r.output
     assert len(r.output.strip().splitlines()) == 1 and not (tmp_path / "m.json").exists()
 
 

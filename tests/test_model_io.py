@@ -26,7 +26,7 @@ def test_round_trip_reproduces_predictions_to_the_bit(tmp_path, paper, scaling, 
     again = load_model(path)
     np.testing.assert_array_equal(again.predict(paper.test), model.predict(paper.test))
     doc = json.loads(path.read_text())
-    assert doc["schema_version"] == 3 and doc["encoding"] == encoding
+    assert doc["schema_version"] == 4 and doc["encoding"] == encoding
     assert doc["training"]["sha256"] == training_digest(paper.train)
     assert len(doc["training"]["runs"]) == 22
 

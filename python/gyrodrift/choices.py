@@ -41,6 +41,28 @@ latitude (deg/h, latitude-free), with the temperature range."""
 TARGETS = ("drift", "residual")
 """What the learner is fitted on: the drift itself, or the residual drift minus a physics estimate (hybrid)."""
 
-PHYSICS_COLUMNS = ("drift_inversion_deg_h", "drift_curvefit_deg_h", "drift_smoother_deg_h")
+PHYSICS_COLUMNS = (
+    "drift_inversion_deg_h",
+    "drift_curvefit_deg_h",
+    "drift_smoother_deg_h",
+    "drift_smoother_fleet_deg_h",
+)
 """Physics estimates a hybrid model can start from: the 12 h inversion (computed from ``lat_deg`` and
-``lat0_deg``), or a run-table column (the 12 h curve fit; a smoother over the whole log)."""
+``lat0_deg``), a run-table column (the 12 h curve fit; the 16 h smoother's end drift), or the smoother's end
+drift re-weighted by the training fleet's pooled prior of its thermal coefficient k_z (computed by the model
+from the smoother's columns, `gyrodrift.fleet_prior`)."""
+
+PHYSICS_CHOICES = ("auto", *PHYSICS_COLUMNS)
+"""What ``physics_column`` (``fit --physics-column``) accepts: a physics estimate, or ``auto`` (the default):
+resolved when the model is fitted, to the fleet-prior smoother when every training run has the smoother's
+columns and at least `MIN_THERMAL_RUNS` have its thermal k_z, else the smoother's drift when every run has
+it, else the 12 h inversion (`gyrodrift.model.resolve_physics_column`)."""
+
+MIN_THERMAL_RUNS = 3
+"""Training runs with the smoother's thermal k_z that the fleet-prior base needs: each training run's own base
+pools the k_z of the others (leave one out), and a pooled prior needs at least 2."""
+
+BASE_UNCERTAINTIES = ("auto", "none")
+"""Whether a hybrid's physics base's 1-sigma joins the label 1-sigma (label weights, the interval's Gaussian
+process and its calibration, the new run's interval): ``auto`` where the base has one, ``none`` never (model
+files written before it)."""

@@ -14,31 +14,41 @@ so ``clone``, ``cross_val_score`` and ``GridSearchCV`` work on the whole model (
 what ``gyrodrift fit`` and ``gyrodrift reproduce`` call (build, fit, with a progress bar). Predictions are axial
 drifts in deg/h, the total constant to subtract from the z-gyro output (measured - estimate).
 
-Three parameters of the model itself (not of a step):
+Parameters of the model itself (not of a step):
 
 * ``target``: ``"drift"`` (the LSSVR learns the drift) or ``"residual"`` (hybrid: the LSSVR learns the label
   minus a physics estimate, and the prediction is physics + learned correction, so the learner models only
   what physics cannot, e.g. how the drift over the next 72 h follows temperature);
-* ``physics_column``: the physics estimate of the hybrid, ``"drift_inversion_deg_h"`` (the 12 h inversion,
-  computed from the table's latitudes) or a run-table column such as ``"drift_curvefit_deg_h"`` or
-  ``"drift_smoother_deg_h"`` (``gyrodrift.choices.PHYSICS_COLUMNS``);
+* ``physics_column``: the physics estimate (base) of the hybrid (``gyrodrift.choices.PHYSICS_COLUMNS``,
+  computed by `physics_estimate`): ``"drift_smoother_fleet_deg_h"`` (the 16 h smoother's end drift re-weighted
+  by the training fleet's pooled prior of its thermal coefficient k_z, `gyrodrift.fleet_prior`: a new run with
+  the prior of all training runs, ``coefficient_prior_``, a training run with the prior pooled without it),
+  ``"drift_inversion_deg_h"`` (the 12 h inversion, computed from the table's latitudes), a run-table column
+  (``"drift_curvefit_deg_h"``, ``"drift_smoother_deg_h"``), or ``"auto"`` (default), resolved by ``fit``
+  (`resolve_physics_column`: the fleet base when the training runs allow it, else the smoother's drift, else the
+  inversion) into ``physics_column_``;
 * ``label_weighting``: ``"auto"`` weights the runs by their label 1-sigma when the table has a
-  ``drift_std_deg_h`` column (weighted LS-SVM, ``C_i = gamma w_i``, ``w_i = mean(s^2) / s_i^2``), ``"none"``
-  never does.
-
+  ``drift_std_deg_h`` column (weighted LS-SVM, ``C_i = gamma w_i``, ``w_i = mean(v) / v_i``, ``v_i = s_i^2``
+  plus the base's ``b_i^2`` below), ``"none"`` never does;
+* ``base_uncertainty``: ``"auto"`` (default): where the hybrid's base has a 1-sigma ``b_i`` for every training
+  run (the fleet base's re-weighted one, ``drift_smoother_std_deg_h``, ``drift_curvefit_std_deg_h``; the
+  inversion has none) the target label - base has the noise of both, and ``s_i^2 + b_i^2`` takes the place of
+  ``s_i^2`` in the label weights, the spread model's known noise and the calibration scores, and the new run's
+  own ``b(x)^2`` joins the interval; ``"none"``: never (model files of schema 3 and before);
 * ``calibration_folds``: how the interval is calibrated (below); 10 by default, 0 for the closed-form
   leave-one-out residuals.
 
 Uncertainty (``predict_interval``, ``check_inputs``): a normalised cross-validation interval for the label a
 new run would get (conservative for its drift itself by the label noise's share). Its half-width is
-``q sqrt(spread(x)^2 + s_rms^2)``: ``spread`` the 1-sigma of the drift from a Gaussian process fitted to the
+``q sqrt(spread(x)^2 + s_rms^2 + b(x)^2)``: ``spread`` the 1-sigma of the drift from a Gaussian process fitted to the
 LSSVR's target with a linear trend, one RBF length scale per input, the label 1-sigmas as known noise and a
 run-to-run term (`gyrodrift.spread.SpreadGP`; larger away from the training runs), ``s_rms`` the training runs'
 rms label 1-sigma, ``q`` the conformal quantile (``jackknife_half_width``) of the scores
-``r_i / sqrt(m_i^2 + s_i^2)``, where ``r_i`` is run i's residual under the model fitted and tuned without run
+``r_i / sqrt(m_i^2 + s_i^2 + b_i^2)``, where ``r_i`` is run i's residual under the model fitted and tuned without run
 i's fold (``calibration_folds`` folds; the LSSVR's own leave-one-out residuals are optimistic once gamma and
-sigma were tuned on them), ``m_i`` that model's spread at the run and ``s_i`` its label 1-sigma
-(docs/identification.md, "Intervals and extrapolation", has the coverage measured over 18 fleets).
+sigma were tuned on them), ``m_i`` that model's spread at the run, ``s_i`` its label 1-sigma and ``b_i`` its
+base's (0 without one; ``b(x)`` the new run's) (docs/identification.md, "Intervals and extrapolation", has the
+coverage measured over 18 fleets).
 ``check_inputs`` flags runs whose inputs lie outside the training runs' range, per input and jointly
 (Mahalanobis distance of the scaled inputs beyond the largest among the training runs).
 """
@@ -60,9 +70,10 @@ from sklearn.preprocessing import MinMaxScaler, StandardScaler
 from sklearn.utils.validation import check_is_fitted
 
 from gyrodrift.baselines import physics_inversion
-from gyrodrift.choices import PHYSICS_COLUMNS, SCALINGS, TARGETS
+from gyrodrift.choices import BASE_UNCERTAINTIES, MIN_THERMAL_RUNS, PHYSICS_CHOICES, PHYSICS_COLUMNS, SCALINGS, TARGETS
 from gyrodrift.encodings import encode, feature_names
 from gyrodrift.errors import InputError, OptionError
+from gyrodrift.fleet_prior import drift_with_coefficient_prior, pooled_coefficient_prior
 from gyrodrift.lssvr import (
     LSSVR,
     IllConditionedWarning,
@@ -85,6 +96,10 @@ from gyrodrift.tuning import (
 
 __all__ = [
     "DriftModel",
+    "FLEET_PHYSICS",
+    "fleet_priors",
+    "resolve_physics_column",
+    "thermal_runs",
     "InputCheck",
     "label_weights",
     "physics_estimate",
@@ -154,23 +169,153 @@ def label_weights(std_deg_h) -> np.ndarray:
     return s2.mean() / s2
 
 
-def physics_estimate(runs: RunTable, column: str = "drift_inversion_deg_h") -> np.ndarray:
-    """The physics estimate of each run's drift [deg/h] named by ``column`` (``PHYSICS_COLUMNS``).
+FLEET_PHYSICS = "drift_smoother_fleet_deg_h"
+"""The fleet-prior smoother base (``PHYSICS_COLUMNS``): computed by the model, not a table column."""
 
-    ``"drift_inversion_deg_h"`` is the 12 h inversion of the latitude error (`physics_inversion`); any other
-    name is an optional run-table column, which every run must have (else an ``InputError`` naming it)."""
-    if column not in PHYSICS_COLUMNS:
-        raise OptionError(f"unknown physics column {column!r}; expected one of {', '.join(PHYSICS_COLUMNS)}")
-    if column == "drift_inversion_deg_h":
-        return physics_inversion(runs, t_h=12.0)
+SMOOTHER_COLUMNS = ("drift_smoother_deg_h", "drift_smoother_std_deg_h")
+"""The smoother's end drift and its 1-sigma [deg/h]: ``physics_column="auto"`` takes the fleet base when every
+training run has both (the base itself needs the drift; its 1-sigma, re-weighted, enters the noise and the
+interval)."""
+
+THERMAL_COLUMNS = (
+    "smoother_coeff_deg_h_per_c",
+    "smoother_coeff_std_deg_h_per_c",
+    "smoother_end_coeff_cov",
+    "smoother_coeff_prior_std_deg_h_per_c",
+)
+"""The smoother's thermal coefficient k_z, its 1-sigma, cov(end drift, k_z) and its own prior 1-sigma: the fleet
+base needs them in the table (empty for a run under the smoother's constant model)."""
+
+BASE_STD_COLUMNS = {
+    "drift_curvefit_deg_h": "drift_curvefit_std_deg_h",
+    "drift_smoother_deg_h": "drift_smoother_std_deg_h",
+    FLEET_PHYSICS: "drift_smoother_std_deg_h",
+}
+"""The run-table column of the 1-sigma of a base [deg/h] (the fleet base's is re-weighted from it)."""
+
+
+def _missing_runs(runs: RunTable, values) -> str:
+    missing = [str(r) for r, v in zip(runs.run, values, strict=True) if not np.isfinite(v)]
+    return f"{', '.join(missing[:5])}{' ...' if len(missing) > 5 else ''}"
+
+
+def _require_column(runs: RunTable, column: str, what: str) -> np.ndarray:
+    """Column ``column`` of every run; else an ``InputError`` naming the table, the column and the runs."""
+    if column not in runs.extra:
+        raise InputError(f"{runs.source}: column {column} ({what}) is missing: the table has no such column")
     values = runs.column(column)
     if not np.all(np.isfinite(values)):
-        missing = [str(r) for r, v in zip(runs.run, values, strict=True) if not np.isfinite(v)]
-        raise InputError(
-            f"{runs.source}: column {column} (the hybrid model's physics estimate) is missing for run(s) "
-            f"{', '.join(missing[:5])}{' ...' if len(missing) > 5 else ''}"
-        )
+        raise InputError(f"{runs.source}: column {column} ({what}) is missing for run(s) {_missing_runs(runs, values)}")
     return np.asarray(values, float)
+
+
+def thermal_runs(runs: RunTable) -> np.ndarray:
+    """True for the runs with the smoother's thermal estimate of k_z (every ``THERMAL_COLUMNS`` value usable: the
+    test of `gyrodrift.fleet_prior.drift_with_coefficient_prior`); False under its constant model or without
+    the columns."""
+    k, sk, c, s0 = (runs.column(name) for name in THERMAL_COLUMNS)
+    with np.errstate(over="ignore"):
+        vk = sk * sk
+    return np.isfinite(k) & np.isfinite(vk) & (vk > 0.0) & np.isfinite(c) & np.isfinite(s0) & (s0 > 0.0)
+
+
+def resolve_physics_column(runs: RunTable) -> tuple[str, str]:
+    """``(column, why)``: the physics base ``physics_column="auto"`` takes on training runs ``runs``.
+
+    The fleet-prior smoother (``drift_smoother_fleet_deg_h``) when every run has ``SMOOTHER_COLUMNS`` and at
+    least ``MIN_THERMAL_RUNS`` have a thermal k_z; else the smoother's drift (``drift_smoother_deg_h``) when
+    every run has it; else the 12 h inversion (``drift_inversion_deg_h``). ``why`` says so in words."""
+    n_thermal = int(thermal_runs(runs).sum())
+    if all(runs.has_column(c) for c in SMOOTHER_COLUMNS):
+        if n_thermal >= MIN_THERMAL_RUNS:
+            return FLEET_PHYSICS, (
+                f"every run has the smoother's drift and 1-sigma, {n_thermal} of {len(runs)} its thermal k_z: the "
+                "16 h smoother's end drift with the fleet's pooled k_z prior"
+            )
+        why = f"{n_thermal} run(s) with the smoother's thermal k_z, the fleet prior needs {MIN_THERMAL_RUNS}"
+        return "drift_smoother_deg_h", f"{why}: the 16 h smoother's end drift"
+    if runs.has_column("drift_smoother_deg_h"):
+        return "drift_smoother_deg_h", "no drift_smoother_std_deg_h for every run: the 16 h smoother's end drift"
+    if "drift_smoother_deg_h" in runs.extra:
+        values = runs.column("drift_smoother_deg_h")
+        why = f"drift_smoother_deg_h is missing for run(s) {_missing_runs(runs, values)}"
+    else:
+        why = "no smoother columns"
+    return "drift_inversion_deg_h", f"{why}: the 12 h inversion"
+
+
+def fleet_priors(runs: RunTable) -> tuple[tuple[float, float], np.ndarray]:
+    """The fleet's k_z priors of training runs ``runs`` [deg/h/degC]: ``(prior, per_run)``.
+
+    ``prior`` = `pooled_coefficient_prior` of every run's k_z (what a new run's base uses); ``per_run`` (n_runs,
+    2): for each run with a thermal k_z the prior pooled from the *other* runs (leave one out: its own k_z is
+    not counted twice, so its base is what a new run's would be), for the others ``prior`` (their base does not
+    use it). ``InputError`` with fewer than ``MIN_THERMAL_RUNS`` thermal runs."""
+    thermal = thermal_runs(runs)
+    if int(thermal.sum()) < MIN_THERMAL_RUNS:
+        raise InputError(
+            f"{runs.source}: the physics base {FLEET_PHYSICS} needs at least {MIN_THERMAL_RUNS} training runs with "
+            f"the smoother's thermal k_z ({', '.join(THERMAL_COLUMNS[:2])}; each run's base pools the others'), "
+            f"got {int(thermal.sum())}"
+        )
+    k = np.where(thermal, runs.column(THERMAL_COLUMNS[0]), np.nan)
+    sk = np.where(thermal, runs.column(THERMAL_COLUMNS[1]), np.nan)
+    prior = pooled_coefficient_prior(k, sk)
+    per_run = np.tile(np.asarray(prior, float), (len(runs), 1))
+    for i in np.flatnonzero(thermal):
+        others = np.arange(len(runs)) != i
+        per_run[i] = pooled_coefficient_prior(k[others], sk[others])
+    return prior, per_run
+
+
+def physics_estimate(runs: RunTable, column: str = "drift_inversion_deg_h", *, prior=None, with_std: bool = False):
+    """The physics estimate of each run's drift [deg/h] named by ``column`` (``PHYSICS_COLUMNS``).
+
+    * ``"drift_inversion_deg_h"``: the 12 h inversion of the latitude error (`physics_inversion`);
+    * ``"drift_smoother_fleet_deg_h"``: the smoother's end drift with the k_z prior ``prior`` in place of its own
+      (`gyrodrift.fleet_prior.drift_with_coefficient_prior`): ``prior`` is ``(mean, std)`` [deg/h/degC] for
+      every run (a model's ``coefficient_prior_``) or an (n_runs, 2) array, one prior per run (the leave-one-out
+      priors of training runs, `fleet_priors`). Every run needs ``drift_smoother_deg_h``, and the table the
+      ``THERMAL_COLUMNS`` (a run under the smoother's constant model has them empty: its base is its smoother
+      drift unchanged); the 1-sigma comes from ``drift_smoother_std_deg_h`` (NaN without it);
+    * any other name: an optional run-table column, which every run must have.
+
+    A missing column gives an ``InputError`` naming the table, the column and the runs. ``with_std``: return
+    ``(estimate, std)``, ``std`` the estimate's 1-sigma [deg/h] (the fleet base's re-weighted one, a column
+    base's ``BASE_STD_COLUMNS`` column, NaN where a run has none; None for the inversion)."""
+    if column not in PHYSICS_COLUMNS:
+        raise OptionError(f"unknown physics column {column!r}; expected one of {', '.join(PHYSICS_COLUMNS)}")
+    what = f"needed by the hybrid model's physics base {column}"
+    if column == "drift_inversion_deg_h":
+        estimate, std = physics_inversion(runs, t_h=12.0), None
+    elif column == FLEET_PHYSICS:
+        if prior is None:
+            raise InputError(f"the physics estimate {FLEET_PHYSICS} needs the fleet's k_z prior")
+        drift = _require_column(runs, "drift_smoother_deg_h", what)
+        drift_std = runs.column("drift_smoother_std_deg_h")
+        for name in THERMAL_COLUMNS:
+            if name not in runs.extra:
+                raise InputError(f"{runs.source}: column {name} ({what}) is missing: the table has no such column")
+        k, sk, c, s0 = (runs.column(name) for name in THERMAL_COLUMNS)
+        prior = np.asarray(prior, float)
+        if prior.shape == (2,):
+            estimate, std = drift_with_coefficient_prior(
+                drift, drift_std, k, sk, c, s0, float(prior[0]), float(prior[1])
+            )
+        elif prior.shape == (len(runs), 2):
+            pairs = [
+                drift_with_coefficient_prior(drift[i], drift_std[i], k[i], sk[i], c[i], s0[i], *map(float, prior[i]))
+                for i in range(len(runs))
+            ]
+            estimate = np.array([p[0] for p in pairs], float)
+            std = np.array([p[1] for p in pairs], float)
+        else:
+            raise InputError(f"a k_z prior is (mean, std) or one per run, shape ({len(runs)}, 2); got {prior.shape}")
+    else:
+        estimate = _require_column(runs, column, what)
+        std = np.asarray(runs.column(BASE_STD_COLUMNS[column]), float)
+    estimate = np.asarray(estimate, float)
+    return (estimate, None if std is None else np.asarray(std, float)) if with_std else estimate
 
 
 def _check_coverage(coverage) -> float:
@@ -436,7 +581,13 @@ class DriftModel(Pipeline):
     ``y`` is not given. The properties below read the steps; ``training_`` (set by ``fit``) describes the
     training runs: ``n_runs``, ``sha256`` (``training_digest``), ``source``, ``weighted`` (whether the label
     1-sigmas weighted the fit), and ``runs`` (the table itself, kept so that a model file can hold its
-    training data). ``target``, ``physics_column`` and ``label_weighting``: see the module docstring.
+    training data). ``target``, ``physics_column``, ``label_weighting``, ``base_uncertainty`` and
+    ``calibration_folds``: see the module docstring.
+
+    Fitted attributes of the base: ``physics_column_`` (the resolved base, None for ``target="drift"``),
+    ``physics_reason_`` (why ``auto`` took it, in words), ``coefficient_prior_`` (the fleet base's k_z prior
+    ``(mean, std)`` [deg/h/degC] pooled from all training runs, else None) and ``base_std_used_`` (whether the
+    base's 1-sigma joined the label's).
     """
 
     def __init__(
@@ -447,22 +598,28 @@ class DriftModel(Pipeline):
         memory=None,
         verbose=False,
         target: str = "drift",
-        physics_column: str = "drift_inversion_deg_h",
+        physics_column: str = "auto",
         label_weighting: str = "auto",
         calibration_folds: int = DEFAULT_CALIBRATION_FOLDS,
+        base_uncertainty: str = "auto",
     ) -> None:
         super().__init__(steps, transform_input=transform_input, memory=memory, verbose=verbose)
         self.target = target
         self.physics_column = physics_column
         self.label_weighting = label_weighting
         self.calibration_folds = calibration_folds
+        self.base_uncertainty = base_uncertainty
 
     def _check_options(self) -> None:
         if self.target not in TARGETS:
             raise OptionError(f"unknown target {self.target!r}; expected one of {', '.join(TARGETS)}")
-        if self.physics_column not in PHYSICS_COLUMNS:
+        if self.physics_column not in PHYSICS_CHOICES:
             raise OptionError(
-                f"unknown physics column {self.physics_column!r}; expected one of {', '.join(PHYSICS_COLUMNS)}"
+                f"unknown physics column {self.physics_column!r}; expected one of {', '.join(PHYSICS_CHOICES)}"
+            )
+        if self.base_uncertainty not in BASE_UNCERTAINTIES:
+            raise OptionError(
+                f"unknown base uncertainty {self.base_uncertainty!r}; expected one of {', '.join(BASE_UNCERTAINTIES)}"
             )
         if self.label_weighting not in ("auto", "none"):
             raise OptionError(f"unknown label weighting {self.label_weighting!r}; expected auto or none")
@@ -470,11 +627,39 @@ class DriftModel(Pipeline):
         if isinstance(folds, bool) or not isinstance(folds, (int, np.integer)) or folds < 0 or folds == 1:
             raise OptionError(f"calibration_folds must be 0 (leave-one-out) or an integer >= 2, got {folds!r}")
 
-    def _base(self, runs: RunTable) -> np.ndarray:
-        """What the LSSVR's output is added to [deg/h]: the physics estimate (residual target) or 0."""
-        if self.target == "residual":
-            return physics_estimate(runs, self.physics_column)
-        return np.zeros(len(runs))
+    def _resolve_physics(self, trained: RunTable) -> tuple[np.ndarray, np.ndarray | None]:
+        """Set ``physics_column_`` (the resolved base), ``physics_reason_`` (why, in words), ``coefficient_prior_``
+        and ``base_std_used_``; return the training runs' base [deg/h] (a fleet base with each run's
+        leave-one-out prior) and its 1-sigma [deg/h] when it joins the label noise (else None)."""
+        self.coefficient_prior_: tuple[float, float] | None = None
+        self.base_std_used_ = False
+        if self.target != "residual":
+            self.physics_column_: str | None = None
+            self.physics_reason_ = "none: the LSSVR learns the drift itself (target drift)"
+            return np.zeros(len(trained)), None
+        if self.physics_column == "auto":
+            column, why = resolve_physics_column(trained)
+        else:
+            column, why = self.physics_column, "as given"
+        per_run = None
+        if column == FLEET_PHYSICS:  # a missing drift named per run before the count of thermal runs
+            _require_column(trained, "drift_smoother_deg_h", f"needed by the hybrid model's physics base {column}")
+            prior, per_run = fleet_priors(trained)
+            self.coefficient_prior_ = (float(prior[0]), float(prior[1]))
+        base, std = physics_estimate(trained, column, prior=per_run, with_std=True)
+        self.physics_column_, self.physics_reason_ = column, why
+        self.base_std_used_ = bool(self.base_uncertainty == "auto" and std is not None and np.all(np.isfinite(std)))
+        return base, (std if self.base_std_used_ else None)
+
+    def _base(self, runs: RunTable, *, with_std: bool = False):
+        """What the LSSVR's output is added to for new runs [deg/h]: the physics estimate (residual target; a fleet
+        base with the prior of every training run, ``coefficient_prior_``) or 0. ``with_std``: ``(base, its
+        1-sigma or None)``."""
+        if self.target != "residual":
+            return (np.zeros(len(runs)), None) if with_std else np.zeros(len(runs))
+        check_is_fitted(self, "physics_column_")
+        prior = self.coefficient_prior_ if self.physics_column_ == FLEET_PHYSICS else None
+        return physics_estimate(runs, self.physics_column_, prior=prior, with_std=with_std)
 
     def fit(self, X, y=None, *, spread_theta=None, interval_calibration=None, **params) -> DriftModel:
         """Fit on runs (RunTable or structured array) and drifts ``y`` [deg/h] (default: the runs' own).
@@ -496,10 +681,16 @@ class DriftModel(Pipeline):
             trained = _with_drift(runs, y)
         if len(runs) < 3:
             raise InputError(f"{runs.source}: need at least 3 training runs, got {len(runs)}")
-        weighted = self.label_weighting == "auto" and trained.has_column("drift_std_deg_h")
+        base, base_std = self._resolve_physics(trained)
+        label_std = trained.column("drift_std_deg_h") if trained.has_column("drift_std_deg_h") else None
+        s = np.zeros(len(trained)) if label_std is None else np.asarray(label_std, float)
+        # the target label - base carries the noise of both: its variance [(deg/h)^2] and 1-sigma
+        noise_var = s**2 if base_std is None else s**2 + base_std**2
+        noise_std = label_std if base_std is None else np.sqrt(noise_var)
+        weighted = self.label_weighting == "auto" and label_std is not None
         if weighted:
-            params = {**params, "lssvr__sample_weight": label_weights(trained.column("drift_std_deg_h"))}
-        super().fit(runs, trained.drift_deg_h - self._base(trained), **params)
+            params = {**params, "lssvr__sample_weight": label_weights(noise_std)}
+        super().fit(runs, trained.drift_deg_h - base, **params)
         self.training_: dict[str, Any] = {
             "n_runs": len(trained),
             "sha256": training_digest(trained),
@@ -514,21 +705,19 @@ class DriftModel(Pipeline):
         cov = np.atleast_2d(np.cov(Z, rowvar=False))
         self.input_precision_ = np.linalg.pinv(cov)
         self.mahalanobis_limit_ = float(self._mahalanobis(Z).max())
-        label_std = trained.column("drift_std_deg_h") if trained.has_column("drift_std_deg_h") else None
-        self.spread_ = SpreadGP(theta=spread_theta).fit(Z, trained.drift_deg_h - self._base(trained), label_std)
-        s = np.zeros(len(trained)) if label_std is None else np.asarray(label_std, float)
+        self.spread_ = SpreadGP(theta=spread_theta).fit(Z, trained.drift_deg_h - base, noise_std)
         if interval_calibration is not None:
             residuals, spreads = (np.asarray(v, float) for v in interval_calibration)
             if not (residuals.shape == spreads.shape == (len(trained),)) or not np.all(np.isfinite(residuals)):
                 raise InputError(f"the interval's calibration must hold {len(trained)} residuals and spreads")
         elif self.calibration_folds == 0 or len(trained) < 2 * _MIN_FOLD_RUNS:
             residuals = np.asarray(self.loo_residuals_deg_h, float)
-            spreads = np.sqrt(np.maximum(self.spread_.loo_std_**2 - s**2, 0.0))
+            spreads = np.sqrt(np.maximum(self.spread_.loo_std_**2 - noise_var, 0.0))
         else:
             residuals, spreads = self._out_of_fold(trained)
         self.interval_residuals_, self.interval_spreads_ = residuals, spreads
         self.label_std_rms_ = float(np.sqrt(np.mean(s**2)))
-        self.interval_scores_ = residuals / np.sqrt(spreads**2 + s**2)
+        self.interval_scores_ = residuals / np.sqrt(spreads**2 + noise_var)
         return self
 
     def _out_of_fold(self, trained: RunTable) -> tuple[np.ndarray, np.ndarray]:
@@ -603,8 +792,8 @@ class DriftModel(Pipeline):
         """Closed-form leave-one-out residuals on the training runs [deg/h] (true minus left-out prediction).
 
         The scaler is not refitted per left-out run; with 20+ runs its effect on the residuals is small. For a
-        hybrid the physics estimate of a run does not depend on the others, so these are the residuals of the
-        drift too.
+        hybrid these are the residuals of the drift too: a run's base does not depend on the others, except the
+        fleet base's k_z prior, which for a training run is pooled from the others already.
         """
         return self.named_steps["lssvr"].loo_residuals_
 
@@ -632,7 +821,8 @@ class DriftModel(Pipeline):
         """Identified drift and its interval [deg/h]: ``(pred, lo, hi)``.
 
         A normalised cross-validation interval for the run's label (the `truth` a new run would get, with the
-        training runs' rms label 1-sigma ``label_std_rms_``): half-width ``q sqrt(spread(x)^2 + s_rms^2)``, with
+        training runs' rms label 1-sigma ``label_std_rms_``): half-width ``q sqrt(spread(x)^2 + s_rms^2 + b^2)``
+        (``b`` the run's base 1-sigma when ``base_std_used_``, else 0; a run without it: ``InputError``), with
         ``spread`` the spread model's 1-sigma of the drift at the run (`predict_spread`, wider away from the
         training runs) and ``q`` the ``jackknife_half_width`` of the calibration scores (`interval_scores`). For
         runs exchangeable with the training runs it covers about ``coverage`` of their labels, and at least as
@@ -642,7 +832,16 @@ class DriftModel(Pipeline):
         q = jackknife_half_width(self.interval_scores(), coverage)
         runs = as_run_table(runs)
         pred = self.predict(runs)
-        scale = np.sqrt(self.predict_spread(runs) ** 2 + self.label_std_rms_**2)
+        if self.base_std_used_:
+            _, base_std = self._base(runs, with_std=True)
+            if not np.all(np.isfinite(base_std)):
+                raise InputError(
+                    f"{runs.source}: column {BASE_STD_COLUMNS[self.physics_column_]} (the 1-sigma of the hybrid "
+                    f"model's physics base, in its interval) is missing for run(s) {_missing_runs(runs, base_std)}"
+                )
+            scale = np.sqrt(self.predict_spread(runs) ** 2 + self.label_std_rms_**2 + base_std**2)
+        else:
+            scale = np.sqrt(self.predict_spread(runs) ** 2 + self.label_std_rms_**2)
         half = q * scale if math.isfinite(q) else np.full(len(runs), math.inf)
         return pred, pred - half, pred + half
 
@@ -689,9 +888,10 @@ def make_drift_model(
     encoding: str = "temp_range",
     scaling: str = "standard",
     target: str = "drift",
-    physics_column: str = "drift_inversion_deg_h",
+    physics_column: str = "auto",
     label_weighting: str = "auto",
     calibration_folds: int = DEFAULT_CALIBRATION_FOLDS,
+    base_uncertainty: str = "auto",
     **lssvr_params: Any,
 ) -> DriftModel:
     """An unfitted :class:`DriftModel`: ``RunEncoder(encoding)``, the scaler, ``TunedLSSVR(**lssvr_params)``;
@@ -708,6 +908,7 @@ def make_drift_model(
         physics_column=physics_column,
         label_weighting=label_weighting,
         calibration_folds=calibration_folds,
+        base_uncertainty=base_uncertainty,
     )
     model._check_options()
     return model
@@ -761,11 +962,12 @@ def fit_drift_model(
     quiet: bool = True,
     callback=None,
     target: str = "drift",
-    physics_column: str = "drift_inversion_deg_h",
+    physics_column: str = "auto",
     label_weighting: str = "auto",
     max_label_std_deg_h: float | None = None,
     calibration_folds: int = DEFAULT_CALIBRATION_FOLDS,
     flagged_labels: str = "exclude",
+    base_uncertainty: str = "auto",
 ) -> DriftModel:
     """Build and fit a drift model on runs with known drift (``make_drift_model`` then ``fit``).
 
@@ -802,6 +1004,7 @@ def fit_drift_model(
         physics_column=physics_column,
         label_weighting=label_weighting,
         calibration_folds=calibration_folds,
+        base_uncertainty=base_uncertainty,
         objective=objective,
         method=method,
         gamma=gamma,

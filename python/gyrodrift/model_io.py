@@ -1,25 +1,31 @@
 """Model files: versioned JSON holding a drift model's parameters and its training runs. Never pickle.
 
-Layout (``schema_version`` 3)::
+Layout (``schema_version`` 4)::
 
-    {"format": "gyrodrift-drift-model", "schema_version": 3, "gyrodrift_version": "...",
+    {"format": "gyrodrift-drift-model", "schema_version": 4, "gyrodrift_version": "...",
      "encoding": "physics", "scaling": "standard", "feature_names": [...],
-     "target": "drift" or "residual", "physics_column": "drift_inversion_deg_h", "label_weighting": "auto",
-     "calibration_folds": 10,
+     "target": "drift" or "residual", "physics_column": "auto", "label_weighting": "auto",
+     "calibration_folds": 10, "base_uncertainty": "auto",
      "lssvr_params": {"gamma": null, "sigma": null, "objective": "loo_mae", "method": "cpso", "bounds": [...],
                       "n_particles": 30, "max_iter": 100, "w": 0.75, "c1": 2.0, "c2": 2.0, "chaos_steps": 10,
                       "grid_size": 40, "n_folds": 5, "random_state": 0 or null},
      "tuning": {...TuningResult...} or null,
      "fitted": {"gamma": ..., "sigma": ..., "intercept_deg_h": ..., "condition_number": ...,
                 "on_search_bound": [...], "loo_residuals_deg_h": [...], "spread_theta": [...],
-                "interval_residuals_deg_h": [...], "interval_spreads_deg_h": [...]},
+                "interval_residuals_deg_h": [...], "interval_spreads_deg_h": [...],
+                "physics_column": "drift_smoother_fleet_deg_h" or ... or null,
+                "coefficient_prior": [mean, std] or null},
      "warnings": ["...", ...],
      "training": {"n_runs": ..., "sha256": ..., "source": ..., "weighted": true/false, "left_out": [...],
                   "runs": [{"run": ..., "lat_deg": ..., ..., "drift_std_deg_h": ...}, ...]}}
 
 ``weighted`` says whether the label 1-sigmas (``drift_std_deg_h``) weighted the LS-SVM; ``left_out`` names the
-runs ``fit`` left out because their label 1-sigma was too large. Schema 2 files (before the hybrid model and
-weighted labels) still load: they are ``target = "drift"`` models with unweighted labels.
+runs ``fit`` left out because their label 1-sigma was too large. ``physics_column`` is the model's parameter
+(``auto`` or a base); ``fitted.physics_column`` the base it resolved to and ``fitted.coefficient_prior`` the
+fleet's k_z prior [deg/h/degC] of the fleet base: a load resolves and pools them again from the training runs
+and refuses a file whose record differs (to the bit). Schema 3 files (a concrete ``physics_column``, before
+``auto`` and ``base_uncertainty``) load with ``base_uncertainty = "none"``, as they were fitted; schema 2 files
+(before the hybrid model and weighted labels) as ``target = "drift"`` models with unweighted labels.
 
 Loading rebuilds the model with :func:`gyrodrift.model.make_drift_model` from the parameters and fits it on the
 training runs with the recorded tuning (no search is repeated); nothing is set into fitted scikit-learn
@@ -48,7 +54,16 @@ import numpy as np
 
 from gyrodrift import __version__
 from gyrodrift.atomic import atomic_write_json, recognise_json_format
-from gyrodrift.choices import ENCODINGS, METHODS, OBJECTIVES, PHYSICS_COLUMNS, SCALINGS, TARGETS
+from gyrodrift.choices import (
+    BASE_UNCERTAINTIES,
+    ENCODINGS,
+    METHODS,
+    OBJECTIVES,
+    PHYSICS_CHOICES,
+    PHYSICS_COLUMNS,
+    SCALINGS,
+    TARGETS,
+)
 from gyrodrift.errors import GyrodriftError, InputError
 from gyrodrift.lssvr import IllConditionedWarning
 from gyrodrift.model import DriftModel, make_drift_model, training_digest
@@ -56,8 +71,8 @@ from gyrodrift.runs import RunTable, RunTableError
 from gyrodrift.tuning import SearchBoundWarning, TuningResult
 
 FORMAT = "gyrodrift-drift-model"
-SCHEMA_VERSION = 3
-READABLE_SCHEMAS = (2, 3)
+SCHEMA_VERSION = 4
+READABLE_SCHEMAS = (2, 3, 4)
 
 #: The TunedLSSVR parameters a model file keeps (``callback`` is not data).
 _PARAMS = (
@@ -134,6 +149,7 @@ def model_to_dict(model: DriftModel) -> dict:
         "physics_column": model.physics_column,
         "label_weighting": model.label_weighting,
         "calibration_folds": int(model.calibration_folds),
+        "base_uncertainty": model.base_uncertainty,
         "lssvr_params": params,
         "tuning": model.tuning.to_dict() if model.tuning is not None else None,
         "fitted": {
@@ -146,6 +162,8 @@ def model_to_dict(model: DriftModel) -> dict:
             "spread_theta": np.asarray(model.spread_.theta_, float).tolist(),
             "interval_residuals_deg_h": np.asarray(model.interval_residuals_, float).tolist(),
             "interval_spreads_deg_h": np.asarray(model.interval_spreads_, float).tolist(),
+            "physics_column": model.physics_column_,
+            "coefficient_prior": None if model.coefficient_prior_ is None else list(model.coefficient_prior_),
         },
         "warnings": model.fit_warnings(),
         "training": {
@@ -294,13 +312,22 @@ def model_from_dict(doc: dict, where: str = "<model>") -> DriftModel:
             f"{where}: schema_version {version!r} is not supported by gyrodrift {__version__} "
             f"(expected one of {', '.join(map(str, READABLE_SCHEMAS))})"
         )
-    hybrid = {"target": "drift", "physics_column": "drift_inversion_deg_h", "label_weighting": "none"}
+    # before schema 4: a concrete physics column, and the base's 1-sigma never joined the label's
+    hybrid = {
+        "target": "drift",
+        "physics_column": "drift_inversion_deg_h",
+        "label_weighting": "none",
+        "base_uncertainty": "none",
+    }
     if version >= 3:
-        for key, allowed in (
+        keys = [
             ("target", TARGETS),
-            ("physics_column", PHYSICS_COLUMNS),
+            ("physics_column", PHYSICS_CHOICES if version >= 4 else PHYSICS_COLUMNS),
             ("label_weighting", ("auto", "none")),
-        ):
+        ]
+        if version >= 4:
+            keys.append(("base_uncertainty", BASE_UNCERTAINTIES))
+        for key, allowed in keys:
             hybrid[key] = _need(doc, key, str, where)
             if hybrid[key] not in allowed:
                 raise ModelFileError(f"{where}: unknown {key} {hybrid[key]!r}; expected one of {', '.join(allowed)}")
@@ -376,6 +403,19 @@ def _check_fitted(fitted: Any, model: DriftModel, where: str) -> None:
     if not isinstance(fitted, dict):
         raise ModelFileError(f"{where}: key 'fitted' must be an object")
     lssvr = model.lssvr
+    if "physics_column" in fitted and fitted["physics_column"] != model.physics_column_:
+        raise ModelFileError(
+            f"{fw}: key 'physics_column' ({fitted['physics_column']!r}) differs from the base the model resolves on "
+            f"its training runs ({model.physics_column_!r}): edited?"
+        )
+    if "coefficient_prior" in fitted:
+        raw = fitted["coefficient_prior"]
+        got = None if raw is None else tuple(_numbers(raw, fw, "coefficient_prior", 2))
+        if got != model.coefficient_prior_:
+            raise ModelFileError(
+                f"{fw}: key 'coefficient_prior' ({raw!r}) differs from the fleet k_z prior pooled from the training "
+                f"runs ({model.coefficient_prior_!r}): edited?"
+            )
     for key, value in (("gamma", lssvr.gamma), ("sigma", lssvr.sigma)):
         if key in fitted and _number(fitted[key], fw, key) != float(value):
             raise ModelFileError(f"{fw}: key {key!r} ({fitted[key]!r}) differs from the model's {value!r}")

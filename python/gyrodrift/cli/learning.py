@@ -12,8 +12,9 @@ from gyrodrift.choices import (
     DEFAULT_ENCODING,
     ENCODINGS,
     METHODS,
+    MIN_THERMAL_RUNS,
     OBJECTIVES,
-    PHYSICS_COLUMNS,
+    PHYSICS_CHOICES,
     SCALINGS,
     SIGMA_RANGE,
     TARGETS,
@@ -103,10 +104,13 @@ _split_option = click.option(
 )
 @click.option(
     "--physics-column",
-    type=click.Choice(list(PHYSICS_COLUMNS)),
-    default="drift_inversion_deg_h",
+    type=click.Choice(list(PHYSICS_CHOICES)),
+    default="auto",
     show_default=True,
-    help="Physics estimate of the hybrid: the 12 h inversion, or a run-table column.",
+    help="Physics estimate of the hybrid: auto (the 16 h smoother with the fleet's pooled k_z prior when every "
+    f"run has the smoother's columns and at least {MIN_THERMAL_RUNS} its thermal k_z, else the smoother's drift "
+    "when every run has it, else the 12 h inversion; said on stderr), the 12 h inversion, a run-table column, or "
+    "the fleet-prior smoother (drift_smoother_fleet_deg_h).",
 )
 @click.option(
     "--max-label-std-deg-h",
@@ -188,8 +192,8 @@ def fit(
     """Fit a drift model on DATA.csv (runs with drift_deg_h) and write it to --out.
 
     Warnings (a tuned value on the edge of its search box, an ill-conditioned solve) go to stderr and into the
-    model file's "warnings". Runs left out for their label 1-sigma, and the weighting, are said on stderr and
-    kept in the file's "training".
+    model file's "warnings". Runs left out for their label 1-sigma, the weighting, and the hybrid's physics
+    base (which one --physics-column auto took, and why) are said on stderr and kept in the file.
     """
     from gyrodrift.atomic import check_output_file
     from gyrodrift.errors import OptionError
@@ -253,7 +257,12 @@ def fit(
             err=True,
         )
     if training["weighted"]:
-        click.echo("note: runs weighted by their label 1-sigma drift_std_deg_h (weighted LS-SVM)", err=True)
+        how = (
+            "their label 1-sigma drift_std_deg_h combined with the physics base's 1-sigma"
+            if model.base_std_used_
+            else "their label 1-sigma drift_std_deg_h"
+        )
+        click.echo(f"note: runs weighted by {how} (weighted LS-SVM)", err=True)
     elif "drift_std_deg_h" in runs.extra and not no_label_weights:
         click.echo("note: drift_std_deg_h is missing for some runs; the runs are not weighted", err=True)
     save_model(model, out, inputs=[data])
@@ -267,6 +276,10 @@ def fit(
                 "n_runs": training["n_runs"],
                 "encoding": encoding,
                 "target": target,
+                "physics_column": model.physics_column_,
+                "coefficient_prior_deg_h_per_c": None
+                if model.coefficient_prior_ is None
+                else list(model.coefficient_prior_),
                 "gamma": float(est.gamma),
                 "sigma": float(est.sigma),
                 "loo_mae_deg_h": loo_mae,
@@ -280,6 +293,13 @@ def fit(
         detail=f"fitted on {training['n_runs']} runs, {encoding}, target {target}: gamma = {est.gamma:.6g}, "
         f"sigma = {est.sigma:.6g}, LOO MAE = {loo_mae:.3e} deg/h",
     )
+    # after the model and the summary are written: a failed write stays the command's one line
+    if model.target == "residual":
+        why = "--physics-column" if physics_column != "auto" else model.physics_reason_
+        prior = model.coefficient_prior_
+        if prior is not None:
+            why += f"; pooled k_z prior {prior[0]:.3e} +- {prior[1]:.3e} deg/h/degC"
+        click.echo(f"note: physics base: {model.physics_column_} ({why})", err=True)
 
 
 @click.command(epilog="Example: gyrodrift predict runs.csv --model model.json --coverage 0.9")
