@@ -3,10 +3,11 @@
 Every encoding x scaling is fitted (RBF, the kernel `fit` tunes) on the paper's runs and on a random synthetic
 table with several sites; on the synthetic table the linear and polynomial kernels of the LSSVR are exported
 too. Hybrid models (``target="residual"``: physics estimate + learned correction) are fitted for every physics
-column x encoding on a synthetic table carrying the curve-fit and smoother columns and label 1-sigmas (so the
-fits are weighted, and one run is left out), and the default ``gyrodrift fit`` model goes through the commands
-(fit, then export). Each model is evaluated on 1000 rows: the training runs, then random rows spanning 1.2
-times the training range of each input (so that some fall outside it). The C of every model is built in one
+column x encoding on a synthetic table carrying the curve-fit and smoother columns (the smoother's k_z on all
+but 5 runs, its constant model) and label 1-sigmas (so the fits are weighted, and one run is left out), and the
+default ``gyrodrift fit`` model (a hybrid on the fleet-prior smoother) goes through the commands (fit, then
+export). Each model is evaluated on 1000 rows: the training runs, then random rows spanning 1.2 times the
+training range of each input (so that some fall outside it; a third without k_z). The C of every model is built in one
 compiler run (each model's source wrapped in its own translation unit), the Rust in one crate.
 
 Tolerance: ``|generated - python| <= 1e-12 * |python|`` on every row, the drifts near zero included. Python's
@@ -52,6 +53,15 @@ TOL = 1e-12
 N_ROWS = 1000
 RAW = ("lat_deg", "lat0_deg", "temp_min_c", "temp_max_c")
 ALL = tuple(export.INPUTS)  # the raw inputs, then the physics columns the navigation computer computes
+FLEET = export.FLEET_PHYSICS
+KZ = export.COEFFICIENT_INPUTS
+PHYSICS_INPUTS_READ = {
+    "drift_inversion_deg_h": (),
+    "drift_curvefit_deg_h": ("drift_curvefit_deg_h",),
+    "drift_smoother_deg_h": ("drift_smoother_deg_h",),
+    FLEET: ("drift_smoother_deg_h", *KZ),
+}
+"""The inputs of each physics estimate that the navigation computer passes (the last fields of the struct)."""
 CC = shutil.which("cc")
 CARGO = shutil.which("cargo")
 CFLAGS = ["-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O2"]
@@ -126,7 +136,7 @@ def _physics(model, rows: RunTable) -> np.ndarray:
 
 def _value(runs: RunTable, name: str) -> np.ndarray:
     """Input ``name`` (`export.INPUTS`) of each run: a column, or a physics column (NaN where absent)."""
-    return runs.column(name) if name in export.PHYSICS_INPUTS else getattr(runs, name)
+    return getattr(runs, name) if name in RAW else runs.column(name)
 
 
 def _probe_rows(train: RunTable, rng: np.random.Generator) -> RunTable:
@@ -134,10 +144,12 @@ def _probe_rows(train: RunTable, rng: np.random.Generator) -> RunTable:
     error (N_ROWS in all); the physics columns the training runs have too."""
     n = N_ROWS - len(train)
     cols = {}
-    for name in [*RAW, *(c for c in export.PHYSICS_INPUTS if np.isfinite(train.column(c)).any())]:
+    # and the smoother's 1-sigma: Python's fleet base wants it (its drift does not depend on it; not exported)
+    physics = [*export.PHYSICS_INPUTS, "drift_smoother_std_deg_h"]
+    for name in [*RAW, *(c for c in physics if np.isfinite(train.column(c)).any())]:
         v = _value(train, name)
         lo, hi = float(np.nanmin(v)), float(np.nanmax(v))
-        span = hi - lo or 0.5
+        span = hi - lo or (0.5 * abs(hi) if name in export.COEFFICIENT_INPUTS else 0.5)  # a k_z 1-sigma stays > 0
         cols[name] = rng.uniform(lo - 0.1 * span, hi + 0.1 * span, n)
     on_site = rng.random(n) < 0.8  # mostly at a training site, so that the other inputs decide the range check
     cols["lat0_deg"][on_site] = rng.choice(train.lat0_deg, int(on_site.sum()))
@@ -145,6 +157,10 @@ def _probe_rows(train: RunTable, rng: np.random.Generator) -> RunTable:
     span = float(err.max() - err.min())
     cols["lat_deg"] = cols["lat0_deg"] + rng.uniform(err.min() - 0.1 * span, err.max() + 0.1 * span, n) / 3600.0
     cols["temp_max_c"] = np.maximum(cols["temp_max_c"], cols["temp_min_c"])
+    if "smoother_coeff_prior_std_deg_h_per_c" in cols:  # the smoother's setting: mostly a training run's
+        s0 = cols["smoother_coeff_prior_std_deg_h_per_c"]
+        usual = rng.random(n) < 0.8
+        s0[usual] = rng.choice(train.column("smoother_coeff_prior_std_deg_h_per_c")[_thermal(train)], int(usual.sum()))
     constant = rng.random(n) < 1 / 3  # a third of the rows without k_z: the smoother's constant model
     for name in export.COEFFICIENT_INPUTS:
         if name in cols:
@@ -253,8 +269,9 @@ CASE_IDS = [
     for d, _, e, s, k, p in CASES
 ]
 DEFAULT_CASE = "cli-default-fit"
-"""The model of `gyrodrift fit TABLE --out model.json` with every default (a hybrid on the 12 h inversion,
-weighted by the label 1-sigmas, one run left out), exported by `gyrodrift export`."""
+"""The model of `gyrodrift fit TABLE --out model.json` with every default (a hybrid on the fleet-prior smoother,
+which `auto` resolves to on a table with the smoother's k_z, weighted by the label 1-sigmas, one run left out),
+exported by `gyrodrift export`."""
 _CLI_EXPORTS: dict[str, dict[str, str]] = {}
 """Language -> the files `gyrodrift export` wrote for DEFAULT_CASE (filled by the `fitted` fixture)."""
 
@@ -304,7 +321,8 @@ def fitted(default_fit_file, tmp_path_factory):
         out[case_id] = (model, rows, _expected(model, rows))
     out[COS_CASE] = out[CASE_IDS[0]]
     model = load_model(default_fit_file)
-    assert (model.encoding, model.target, model.physics_column) == (DEFAULT_ENCODING, "residual", PHYSICS_COLUMNS[0])
+    assert (model.encoding, model.target, model.physics_column) == (DEFAULT_ENCODING, "residual", "auto")
+    assert model.physics_column_ == FLEET and model.coefficient_prior_ is not None  # resolved on the smoother's k_z
     assert model.training["weighted"] and model.training_["left_out"]
     rows = _probe_rows(model.training_["runs"], rng)
     out[DEFAULT_CASE] = (model, rows, _expected(model, rows))
@@ -371,6 +389,8 @@ def test_every_physics_column_has_a_c_and_a_rust_expression(physics):
     assert set(expr.inputs) <= set(export.INPUTS) and expr.unit == "deg/h"
     if physics == "drift_inversion_deg_h":  # computed from the latitudes, as the physics feature is
         assert expr == dataclasses.replace(export.FEATURE_EXPRESSIONS["drift_equiv_deg_h"], unit="deg/h")
+    elif physics == FLEET:  # computed from the smoother's end drift and k_z, which the navigation computer passes
+        assert expr.inputs == ("drift_smoother_deg_h", *KZ) and set(expr.inputs) <= set(export.PHYSICS_INPUTS)
     else:  # the navigation computer computes it: an input, read as it is
         assert expr.inputs == (physics,) and physics in export.PHYSICS_INPUTS and "deg/h" in export.INPUTS[physics]
 
@@ -382,6 +402,7 @@ def test_every_physics_column_has_a_c_and_a_rust_expression(physics):
         ("drift_inversion_deg_h", "temperature", RAW, ("cos", "exp")),  # the latitudes for the physics alone
         ("drift_curvefit_deg_h", "temperature", ("temp_min_c", "temp_max_c", "drift_curvefit_deg_h"), ("exp",)),
         ("drift_smoother_deg_h", "lat_only", ("lat_deg", "lat0_deg", "drift_smoother_deg_h"), ("exp",)),
+        (FLEET, "temperature", ("temp_min_c", "temp_max_c", "drift_smoother_deg_h", *KZ), ("exp",)),
     ],
 )
 def test_a_hybrid_reads_its_physics_inputs_and_checks_their_range(physics, encoding, fields, functions):
@@ -398,12 +419,18 @@ def test_a_hybrid_reads_its_physics_inputs_and_checks_their_range(physics, encod
     )
     assert re.search(r"pub fn physics_deg_h\(inputs: &Inputs, _?math: &Math\) -> f64", rust)
     assert "pub fn correction_deg_h(inputs: &Inputs, math: &Math) -> f64" in rust
-    if physics != "drift_inversion_deg_h":  # the extra input's training range is in the range check
-        train = model.training_["runs"].column(physics)
+    runs = model.training_["runs"]
+    for name in fields[-len(PHYSICS_INPUTS_READ[physics]) :] if PHYSICS_INPUTS_READ[physics] else ():
+        train = runs.column(name)  # the extra inputs' training ranges are in the range check
+        train = train[_thermal(runs)] if name in KZ else train  # k_z: over the runs with one
         lo, hi = export._lit(train.min()), export._lit(train.max())
-        assert f'{{"{physics}", {lo}, {hi}}}' in export.export_model(model, "c")["gyrodrift_model.c"]
-        assert f'Range {{ name: "{physics}", min: {lo}, max: {hi} }}' in rust
-        assert f"{physics}: [{lo}, {hi}], " in header  # provenance
+        assert f'{{"{name}", {lo}, {hi}}}' in export.export_model(model, "c")["gyrodrift_model.c"]
+        assert f'Range {{ name: "{name}", min: {lo}, max: {hi} }}' in rust
+        assert f"{name}: [{lo}, {hi}]" in header  # provenance
+    if physics == FLEET:  # the fleet prior: constants
+        mean, std = (export._lit(v) for v in model.coefficient_prior_)
+        assert f"#define GYRODRIFT_MODEL_COEFF_PRIOR_MEAN_DEG_H_PER_C {mean}" in header
+        assert f"pub const COEFF_PRIOR_STD_DEG_H_PER_C: f64 = {std};" in rust
 
 
 def test_label_weights_change_the_model_but_need_nothing_at_prediction(fitted):
@@ -422,7 +449,8 @@ def test_label_weights_change_the_model_but_need_nothing_at_prediction(fitted):
         _export(DEFAULT_CASE, weighted, "rust")["gyrodrift_model.rs"],
     ]
     assert all("drift_std" not in re.sub(r"Label weighting[^\n]*", "", text) for text in files)
-    assert export.export_spec(unweighted).inputs == export.export_spec(weighted).inputs == RAW
+    fleet_fields = (*RAW, "drift_smoother_deg_h", *KZ)  # the default base: the fleet-prior smoother
+    assert export.export_spec(unweighted).inputs == export.export_spec(weighted).inputs == fleet_fields
 
 
 def test_a_feature_without_expression_cannot_be_exported(monkeypatch):
@@ -587,7 +615,7 @@ def c_driver(fitted, tmp_path_factory):
             export.FEATURE_EXPRESSIONS[f].functions for f in model.feature_names
         )
         needs_math |= case_id == COS_CASE or (
-            model.target == "residual" and model.physics_column == "drift_inversion_deg_h"
+            export.physics_column(model) in ("drift_inversion_deg_h", FLEET)  # cos; isfinite
         )
         assert ("#include <math.h>" in files["gyrodrift_model.c"]) == needs_math, case_id
         (folder / name).mkdir()
@@ -629,6 +657,9 @@ def test_c_export_reproduces_python(case_id, fitted, c_driver):
     np.testing.assert_array_equal(table[:, 1].astype(bool), exp["inside"])
     assert exp["inside"][: model.training["n_runs"]].all()  # the training runs come first
     assert 50 < exp["inside"].sum() < N_ROWS - 50  # rows on both sides of the range check
+    if export.physics_column(model) == FLEET:  # in range with a thermal k_z and without one
+        thermal = _thermal(rows)
+        assert (exp["inside"] & thermal).sum() > 20 and (exp["inside"] & ~thermal).sum() > 20
     rel, same = _check(case_id, table[:, 0], exp)
     exact = np.abs(exp["exact"])
     C_RESULTS[case_id] = (
@@ -802,12 +833,12 @@ def model_file(tmp_path_factory, fitted):
 def test_cli_exports_the_default_fit_model_as_a_hybrid(default_fit_file, tmp_path):
     r = CliRunner().invoke(main, ["export", "--model", str(default_fit_file), "--lang", "c", "--out", str(tmp_path)])
     assert r.exit_code == 0, r.output
-    assert "hybrid on drift_inversion_deg_h" in r.output
+    assert f"hybrid on {FLEET}" in r.output
     args = ["export", "--model", str(default_fit_file), "--lang", "rust", "--out", str(tmp_path), "--json"]
     r = CliRunner().invoke(main, args)
     assert r.exit_code == 0, r.output
     doc = json.loads(r.stdout)  # one JSON document; the "wrote" line goes to stderr
-    assert (doc["encoding"], doc["target"], doc["physics_column"]) == ("physics", "residual", "drift_inversion_deg_h")
+    assert (doc["encoding"], doc["target"], doc["physics_column"]) == ("physics", "residual", FLEET)
 
 
 def test_cli_writes_c_and_rust_into_one_folder(model_file, tmp_path):

@@ -24,6 +24,7 @@ from gyrodrift.encodings import encode
 from gyrodrift.errors import InputError
 from gyrodrift.fleet_prior import drift_with_coefficient_prior, pooled_coefficient_prior
 from gyrodrift.model import fit_drift_model
+from gyrodrift.model_io import load_model, save_model
 from gyrodrift.runs import RunTable
 
 CC = shutil.which("cc")
@@ -73,19 +74,20 @@ def fleet_runs(rng: np.random.Generator, n: int = 24, n_constant: int = 5) -> Ru
     )
 
 
+def _fit(train: RunTable):
+    """The default hybrid (``physics_column="auto"``) fitted on ``train`` (fixed gamma and sigma: tuning is not
+    tested here)."""
+    return fit_drift_model(train, encoding=DEFAULT_ENCODING, target="residual", gamma=100.0, sigma=0.7)
+
+
 def _fleet_model(train: RunTable):
-    """A hybrid on the fleet-prior smoother fitted on ``train`` (fixed gamma and sigma: tuning is not tested here)."""
-    model = fit_drift_model(
-        train,
-        encoding=DEFAULT_ENCODING,
-        target="residual",
-        physics_column="drift_smoother_deg_h",
-        gamma=100.0,
-        sigma=0.7,
+    """A hybrid on the fleet-prior smoother fitted on ``train``: what ``auto`` resolves to on these runs."""
+    model = _fit(train)
+    assert (model.physics_column, model.physics_column_) == ("auto", FLEET)
+    thermal = _thermal(train)
+    assert model.coefficient_prior_ == pooled_coefficient_prior(
+        train.column(KZ[0])[thermal], train.column(KZ[1])[thermal]
     )
-    # the fleet base's export, before the model computes it: what the model will hold once fitted on it
-    model.physics_column_ = FLEET
-    model.coefficient_prior_ = pooled_coefficient_prior(train.column(KZ[0]), train.column(KZ[1]))
     return model
 
 
@@ -122,6 +124,9 @@ def _probe_rows(train: RunTable, rng: np.random.Generator) -> RunTable:
     cols["lat0_deg"] = rng.choice(train.lat0_deg, n)
     cols["lat_deg"] = cols["lat0_deg"] + rng.uniform(-130.0, 130.0, n) / 3600.0
     cols["temp_max_c"] = np.maximum(cols["temp_max_c"], cols["temp_min_c"])
+    smoother_std = rng.uniform(1e-4, 5e-4, n)  # not an input (the base's drift does not depend on it); Python's
+    usual = rng.random(n) < 0.8  # the smoother's prior 1-sigma (a setting): mostly a training run's
+    cols[KZ[3]][usual] = rng.choice(train.column(KZ[3])[_thermal(train)], int(usual.sum()))
     constant = rng.random(n) < 1 / 3
     for name in KZ:
         cols[name][constant] = np.nan
@@ -145,7 +150,10 @@ def _probe_rows(train: RunTable, rng: np.random.Generator) -> RunTable:
         run=np.array([f"p{i}" for i in range(len(train) + n)]),
         drift_deg_h=np.full(len(train) + n, np.nan),
         **{name: np.concatenate([getattr(train, name), cols[name]]) for name in FIELDS[:4]},
-        extra={name: np.concatenate([train.column(name), cols[name]]) for name in FIELDS[4:]},
+        extra={
+            **{name: np.concatenate([train.column(name), cols[name]]) for name in FIELDS[4:]},
+            "drift_smoother_std_deg_h": np.concatenate([train.column("drift_smoother_std_deg_h"), smoother_std]),
+        },
     )
 
 
@@ -174,10 +182,48 @@ def fleet():
     rows = _probe_rows(model.training_["runs"], rng)
     exp = _expected(model, rows)
     assert 0.2 < exp["thermal"].mean() < 0.8 and 50 < exp["inside"].sum() < len(rows) - 50
+    assert (exp["inside"] & exp["thermal"]).sum() > 50 and (exp["inside"] & ~exp["thermal"]).sum() > 50
     assert exp["inside"][: len(model.training_["runs"])].all()  # the training runs are inside
     moved = exp["base"] != rows.column("drift_smoother_deg_h")
     assert np.array_equal(moved, exp["thermal"] & moved) and moved.sum() > 0.5 * exp["thermal"].sum()
     return model, rows, exp
+
+
+def test_the_reference_is_the_models_prediction(fleet):
+    """`DriftModel.predict` gives the bits the generated code is checked against, on every row: the LSSVR's
+    compensated sum with `drift_with_coefficient_prior` of the row and the model's fleet prior as offset. A row
+    with some but not all k_z inputs (edge rows here) passes through as the constant model there, as in the
+    generated code, whose `in_range` is false on it (neither of the smoother's models writes such a row)."""
+    model, rows, exp = fleet
+    with np.errstate(over="ignore"):  # a k_z 1-sigma squaring to inf (an edge row)
+        np.testing.assert_array_equal(_bits(model.predict(rows)), _bits(exp["pred"]))
+    kz = np.column_stack([rows.column(name) for name in KZ])
+    partial = ~exp["thermal"] & np.isfinite(kz).any(axis=1)
+    assert 0 < partial.sum() < 60 and not exp["inside"][partial].any()
+    assert np.array_equal(exp["base"][partial], rows.column("drift_smoother_deg_h")[partial])
+
+
+def test_auto_exports_the_base_it_resolved_to_and_the_model_file_keeps_it(fleet, tmp_path):
+    """``physics_column="auto"`` resolves at fit time; export reads the resolved column (and the fleet prior
+    through a model file, bit for bit)."""
+    model, _, _ = fleet
+    path = tmp_path / "model.json"
+    save_model(model, path)
+    loaded = load_model(path)
+    for lang in export.LANGUAGES:
+        assert export.export_model(loaded, lang) == export.export_model(model, lang)
+    train = model.training_["runs"]
+    no_kz = train.replace(extra={k: v for k, v in train.extra.items() if k not in KZ})
+    no_smoother = train.replace(extra={"drift_std_deg_h": train.column("drift_std_deg_h")})
+    for runs, column, fields in (
+        (no_kz, "drift_smoother_deg_h", FIELDS[:5]),
+        (no_smoother, "drift_inversion_deg_h", FIELDS[:4]),
+    ):
+        resolved = _fit(runs)
+        spec = export.export_spec(resolved)
+        assert (resolved.physics_column_, spec.physics, spec.inputs) == (column, column, fields)
+        assert spec.coefficient_prior is None
+        assert f'#define GYRODRIFT_MODEL_PHYSICS "{column}"' in export.export_model(resolved, "c")["gyrodrift_model.h"]
 
 
 def _rows_text(rows: RunTable) -> str:
@@ -247,7 +293,8 @@ def _check(got: np.ndarray, exp: dict, what: str) -> None:
     np.testing.assert_array_equal(got[:, 2].astype(bool), exp["inside"])
     print(
         f"\n{what}: {len(got)} rows ({int(exp['thermal'].sum())} with a thermal k_z, {int((~exp['thermal']).sum())} "
-        f"without: constant model or an edge of the test; {int(exp['inside'].sum())} in range): drift and base the "
+        f"without: constant model or an edge of the test; {int(exp['inside'].sum())} in range, "
+        f"{int((exp['inside'] & exp['thermal']).sum())} of them with k_z): drift and base the "
         "same bits as Python on every row"
     )
 

@@ -43,6 +43,7 @@ import numpy as np
 from gyrodrift import __version__
 from gyrodrift.encodings import encode
 from gyrodrift.errors import InputError, OptionError
+from gyrodrift.model import FLEET_PHYSICS, THERMAL_COLUMNS, thermal_runs
 
 __all__ = [
     "COEFFICIENT_INPUTS",
@@ -89,19 +90,12 @@ PHYSICS_INPUTS: dict[str, str] = {
 the 16 h smoother's end drift, and for the fleet-prior smoother (`FLEET_PHYSICS`) the smoother's k_z estimate
 (`COEFFICIENT_INPUTS`)."""
 
-FLEET_PHYSICS = "drift_smoother_fleet_deg_h"
-"""The physics column of the fleet-prior smoother: the smoother's end drift re-weighted by the training fleet's
-prior on k_z (`gyrodrift.fleet_prior.drift_with_coefficient_prior`, the prior baked into the code)."""
-
-COEFFICIENT_INPUTS: tuple[str, ...] = (
-    "smoother_coeff_deg_h_per_c",
-    "smoother_coeff_std_deg_h_per_c",
-    "smoother_end_coeff_cov",
-    "smoother_coeff_prior_std_deg_h_per_c",
-)
-"""The smoother's k_z estimate (`FLEET_PHYSICS` reads them; the last inputs of the struct): NaN for a run whose
-smoother used its constant model, whose base is then its end drift unchanged. The range check wants them all NaN
-there (some but not all is neither model: `DriftModel.predict` refuses such a run), else within their range."""
+COEFFICIENT_INPUTS: tuple[str, ...] = THERMAL_COLUMNS
+"""The smoother's k_z estimate (`gyrodrift.model.THERMAL_COLUMNS`), read by the fleet-prior smoother base
+(`FLEET_PHYSICS`); the last inputs of the struct. NaN for a run whose smoother used its constant model, whose base
+is then its end drift unchanged. The range check wants them all NaN there (some but not all is neither of the
+smoother's models; the base passes such a run through as constant, as `drift_with_coefficient_prior` does), else
+within their range."""
 
 INPUTS: dict[str, str] = {**RAW_INPUTS, **PHYSICS_INPUTS}
 """Every input a generated function can read, in the order of its fields, with its unit."""
@@ -171,7 +165,7 @@ PHYSICS_EXPRESSIONS: dict[str, FeatureExpression] = {
         for name in ("drift_curvefit_deg_h", "drift_smoother_deg_h")
     },
     # drift_with_coefficient_prior(drift, ., coeff, coeff_std, cov, prior_std, *coefficient_prior_)[0]: a function
-    # of the generated code (`_fleet_functions`) holding the fleet prior as constants
+    # of the generated code (`_c_fleet_functions`, `_RUST_FLEET_FUNCTIONS`) reading the fleet prior's constants
     FLEET_PHYSICS: FeatureExpression(
         ("drift_smoother_deg_h", *COEFFICIENT_INPUTS),
         f"gyrodrift_model_fleet_base_deg_h({_FLEET_ARGS})",
@@ -235,14 +229,6 @@ def physics_column(model) -> str | None:
     if physics == "auto":
         raise InputError("the hybrid model's physics column was never resolved (physics_column_); refit it")
     return physics
-
-
-def _thermal(coeff, coeff_std, cov, prior_std) -> np.ndarray:
-    """Where a run has the smoother's thermal estimate of k_z: the test of
-    `gyrodrift.fleet_prior.drift_with_coefficient_prior` (elsewhere its base is the end drift unchanged)."""
-    vk = np.asarray(coeff_std, float) ** 2
-    s0 = np.asarray(prior_std, float)
-    return np.isfinite(coeff) & np.isfinite(vk) & (vk > 0.0) & np.isfinite(cov) & np.isfinite(s0) & (s0 > 0.0)
 
 
 def output_names(lang: str) -> tuple[str, ...]:
@@ -323,7 +309,7 @@ def export_spec(model, *, model_sha256: str | None = None) -> ExportSpec:
     for name in inputs:
         values = runs.column(name) if name in PHYSICS_INPUTS else getattr(runs, name)
         if name in COEFFICIENT_INPUTS:  # the runs with a thermal estimate (the others do not read them)
-            values = values[_thermal(*(runs.column(n) for n in COEFFICIENT_INPUTS))]
+            values = values[thermal_runs(runs)]
         if values.size == 0 or not np.all(np.isfinite(values)):
             raise InputError(f"input {name} of the model is missing for some training runs; it cannot be exported")
         input_ranges.append((float(values.min()), float(values.max())))
