@@ -839,6 +839,7 @@ def test_cli_exports_the_default_fit_model_as_a_hybrid(default_fit_file, tmp_pat
     assert r.exit_code == 0, r.output
     doc = json.loads(r.stdout)  # one JSON document; the "wrote" line goes to stderr
     assert (doc["encoding"], doc["target"], doc["physics_column"]) == ("physics", "residual", FLEET)
+    assert doc["coefficient_prior_deg_h_per_c"] == list(load_model(default_fit_file).coefficient_prior_)
 
 
 def test_cli_writes_c_and_rust_into_one_folder(model_file, tmp_path):

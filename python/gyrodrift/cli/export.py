@@ -65,6 +65,10 @@ def export_command(model_file: Path, lang: str, out_dir: Path, as_json: bool, qu
                 "kernel": model.lssvr.kernel,
                 "target": model.target,
                 "physics_column": physics,
+                # the fleet-prior base's k_z prior baked into the code: [mean, 1-sigma] deg/h/degC, else null
+                "coefficient_prior_deg_h_per_c": (
+                    list(model.coefficient_prior_) if getattr(model, "coefficient_prior_", None) else None
+                ),
             }
         )
     detail = f"{model.encoding}, {model.lssvr.kernel}" + ("" if physics is None else f", hybrid on {physics}")
