@@ -1,9 +1,10 @@
 """Identification on a simulated multi-latitude thermal fleet: every method against what a perfect one could know.
 
 Run: ``python examples/identification_study.py [--train 24] [--held-out 12] [--workers 1] [--seeds 11,12,13,14]``
-(5-8 minutes per fleet at the default size on one core of a loaded machine; docs/identification.md quotes its output). With
-several seeds (``--seeds 11,12,13,14`` or ``--seeds 4`` for 11-14) it runs one fleet per seed, ``--workers``
-fleets side by side, prints each fleet's report and then the targets of issue 10 per seed and as mean +- sd.
+(5-8 minutes per fleet at the default size on one core of a loaded machine; docs/identification.md quotes its
+output). With several seeds (``--seeds 11,12,13,14`` or ``--seeds 4`` for 11-14) it runs one fleet per seed,
+``--workers`` fleets side by side, prints each fleet's report and then the targets of issue 10 per seed and as
+mean +- sd.
 
 The fleet: a reciprocating RLG INS (ARW 0.0005 deg/sqrt(h), VRW 5 ug/sqrt(Hz), random x/y gyro and accelerometer
 biases and heading) at sites drawn uniformly in 20-60 deg, each run a 76 h static log at 10 Hz simulated on the
