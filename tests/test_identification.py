@@ -252,7 +252,7 @@ def test_fit_says_what_it_weighted_and_left_out_and_predict_flags(tmp_path):
     assert "left out 1 run(s)" in r.stderr and "r4" in r.stderr and "weighted" in r.stderr
     doc = json.loads(model.read_text())
     assert doc["training"]["left_out"] == ["r4"] and doc["training"]["weighted"] is True
-    assert doc["encoding"] == "physics" and doc["target"] == "residual"
+    assert doc["encoding"] == "temperature" and doc["target"] == "residual"  # the hybrid's default encoding
     hot = tmp_path / "hot.csv"
     _write_csv(hot, _synthetic_runs(3, seed=12, temp_shift=30.0))
     r = CliRunner().invoke(main, ["predict", str(hot), "--model", str(model), "--coverage", "0.9"])
@@ -332,3 +332,15 @@ def test_edited_model_files_name_the_key(key, value, message):
     doc["training"]["left_out"] = [1]
     with pytest.raises(ValueError, match="left_out"):
         model_from_dict(doc, "m.json")
+
+
+def test_fit_default_encoding_follows_the_target(tmp_path):
+    """A hybrid's correction sees the temperature only; a model of the drift itself gets the physics inputs."""
+    data = tmp_path / "runs.csv"
+    _write_csv(data, _synthetic_runs(12, seed=5))
+    for target, encoding in (("residual", "temperature"), ("drift", "physics")):
+        model = tmp_path / f"{target}.json"
+        args = ["fit", str(data), "--out", str(model), "--target", target, "--method", "grid", "--quiet"]
+        r = CliRunner().invoke(main, args)
+        assert r.exit_code == 0, r.output
+        assert json.loads(model.read_text())["encoding"] == encoding

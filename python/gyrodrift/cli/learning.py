@@ -9,7 +9,6 @@ import json
 import click
 
 from gyrodrift.choices import (
-    DEFAULT_ENCODING,
     ENCODINGS,
     METHODS,
     MIN_THERMAL_RUNS,
@@ -18,6 +17,7 @@ from gyrodrift.choices import (
     SCALINGS,
     SIGMA_RANGE,
     TARGETS,
+    default_encoding,
 )
 from gyrodrift.cli.errors import write_stdout
 from gyrodrift.cli.options import json_option, print_json, quiet_option, say_wrote
@@ -89,10 +89,11 @@ _split_option = click.option(
 @click.option(
     "--encoding",
     type=click.Choice(list(ENCODINGS)),
-    default=DEFAULT_ENCODING,
-    show_default=True,
-    help="Model inputs: physics (drift equivalent of the 12 h latitude error at the run's latitude, and the "
-    "temperature range), physics_lat (plus the site latitude), or one of the paper's readings (raw arcsec).",
+    default=None,
+    help="Model inputs: temperature (the temperature range alone; the default for --target residual: the "
+    "physics base carries the navigation), physics (drift equivalent of the 12 h latitude error at the run's "
+    "latitude, and the temperature range; the default for --target drift), physics_lat (plus the site "
+    "latitude), or one of the paper's readings (raw arcsec).",
 )
 @click.option(
     "--target",
@@ -216,7 +217,7 @@ def fit(
         with _ShowWarnings():
             model = fit_drift_model(
                 runs,
-                encoding=encoding,
+                encoding=default_encoding(target) if encoding is None else encoding,
                 scaling=scaling,
                 objective=objective,
                 method=method,
