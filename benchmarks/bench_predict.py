@@ -6,11 +6,11 @@
 the features in order, the C library's ``exp`` through ``math.exp``) and sums ``b + sum_i alpha_i K_i + physics``
 with TwoSum in support-vector order (`gyrodrift.lssvr`, "prediction arithmetic"). The reference, in the same run:
 the same pipeline with numpy's kernel (scipy's distances, numpy's SIMD ``exp``) summed by BLAS, ``K @ alpha + b +
-physics``, which is what predict did before. Models: the default hybrid of `gyrodrift fit` (``physics_column=
-"auto"``, which resolves to the fleet-prior smoother on these runs: they carry the smoother's end drift and k_z,
-a fifth of them on its constant model) fitted on `--train` synthetic runs from three sites; rows drawn over the
-training range. CPU time (``time.process_time``, best of `--repeat`), so that other jobs on the machine matter
-less. Only reports.
+physics``, which is what predict did before. Models: hybrids with encoding ``physics`` and the default
+``physics_column="auto"`` (it resolves to the fleet-prior smoother on these runs: they carry the smoother's end
+drift and k_z, a fifth of them on its constant model) fitted on `--train` synthetic runs from three sites; rows
+drawn over the training range. CPU time (``time.process_time``, best of `--repeat`), so that other jobs on the
+machine matter less. Only reports.
 """
 
 from __future__ import annotations
@@ -82,7 +82,7 @@ def main() -> None:
     args = parser.parse_args()
     rng = np.random.default_rng(1)
     print("training runs, rows: predict [s CPU], numpy kernel + BLAS [s CPU], ratio; max |diff| / |predict|")
-    print("(the default hybrid: physics base resolved to the fleet-prior smoother)")
+    print("(hybrids, encoding physics, physics base auto: resolved to the fleet-prior smoother)")
     for n_train in (int(v) for v in args.train.split(",")):
         model = fit_drift_model(
             synthetic_runs(n_train, rng), encoding="physics", target="residual", gamma=100.0, sigma=0.7

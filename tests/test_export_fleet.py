@@ -19,7 +19,6 @@ import numpy as np
 import pytest
 
 from gyrodrift import export
-from gyrodrift.choices import DEFAULT_ENCODING
 from gyrodrift.encodings import encode
 from gyrodrift.errors import InputError
 from gyrodrift.fleet_prior import drift_with_coefficient_prior, pooled_coefficient_prior
@@ -33,7 +32,8 @@ CFLAGS = ["-std=c99", "-pedantic", "-Wall", "-Wextra", "-Wconversion", "-Wshadow
 FLEET = export.FLEET_PHYSICS
 KZ = export.COEFFICIENT_INPUTS
 FIELDS = ("lat_deg", "lat0_deg", "temp_min_c", "temp_max_c", "drift_smoother_deg_h", *KZ)
-"""The fields of the generated struct of a fleet hybrid with the default encoding (physics), in order."""
+"""The fields of the generated struct of a fleet hybrid with encoding ``physics`` (it reads all four raw inputs and
+`cos`), in order."""
 N_RANDOM = 1500
 
 
@@ -75,9 +75,9 @@ def fleet_runs(rng: np.random.Generator, n: int = 24, n_constant: int = 5) -> Ru
 
 
 def _fit(train: RunTable):
-    """The default hybrid (``physics_column="auto"``) fitted on ``train`` (fixed gamma and sigma: tuning is not
-    tested here)."""
-    return fit_drift_model(train, encoding=DEFAULT_ENCODING, target="residual", gamma=100.0, sigma=0.7)
+    """A hybrid with the default ``physics_column="auto"`` and encoding ``physics`` fitted on ``train`` (fixed
+    gamma and sigma: tuning is not tested here)."""
+    return fit_drift_model(train, encoding="physics", target="residual", gamma=100.0, sigma=0.7)
 
 
 def _fleet_model(train: RunTable):
@@ -176,7 +176,7 @@ def _expected(model, rows: RunTable) -> dict:
 
 @pytest.fixture(scope="module")
 def fleet():
-    """(model, probe rows, expected) for a fleet hybrid with the default encoding."""
+    """(model, probe rows, expected) for a fleet hybrid with encoding ``physics``."""
     rng = np.random.default_rng(2026)
     model = _fleet_model(fleet_runs(rng))
     rows = _probe_rows(model.training_["runs"], rng)
