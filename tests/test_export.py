@@ -38,7 +38,7 @@ from click.testing import CliRunner
 
 import gyrodrift
 from gyrodrift import export
-from gyrodrift.choices import DEFAULT_ENCODING, ENCODINGS, PHYSICS_COLUMNS, SCALINGS
+from gyrodrift.choices import ENCODINGS, PHYSICS_COLUMNS, SCALINGS, default_encoding
 from gyrodrift.cli import main
 from gyrodrift.encodings import encode
 from gyrodrift.errors import InputError, OptionError
@@ -321,7 +321,7 @@ def fitted(default_fit_file, tmp_path_factory):
         out[case_id] = (model, rows, _expected(model, rows))
     out[COS_CASE] = out[CASE_IDS[0]]
     model = load_model(default_fit_file)
-    assert (model.encoding, model.target, model.physics_column) == (DEFAULT_ENCODING, "residual", "auto")
+    assert (model.encoding, model.target, model.physics_column) == (default_encoding("residual"), "residual", "auto")
     assert model.physics_column_ == FLEET and model.coefficient_prior_ is not None  # resolved on the smoother's k_z
     assert model.training["weighted"] and model.training_["left_out"]
     rows = _probe_rows(model.training_["runs"], rng)
@@ -438,9 +438,10 @@ def test_label_weights_change_the_model_but_need_nothing_at_prediction(fitted):
     assert weighted.training["weighted"]
     runs = weighted.training_["runs"]
     est = weighted.lssvr
-    plain = fit_drift_model(runs, encoding=DEFAULT_ENCODING, target="residual", gamma=est.gamma, sigma=est.sigma)
+    encoding = default_encoding("residual")
+    plain = fit_drift_model(runs, encoding=encoding, target="residual", gamma=est.gamma, sigma=est.sigma)
     unweighted = fit_drift_model(
-        runs, encoding=DEFAULT_ENCODING, target="residual", gamma=est.gamma, sigma=est.sigma, label_weighting="none"
+        runs, encoding=encoding, target="residual", gamma=est.gamma, sigma=est.sigma, label_weighting="none"
     )
     np.testing.assert_array_equal(plain.lssvr.alpha_, est.alpha_)  # the same fit as the command's
     assert np.max(np.abs(unweighted.lssvr.alpha_ - est.alpha_)) > 1e-3 * np.max(np.abs(est.alpha_))  # weights matter
@@ -449,7 +450,8 @@ def test_label_weights_change_the_model_but_need_nothing_at_prediction(fitted):
         _export(DEFAULT_CASE, weighted, "rust")["gyrodrift_model.rs"],
     ]
     assert all("drift_std" not in re.sub(r"Label weighting[^\n]*", "", text) for text in files)
-    fleet_fields = (*RAW, "drift_smoother_deg_h", *KZ)  # the default base: the fleet-prior smoother
+    raw = tuple(n for n in RAW if any(n in export.FEATURE_EXPRESSIONS[f].inputs for f in ENCODINGS[encoding]))
+    fleet_fields = (*raw, "drift_smoother_deg_h", *KZ)  # the encoding's, then the fleet-prior smoother's
     assert export.export_spec(unweighted).inputs == export.export_spec(weighted).inputs == fleet_fields
 
 
@@ -838,7 +840,7 @@ def test_cli_exports_the_default_fit_model_as_a_hybrid(default_fit_file, tmp_pat
     r = CliRunner().invoke(main, args)
     assert r.exit_code == 0, r.output
     doc = json.loads(r.stdout)  # one JSON document; the "wrote" line goes to stderr
-    assert (doc["encoding"], doc["target"], doc["physics_column"]) == ("physics", "residual", FLEET)
+    assert (doc["encoding"], doc["target"], doc["physics_column"]) == (default_encoding("residual"), "residual", FLEET)
     assert doc["coefficient_prior_deg_h_per_c"] == list(load_model(default_fit_file).coefficient_prior_)
 
 
