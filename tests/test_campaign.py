@@ -365,7 +365,10 @@ def test_cli_campaign_and_study(store, tmp_path):
     assert 0 <= m["coverage_eff"] <= 1 and m["own_sigma_rms"] == pytest.approx(np.sqrt(np.mean(sd**2)))
     assert "16 h smoother with the training fleet's k_z prior" in res.output
     assert len(doc["train_size"]["rms_eff"][FLEET_ROW]) == len(doc["train_size"]["sizes"])
-    assert doc["methods"]["hybrid default"]["note"].startswith("physics base ")
+    from gyrodrift.choices import default_encoding
+
+    note = doc["methods"]["hybrid default"]["note"]
+    assert note.startswith(f"inputs {default_encoding('residual')}, physics base drift_smoother_fleet_deg_h"), note
 
 
 def test_runs_carry_the_smoothers_thermal_columns(store, tmp_path):

@@ -9,10 +9,10 @@ on the held-out ones:
 * Gaussian-process regression (scikit-learn, RBF + white noise, same inputs), a linear model (least squares,
   same inputs);
 * the 12 h physics inversion, the 12 h curve fit, the alignment's own z estimate (no training);
-* the hybrid default: ``gyrodrift fit``'s defaults (``physics`` encoding, CPSO on the LOO MAE, residual target on
-  the physics base its ``physics_column`` default picks, flagged labels and labels with a 1-sigma above
-  ``DEFAULT_MAX_LABEL_STD_DEG_H`` left out), except the study's ``max_iter``; the row's note names the base it
-  resolved to;
+* the hybrid default: ``gyrodrift fit``'s defaults (residual target on the physics base its ``physics_column``
+  default ``auto`` picks, the hybrid's default encoding ``default_encoding("residual")``, CPSO on the LOO MAE,
+  flagged labels and labels with a 1-sigma above ``DEFAULT_MAX_LABEL_STD_DEG_H`` left out), except the study's
+  ``max_iter``; the row's note names its inputs and the base it resolved to;
 * the 16 h smoother, when the campaign holds its column (`gyrodrift.procedure.smoother`);
 * the 16 h smoother with the training fleet's k_z prior (``FLEET_ROW``): the training runs' thermal coefficients
   pooled (`gyrodrift.fleet_prior.pooled_coefficient_prior`) and each held-out run's end drift re-weighted by
@@ -189,6 +189,7 @@ def _fit_learned(name: str, train, *, seed: int, max_iter: int):
     from sklearn.pipeline import make_pipeline
     from sklearn.preprocessing import StandardScaler
 
+    from gyrodrift.choices import default_encoding
     from gyrodrift.encodings import encode
     from gyrodrift.model import DEFAULT_MAX_LABEL_STD_DEG_H, fit_drift_model
 
@@ -198,23 +199,26 @@ def _fit_learned(name: str, train, *, seed: int, max_iter: int):
         "CPSO-LSSVM (LOO)": dict(method="cpso", objective="loo_mae"),
         "PSO-LSSVM (LOO)": dict(method="pso", objective="loo_mae"),
         "grid-LSSVM (LOO)": dict(method="grid", objective="loo_mae"),
-        # `gyrodrift fit`'s defaults: its physics column default (no physics_column given), its label limit
+        # `gyrodrift fit`'s defaults: its physics column default (auto), the hybrid's encoding, its label limit
         "hybrid default": dict(
-            method="cpso", objective="loo_mae", target="residual", max_label_std_deg_h=DEFAULT_MAX_LABEL_STD_DEG_H
+            method="cpso",
+            objective="loo_mae",
+            target="residual",
+            encoding=default_encoding("residual"),
+            max_label_std_deg_h=DEFAULT_MAX_LABEL_STD_DEG_H,
         ),
     }
     if name in specs:
-        model = fit_drift_model(train, **common, **specs[name])
+        model = fit_drift_model(train, **{**common, **specs[name]})
 
         def predict(t):
             return model.predict_interval(t, COVERAGE)
 
         note = ""
         if model.target == "residual":
-            base = getattr(model, "physics_column_", None) or model.physics_column
-            note = f"physics base {base}"
-            prior = getattr(model, "coefficient_prior_", None)
-            if prior is not None:
+            note = f"inputs {model.encoding}, physics base {model.physics_column_}"
+            if model.coefficient_prior_ is not None:
+                prior = model.coefficient_prior_
                 note += f" (pooled k_z prior {prior[0]:.3e} +- {prior[1]:.3e} deg/h/degC)"
         return predict, note
     X = encode(train, "physics")
