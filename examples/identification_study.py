@@ -23,14 +23,14 @@ drift (one read, one navigator per method). Methods:
 * paper-encoding LSSVM: CPSO-LSSVM (LOO MAE) on the paper's inputs (raw 12 h latitude error in arcsec, temp range);
 * physics-encoding LSSVM: the same on the drift equivalent of the latitude error;
 * 12 h physics inversion; 12 h curve fit (`gyrodrift.curve_fit`);
-* default: what ``gyrodrift fit`` does with no options (`fit_default`: the physics encoding, the hybrid target,
-  the ``auto`` physics base, which on these tables is ``drift_smoother_fleet_deg_h``: the 16 h smoother's end
-  drift re-weighted with the training runs' pooled k_z, leave-one-out for the training runs themselves; plus the
-  LSSVR correction learnt on label - base);
-* hybrid: inversion + LSSVR (the default before): 12 h inversion + LSSVR correction learnt on label - inversion;
-  and the same with the correction on the temperatures only;
-* hybrid: fleet-prior smoother, temperature-only correction: the default's base with the correction on the
-  temperatures only;
+* default: what ``gyrodrift fit`` does with no options (`fit_default`: the hybrid target with its default
+  encoding, the temperature range; the ``auto`` physics base, which on these tables is
+  ``drift_smoother_fleet_deg_h``: the 16 h smoother's end drift re-weighted with the training runs' pooled k_z,
+  leave-one-out for the training runs themselves; plus the LSSVR correction learnt on label - base);
+* hybrid: fleet-prior smoother, physics-encoding correction: the default's base with the correction on the
+  ``physics`` encoding (the 12 h drift equivalent and the temperature range);
+* hybrid: inversion + LSSVR (the default before the fleet base): 12 h inversion + LSSVR correction learnt on
+  label - inversion (``physics`` encoding); and the same with the correction on the temperatures only;
 * hybrid on the curve fit: the same with the curve fit as its physics column;
 * 16 h Kalman smoother (`gyrodrift.procedure.smoother`): forward filter + RTS over alignment + 12 h with zero
   velocity and the known position, its thermal model (drift = eps_z + k_z (T - T_ref), T the log's temperature)
@@ -59,7 +59,7 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 
 from gyrodrift.baselines import physics_inversion
-from gyrodrift.choices import DEFAULT_ENCODING
+from gyrodrift.choices import default_encoding
 from gyrodrift.curve_fit import fit_error_curves
 from gyrodrift.ins.scenario import Scenario
 from gyrodrift.logs import ImuLog
@@ -81,6 +81,7 @@ FOUR_LAT_DRIFT_DEG_H = 0.00368
 FIRST_SEED = 11
 DEFAULT = "default (gyrodrift fit)"
 OLD_DEFAULT = "hybrid: inversion + LSSVR"
+FLEET_PHYSICS_ENCODING = "hybrid: fleet-prior smoother, physics-encoding correction"
 PAPER = "paper-encoding LSSVM (temp_range)"
 
 
@@ -161,12 +162,12 @@ def smoother_columns(estimate: SmootherEstimate | None) -> dict:
 
 
 def fit_default(train: RunTable, **kwargs) -> DriftModel:
-    """What ``gyrodrift fit runs.csv --out m.json`` fits: the default encoding, the hybrid target, the default
-    physics base (``auto``), weighted labels, runs beyond the default label 1-sigma left out; ``kwargs`` go to
-    `fit_drift_model` (tuner, iterations, seed)."""
+    """What ``gyrodrift fit runs.csv --out m.json`` fits: the hybrid target and its default encoding
+    (temperature), the default physics base (``auto``), weighted labels, runs beyond the default label 1-sigma
+    left out; ``kwargs`` go to `fit_drift_model` (tuner, iterations, seed)."""
     return fit_drift_model(
         train,
-        encoding=DEFAULT_ENCODING,
+        encoding=default_encoding("residual"),
         target="residual",
         max_label_std_deg_h=DEFAULT_MAX_LABEL_STD_DEG_H,
         **kwargs,
@@ -285,14 +286,14 @@ def run_study(
         models[PAPER] = fit_drift_model(train, encoding="temp_range", **common)
         models["physics-encoding LSSVM"] = fit_drift_model(train, encoding="physics", **common)
         models[DEFAULT] = fit_default(train, **tuner)
+        models[FLEET_PHYSICS_ENCODING] = fit_drift_model(
+            train, encoding="physics", target="residual", physics_column="drift_smoother_fleet_deg_h", **common
+        )
         models[OLD_DEFAULT] = fit_drift_model(
             train, encoding="physics", target="residual", physics_column="drift_inversion_deg_h", **common
         )
         models["hybrid, temperature-only correction"] = fit_drift_model(
             train, encoding="temperature", target="residual", physics_column="drift_inversion_deg_h", **common
-        )
-        models["hybrid: fleet-prior smoother, temperature-only correction"] = fit_drift_model(
-            train, encoding="temperature", target="residual", physics_column="drift_smoother_fleet_deg_h", **common
         )
         models["hybrid: curve fit + LSSVR"] = fit_drift_model(
             train, encoding="physics", target="residual", physics_column="drift_curvefit_deg_h", **common
@@ -339,6 +340,7 @@ def run_study(
         "edge_warnings": edge_warnings,
         "seed": seed,
         "default_physics_column": models[DEFAULT].physics_column_,
+        "default_encoding": models[DEFAULT].encoding,
         "default_coefficient_prior": models[DEFAULT].coefficient_prior_,
     }
     for j, name in enumerate(names):
@@ -408,6 +410,7 @@ def print_report(r: dict) -> None:
     print(
         f"default's physics base: {r['default_physics_column']}"
         + (f" (k_z prior {prior[0]:.2e} +- {prior[1]:.2e} deg/h/degC)" if prior is not None else "")
+        + f"; its correction's encoding: {r['default_encoding']}"
     )
     k = key_numbers(r)
     print(f"default / paper-encoding held-out RMS (vs effective drift): {k['vs_paper']:.2f} (target <= 0.7)")
@@ -488,7 +491,7 @@ def print_seeds_summary(results: list[dict]) -> None:
     print(f"default's physics base per seed: {', '.join(sorted({r['default_physics_column'] for r in results}))}")
     head = "".join(f"{'s' + str(s):>9s}" for s in seeds)
     print(f"{'quantity':46s} {'target':>8s}{head}  {'mean +- sd':>18s}")
-    for name in (DEFAULT, OLD_DEFAULT):
+    for name in (DEFAULT, FLEET_PHYSICS_ENCODING, OLD_DEFAULT):
         print(f"{name}:")
         per_seed = [key_numbers(r, name) for r in results]
         for key, what, target in KEY_NUMBERS:
@@ -532,7 +535,8 @@ def coverage_study(
 ) -> dict:
     """Coverage of the 90 % intervals over several fleets (one per seed), without the navigation or the
     four-latitude check, for the default model (`fit_default`, on the fleet-prior smoother base: the runs are
-    measured with the smoother) and the earlier default (inversion + LSSVR) on the same runs: per seed the share
+    measured with the smoother), the same base with the physics-encoding correction and the earlier default
+    (inversion + LSSVR) on the same runs: per seed the share
     of held-out runs whose effective drift (and whose label) the interval covers, in range and flagged, the
     half-width of the hot runs over that of the runs in range, and the held-out RMS against the effective drift.
     Returns ``{model name: {quantity: per-seed array}}`` plus ``"seeds"`` and prints nothing."""
@@ -544,7 +548,7 @@ def coverage_study(
         "hot_half_width_ratio",
         "rms_eff",
     )
-    per: dict[str, list[list[float]]] = {DEFAULT: [], OLD_DEFAULT: []}
+    per: dict[str, list[list[float]]] = {DEFAULT: [], FLEET_PHYSICS_ENCODING: [], OLD_DEFAULT: []}
     physics_columns = []
     for seed in seeds:
         specs = draw_fleet(n_train, n_test, n_hot, seed, rate_hz)
@@ -560,6 +564,14 @@ def coverage_study(
             warnings.simplefilter("ignore", SearchBoundWarning)
             models = {
                 DEFAULT: fit_default(train, rng=0),
+                FLEET_PHYSICS_ENCODING: fit_drift_model(
+                    train,
+                    encoding="physics",
+                    target="residual",
+                    physics_column="drift_smoother_fleet_deg_h",
+                    max_label_std_deg_h=DEFAULT_MAX_LABEL_STD_DEG_H,
+                    rng=0,
+                ),
                 OLD_DEFAULT: fit_drift_model(
                     train,
                     encoding="physics",
@@ -598,7 +610,9 @@ def print_coverage(c: dict, n_test: int) -> None:
         f"90 % intervals over {len(c['seeds'])} fleets of {n_test} held-out runs (default's physics base: "
         f"{', '.join(sorted(set(c['default_physics_columns'])))}):"
     )
-    print(f"  {'':34s} {DEFAULT:>26s} {OLD_DEFAULT:>26s}")
+    names = (DEFAULT, FLEET_PHYSICS_ENCODING, OLD_DEFAULT)
+    short = ("default (gyrodrift fit)", "fleet base, physics enc.", "inversion + LSSVR")
+    print(f"  {'':30s} " + " ".join(f"{n:>26s}" for n in short))
     for key, what in (
         ("coverage_eff", "covers the effective drift"),
         ("coverage_truth", "covers the label (noisy truth)"),
@@ -608,12 +622,12 @@ def print_coverage(c: dict, n_test: int) -> None:
         ("rms_eff", "held-out RMS [deg/h]"),
     ):
         cells = []
-        for name in (DEFAULT, OLD_DEFAULT):
+        for name in names:
             v = c[name][key]
             f = ".2e" if key == "rms_eff" else ".3f"
             mean, sd = mean_sd(v)
             cells.append(f"mean {mean:{f}} sd {sd:{f}}")
-        print(f"  {what:34s} {cells[0]:>26s} {cells[1]:>26s}")
+        print(f"  {what:30s} " + " ".join(f"{c:>26s}" for c in cells))
 
 
 def parse_seeds(text: str) -> list[int]:

@@ -10,6 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from gyrodrift.choices import default_encoding
+
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "identification_study.py"
 
 
@@ -29,7 +31,7 @@ def test_study_runs_and_reports(study, capsys):
         module.DEFAULT,
         module.OLD_DEFAULT,
         module.PAPER,
-        "hybrid: fleet-prior smoother, temperature-only correction",
+        module.FLEET_PHYSICS_ENCODING,
         "16 h Kalman smoother",
         "16 h smoother, fleet k_z prior",
     ):
@@ -51,6 +53,7 @@ def test_default_is_gyrodrift_fit_on_the_fleet_prior_smoother(study):
     default's."""
     _, r = study
     assert r["default_physics_column"] == "drift_smoother_fleet_deg_h"
+    assert r["default_encoding"] == default_encoding("residual")
     mean, std = r["default_coefficient_prior"]
     assert 0 < std < 1e-4 and abs(mean - 2e-4) < 4 * std + 5e-5
     default, old = r["methods"]["default (gyrodrift fit)"], r["methods"]["hybrid: inversion + LSSVR"]
@@ -98,7 +101,7 @@ def test_coverage_over_seeds_runs_at_reduced_size(study, capsys):
     module, _ = study
     c = module.coverage_study([1], n_train=10, n_test=4, n_hot=1, rate_hz=2.0)
     assert c["default_physics_columns"] == ["drift_smoother_fleet_deg_h"]
-    for name in (module.DEFAULT, module.OLD_DEFAULT):
+    for name in (module.DEFAULT, module.FLEET_PHYSICS_ENCODING, module.OLD_DEFAULT):
         assert c[name]["coverage_eff"].shape == (1,) and 0.0 <= c[name]["coverage_eff"][0] <= 1.0
         assert 0 < c[name]["rms_eff"][0] < 2e-3
     module.print_coverage(c, 4)
