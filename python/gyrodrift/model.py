@@ -658,8 +658,9 @@ class DriftModel(Pipeline):
         if self.target != "residual":
             return (np.zeros(len(runs)), None) if with_std else np.zeros(len(runs))
         check_is_fitted(self, "physics_column_")
-        prior = self.coefficient_prior_ if self.physics_column_ == FLEET_PHYSICS else None
-        return physics_estimate(runs, self.physics_column_, prior=prior, with_std=with_std)
+        column = str(self.physics_column_)
+        prior = self.coefficient_prior_ if column == FLEET_PHYSICS else None
+        return physics_estimate(runs, column, prior=prior, with_std=with_std)
 
     def fit(self, X, y=None, *, spread_theta=None, interval_calibration=None, **params) -> DriftModel:
         """Fit on runs (RunTable or structured array) and drifts ``y`` [deg/h] (default: the runs' own).
@@ -836,7 +837,7 @@ class DriftModel(Pipeline):
             _, base_std = self._base(runs, with_std=True)
             if not np.all(np.isfinite(base_std)):
                 raise InputError(
-                    f"{runs.source}: column {BASE_STD_COLUMNS[self.physics_column_]} (the 1-sigma of the hybrid "
+                    f"{runs.source}: column {BASE_STD_COLUMNS[str(self.physics_column_)]} (the 1-sigma of the hybrid "
                     f"model's physics base, in its interval) is missing for run(s) {_missing_runs(runs, base_std)}"
                 )
             scale = np.sqrt(self.predict_spread(runs) ** 2 + self.label_std_rms_**2 + base_std**2)

@@ -427,11 +427,11 @@ def _check_fitted(fitted: Any, model: DriftModel, where: str) -> None:
         if key not in fitted:
             continue
         raw = fitted[key]
-        got = np.atleast_1d(_numbers(raw, fw, key) if isinstance(raw, list) else _number(raw, fw, key))
-        if got.shape != expected.shape:
-            raise ModelFileError(f"{fw}: key {key!r} has {got.size} values, the model {expected.size}")
+        values = np.atleast_1d(_numbers(raw, fw, key) if isinstance(raw, list) else _number(raw, fw, key))
+        if values.shape != expected.shape:
+            raise ModelFileError(f"{fw}: key {key!r} has {values.size} values, the model {expected.size}")
         scale = float(np.max(np.abs(expected))) or 1.0
-        if not np.allclose(got, expected, rtol=1e-9, atol=1e-12 * scale):
+        if not np.allclose(values, expected, rtol=1e-9, atol=1e-12 * scale):
             raise ModelFileError(f"{fw}: key {key!r} differs from the model rebuilt from the file (edited?)")
 
 

@@ -171,11 +171,16 @@ def _with_fleet_prior(test_runs, prior: tuple[float, float]) -> tuple[np.ndarray
     """The held-out runs' smoother end drift and 1-sigma [deg/h] re-weighted by the k_z prior ``(mean, std)``."""
     from gyrodrift.fleet_prior import drift_with_coefficient_prior
 
+    coeff, coeff_std, cov, prior_std = (_column(test_runs, c) for c in THERMAL)
     d, s = drift_with_coefficient_prior(
         test_runs.numbers("drift_smoother_deg_h"),
         test_runs.numbers("drift_smoother_std_deg_h"),
-        *(_column(test_runs, c) for c in THERMAL),
-        *prior,
+        coeff,
+        coeff_std,
+        cov,
+        prior_std,
+        prior[0],
+        prior[1],
     )
     return np.atleast_1d(np.asarray(d, float)), np.atleast_1d(np.asarray(s, float))
 
@@ -361,8 +366,12 @@ def run_study(
     for m in methods.values():
         m.metrics = {**_metrics(m, test_df, effective, truth, limit), **m.metrics}
     if FLEET_ROW in methods:
-        m = methods[FLEET_ROW].metrics
-        m["ratio_to_own_sigma"] = m["rms_eff"] / m["own_sigma_rms"] if m["own_sigma_rms"] > 0 else math.nan
+        fleet_metrics = methods[FLEET_ROW].metrics
+        fleet_metrics["ratio_to_own_sigma"] = (
+            fleet_metrics["rms_eff"] / fleet_metrics["own_sigma_rms"]
+            if fleet_metrics["own_sigma_rms"] > 0
+            else math.nan
+        )
     # --- curves ----------------------------------------------------------------------------------------
     n_train = len(tr_idx)
     if train_sizes is None:
@@ -373,15 +382,15 @@ def run_study(
         warnings.simplefilter("ignore", SearchBoundWarning)
         for name in LEARNED:
             values = []
-            for s in train_sizes:
-                sub = train.select(np.sort(order[:s]))
+            for size in train_sizes:
+                sub = train.select(np.sort(order[:size]))
                 pred = _fit_learned(name, sub, seed=seed, max_iter=max_iter)[0](test)[0]
                 values.append(_rms(effective - np.asarray(pred, float)))
             size_curve["rms_eff"][name] = values
     if FLEET_ROW in methods:  # the prior pooled again from each nested subset of the training runs
         values = []
-        for s in train_sizes:
-            prior = _fleet_prior(train_df.select(np.sort(order[:s])))
+        for size in train_sizes:
+            prior = _fleet_prior(train_df.select(np.sort(order[:size])))
             values.append(
                 math.nan if isinstance(prior, str) else _rms(effective - _with_fleet_prior(test_df, prior)[0])
             )

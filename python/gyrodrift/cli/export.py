@@ -57,6 +57,7 @@ def export_command(model_file: Path, lang: str, out_dir: Path, as_json: bool, qu
             stage.file(name).write_text(text, encoding="utf-8")
     paths = [out_dir / name for name in names]
     physics = physics_column(model)
+    prior = getattr(model, "coefficient_prior_", None)
     if as_json:
         print_json(
             {
@@ -66,9 +67,7 @@ def export_command(model_file: Path, lang: str, out_dir: Path, as_json: bool, qu
                 "target": model.target,
                 "physics_column": physics,
                 # the fleet-prior base's k_z prior baked into the code: [mean, 1-sigma] deg/h/degC, else null
-                "coefficient_prior_deg_h_per_c": (
-                    list(model.coefficient_prior_) if getattr(model, "coefficient_prior_", None) else None
-                ),
+                "coefficient_prior_deg_h_per_c": None if prior is None else list(prior),
             }
         )
     detail = f"{model.encoding}, {model.lssvr.kernel}" + ("" if physics is None else f", hybrid on {physics}")
