@@ -51,6 +51,7 @@ from typing import Any
 import numpy as np
 
 from gyrodrift.errors import InputError, OptionError, OutputError
+from gyrodrift.runs import SMOOTHER_THERMAL_COLUMNS
 from gyrodrift.toml_input import read_toml
 
 __all__ = [
@@ -419,10 +420,7 @@ def _noise_model(scenario):
 SMOOTHER_COLUMNS = (
     "drift_smoother_deg_h",
     "drift_smoother_std_deg_h",
-    "smoother_coeff_deg_h_per_c",
-    "smoother_coeff_std_deg_h_per_c",
-    "smoother_end_coeff_cov",
-    "smoother_coeff_prior_std_deg_h_per_c",
+    *SMOOTHER_THERMAL_COLUMNS,
 )
 """The smoother's columns of a run: its drift carried into navigation and 1-sigma [deg/h], and under its thermal
 model k_z and its 1-sigma [deg/h/degC], cov(end drift, k_z) [(deg/h)^2/degC] and its prior 1-sigma of k_z

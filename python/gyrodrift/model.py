@@ -82,7 +82,7 @@ from gyrodrift.lssvr import (
     condition_warning_message,
 )
 from gyrodrift.progress import progress
-from gyrodrift.runs import RunTable, as_run_table
+from gyrodrift.runs import SMOOTHER_THERMAL_COLUMNS, RunTable, as_run_table
 from gyrodrift.spread import SpreadGP
 from gyrodrift.tuning import (
     DEFAULT_BOUNDS,
@@ -177,12 +177,7 @@ SMOOTHER_COLUMNS = ("drift_smoother_deg_h", "drift_smoother_std_deg_h")
 training run has both (the base itself needs the drift; its 1-sigma, re-weighted, enters the noise and the
 interval)."""
 
-THERMAL_COLUMNS = (
-    "smoother_coeff_deg_h_per_c",
-    "smoother_coeff_std_deg_h_per_c",
-    "smoother_end_coeff_cov",
-    "smoother_coeff_prior_std_deg_h_per_c",
-)
+THERMAL_COLUMNS = SMOOTHER_THERMAL_COLUMNS
 """The smoother's thermal coefficient k_z, its 1-sigma, cov(end drift, k_z) and its own prior 1-sigma: the fleet
 base needs them in the table (empty for a run under the smoother's constant model)."""
 

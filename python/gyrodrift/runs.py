@@ -58,16 +58,23 @@ TEMPERATURE_LIMITS_C = (-100.0, 200.0)
 """Plausible system temperatures [deg C], inclusive: every reader (run tables, IMU logs) refuses the rest (a
 kelvin value such as 303, or 1e6)."""
 
+SMOOTHER_THERMAL_COLUMNS = (
+    "smoother_coeff_deg_h_per_c",
+    "smoother_coeff_std_deg_h_per_c",
+    "smoother_end_coeff_cov",
+    "smoother_coeff_prior_std_deg_h_per_c",
+)
+"""The 16 h smoother's thermal estimate of a run (empty under its constant model): k_z [deg/h/degC], its 1-sigma,
+cov(end drift, k_z) [(deg/h)^2/degC] and the smoother's own prior 1-sigma of k_z [deg/h/degC]; what the fleet
+prior on k_z needs (`gyrodrift.fleet_prior`). The one definition of these names."""
+
 OPTIONAL_COLUMNS = (
     "drift_std_deg_h",
     "drift_curvefit_deg_h",
     "drift_curvefit_std_deg_h",
     "drift_smoother_deg_h",
     "drift_smoother_std_deg_h",
-    "smoother_coeff_deg_h_per_c",
-    "smoother_coeff_std_deg_h_per_c",
-    "smoother_end_coeff_cov",
-    "smoother_coeff_prior_std_deg_h_per_c",
+    *SMOOTHER_THERMAL_COLUMNS,
     "label_flagged",
 )
 """Optional per-run values a table may carry (NaN where unknown): numbers (units in the names) and the flag

@@ -43,6 +43,7 @@ from typing import Any
 import numpy as np
 
 from gyrodrift.errors import InputError, OptionError
+from gyrodrift.runs import SMOOTHER_THERMAL_COLUMNS
 
 __all__ = ["COVERAGE", "FLEET_ROW", "MethodResult", "StudyResult", "run_study", "split_runs"]
 
@@ -55,13 +56,8 @@ LEARNED = ("CPSO-LSSVM (LOO)", "GP regression", "linear model", "hybrid default"
 smoother's prior is pooled again from each subset)."""
 FLEET_ROW = "16 h smoother, fleet k_z prior"
 """The smoother's end drift with the training runs' pooled thermal coefficient as prior (module docstring)."""
-THERMAL = (
-    "smoother_coeff_deg_h_per_c",
-    "smoother_coeff_std_deg_h_per_c",
-    "smoother_end_coeff_cov",
-    "smoother_coeff_prior_std_deg_h_per_c",
-)
-"""The smoother's thermal columns of a campaign run (`gyrodrift.campaign.SMOOTHER_COLUMNS`)."""
+THERMAL = SMOOTHER_THERMAL_COLUMNS
+"""The smoother's thermal columns of a campaign run (`gyrodrift.runs.SMOOTHER_THERMAL_COLUMNS`)."""
 
 
 @dataclass

@@ -21,6 +21,7 @@ import numpy as np
 
 from gyrodrift.earth import NMI_M
 from gyrodrift.fleet_prior import drift_with_coefficient_prior
+from gyrodrift.runs import SMOOTHER_THERMAL_COLUMNS
 from gyrodrift.site import Site
 from gyrodrift.units import DEG, DEG_PER_H, MICRO_G
 
@@ -331,25 +332,20 @@ RUN_TABLE_COLUMNS = (
     "drift_curvefit_std_deg_h",
     "drift_smoother_deg_h",
     "drift_smoother_std_deg_h",
-    "smoother_coeff_deg_h_per_c",
-    "smoother_coeff_std_deg_h_per_c",
-    "smoother_end_coeff_cov",
-    "smoother_coeff_prior_std_deg_h_per_c",
+    *SMOOTHER_THERMAL_COLUMNS,
 )
 """Columns written by `gyrodrift features` (plus ``drift_deg_h``, ``drift_std_deg_h`` and ``label_flagged`` with the
 truth). The last four are the smoother's thermal coefficient k_z [deg/h/degC], its 1-sigma, cov(end drift, k_z)
 [(deg/h)^2/degC] and the filter's prior 1-sigma of k_z [deg/h/degC] (`SmootherEstimate`): what a fleet prior on
 k_z needs (`gyrodrift.fleet_prior`); empty (NaN) under the smoother's constant model or without the smoother."""
 
-SMOOTHER_THERMAL_COLUMNS = RUN_TABLE_COLUMNS[-4:]
-"""The run-table columns of the smoother's thermal model, in the order of `SMOOTHER_THERMAL_FIELDS`."""
 SMOOTHER_THERMAL_FIELDS = (
     "thermal_coeff_deg_h_per_c",
     "thermal_coeff_std_deg_h_per_c",
     "end_coeff_cov",
     "thermal_prior_std_deg_h_per_c",
 )
-"""The `SmootherEstimate` attributes the columns `SMOOTHER_THERMAL_COLUMNS` hold."""
+"""The `SmootherEstimate` attributes the columns `SMOOTHER_THERMAL_COLUMNS` (`gyrodrift.runs`) hold, in order."""
 
 
 @dataclass(frozen=True)
