@@ -196,3 +196,21 @@ def test_malformed_csv_is_a_run_table_error_with_its_row(tmp_path):
     path.write_text('run,lat_deg,temp_min_c,temp_max_c\n1,28.2,1,2\n2,"' + "x" * 200_000 + '",1,2\n')
     with pytest.raises(RunTableError, match=r"big.csv, row 3: malformed CSV"):
         read_runs_csv(path, lat0_deg=28.222)
+
+
+def test_thermal_columns_name_their_own_unit(tmp_path):
+    """The smoother's k_z columns are in deg/h/degC (the cov in (deg/h)^2/degC), not deg/h; their 1-sigma > 0."""
+    header = "run,lat_deg,lat0_deg,temp_min_c,temp_max_c,smoother_coeff_deg_h_per_c,smoother_coeff_std_deg_h_per_c"
+    for cells, message in (
+        ("abc,2e-4", "column smoother_coeff_deg_h_per_c: expected a number in deg/h/degC, got 'abc'"),
+        ("2e-4,-1e-4", "column smoother_coeff_std_deg_h_per_c: expected a 1-sigma > 0 deg/h/degC"),
+        ("20,1e-4", "|20.0| deg/h/degC is not an RLG value"),
+    ):
+        path = tmp_path / "runs.csv"
+        path.write_text(f"{header}\nr1,40.001,40,30,35,{cells}\n")
+        with pytest.raises(RunTableError) as info:
+            read_runs_csv(path)
+        assert message in str(info.value) and "row 2" in str(info.value)
+    path.write_text(f"{header}\nr1,40.001,40,30,35,2e-4,1e-4\nr2,40.001,40,30,35,,\n")
+    coeff = read_runs_csv(path).column("smoother_coeff_deg_h_per_c")
+    assert coeff[0] == 2e-4 and np.isnan(coeff[1])

@@ -436,16 +436,28 @@ def _check_run_values(
         raise RunTableError(f"{where}, key split: expected 'train', 'test' or '', got {split!r}")
 
 
+def _column_unit(key: str) -> str:
+    """The unit of an optional numeric column, from its name (``OPTIONAL_COLUMNS``)."""
+    if key == "smoother_end_coeff_cov":
+        return "(deg/h)^2/degC"
+    if key.endswith("_deg_h_per_c"):
+        return "deg/h/degC"
+    return "deg/h"
+
+
 def _check_optional(where: str, key: str, value: float) -> None:
-    """An optional column's value: NaN (unknown) or a drift-sized number; a 1-sigma must be > 0."""
+    """An optional column's value: NaN (unknown) or a drift-sized number (|value| <= 10 in its unit); a 1-sigma
+    must be > 0."""
     if math.isnan(value):
         return
+    unit = _column_unit(key)
     if abs(value) > 10.0:
         raise RunTableError(
-            f"{where}, column {key}: |{value}| deg/h is not an RLG drift (expected |value| <= 10 deg/h)"
+            f"{where}, column {key}: |{value}| {unit} is not an RLG {'drift' if unit == 'deg/h' else 'value'} "
+            f"(expected |value| <= 10 {unit})"
         )
-    if key.endswith("_std_deg_h") and not value > 0:
-        raise RunTableError(f"{where}, column {key}: expected a 1-sigma > 0 deg/h, got {value}")
+    if ("_std_" in key) and not value > 0:
+        raise RunTableError(f"{where}, column {key}: expected a 1-sigma > 0 {unit}, got {value}")
 
 
 def _check_unique_runs(runs: list[str], source: str) -> None:
@@ -616,7 +628,7 @@ def read_runs_csv(path, *, lat0_deg: float | None = None, require_truth: bool = 
                 if h in FLAG_COLUMNS:
                     extra[h].append(_parse_flag(cell[h], where, h))
                     continue
-                v = math.nan if cell[h] == "" else _parse_float(cell[h], where, h, "a number in deg/h")
+                v = math.nan if cell[h] == "" else _parse_float(cell[h], where, h, f"a number in {_column_unit(h)}")
                 _check_optional(where, h, v)
                 extra[h].append(v)
     if not runs:
