@@ -82,7 +82,7 @@ from gyrodrift.lssvr import (
     condition_warning_message,
 )
 from gyrodrift.progress import progress
-from gyrodrift.runs import SMOOTHER_THERMAL_COLUMNS, RunTable, as_run_table
+from gyrodrift.runs import SMOOTHER_THERMAL_COLUMNS, RunTable, as_run_table, check_smoother_thermal
 from gyrodrift.spread import SpreadGP
 from gyrodrift.tuning import (
     DEFAULT_BOUNDS,
@@ -291,6 +291,7 @@ def physics_estimate(runs: RunTable, column: str = "drift_inversion_deg_h", *, p
         for name in THERMAL_COLUMNS:
             if name not in runs.extra:
                 raise InputError(f"{runs.source}: column {name} ({what}) is missing: the table has no such column")
+        check_smoother_thermal(runs, what)
         k, sk, c, s0 = (runs.column(name) for name in THERMAL_COLUMNS)
         prior = np.asarray(prior, float)
         if prior.shape == (2,):

@@ -652,3 +652,18 @@ def read_runs_csv(path, *, lat0_deg: float | None = None, require_truth: bool = 
         source=name,
         extra={h: np.array(v, dtype=float) for h, v in extra.items()},
     )
+
+
+def check_smoother_thermal(runs: RunTable, what: str) -> None:
+    """Refuse runs that carry some but not all of ``SMOOTHER_THERMAL_COLUMNS`` (`RunTableError` naming the table,
+    the runs and the missing columns; `what`: who needs them). A run has all four (the smoother's thermal model)
+    or none (its constant model): a partial one would silently be taken as the constant model."""
+    present = np.array([np.isfinite(runs.column(c)) for c in SMOOTHER_THERMAL_COLUMNS])  # (4, n_runs)
+    partial = np.flatnonzero(present.any(axis=0) & ~present.all(axis=0))
+    if partial.size:
+        names = np.array(SMOOTHER_THERMAL_COLUMNS)
+        shown = [f"{runs.run[i]} (missing {', '.join(names[~present[:, i]])})" for i in partial[:5]]
+        raise RunTableError(
+            f"{runs.source}: run(s) {'; '.join(shown)}{' ...' if partial.size > 5 else ''} have some but not all of "
+            f"the smoother's thermal columns ({what}): give all four (its thermal model) or none (its constant model)"
+        )
