@@ -12,6 +12,10 @@ Every command that writes goes through this module, in one of two ways:
   so a run killed at any moment leaves the old set or the new one, and the next run (or a reader, via
   `check_complete`) can tell which.
 
+A manifest is trusted only if every name in it is a plain file name of its folder (no separator, not absolute,
+no leading dot, no NUL, no symbolic link) and it has the shape gyrodrift writes; otherwise it is refused whole
+(`UntrustedManifestError`) before anything in the folder is touched.
+
 What may be written (checked before any work, and again at the end):
 
 - A file is replaced only if it is a regular file written by gyrodrift (recognised by its content) or empty;
@@ -49,11 +53,13 @@ from pathlib import Path
 from typing import IO, Any
 
 from gyrodrift.errors import OutputError
+from gyrodrift.input_files import NotRegularFileError, file_kind, read_limited
 
 __all__ = [
     "MANIFEST_NAME",
     "STALE_AFTER_S",
     "OutputFolder",
+    "UntrustedManifestError",
     "Stage",
     "atomic_files",
     "atomic_write",
@@ -235,18 +241,6 @@ def _same_file(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
         return os.path.realpath(a) == os.path.realpath(b)
 
 
-def _kind(mode: int) -> str:
-    if stat.S_ISDIR(mode):
-        return "a directory"
-    if stat.S_ISFIFO(mode):
-        return "a FIFO"
-    if stat.S_ISSOCK(mode):
-        return "a socket"
-    if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):
-        return "a device"
-    return "not a regular file"
-
-
 def _head(path: Path) -> bytes:
     with open(path, "rb") as fh:
         return fh.read(_HEAD_BYTES)
@@ -307,7 +301,7 @@ def check_output_file(
     if stat.S_ISDIR(st.st_mode):
         raise _fail(given, "is a directory (a file was expected)")
     if not stat.S_ISREG(st.st_mode):
-        raise _fail(given, f"is {_kind(st.st_mode)}; gyrodrift writes only regular files or new paths")
+        raise _fail(given, f"is {file_kind(st.st_mode)}; gyrodrift writes only regular files or new paths")
     if recognise is not None:
         with _naming(given):
             head = _head(real)
@@ -490,22 +484,142 @@ def _matches(path: Path, entry: dict[str, Any]) -> bool:
         return False
 
 
+MAX_MANIFEST_BYTES = 64 << 20
+"""Largest manifest read [bytes] (a folder of 100 000 outputs needs about 20 MB)."""
+
+
+class UntrustedManifestError(OutputError):
+    """A file named like gyrodrift's manifest that claims its format but is not what gyrodrift writes: an entry
+    that is no plain file name of the folder, or a structure of the wrong shape. Refused whole, before any
+    work: acting on it could delete or replace files the program did not write."""
+
+
+_SHA256_RE = re.compile(r"^[0-9a-f]{64}$")
+
+
+def _shown(name: object) -> str:
+    """A name from a manifest, quoted and escaped for a one-line message (at most about 80 characters)."""
+    text = repr(name)
+    return text if len(text) <= 80 else text[:77] + "..."
+
+
+def _plain_name_problem(name: object) -> str | None:
+    """Why `name` is not the name of a file gyrodrift may write in its folder, or None."""
+    if not isinstance(name, str) or not name:
+        return "is not a file name"
+    if "\0" in name:
+        return "holds a NUL character"
+    if os.path.isabs(name) or name.startswith("/"):
+        return "is an absolute path"
+    if "/" in name or os.sep in name or (os.altsep and os.altsep in name) or "\\" in name:
+        return "holds a path separator"
+    if name in (".", ".."):
+        return "is not a file of the folder"
+    if name.startswith("."):
+        return "starts with a dot (gyrodrift's outputs never do)"
+    return None
+
+
+def _validate_manifest(folder: Path, doc: dict[str, Any]) -> None:
+    """Raise `UntrustedManifestError` naming the manifest and the first bad entry unless every set and the
+    pending journal have the shape gyrodrift writes, every file name is a plain name of `folder` (no separator,
+    not absolute, no leading dot, no NUL) and none of them, nor a journal's temporary, is a symbolic link."""
+    path = folder / MANIFEST_NAME
+
+    def bad(where: str, why: str) -> UntrustedManifestError:
+        return UntrustedManifestError(
+            f"{os.fspath(path)}: {where} {why}; gyrodrift writes no such manifest, so it refuses the whole of it "
+            "and changes nothing in the folder: choose another --out folder (or remove the manifest if you are "
+            "sure gyrodrift's outputs in the folder can be overwritten)"
+        )
+
+    def check_entry(where: str, name: Any, entry: Any, journal: bool) -> None:
+        problem = _plain_name_problem(name)
+        if problem is not None or name == MANIFEST_NAME:
+            raise bad(f"{where} names {_shown(name)}, which", problem or "is the manifest itself")
+        if not isinstance(entry, dict):
+            raise bad(f"{where}, file {_shown(name)}:", f"is {type(entry).__name__}, not a mapping")
+        for key in ("bytes", "mtime_ns"):
+            value = entry.get(key)
+            if isinstance(value, bool) or not isinstance(value, int) or (key == "bytes" and value < 0):
+                raise bad(
+                    f"{where}, file {_shown(name)}:",
+                    f'"{key}" is {_shown(value)}, not a{" non-negative" if key == "bytes" else "n"} integer',
+                )
+        if not (isinstance(entry.get("sha256"), str) and _SHA256_RE.match(entry["sha256"])):
+            raise bad(f"{where}, file {_shown(name)}:", f'"sha256" is {_shown(entry.get("sha256"))}, not 64 hex digits')
+        names = [name]
+        if journal:
+            tmp = entry.get("tmp")
+            match = _TEMP_RE.match(tmp) if isinstance(tmp, str) and "/" not in tmp and "\0" not in tmp else None
+            if match is None or match["name"] != name or _plain_name_problem(match.string[1:]) is not None:
+                raise bad(f"{where}, file {_shown(name)}:", f'"tmp" is {_shown(tmp)}, not a temporary of that file')
+            names.append(match.string)
+        for n in names:
+            try:
+                link = stat.S_ISLNK(os.lstat(folder / n).st_mode)
+            except OSError:
+                continue
+            if link:
+                raise bad(f"{where} names {_shown(n)}, which", "is a symbolic link (gyrodrift writes no links)")
+
+    sets = doc["sets"]
+    for command, s in sets.items():
+        where = f"the set {_shown(command)}"
+        if not isinstance(s, dict):
+            raise bad(where, f"is {type(s).__name__}, not a mapping")
+        files = s.get("files")
+        if not isinstance(files, dict):
+            raise bad(where, f'has "files" {type(files).__name__}, not a mapping of file names')
+        for name, entry in files.items():
+            check_entry(where, name, entry, journal=False)
+    if "pending" in doc:
+        pending = doc["pending"]
+        where = "the pending journal"
+        if not isinstance(pending, dict):
+            raise bad(where, f"is {type(pending).__name__}, not a mapping")
+        if not isinstance(pending.get("command"), str):
+            raise bad(where, f'has "command" {_shown(pending.get("command"))}, not a command name')
+        if not isinstance(pending.get("meta"), dict):
+            raise bad(where, f'has "meta" {type(pending.get("meta")).__name__}, not a mapping')
+        files = pending.get("files")
+        if not isinstance(files, dict):
+            raise bad(where, f'has "files" {type(files).__name__}, not a mapping of file names')
+        for name, entry in files.items():
+            check_entry(where, name, entry, journal=True)
+
+
 def _read_manifest(folder: Path) -> dict[str, Any] | None:
-    """The folder's manifest, None without one; an unreadable or foreign manifest is an `OutputError`."""
+    """The folder's manifest, None without one; an unreadable or foreign manifest is an `OutputError`, one of
+    gyrodrift's format whose entries are not plain file names of the folder (or of the wrong shape) an
+    `UntrustedManifestError` (see `_validate_manifest`)."""
     path = folder / MANIFEST_NAME
     try:
-        text = path.read_text(encoding="utf-8")
+        raw = read_limited(path, MAX_MANIFEST_BYTES)
+        if len(raw) > MAX_MANIFEST_BYTES:
+            raise _fail(path, f"a manifest of gyrodrift's outputs holds at most {MAX_MANIFEST_BYTES} bytes")
+        text = raw.decode("utf-8")
     except FileNotFoundError:
         return None
+    except NotRegularFileError as exc:
+        raise _fail(path, f"{exc}; a manifest of gyrodrift's outputs is a regular file") from None
     except (OSError, UnicodeDecodeError) as exc:
+        if isinstance(exc, OutputError):
+            raise
         reason = os_error_reason(exc) if isinstance(exc, OSError) else "not UTF-8"
         raise _fail(path, f"cannot read the manifest of gyrodrift's outputs ({reason})") from None
     try:
         doc = json.loads(text)
     except (ValueError, RecursionError):
         doc = None
-    if not (isinstance(doc, dict) and doc.get("format") == MANIFEST_FORMAT and isinstance(doc.get("sets"), dict)):
+    if not (isinstance(doc, dict) and doc.get("format") == MANIFEST_FORMAT):
         raise _fail(path, f"is not a manifest of format {MANIFEST_FORMAT}; remove it only if gyrodrift wrote it")
+    if not isinstance(doc.get("sets"), dict):
+        raise UntrustedManifestError(
+            f'{os.fspath(path)}: "sets" is {type(doc.get("sets")).__name__}, not a mapping; gyrodrift writes no such '
+            "manifest, so it refuses the whole of it and changes nothing in the folder: choose another --out folder"
+        )
+    _validate_manifest(folder, doc)
     return doc
 
 
@@ -592,11 +706,15 @@ def check_complete(path: str | os.PathLike[str]) -> None:
     If `path`'s folder has a manifest and lists `path`, no publication of it may be unfinished and every file
     of its set must still be there with the size it was written with (no hashing: a loader calls this at
     every open); otherwise `OutputError` says which file and what to do. A file outside any manifest (a
-    user's file, an older gyrodrift's output) passes.
+    user's file, an older gyrodrift's output) passes, and so does a file beside an unreadable manifest or one of
+    another format; a manifest of gyrodrift's format whose entries are not plain file names of the folder (or of
+    the wrong shape) is refused (`UntrustedManifestError`).
     """
     p = Path(path)
     try:
         manifest = _read_manifest(p.parent)
+    except UntrustedManifestError:
+        raise
     except OutputError:
         return
     if manifest is None:
@@ -716,7 +834,7 @@ class OutputFolder:
         except OSError as exc:
             raise _fail(folder, os_error_reason(exc)) from None
         if not stat.S_ISDIR(st.st_mode):
-            raise _fail(folder, f"is {'a file' if stat.S_ISREG(st.st_mode) else _kind(st.st_mode)}, not a folder")
+            raise _fail(folder, f"is {'a file' if stat.S_ISREG(st.st_mode) else file_kind(st.st_mode)}, not a folder")
         manifest = _read_manifest(folder)
         owned = _owned(manifest)
         foreign = []
