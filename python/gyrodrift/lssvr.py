@@ -43,8 +43,10 @@ from the training inputs ``k -> 0`` and ``v`` grows to its prior value: the inte
 
 If the Cholesky factorisation fails (``H`` not numerically positive definite, e.g. an enormous gamma with
 a singular kernel matrix - duplicated training points - or an indefinite polynomial kernel with
-``coef0 < 0``) the functions raise :class:`NotPositiveDefiniteError` (a ``numpy.linalg.LinAlgError``,
-itself a ``ValueError``). No jitter is ever added silently: lower gamma (more regularisation) instead.
+``coef0 < 0``) the functions raise :class:`IllConditionedError` (a ``numpy.linalg.LinAlgError``,
+itself a ``ValueError``), as they do when the condition number reaches ``COND_REFUSE``: one refusal, whichever
+path a given BLAS takes (``NotPositiveDefiniteError`` is the same class).
+No jitter is ever added silently: lower gamma (more regularisation) instead.
 :func:`rbf_batch_errors` is the exception to raising: it returns rows of ``+inf`` so that a tuner survives.
 
 Prediction arithmetic (`LSSVR.predict`, and the generated C and Rust of `gyrodrift.export`, operation for
@@ -109,13 +111,6 @@ __all__ = [
 ]
 
 
-class NotPositiveDefiniteError(GyrodriftError, np.linalg.LinAlgError):
-    """``H = K + I/gamma`` is not numerically positive definite, so the LSSVM system cannot be solved.
-
-    A subclass of ``numpy.linalg.LinAlgError`` (and therefore of ``ValueError``).
-    """
-
-
 _EPS = float(np.finfo(float).eps)
 
 COND_REFUSE = 1.0 / _EPS
@@ -133,7 +128,20 @@ is not guaranteed (measured errors on the paper's runs are ~50x below the bound:
 
 
 class IllConditionedError(GyrodriftError, np.linalg.LinAlgError):
-    """``H = K + I/gamma`` is so ill-conditioned (``cond >= COND_REFUSE``) that its solution is meaningless."""
+    """``H = K + I/gamma`` cannot be solved to any digit: the one refusal of this module, whichever way it shows.
+
+    Either the Cholesky factorisation fails (``H`` not numerically positive definite: a nearly singular ``H``
+    whose rounding leaves a pivot <= 0, or an indefinite kernel) or it succeeds and the condition number
+    reaches ``COND_REFUSE``. For a nearly singular ``H`` which of the two happens depends on the last bits of
+    the BLAS (an AMD EPYC's OpenBLAS fails the factorisation of the paper's runs at gamma 1e16, sigma 100,
+    where another machine estimated cond 2.7e18), so both raise this class with one message
+    ("LSSVR: H = K + I/gamma <what> cannot be solved: <why>. <hint>"). A ``numpy.linalg.LinAlgError`` (and
+    therefore a ``ValueError``).
+    """
+
+
+NotPositiveDefiniteError = IllConditionedError
+"""The former name of the Cholesky-failure refusal: the same class as :class:`IllConditionedError`."""
 
 
 class IllConditionedWarning(UserWarning):
@@ -173,12 +181,21 @@ def check_condition(cond: float, what: str) -> None:
     ``COND_WARN``; ``what`` names the system (e.g. its gamma and sigma) in the message."""
     if not cond < COND_REFUSE:
         raise IllConditionedError(
-            f"LSSVR: H = K + I/gamma {what} has condition number {cond:.3g} >= 1/eps = {COND_REFUSE:.3g}: its "
-            "solution has no correct digit. Lower gamma (more regularisation) or sigma."
+            f"LSSVR: H = K + I/gamma {what} cannot be solved: its condition number {cond:.3g} >= 1/eps = "
+            f"{COND_REFUSE:.3g}, no digit of its solution is correct. Lower gamma (more regularisation) or sigma."
         )
     message = condition_warning_message(cond, what)
     if message:
         warnings.warn(message, IllConditionedWarning, stacklevel=3)
+
+
+def _not_positive_definite(what: str, hint: str) -> IllConditionedError:
+    """The refusal for a failed Cholesky factorisation, in the words of :func:`check_condition`'s."""
+    return IllConditionedError(
+        f"LSSVR: H = K + I/gamma {what} cannot be solved: it is not numerically positive definite (the Cholesky "
+        f"factorisation failed: its condition number is beyond 1/eps = {COND_REFUSE:.3g}, or the kernel is "
+        f"indefinite). {hint}"
+    )
 
 
 # --------------------------------------------------------------------------------------------------
@@ -286,10 +303,7 @@ def _factor_or_raise(K: np.ndarray, gamma: float, what: str) -> np.ndarray:
     anorm = _one_norm(H)
     U = _cholesky_upper(H)
     if U is None:
-        raise NotPositiveDefiniteError(
-            f"H = K + I/gamma is not positive definite {what}; the Cholesky factorisation failed. "
-            "Lower gamma (more regularisation) or use a positive semi-definite kernel."
-        )
+        raise _not_positive_definite(what, "Lower gamma (more regularisation) or use a positive semi-definite kernel.")
     check_condition(_condition_number(U, anorm), what)
     return U
 
@@ -575,7 +589,7 @@ class LSSVR(RegressorMixin, BaseEstimator):
     -----
     * Multi-output: a 2-D ``y`` of shape (n, k) is supported; the k problems share one factorisation.
     * Failure mode: if ``K + I/gamma`` is not numerically positive definite ``fit`` raises
-      :class:`NotPositiveDefiniteError` naming gamma, sigma and the kernel; no jitter is added.
+      :class:`IllConditionedError` naming gamma, sigma and the kernel; no jitter is added.
     * Cross-checks: scikit-learn ``KernelRidge(alpha=1/gamma, kernel="rbf", gamma=1/sigma^2)`` fitted on
       ``y - intercept_`` gives ``dual_coef_ == alpha_``; poly maps to ``KernelRidge(kernel="poly",
       gamma=1/sigma^2, coef0=coef0, degree=degree)``; linear to ``kernel="linear"``.
@@ -640,10 +654,10 @@ class LSSVR(RegressorMixin, BaseEstimator):
             unknown kernel, bad degree/coef0, NaN/inf, fewer than 2 samples, inconsistent lengths.
         MemoryLimitError
             The n x n matrices would not fit in the available memory (checked before allocating).
-        NotPositiveDefiniteError
-            ``K + I/gamma`` not numerically positive definite (message names gamma, sigma and kernel).
         IllConditionedError
-            ``cond(K + I/gamma) >= COND_REFUSE``; above ``COND_WARN`` an ``IllConditionedWarning`` is issued.
+            ``K + I/gamma`` not numerically positive definite, or ``cond(K + I/gamma) >= COND_REFUSE`` (one
+            class, one message naming gamma, sigma and kernel); above ``COND_WARN`` an
+            ``IllConditionedWarning`` is issued.
         NonFiniteResultError
             The kernel matrix or the solution is not finite (overflow).
         """
@@ -669,10 +683,9 @@ class LSSVR(RegressorMixin, BaseEstimator):
         anorm = _one_norm(H)
         U = _cholesky_upper(H)
         if U is None:
-            raise NotPositiveDefiniteError(
-                f"LSSVR: H = K + I/gamma is not positive definite for {self._describe()}; the Cholesky "
-                "factorisation failed. Lower gamma (more regularisation), change sigma, or remove "
-                "duplicated training samples."
+            raise _not_positive_definite(
+                f"for {self._describe()}",
+                "Lower gamma (more regularisation), change sigma, or remove duplicated training samples.",
             )
         cond = _condition_number(U, anorm)
         check_condition(cond, f"for {self._describe()}")
