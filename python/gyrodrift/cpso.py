@@ -33,6 +33,7 @@ __all__ = [
     "CPSOSolver",
     "Swarm",
     "chaos_region",
+    "check_seed",
     "logistic_chaos_points",
     "minimize_cpso",
     "pso_move",
@@ -410,7 +411,7 @@ class CPSOSolver:
         if callable(workers) and n_threads != 1:
             raise OptionError(f"give workers (a map-like callable) or threads, not both (threads={threads!r})")
 
-        self._gen = np.random.default_rng(rng)
+        self._gen = np.random.default_rng(check_seed(rng, "rng"))
         # Search space: log10 in the log-scaled dimensions, natural elsewhere.
         lo_nat, hi_nat, log_mask = self.lo_nat, self.hi_nat, self.log_mask
         self.lo = np.where(log_mask, np.log10(lo_nat, where=log_mask, out=lo_nat.copy()), lo_nat)
@@ -708,6 +709,15 @@ def _validate_log_scale(log_scale, lo: np.ndarray, hi: np.ndarray) -> np.ndarray
                 f"log_scale requires positive bounds, got ({float(lo[i])!r}, {float(hi[i])!r}) in dimension {i}"
             )
     return mask
+
+
+def check_seed(seed, name: str = "seed"):
+    """`seed` as it is if it is None or a numpy generator, seed sequence or bit generator; an integer seed must be
+    an int >= 0 (not a bool): anything else is an `OptionError` naming `name` (numpy's own refusal of -1 is a
+    ValueError deep in `SeedSequence`)."""
+    if seed is None or isinstance(seed, (np.random.Generator, np.random.SeedSequence, np.random.BitGenerator)):
+        return seed
+    return _validate_int(name, seed, minimum=0)
 
 
 def _validate_int(name: str, value, *, minimum: int) -> int:

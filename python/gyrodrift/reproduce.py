@@ -41,6 +41,7 @@ import numpy as np
 
 from gyrodrift import __version__
 from gyrodrift.baselines import fit_latitude_line, physics_inversion, position_error_of_drift_nmi
+from gyrodrift.cpso import check_seed
 from gyrodrift.datasets import load_paper
 from gyrodrift.encodings import ENCODING_DESCRIPTIONS
 from gyrodrift.model import DriftModel, fit_drift_model
@@ -172,6 +173,7 @@ def run_reproduction(seed: int = 0, quiet: bool = True) -> dict:
     Deterministic for a given ``seed`` (each tuned method derives its own generator from it). Tuned values on
     the edge of their search box are recorded per method (``on_search_bound``) instead of warned about.
     """
+    seed = check_seed(seed, "seed")  # an int >= 0, before any work
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SearchBoundWarning)
         return _run_reproduction(seed, quiet)
@@ -373,6 +375,7 @@ def reproduce(out_dir="gyrodrift-reproduce", seed: int = 0, quiet: bool = False)
     from gyrodrift import report
     from gyrodrift.atomic import output_folder, write_json
 
+    seed = check_seed(seed, "seed")
     out = output_folder(out_dir, "reproduce", report.REPORT_FILES)
     results = run_reproduction(seed=seed, quiet=quiet)
     with out.publish() as stage:

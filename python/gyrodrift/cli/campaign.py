@@ -8,7 +8,7 @@ from pathlib import Path
 import click
 
 from gyrodrift.cli.options import json_option, print_json, quiet_option, say_wrote
-from gyrodrift.cli.types import FiniteFloat
+from gyrodrift.cli.types import FiniteFloat, Seed
 
 __all__ = ["COMMANDS", "campaign_command", "study_command"]
 
@@ -118,6 +118,25 @@ def campaign_command(source, out, workers, scheduler, connect_timeout_s, limit, 
     )
     if summary.interrupted:
         click.get_current_context().exit(130)  # the shell's code for a SIGINT; the runs in progress were committed
+    _check_failures(summary, out)
+
+
+def _check_failures(summary, out) -> None:
+    """Every run of the store failed (or was lost): `CampaignFailedError` (one line, exit 1); some runs failed
+    now: one line on stderr saying how many and the first error."""
+    from gyrodrift.campaign import CampaignFailedError
+
+    tried = summary.skipped + summary.done + summary.lost
+    first = f"; first error: {summary.first_error}" if summary.first_error else ""
+    if tried and summary.succeeded == 0:
+        lost = f", {summary.lost} lost to the workers" if summary.lost else ""
+        raise CampaignFailedError(
+            f"{out}: every run failed ({summary.failed_before + summary.failed} of {tried} with an error{lost})"
+            + (first or " (their errors are in the store)")
+        )
+    if summary.failed or summary.lost:
+        lost = f"; {summary.lost} not committed (workers lost; rerun to resume)" if summary.lost else ""
+        click.echo(f"campaign: {summary.failed} of {summary.done} run(s) failed now{lost}{first}", err=True)
 
 
 def _export(campaign, index: int, out, quiet: bool, as_json: bool) -> None:
@@ -148,7 +167,7 @@ def _export(campaign, index: int, out, quiet: bool, as_json: bool) -> None:
     show_default=True,
     help="Share of the runs held out [fraction of 1] (chosen by run, seeded).",
 )
-@click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Seed of the split and tuners.")
+@click.option("--seed", type=Seed(), default=0, show_default=True, help="Seed of the split and tuners.")
 @click.option(
     "--max-iter", type=click.IntRange(min=1), default=60, show_default=True, help="CPSO/PSO iterations per fit."
 )

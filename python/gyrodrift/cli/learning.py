@@ -21,7 +21,7 @@ from gyrodrift.choices import (
 )
 from gyrodrift.cli.errors import write_stdout
 from gyrodrift.cli.options import json_option, print_json, quiet_option, say_wrote
-from gyrodrift.cli.types import FiniteFloat
+from gyrodrift.cli.types import FiniteFloat, Seed
 
 PREDICTIONS_HEADERS = ("run,drift_identified_deg_h", '{"run": ')
 """How a predictions file written by `predict --out` starts (CSV header, JSON line): the only existing files
@@ -164,7 +164,11 @@ _split_option = click.option(
     "Default: tuned.",
 )
 @click.option(
-    "--seed", type=int, default=0, show_default=True, help="Seed of the swarm (an integer); same seed, same model."
+    "--seed",
+    type=Seed(),
+    default=0,
+    show_default=True,
+    help="Seed of the swarm (an integer >= 0); same seed, same model.",
 )
 @_lat0_option
 @_split_option
@@ -415,7 +419,11 @@ def predict(data, model_file, out, coverage, lat0_deg, split, as_json, fmt, quie
     "gyrodrift's outputs (published together; docs/outputs.md).",
 )
 @click.option(
-    "--seed", type=int, default=0, show_default=True, help="Seeds every swarm (an integer); same seed, same results."
+    "--seed",
+    type=Seed(),
+    default=0,
+    show_default=True,
+    help="Seeds every swarm (an integer >= 0); same seed, same results.",
 )
 @json_option
 @quiet_option

@@ -15,7 +15,7 @@ from gyrodrift.cli.options import (
     site_from_options,
     site_options,
 )
-from gyrodrift.cli.types import FiniteFloat
+from gyrodrift.cli.types import FiniteFloat, Seed
 
 __all__ = ["simulate_command", "navigate_command"]
 
@@ -41,7 +41,7 @@ __all__ = ["simulate_command", "navigate_command"]
 )
 @click.option(
     "--seed",
-    type=click.IntRange(min=0),
+    type=Seed(),
     default=None,
     help="Seed of the sensor noise (an integer >= 0), over [run] seed. Default: the scenario's.",
 )

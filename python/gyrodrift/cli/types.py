@@ -6,7 +6,10 @@ import math
 
 import click
 
-__all__ = ["FiniteFloat"]
+__all__ = ["FiniteFloat", "MAX_SEED", "Seed"]
+
+MAX_SEED = 2**64 - 1
+"""Largest seed [-]: the Rust core's seeds are unsigned 64-bit integers; numpy's take any integer >= 0."""
 
 
 class FiniteFloat(click.ParamType):
@@ -49,3 +52,15 @@ class FiniteFloat(click.ParamType):
 
     def __repr__(self) -> str:
         return f"FiniteFloat{self._range()}"
+
+
+class Seed(click.IntRange):
+    """A seed: an integer in [0, 2**64 - 1] (numpy's `SeedSequence` refuses negative ones, the Rust core takes
+    unsigned 64-bit ones). Every ``--seed`` of the CLI has this type; a refused value is click's usage error
+    naming the option (``Invalid value for '--seed': -1 is not in the range 0<=x<=18446744073709551615``),
+    exit status 2."""
+
+    name = "seed"
+
+    def __init__(self) -> None:
+        super().__init__(min=0, max=MAX_SEED)
