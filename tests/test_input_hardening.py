@@ -58,3 +58,23 @@ def test_a_library_seed_is_an_int_at_least_zero():
         run_reproduction(seed=-1)
     with pytest.raises(OptionError, match="seed must be an int >= 0, got -1"):
         reproduce("never-created", seed=-1)
+
+
+# --- schema versions --------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("version", [True, 1.0, "1", 4.0])
+def test_a_schema_version_that_is_not_an_integer_is_named_as_such(tmp_path, version):
+    """`"schema_version": true` was reported as a schema-1 file (True == 1 in Python); 4.0 was read as 4."""
+    import json
+
+    from gyrodrift.model_io import ModelFileError, load_model
+
+    path = tmp_path / "m.json"
+    path.write_text(json.dumps({"format": "gyrodrift-drift-model", "schema_version": version}))
+    with pytest.raises(ModelFileError) as info:
+        load_model(path)
+    message = str(info.value)
+    assert f"schema_version {version!r} is not supported" in message and "schema 1" not in message
+    result = _run(["predict", tmp_path / "runs.csv", "--model", path])
+    assert result.exit_code == 1 and f"schema_version {version!r} is not supported" in _error_line(result)

@@ -299,7 +299,7 @@ def model_from_dict(doc: dict, where: str = "<model>") -> DriftModel:
         raise ModelFileError(f"{where}: not a gyrodrift model file (format is not {FORMAT!r})")
     _refuse_huge_ints(doc, where)
     version = doc.get("schema_version")
-    if version == 1:
+    if type(version) is int and version == 1:  # not True or 1.0: a schema version is an integer
         training = doc.get("training")
         source = training.get("source", "its training table") if isinstance(training, dict) else "its training table"
         raise ModelFileError(
@@ -307,7 +307,7 @@ def model_from_dict(doc: dict, where: str = "<model>") -> DriftModel:
             f"runs), which this version ({__version__}) no longer reads; refit it with `gyrodrift fit` on "
             f"{source} (the same --encoding, --scaling and --seed give the same model)"
         )
-    if isinstance(version, bool) or version not in READABLE_SCHEMAS:
+    if type(version) is not int or version not in READABLE_SCHEMAS:
         raise ModelFileError(
             f"{where}: schema_version {version!r} is not supported by gyrodrift {__version__} "
             f"(expected one of {', '.join(map(str, READABLE_SCHEMAS))})"
