@@ -18,6 +18,7 @@ from gyrodrift.kernels import kernel_matrix, squared_distances
 from gyrodrift.lssvr import (
     LSSVR,
     NotPositiveDefiniteError,
+    RBFEigenSystem,
     lssvr_loo_residuals,
     lssvr_solve,
     rbf_batch_errors,
@@ -231,6 +232,58 @@ def test_rbf_batch_errors_equal_per_candidate_fits(kind, n):
         else:  # brute force for a few candidates, the (separately verified) closed form for the rest
             expected = brute_force_loo(model, X, y) if j < 3 else model.loo_residuals()
         assert rel_err(E[j], expected) < 1e-8, (j, g, s)
+
+
+@pytest.mark.parametrize("weighted", [False, True])
+@pytest.mark.parametrize("sigma", [0.3, 1.0])
+def test_eigen_system_equals_the_cholesky_path_and_kernel_ridge_for_every_gamma(sigma, weighted):
+    """One eigendecomposition per sigma gives, for every gamma, what one Cholesky factor per candidate gives: alpha
+    and b (scikit-learn's KernelRidge on y - b as the oracle, unweighted), LOO residuals and scales (LSSVR), the
+    training residuals; within 1e-8 relative (both backward stable; these systems have cond <= 1e6)."""
+    X, y = make_data(n=40, seed=21)
+    w = np.random.default_rng(3).uniform(0.3, 3.0, 40) if weighted else None
+    gammas = np.array([0.1, 3.0, 100.0, 1e4])
+    system = RBFEigenSystem(squared_distances(X), sigma, w)
+    alpha, b, _, _, _ = system.solve(gammas, y)
+    loo, train = system.errors(gammas, y, "loo"), system.errors(gammas, y, "train")
+    for j, g in enumerate(gammas):
+        model = LSSVR(gamma=g, sigma=sigma).fit(X, y, sample_weight=w)
+        assert model.condition_number_ < 1e6 and system.cond_bound([g])[0] >= model.condition_number_
+        assert rel_err(alpha[j], model.alpha_) < 1e-8 and b[j] == pytest.approx(model.intercept_, rel=1e-8)
+        assert rel_err(loo[j], model.loo_residuals_) < 1e-8
+        assert rel_err(train[j], y - model.predict(X)) < 1e-8
+        residuals, scale = system.loo(g, y)
+        assert rel_err(residuals, model.loo_residuals_) < 1e-8 and rel_err(scale, model.loo_scale_) < 1e-8
+        if not weighted:
+            kr = KernelRidge(alpha=1.0 / g, kernel="rbf", gamma=1.0 / sigma**2).fit(X, y - b[j])
+            assert rel_err(alpha[j], kr.dual_coef_) < 1e-8
+
+
+@pytest.mark.parametrize("weighted", [False, True])
+def test_eigen_fold_residuals_equal_refits_without_the_fold(weighted):
+    X, y = make_data(n=30, seed=22)
+    w = np.random.default_rng(4).uniform(0.3, 3.0, 30) if weighted else None
+    folds = np.arange(30) % 4
+    got = RBFEigenSystem(squared_distances(X), 0.7, w).fold_residuals(50.0, y, folds)
+    for f in range(4):
+        train = folds != f
+        model = LSSVR(gamma=50.0, sigma=0.7).fit(X[train], y[train], sample_weight=None if w is None else w[train])
+        assert rel_err(got[~train], y[~train] - model.predict(X[~train])) < 1e-8
+    loo = RBFEigenSystem(squared_distances(X), 0.7, w).fold_residuals(50.0, y, np.arange(30))
+    assert rel_err(loo, LSSVR(gamma=50.0, sigma=0.7).fit(X, y, sample_weight=w).loo_residuals_) < 1e-8
+    with pytest.raises(ValueError, match="at least 2 samples"):
+        RBFEigenSystem(squared_distances(X), 0.7).fold_residuals(50.0, y, np.r_[np.zeros(29), 1])
+
+
+def test_candidates_sharing_a_sigma_come_from_one_eigendecomposition_with_the_same_values():
+    """n > 32: a group of candidates on one sigma (a grid's column, particles on a bound) takes the eigen path; its
+    rows equal per-candidate fits, a non-PD candidate in the group still gives +inf."""
+    X, y = make_data(n=40, seed=23)
+    gammas = np.r_[10.0 ** np.arange(-1, 5), 1e17]
+    E = rbf_batch_errors(squared_distances(X), y, gammas, 1e3, "loo")
+    assert np.all(np.isinf(E[-1])) and np.all(np.isfinite(E[:-1]))
+    for j, g in enumerate(gammas[:-1]):
+        assert rel_err(E[j], LSSVR(gamma=g, sigma=1e3).fit(X, y).loo_residuals_) < 1e-6, g
 
 
 def test_rbf_batch_fitness_is_the_papers_mean_absolute_error():

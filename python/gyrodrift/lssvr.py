@@ -104,6 +104,7 @@ __all__ = [
     "IllConditionedWarning",
     "NonFiniteResultError",
     "NotPositiveDefiniteError",
+    "RBFEigenSystem",
     "lssvr_solve",
     "lssvr_loo_residuals",
     "rbf_batch_errors",
@@ -512,12 +513,19 @@ def _rbf_batch_stacked(D, y, g, sg, kind, w=None):
 
 
 def _rbf_batch_loop(D, y, g, sg, kind, w=None):
-    """Candidate by candidate with LAPACK ``dpotrf``/``dpotrs``/``dtrtri``; non-PD rows are +inf."""
+    """Candidate by candidate with LAPACK ``dpotrf``/``dpotrs``/``dtrtri``; non-PD rows are +inf. Candidates sharing
+    one sigma, ``EIG_MIN_GROUP`` or more of them, come from one :class:`RBFEigenSystem` instead."""
     n = D.shape[0]
     out = np.empty((g.size, n))
     B = np.column_stack([np.ones(n), y])
     diag = np.arange(n) * (n + 1)
-    for j in range(g.size):
+    values, inverse, counts = np.unique(sg, return_inverse=True, return_counts=True)
+    alone = np.ones(g.size, dtype=bool)
+    for k in np.flatnonzero(counts >= EIG_MIN_GROUP):
+        rows = np.flatnonzero(inverse == k)
+        out[rows] = RBFEigenSystem(D, float(values[k]), w).errors(g[rows], y, kind)
+        alone[rows] = False
+    for j in np.flatnonzero(alone):
         H = rbf_from_squared_distances(D, sg[j])
         H.flat[diag] += 1.0 / g[j] if w is None else 1.0 / (g[j] * w)
         anorm = _one_norm(H)
@@ -534,6 +542,145 @@ def _rbf_batch_loop(D, y, g, sg, kind, w=None):
         else:
             out[j] = _loo_from_factor(U, alpha, p, s)
     return out
+
+
+# --------------------------------------------------------------------------------------------------
+# One eigendecomposition per sigma, every gamma from it (the tuner's grid, fold scores at fixed hyperparameters)
+# --------------------------------------------------------------------------------------------------
+
+#: Smallest number of candidates sharing one sigma for which :func:`rbf_batch_errors` (n > 32) takes them from
+#: one eigendecomposition instead of one Cholesky factor each: ``eigh`` costs about 4-5 factorisations with their
+#: triangular inverse (measured at n = 200 and 1000, one BLAS thread; ``benchmarks/bench_tuning.py``).
+EIG_MIN_GROUP = 6
+
+
+class RBFEigenSystem:
+    """The RBF LSSVM of one kernel width for every gamma, from one eigendecomposition (weighted or not).
+
+    With sample weights ``w`` (all 1 when None) ``H = K + diag(1/(gamma w))``; with ``S = diag(sqrt(w))``,
+    ``H = S^-1 (S K S + I/gamma) S^-1`` and ``S K S = V diag(lam) V'`` (LAPACK ``dsyevd`` via ``numpy.linalg.eigh``,
+    O(n^3) once), so for any gamma ``H^-1 = S V diag(d) V' S`` with ``d = 1/(lam + 1/gamma)``: the bordered
+    system's ``p = H^-1 1``, ``q = H^-1 y``, ``alpha``, ``b`` and ``diag(H^-1)`` (hence the closed-form LOO
+    residuals of the module docstring) cost O(n^2) per gamma (matrix products when several gammas are asked at
+    once). ``H`` is positive definite iff every ``lam + 1/gamma > 0``.
+
+    Condition number: ``cond_bound(gamma)`` is an upper bound of the 1-norm condition number of ``H`` (the one
+    ``LSSVR.fit`` estimates with ``dpocon``, which never exceeds the exact one): ``||H||_1`` exactly (column sums
+    of ``K`` plus the diagonal term) times ``sqrt(n) ||H^-1||_2 <= sqrt(n) max(w) max(d)``. So a candidate this
+    class keeps (bound < ``COND_REFUSE``) is never refused by the final fit; it may refuse a candidate whose
+    exact 1-norm condition number is up to ``sqrt(n) max(w)/min(w)`` times lower, i.e. only at condition
+    numbers beyond 1e12 (gamma > ~1e12 with a nearly singular kernel): far outside the default search box.
+
+    Agreement with the Cholesky path (``lssvr_solve``, ``lssvr_loo_residuals``, ``LSSVR``): both are backward
+    stable, so they agree to about ``cond(H) * eps`` relative (tests: 1e-8 relative at cond <= 1e6).
+
+    Parameters
+    ----------
+    sqdist : array_like, shape (n, n)
+        Squared distances of the scaled training inputs (``squared_distances``), n >= 2.
+    sigma : float
+        RBF width, scaled input units.
+    weights : array_like, shape (n,), optional
+        Sample weights > 0 (``check_sample_weight``).
+    """
+
+    def __init__(self, sqdist, sigma: float, weights=None) -> None:
+        D = np.asarray(sqdist, dtype=float)
+        n = D.shape[0]
+        self.sigma = check_sigma(sigma)
+        self.weights = check_sample_weight(weights, n)
+        self.n = n
+        K = rbf_from_squared_distances(D, self.sigma)
+        self._colsum = K.sum(axis=0) - 1.0  # K >= 0 with a unit diagonal: ||H||_1 = max(colsum + 1 + 1/(gamma w))
+        sw = np.ones(n) if self.weights is None else np.sqrt(self.weights)
+        if self.weights is not None:
+            K *= sw[:, None]
+            K *= sw[None, :]
+        self.lam, V = np.linalg.eigh(K)
+        self._sw = sw
+        self._V = V
+        self._V2 = V * V
+        self._c1 = V.T @ sw  # V' S 1
+
+    def _d(self, gammas: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(d, ok)``: ``1/(lam + 1/gamma)`` as an (n, m) array and which gammas give a positive definite H."""
+        shifted = self.lam[:, None] + 1.0 / gammas[None, :]
+        ok = np.all(shifted > 0.0, axis=0)
+        with np.errstate(divide="ignore"):
+            d = np.where(shifted > 0.0, 1.0 / np.where(shifted > 0.0, shifted, 1.0), 0.0)
+        return d, ok
+
+    def cond_bound(self, gammas) -> np.ndarray:
+        """Upper bound of the 1-norm condition number of ``H`` for each gamma (class docstring); inf when not PD."""
+        g = np.atleast_1d(np.asarray(gammas, dtype=float))
+        w = np.ones(self.n) if self.weights is None else self.weights
+        anorm = np.max(self._colsum[None, :] + 1.0 + 1.0 / (g[:, None] * w[None, :]), axis=1)
+        shifted = self.lam.min() + 1.0 / g
+        with np.errstate(divide="ignore"):
+            inv_norm = np.where(shifted > 0.0, np.max(w) / np.where(shifted > 0.0, shifted, 1.0), np.inf)
+        return anorm * math.sqrt(self.n) * inv_norm
+
+    def solve(self, gammas, y):
+        """``(alpha, b, hinv_diag, p, s)`` for each gamma: alpha, diag(H^-1), p of shape (m, n); b, s of shape (m,).
+
+        Rows of gammas whose ``H`` is not positive definite are NaN."""
+        g = np.atleast_1d(np.asarray(gammas, dtype=float))
+        y = np.asarray(y, dtype=float)
+        d, ok = self._d(g)
+        V, sw = self._V, self._sw
+        cy = V.T @ (sw * y)
+        c1 = self._c1
+        s = c1**2 @ d  # 1' H^-1 1
+        b = (c1 * cy) @ d / s
+        p = sw[:, None] * (V @ (c1[:, None] * d))  # (n, m)
+        alpha = sw[:, None] * (V @ ((cy[:, None] - c1[:, None] * b[None, :]) * d))
+        hinv_diag = (sw * sw)[:, None] * (self._V2 @ d)
+        out = alpha.T, b, hinv_diag.T, p.T, s
+        for a in out:
+            a[~ok] = np.nan
+        return out
+
+    def errors(self, gammas, y, kind: str = "loo") -> np.ndarray:
+        """Per-sample errors (observed minus predicted) of each gamma, shape (m, n): ``"loo"`` the closed-form
+        leave-one-out residuals, ``"train"`` the training residuals ``alpha / (gamma w)``; rows of gammas whose H is
+        not positive definite or whose ``cond_bound`` reaches ``COND_REFUSE`` are +inf (as ``rbf_batch_errors``)."""
+        g = np.atleast_1d(np.asarray(gammas, dtype=float))
+        alpha, _, hinv_diag, p, s = self.solve(g, y)
+        if kind == "train":
+            w = 1.0 if self.weights is None else self.weights[None, :]
+            out = alpha / (g[:, None] * w)
+        else:
+            out = alpha / (hinv_diag - p * p / s[:, None])
+        out[~(self.cond_bound(g) < COND_REFUSE)] = np.inf
+        out[~np.all(np.isfinite(out), axis=1)] = np.inf
+        return out
+
+    def loo(self, gamma: float, y) -> tuple[np.ndarray, np.ndarray]:
+        """``(residuals, loo_scale)`` of one gamma: the closed-form LOO residuals [unit of y] and the LOO predictive
+        scale ``1/sqrt((H^-1)_ii - p_i^2/s)`` [prior std units], as ``LSSVR.loo_residuals_`` and ``loo_scale_``."""
+        alpha, _, hinv_diag, p, s = self.solve([gamma], y)
+        denom = hinv_diag[0] - p[0] ** 2 / s[0]
+        return alpha[0] / denom, 1.0 / np.sqrt(np.maximum(denom, np.finfo(float).tiny))
+
+    def fold_residuals(self, gamma: float, y, folds) -> np.ndarray:
+        """Held-out residuals ``y_S - f_(-S)(x_S)`` of each fold S (an array of fold labels, one per sample) of the
+        LSSVM refitted without S at the same gamma and sigma, in closed form: ``e_S = C_SS^-1 alpha_S`` with
+        ``C = H^-1 - p p'/s`` (the alpha block of the bordered inverse; An, Liu & Venkatesh 2007). O(n^3) once
+        for ``C``, then one small solve per fold; equals refits to rounding (tested)."""
+        folds = np.asarray(folds)
+        if folds.shape != (self.n,):
+            raise ValueError(f"folds must hold one label per sample, shape ({self.n},), got {folds.shape}")
+        alpha, _, _, p, s = self.solve([gamma], y)
+        d, _ = self._d(np.array([float(gamma)]))
+        SV = self._sw[:, None] * self._V
+        C = (SV * d[:, 0]) @ SV.T - np.outer(p[0], p[0]) / s[0]
+        out = np.empty(self.n)
+        for label in np.unique(folds):
+            idx = np.flatnonzero(folds == label)
+            if self.n - idx.size < 2:
+                raise ValueError("a fold must leave at least 2 samples in training")
+            out[idx] = np.linalg.solve(C[np.ix_(idx, idx)], alpha[0, idx])
+        return out
 
 
 # --------------------------------------------------------------------------------------------------
