@@ -2,6 +2,11 @@
 before the work, misleading messages. Each case: exit status != 0, one line (or click's usage error), no
 Python traceback, nothing outside the folder touched."""
 
+import contextlib
+import os
+import signal
+from pathlib import Path
+
 import pytest
 from click.testing import CliRunner
 
@@ -78,3 +83,110 @@ def test_a_schema_version_that_is_not_an_integer_is_named_as_such(tmp_path, vers
     assert f"schema_version {version!r} is not supported" in message and "schema 1" not in message
     result = _run(["predict", tmp_path / "runs.csv", "--model", path])
     assert result.exit_code == 1 and f"schema_version {version!r} is not supported" in _error_line(result)
+
+
+# --- inputs that are not regular files ----------------------------------------------------------------------
+
+# Every input a command reads, with X in its place (other inputs may be missing: the type refuses X first).
+INPUTS = {
+    "simulate SCENARIO": ["simulate", "X", "--out", "o"],
+    "fit DATA": ["fit", "X", "--out", "o.json"],
+    "predict DATA": ["predict", "X", "--model", "m.json"],
+    "predict --model": ["predict", "r.csv", "--model", "X"],
+    "export --model": ["export", "--model", "X", "--out", "o"],
+    "navigate LOG": ["navigate", "X", "--out", "o"],
+    "navigate --format": ["navigate", "l.csv", "--format", "X", "--out", "o"],
+    "features LOGS": ["features", "l.parquet", "X", "--out", "o.csv"],
+    "truth LOG": ["truth", "X"],
+    "truth --noise": ["truth", "l.parquet", "--noise", "X"],
+    "evaluate LOG": ["evaluate", "X", "--model", "m.json", "--out", "o"],
+    "evaluate --model": ["evaluate", "l.parquet", "--model", "X", "--out", "o"],
+    "evaluate --reference": ["evaluate", "l.parquet", "--model", "m.json", "--reference", "X", "--out", "o"],
+    "identify LOG": ["identify", "X", "--model", "m.json"],
+    "identify --model": ["identify", "l.parquet", "--model", "X"],
+    "allan LOG": ["allan", "X", "--out", "o"],
+    "campaign SOURCE": ["campaign", "X", "--out", "o"],
+}
+
+
+@pytest.fixture
+def specials(tmp_path):
+    """A FIFO, a listening socket's path, a directory, and the two endless devices."""
+    import socket
+
+    os.mkfifo(tmp_path / "fifo")
+    sock = socket.socket(socket.AF_UNIX)
+    sock.bind(str(tmp_path / "sock"))
+    (tmp_path / "dir").mkdir()
+    yield {
+        "fifo": (tmp_path / "fifo", "is a FIFO, not a regular file"),
+        "socket": (tmp_path / "sock", "is a socket, not a regular file"),
+        "dev/zero": (Path("/dev/zero"), "is a device, not a regular file"),
+        "dev/urandom": (Path("/dev/urandom"), "is a device, not a regular file"),
+        "directory": (tmp_path / "dir", "is a directory; expected a file"),
+    }
+    sock.close()
+
+
+@contextlib.contextmanager
+def _deadline(seconds):
+    """Fail instead of hanging for ever (a FIFO read blocks until someone writes)."""
+
+    def alarm(signum, frame):
+        raise TimeoutError(f"blocked for {seconds} s")
+
+    old = signal.signal(signal.SIGALRM, alarm)
+    signal.alarm(seconds)
+    try:
+        yield
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, old)
+
+
+@pytest.mark.parametrize("command", list(INPUTS))
+def test_every_input_refuses_devices_fifos_sockets_and_folders_before_any_work(
+    tmp_path, monkeypatch, specials, command
+):
+    monkeypatch.chdir(tmp_path)
+    for kind, (path, reason) in specials.items():
+        if kind == "directory" and command == "campaign SOURCE":
+            continue  # a campaign folder is a valid source
+        args = [str(path) if a == "X" else a for a in INPUTS[command]]
+        with _deadline(30):
+            result = _run(args)
+        assert result.exit_code == 2, (kind, result.output)
+        line = _error_line(result)
+        assert "Invalid value for" in line and f"{path} {reason}" in line, (kind, line)
+        assert not (tmp_path / "o").exists() and not (tmp_path / "o.csv").exists()
+    assert (tmp_path / "fifo").is_fifo()
+
+
+def test_a_study_folder_that_is_a_fifo_or_a_file_is_refused(tmp_path, specials):
+    for path in (specials["fifo"][0], Path("/dev/zero")):
+        result = _run(["study", path, "--out", tmp_path / "s"])
+        assert result.exit_code == 2 and f"{path} is not a folder" in _error_line(result)
+
+
+@pytest.mark.parametrize("kind", ["fifo", "dev/zero", "dev/urandom", "directory"])
+def test_read_toml_refuses_non_regular_files_without_reading_them(kind, specials):
+    from gyrodrift.toml_input import read_toml
+
+    path, _ = specials[kind]
+    with _deadline(30), pytest.raises(ValueError, match=r"is a (FIFO|device|directory), not a regular file"):
+        read_toml(path, ValueError, expected="a scenario TOML file")
+
+
+def test_read_toml_reads_at_most_its_limit_plus_one_byte(tmp_path, monkeypatch):
+    """An oversized file is refused after reading max_bytes + 1 bytes, not all of it."""
+    from gyrodrift import input_files
+    from gyrodrift.toml_input import read_toml
+
+    path = tmp_path / "big.toml"
+    path.write_bytes(b"#" * 10_000)
+    seen = []
+    real_read = os.read
+    monkeypatch.setattr(input_files.os, "read", lambda fd, n: seen.append(n) or real_read(fd, n))
+    with pytest.raises(ValueError, match="more than 100 bytes; a scenario holds at most 100"):
+        read_toml(path, ValueError, expected="a scenario", max_bytes=100)
+    assert sum(seen) == 101

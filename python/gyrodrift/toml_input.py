@@ -1,6 +1,7 @@
 """Reading a user's TOML file (scenario, campaign, log format, noise model) with one-line errors.
 
-Every TOML file gyrodrift reads goes through `read_toml`: a missing or unreadable file, an oversized file, bytes
+Every TOML file gyrodrift reads goes through `read_toml`: a missing or unreadable file, a directory, device, FIFO or
+socket (refused without blocking or reading it), an oversized file (at most ``max_bytes + 1`` bytes are read), bytes
 that are not UTF-8, invalid TOML, integers beyond Python's digit limit and tables nested too deeply all become
 the caller's error class with a message that starts with the file name. What the keys mean is the caller's job.
 """
@@ -10,8 +11,9 @@ from __future__ import annotations
 import os
 import tomllib
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
+
+from gyrodrift.input_files import NotRegularFileError, read_limited
 
 __all__ = ["read_toml", "MAX_TOML_BYTES"]
 
@@ -41,15 +43,17 @@ def read_toml(
     """
     source = str(path)
     try:
-        raw = Path(path).read_bytes()
+        raw = read_limited(path, max_bytes)
     except FileNotFoundError:
         raise error(f"{source}: no such file") from None
-    except IsADirectoryError:
-        raise error(f"{source}: a directory (expected {expected})") from None
+    except NotRegularFileError as exc:
+        raise error(f"{source}: {exc} (expected {expected})") from None
     except OSError as exc:
         raise error(f"{source}: cannot read: {exc.strerror or exc}") from None
+    except ValueError:  # a NUL in the name
+        raise error(f"{source}: not a valid file name (expected {expected})") from None
     if len(raw) > max_bytes:
-        raise error(f"{source}: {len(raw)} bytes; {expected} holds at most {max_bytes}")
+        raise error(f"{source}: more than {max_bytes} bytes; {expected} holds at most {max_bytes}")
     try:
         return tomllib.loads(raw.decode("utf-8"))
     except UnicodeDecodeError as exc:

@@ -8,7 +8,7 @@ from pathlib import Path
 import click
 
 from gyrodrift.cli.options import json_option, print_json, quiet_option, say_wrote
-from gyrodrift.cli.types import FiniteFloat, Seed
+from gyrodrift.cli.types import FiniteFloat, InputPath, Seed
 
 __all__ = ["COMMANDS", "campaign_command", "study_command"]
 
@@ -18,7 +18,7 @@ __all__ = ["COMMANDS", "campaign_command", "study_command"]
     epilog="Examples: gyrodrift campaign examples/campaigns/default.toml --out fleet --workers 2 ; "
     "gyrodrift campaign fleet --run-table runs.csv ; gyrodrift campaign fleet --export-log 7 --out run7",
 )
-@click.argument("source", type=click.Path(exists=True, path_type=Path))
+@click.argument("source", type=InputPath(exists=True, dir_okay=True, path_type=Path))
 @click.option(
     "--out",
     type=click.Path(path_type=Path),
@@ -134,7 +134,7 @@ def _export(campaign, index: int, out, quiet: bool, as_json: bool) -> None:
 
 
 @click.command("study", epilog="Example: gyrodrift study fleet --out study --test-fraction 0.3 --seed 1")
-@click.argument("folder", type=click.Path(exists=True, file_okay=False, path_type=Path))
+@click.argument("folder", type=InputPath(exists=True, dir_okay=True, file_okay=False, path_type=Path))
 @click.option(
     "--out",
     required=True,

@@ -7,6 +7,7 @@ from pathlib import Path
 import click
 
 from gyrodrift.cli.options import json_option, print_json, quiet_option, say_wrote
+from gyrodrift.cli.types import InputPath
 
 
 @click.command("export", epilog="Example: gyrodrift export --model model.json --lang c --out nav")
@@ -14,7 +15,7 @@ from gyrodrift.cli.options import json_option, print_json, quiet_option, say_wro
     "--model",
     "model_file",
     required=True,
-    type=click.Path(dir_okay=False, path_type=Path),
+    type=InputPath(path_type=Path),
     help="Drift model file (JSON, from `gyrodrift fit`). Required.",
 )
 @click.option(

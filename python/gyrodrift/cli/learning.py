@@ -21,7 +21,7 @@ from gyrodrift.choices import (
 )
 from gyrodrift.cli.errors import write_stdout
 from gyrodrift.cli.options import json_option, print_json, quiet_option, say_wrote
-from gyrodrift.cli.types import FiniteFloat, Seed
+from gyrodrift.cli.types import FiniteFloat, InputPath, Seed
 
 PREDICTIONS_HEADERS = ("run,drift_identified_deg_h", '{"run": ')
 """How a predictions file written by `predict --out` starts (CSV header, JSON line): the only existing files
@@ -78,7 +78,7 @@ _split_option = click.option(
 
 
 @click.command(epilog="Example: gyrodrift fit runs.csv --split train --out model.json")
-@click.argument("data", type=click.Path(dir_okay=False))
+@click.argument("data", type=InputPath())
 @click.option(
     "--out",
     "out",
@@ -308,12 +308,12 @@ def fit(
 
 
 @click.command(epilog="Example: gyrodrift predict runs.csv --model model.json --coverage 0.9")
-@click.argument("data", type=click.Path(dir_okay=False))
+@click.argument("data", type=InputPath())
 @click.option(
     "--model",
     "model_file",
     required=True,
-    type=click.Path(dir_okay=False),
+    type=InputPath(),
     help="Drift model file (JSON, from `gyrodrift fit`). Required.",
 )
 @click.option(

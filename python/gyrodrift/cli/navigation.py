@@ -15,7 +15,7 @@ from gyrodrift.cli.options import (
     site_from_options,
     site_options,
 )
-from gyrodrift.cli.types import FiniteFloat, Seed
+from gyrodrift.cli.types import FiniteFloat, InputPath, Seed
 
 __all__ = ["simulate_command", "navigate_command"]
 
@@ -24,7 +24,7 @@ __all__ = ["simulate_command", "navigate_command"]
     "simulate",
     epilog="Example: gyrodrift simulate examples/scenarios/tour.toml --seed 2 --duration-h 20 --out sim",
 )
-@click.argument("scenario_toml", metavar="SCENARIO.toml", type=click.Path(path_type=Path))
+@click.argument("scenario_toml", metavar="SCENARIO.toml", type=InputPath(path_type=Path))
 @click.option(
     "--out",
     "out_dir",
@@ -120,7 +120,7 @@ _INITIAL_WORDS = {
     "navigate",
     epilog="Example: gyrodrift navigate sim/imu.parquet --hours 12 --drift-deg-h 0.0038 --out nav",
 )
-@click.argument("log", metavar="LOG", type=click.Path(path_type=Path))
+@click.argument("log", metavar="LOG", type=InputPath(path_type=Path))
 @click.option(
     "--hours",
     type=FiniteFloat(min=0.0, min_open=True),

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import click
 
-from gyrodrift.cli.types import FiniteFloat
+from gyrodrift.cli.types import FiniteFloat, InputPath
 
 __all__ = [
     "site_options",
@@ -65,7 +65,7 @@ def log_format_option(f):
     return click.option(
         "--format",
         "log_format",
-        type=click.Path(dir_okay=False, path_type=Path),
+        type=InputPath(path_type=Path),
         default=None,
         help="Log format file (TOML) describing the log's own columns, units, axes, time stamps and CSV "
         "delimiter (docs/procedure.md, 'Logs in their own format'; examples/logs/). Default: the native columns "
@@ -95,7 +95,7 @@ def noise_options(f):
     return click.option(
         "--noise",
         "noise_file",
-        type=click.Path(dir_okay=False, path_type=Path),
+        type=InputPath(path_type=Path),
         default=None,
         help="Noise file (TOML): [gyro] arw_deg_rth, [accel] vrw_ug_rthz, optionally [gyro] "
         "bias_instability_deg_h, correlation_s, rrw_deg_h_rth (a scenario file works). Default: measured from "

@@ -17,7 +17,7 @@ from gyrodrift.cli.options import (
     site_from_options,
     site_options,
 )
-from gyrodrift.cli.types import FiniteFloat
+from gyrodrift.cli.types import FiniteFloat, InputPath
 
 __all__ = ["features_command", "truth_command", "evaluate_command", "identify_command"]
 
@@ -35,7 +35,7 @@ def _open(path, site, log_format=None):
     "features",
     epilog="Example: gyrodrift features fleet/*/imu.parquet --with-truth --out runs.csv",
 )
-@click.argument("logs", nargs=-1, required=True, type=click.Path(path_type=Path))
+@click.argument("logs", nargs=-1, required=True, type=InputPath(path_type=Path))
 @click.option(
     "--out",
     "out",
@@ -150,7 +150,7 @@ def features_command(
 
 
 @click.command("truth", epilog="Example: gyrodrift truth sim/imu.parquet --criterion final --out truth")
-@click.argument("log", type=click.Path(path_type=Path))
+@click.argument("log", type=InputPath(path_type=Path))
 @click.option(
     "--criterion",
     type=click.Choice(["final", "rms", "max"]),
@@ -233,7 +233,7 @@ def truth_command(
 
 
 @click.command("evaluate", epilog="Example: gyrodrift evaluate sim/imu.parquet --model model.json --out eval")
-@click.argument("log", type=click.Path(path_type=Path))
+@click.argument("log", type=InputPath(path_type=Path))
 @click.option(
     "--drift-deg-h",
     type=FiniteFloat(),
@@ -243,7 +243,7 @@ def truth_command(
 @click.option(
     "--model",
     "model_path",
-    type=click.Path(dir_okay=False, path_type=Path),
+    type=InputPath(path_type=Path),
     default=None,
     help="Drift model file (JSON, from `gyrodrift fit`) identifying the drift to compensate. Default: none; give it "
     "or --drift-deg-h.",
@@ -267,7 +267,7 @@ def truth_command(
 @click.option(
     "--reference",
     "reference",
-    type=click.Path(dir_okay=False, path_type=Path),
+    type=InputPath(path_type=Path),
     default=None,
     help="Moving base: reference track (GNSS CSV/Parquet: t_s, lat_deg, lon_deg, height_m, optional "
     "vel_e/n/u_m_s; times on the log's time base) to compute the errors against; adds route_map.png. "
@@ -315,12 +315,12 @@ def evaluate_command(
 
 
 @click.command("identify", epilog="Example: gyrodrift identify sim/imu.parquet --model model.json --out ident")
-@click.argument("log", type=click.Path(path_type=Path))
+@click.argument("log", type=InputPath(path_type=Path))
 @click.option(
     "--model",
     "model_path",
     required=True,
-    type=click.Path(dir_okay=False, path_type=Path),
+    type=InputPath(path_type=Path),
     help="Drift model file (JSON, from `gyrodrift fit`). Required.",
 )
 @site_options

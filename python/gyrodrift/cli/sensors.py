@@ -15,12 +15,13 @@ from gyrodrift.cli.options import (
     site_from_options,
     site_options,
 )
+from gyrodrift.cli.types import InputPath
 
 __all__ = ["allan_command", "COMMANDS"]
 
 
 @click.command("allan", epilog="Example: gyrodrift allan static.parquet --out allan")
-@click.argument("log", type=click.Path(path_type=Path))
+@click.argument("log", type=InputPath(path_type=Path))
 @click.option(
     "--out",
     "out_dir",

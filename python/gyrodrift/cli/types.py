@@ -6,7 +6,7 @@ import math
 
 import click
 
-__all__ = ["FiniteFloat", "MAX_SEED", "Seed"]
+__all__ = ["FiniteFloat", "InputPath", "MAX_SEED", "Seed"]
 
 MAX_SEED = 2**64 - 1
 """Largest seed [-]: the Rust core's seeds are unsigned 64-bit integers; numpy's take any integer >= 0."""
@@ -64,3 +64,42 @@ class Seed(click.IntRange):
 
     def __init__(self) -> None:
         super().__init__(min=0, max=MAX_SEED)
+
+
+class InputPath(click.Path):
+    """A file the command reads (scenario, run table, model, log, format, noise or campaign file): if it exists
+    it must be a regular file, or a folder where `dir_okay`. A device (``/dev/zero``, which never ends), a FIFO
+    (which blocks until written), a socket, or a folder where a file is expected is click's usage error naming
+    the argument, before any work (``Invalid value for 'LOG': /dev/zero is a device, not a regular file ...``),
+    exit status 2. A missing path passes: the reader says so in its own words (`gyrodrift.input_files`).
+
+    ``InputPath()`` a file; ``InputPath(dir_okay=True)`` a file or a folder; ``InputPath(file_okay=False)`` a
+    folder; `exists` and `path_type` are click's.
+    """
+
+    def __init__(
+        self, *, dir_okay: bool = False, file_okay: bool = True, exists: bool = False, path_type: type | None = None
+    ):
+        super().__init__(exists=exists, file_okay=True, dir_okay=True, path_type=path_type)
+        self.input_dir_okay, self.input_file_okay = dir_okay, file_okay
+
+    def convert(self, value, param, ctx):
+        import os
+        import stat
+
+        from gyrodrift.input_files import non_regular_reason
+
+        path = super().convert(value, param, ctx)
+        where = os.fsdecode(path)
+        try:
+            is_dir = stat.S_ISDIR(os.stat(path).st_mode)
+        except (OSError, ValueError):
+            return path  # missing or unreadable: the reader's message
+        if is_dir and not self.input_dir_okay:
+            self.fail(f"{where} is a directory; expected a file", param, ctx)
+        if not is_dir and not self.input_file_okay:
+            self.fail(f"{where} is not a folder", param, ctx)
+        reason = non_regular_reason(path, dir_ok=self.input_dir_okay)
+        if reason is not None:
+            self.fail(f"{where} {reason}; gyrodrift reads only regular files", param, ctx)
+        return path
