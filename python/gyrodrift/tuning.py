@@ -8,7 +8,15 @@ Objectives (all mean absolute errors in the target's unit, deg/h for drift model
 - ``kfold_mae``: contiguous, unshuffled folds (runs are in time order; shuffling would leak neighbours).
 
 The search runs in log10 space over both parameters. Every objective evaluation handles the whole swarm at
-once and reuses one squared-distance matrix of the (already scaled) inputs.
+once and reuses one squared-distance matrix of the (already scaled) inputs; candidates that share one sigma (a
+grid's column, particles clipped onto a sigma bound) share one eigendecomposition (``gyrodrift.lssvr.
+rbf_batch_errors``).
+
+BLAS threads: :func:`tune_lssvr` runs its thousands of small factorisations with one BLAS thread
+(``threadpoolctl``, a dependency of scikit-learn). OpenBLAS's own threads cost more than they give on matrices of
+this size, and on a loaded machine they wait for each other: one 10-iteration CPSO run on 200 synthetic runs took
+44.6 s with the default threads and 2.05 s with one, measured in the same process on the shared 2-core development
+machine (``benchmarks/bench_tuning.py`` prints the ratio on any machine).
 """
 
 from __future__ import annotations
@@ -17,6 +25,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 from sklearn.model_selection import KFold
+from threadpoolctl import threadpool_limits
 
 from gyrodrift.choices import METHODS, OBJECTIVES
 from gyrodrift.cpso import minimize_cpso
@@ -189,51 +198,59 @@ def tune_lssvr(
         raise OptionError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
     bounds = check_bounds(bounds)
     fun = make_objective(X, y, objective, n_folds=n_folds, sample_weight=sample_weight)
-    if method == "grid":
-        if grid_size < 2:
-            raise OptionError(f"grid_size must be at least 2, got {grid_size}")
-        g = np.logspace(np.log10(bounds[0][0]), np.log10(bounds[0][1]), grid_size)
-        s = np.logspace(np.log10(bounds[1][0]), np.log10(bounds[1][1]), grid_size)
-        gg, ss = np.meshgrid(g, s, indexing="ij")
-        params = np.column_stack([gg.ravel(), ss.ravel()])
-        values = fun(params)
-        best = int(np.argmin(values))
+    with threadpool_limits(limits=1, user_api="blas"):  # module docstring: "BLAS threads"
+        if method == "grid":
+            if grid_size < 2:
+                raise OptionError(f"grid_size must be at least 2, got {grid_size}")
+            g = np.logspace(np.log10(bounds[0][0]), np.log10(bounds[0][1]), grid_size)
+            s = np.logspace(np.log10(bounds[1][0]), np.log10(bounds[1][1]), grid_size)
+            gg, ss = np.meshgrid(g, s, indexing="ij")
+            params = np.column_stack([gg.ravel(), ss.ravel()])
+            values = fun(params)
+            best = int(np.argmin(values))
+            return TuningResult(
+                gamma=float(params[best, 0]),
+                sigma=float(params[best, 1]),
+                fitness=float(values[best]),
+                objective=objective,
+                method=method,
+                nfev=len(values),
+                nit=1,
+                history=[float(values[best])],
+                bounds=bounds,
+                settings={"grid_size": grid_size},
+            )
+        steps = chaos_steps if method == "cpso" else 0
+        res = minimize_cpso(
+            fun,
+            bounds,
+            n_particles=n_particles,
+            max_iter=max_iter,
+            w=w,
+            c1=c1,
+            c2=c2,
+            chaos_steps=steps,
+            log_scale=True,
+            vectorized=True,
+            rng=rng,
+            callback=callback,
+        )
         return TuningResult(
-            gamma=float(params[best, 0]),
-            sigma=float(params[best, 1]),
-            fitness=float(values[best]),
+            gamma=float(res.x[0]),
+            sigma=float(res.x[1]),
+            fitness=float(res.fun),
             objective=objective,
             method=method,
-            nfev=len(values),
-            nit=1,
-            history=[float(values[best])],
+            nfev=int(res.nfev),
+            nit=int(res.nit),
+            history=[float(v) for v in res.history],
             bounds=bounds,
-            settings={"grid_size": grid_size},
+            settings={
+                "n_particles": n_particles,
+                "max_iter": max_iter,
+                "w": w,
+                "c1": c1,
+                "c2": c2,
+                "chaos_steps": steps,
+            },
         )
-    steps = chaos_steps if method == "cpso" else 0
-    res = minimize_cpso(
-        fun,
-        bounds,
-        n_particles=n_particles,
-        max_iter=max_iter,
-        w=w,
-        c1=c1,
-        c2=c2,
-        chaos_steps=steps,
-        log_scale=True,
-        vectorized=True,
-        rng=rng,
-        callback=callback,
-    )
-    return TuningResult(
-        gamma=float(res.x[0]),
-        sigma=float(res.x[1]),
-        fitness=float(res.fun),
-        objective=objective,
-        method=method,
-        nfev=int(res.nfev),
-        nit=int(res.nit),
-        history=[float(v) for v in res.history],
-        bounds=bounds,
-        settings={"n_particles": n_particles, "max_iter": max_iter, "w": w, "c1": c1, "c2": c2, "chaos_steps": steps},
-    )
