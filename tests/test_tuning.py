@@ -187,6 +187,23 @@ def test_edge_of_the_search_box_is_warned_and_recorded(paper):
     assert on_search_bound(1.0 + 1e-7, 0.6, ((1.0, 2.0), (0.5, 0.6))) == ["gamma", "sigma"]
 
 
+def test_edge_is_measured_in_the_searched_log_space_relative_to_the_box_width():
+    """Issue 20: a swarm that pressed against gamma's top ended at 99999.12 in [1e-2, 1e5] (5.5e-7 of the log10
+    width away) and was not warned; 1e-3 of the width is the line (a factor 10**0.007 = 1.016 in gamma)."""
+    from gyrodrift.tuning import DEFAULT_BOUNDS, EDGE_FRACTION, edge_distance, on_search_bound, search_bound_message
+
+    assert edge_distance(99999.12, 1e-2, 1e5) == pytest.approx(np.log10(1e5 / 99999.12) / 7.0, rel=1e-9)
+    assert on_search_bound(99999.12, 1.0, DEFAULT_BOUNDS) == ["gamma"]
+    assert "99999.1 in [0.01, 100000] (5.5e-07 of the box's log10 width" in search_bound_message(
+        ["gamma"], 99999.12, 1.0, DEFAULT_BOUNDS
+    )
+    inside = 1e5 / 10 ** (7 * EDGE_FRACTION * 3)  # three times the line inside: not on the edge
+    assert on_search_bound(inside, 1.0, DEFAULT_BOUNDS) == []
+    near_low = 1e-3 * 10 ** (5 * EDGE_FRACTION / 3)  # a third of the line above sigma's bottom
+    assert on_search_bound(10.0, near_low, DEFAULT_BOUNDS) == ["sigma"]
+    assert edge_distance(np.sqrt(1e-2 * 1e5), 1e-2, 1e5) == pytest.approx(0.5)
+
+
 @pytest.mark.filterwarnings("ignore::gyrodrift.tuning.SearchBoundWarning")
 def test_tuned_lssvr_passes_scikit_learns_estimator_checks():
     from sklearn.utils.estimator_checks import check_estimator
