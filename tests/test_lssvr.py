@@ -660,3 +660,34 @@ def test_tuner_candidates_whose_solve_is_meaningless_get_inf_rows(n):
     errors = rbf_batch_errors(D, y, [100.0, 1e16], [1.0, 100.0], "loo")
     assert np.all(np.isfinite(errors[0])) and np.all(np.isinf(errors[1]))
     np.testing.assert_allclose(errors[0], lssvr_loo_residuals(kernel_matrix(X, sigma=1.0), y, 100.0), rtol=1e-9)
+
+
+@pytest.mark.parametrize("weighted", [False, True])
+def test_from_solution_rebuilds_the_fit_without_solving_and_refuses_an_edited_coefficient(weighted):
+    X, y = make_data(n=60, seed=31)
+    w = np.random.default_rng(5).uniform(0.3, 3.0, 60) if weighted else None
+    fitted = LSSVR(gamma=300.0, sigma=0.6).fit(X, y, sample_weight=w)
+    stored = {
+        "gamma": 300.0,
+        "sigma": 0.6,
+        "alpha": fitted.alpha_.tolist(),
+        "intercept": float(fitted.intercept_),
+        "loo_residuals": fitted.loo_residuals_.tolist(),
+        "condition_number": fitted.condition_number_,
+    }
+    rebuilt = LSSVR.from_solution(X, y, sample_weight=w, **stored)
+    Xn = np.random.default_rng(6).uniform(-1.5, 1.5, (7, 2))
+    np.testing.assert_array_equal(rebuilt.predict(Xn), fitted.predict(Xn))  # same floats, same arithmetic
+    np.testing.assert_array_equal(rebuilt.loo_residuals(), fitted.loo_residuals())
+    assert rel_err(rebuilt.predictive_scale(Xn), fitted.predictive_scale(Xn)) < 1e-12
+    for j in (0, 29, 59):  # a sampled row, an unsampled one, the last
+        edited = dict(stored, alpha=list(stored["alpha"]))
+        edited["alpha"][j] *= 1.001
+        with pytest.raises(ValueError, match="sum to 0|does not solve"):
+            LSSVR.from_solution(X, y, sample_weight=w, **edited)
+    with pytest.raises(ValueError, match="does not solve the LSSVM system at sample 0"):
+        LSSVR.from_solution(X, y, sample_weight=w, **dict(stored, intercept=stored["intercept"] + 1e-6))
+    with pytest.raises(ValueError, match="does not solve"):
+        LSSVR.from_solution(X, y, sample_weight=w, **dict(stored, gamma=301.0))
+    with pytest.raises(ValueError, match="60 finite dual coefficients"):
+        LSSVR.from_solution(X, y, sample_weight=w, **dict(stored, alpha=stored["alpha"][:-1]))

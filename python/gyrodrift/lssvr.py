@@ -937,17 +937,77 @@ class LSSVR(RegressorMixin, BaseEstimator):
         self.loo_residuals_, self.loo_scale_, self.sample_weight_ = loo, scale, weights
         return self
 
+    @classmethod
+    def from_solution(
+        cls,
+        X,
+        y,
+        *,
+        gamma: float,
+        sigma: float,
+        alpha,
+        intercept: float,
+        loo_residuals,
+        condition_number: float,
+        sample_weight=None,
+        rtol: float = 1e-9,
+    ) -> LSSVR:
+        """A fitted RBF LSSVR from a stored solution (a model file's), without solving the n x n system.
+
+        Verified cheaply, O(32 n): ``sum(alpha) = 0`` and the dual equations ``K_i alpha + alpha_i/(gamma w_i) + b =
+        y_i`` of up to 32 rows spread over the samples, each to ``rtol`` of the sum of the absolute values of its
+        terms (a backward-stable solve leaves about ``n eps`` of it; an edited coefficient leaves far more, in every
+        row its kernel reaches and in the sum). ``loo_residuals`` and ``condition_number`` are taken as stored (an
+        O(n^3) inverse would be needed to recompute them); ``predictive_scale`` factorises ``H`` on first use.
+        Raises ``ValueError`` naming what does not hold. ``X`` (scaled inputs, n x d) and ``y`` as given to ``fit``.
+        """
+        est = cls(gamma=gamma, sigma=sigma)
+        gamma = check_positive("gamma", gamma)
+        sigma = check_sigma(sigma)
+        X, y = _validate_data(est, X, y, dtype=np.float64, y_numeric=True, ensure_min_samples=2, copy=True)
+        n = X.shape[0]
+        w = check_sample_weight(sample_weight, n)
+        alpha = np.asarray(alpha, dtype=float)
+        loo = np.asarray(loo_residuals, dtype=float)
+        if alpha.shape != (n,) or loo.shape != (n,) or not (np.all(np.isfinite(alpha)) and np.all(np.isfinite(loo))):
+            raise ValueError(f"the stored solution must hold {n} finite dual coefficients and LOO residuals")
+        b = float(intercept)
+        if not abs(alpha.sum()) <= rtol * max(np.abs(alpha).sum(), np.finfo(float).tiny):
+            raise ValueError(f"the stored dual coefficients do not sum to 0 (sum {alpha.sum():.3g})")
+        rows = np.unique(np.linspace(0, n - 1, min(n, 32)).round().astype(int))
+        Kr = rbf_from_squared_distances(squared_distances(X[rows], X), sigma)
+        ridge = alpha[rows] / (gamma * (1.0 if w is None else w[rows]))
+        residual = Kr @ alpha + ridge + b - y[rows]
+        size = np.abs(Kr) @ np.abs(alpha) + np.abs(ridge) + abs(b) + np.abs(y[rows])
+        bad = np.flatnonzero(~(np.abs(residual) <= rtol * size))
+        if bad.size:
+            i = int(rows[bad[0]])
+            raise ValueError(
+                f"the stored solution does not solve the LSSVM system at sample {i}: residual {residual[bad[0]]:.3g} "
+                f"against terms of size {size[bad[0]]:.3g} (gamma {gamma!r}, sigma {sigma!r})"
+            )
+        est.alpha_, est.intercept_, est.X_fit_ = alpha, b, X
+        est.loo_residuals_ = loo
+        est.sample_weight_ = np.ones(n) if w is None else w
+        est.condition_number_ = float(condition_number)
+        return est
+
     def predictive_scale(self, X) -> np.ndarray:
         """``v(x)``, the predictive standard deviation of a new observation (weight 1) at each row of ``X`` in
         units of the prior (kernel) standard deviation (module docstring); dimensionless, >= 1/sqrt(gamma).
 
         Multiply by a scale fitted on the leave-one-out residuals (``r_i / loo_scale_[i]``) to get deg/h.
         """
-        check_is_fitted(self, ("alpha_", "factor_", "X_fit_"))
+        check_is_fitted(self, ("alpha_", "X_fit_"))
         X = _validate_data(self, X, dtype=np.float64, reset=False)
         check_matrix_memory(X.shape[0], self.X_fit_.shape[0], 3, "predicting with the LSSVR", unit="samples")
         k = self._kernel(self.X_fit_, X)  # (n_train, m)
         kxx = np.array([float(self._kernel(x[None, :])[0, 0]) for x in X]) if self.kernel != "rbf" else 1.0
+        if not hasattr(self, "factor_"):  # rebuilt from a stored solution (from_solution): factorise once, now
+            H = _h_matrix(self._kernel(self.X_fit_), float(self.gamma), copy=False, weights=self.sample_weight_)
+            self.factor_ = _cholesky_upper(H)
+            if self.factor_ is None:  # pragma: no cover - from_solution verified a solvable system
+                raise _not_positive_definite(f"for {self._describe()}", "Refit the model.")
         U = self.factor_
         hk = _cho_solve(U, k)
         p = _cho_solve(U, np.ones(U.shape[0]))
