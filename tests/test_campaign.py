@@ -252,7 +252,7 @@ def test_unreachable_scheduler_is_a_clear_error_within_seconds(tmp_path):
     assert time.perf_counter() - t < 15
 
 
-def _wait_for_runs(folder: Path, n: int, proc, timeout: float = 60.0) -> None:
+def _wait_for_runs(folder: Path, n: int, proc, timeout: float = 240.0) -> None:
     t = time.monotonic()
     while time.monotonic() - t < timeout:
         if (folder / "runs").is_dir() and len(list((folder / "runs").glob("run-*.parquet"))) >= n:

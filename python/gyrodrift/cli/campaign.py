@@ -118,6 +118,25 @@ def campaign_command(source, out, workers, scheduler, connect_timeout_s, limit, 
     )
     if summary.interrupted:
         click.get_current_context().exit(130)  # the shell's code for a SIGINT; the runs in progress were committed
+    _check_failures(summary, out)
+
+
+def _check_failures(summary, out) -> None:
+    """Every run of the store failed (or was lost): `CampaignFailedError` (one line, exit 1); some runs failed
+    now: one line on stderr saying how many and the first error."""
+    from gyrodrift.campaign import CampaignFailedError
+
+    tried = summary.skipped + summary.done + summary.lost
+    first = f"; first error: {summary.first_error}" if summary.first_error else ""
+    if tried and summary.succeeded == 0:
+        lost = f", {summary.lost} lost to the workers" if summary.lost else ""
+        raise CampaignFailedError(
+            f"{out}: every run failed ({summary.failed_before + summary.failed} of {tried} with an error{lost})"
+            + (first or " (their errors are in the store)")
+        )
+    if summary.failed or summary.lost:
+        lost = f"; {summary.lost} not committed (workers lost; rerun to resume)" if summary.lost else ""
+        click.echo(f"campaign: {summary.failed} of {summary.done} run(s) failed now{lost}{first}", err=True)
 
 
 def _export(campaign, index: int, out, quiet: bool, as_json: bool) -> None:
