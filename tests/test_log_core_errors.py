@@ -22,12 +22,16 @@ G = 9.80665
 
 @pytest.fixture(scope="module")
 def five_g_log(tmp_path_factory) -> str:
-    """16.2 h at 1 Hz of a static IMU with 5 g on the x accelerometer: no static base the aligner or the smoother
-    can explain (the samples themselves are within the sensor limits, so the log reader accepts them)."""
+    """16.2 h at 1 Hz of a static IMU with 5 g on the x accelerometer after its first 400 s: no static base the
+    aligner or the smoother can explain (the samples themselves are within the sensor limits, and the first 400 s,
+    a level IMU at 30 deg with the Earth rate, pass the reader's static-base check)."""
     n = int(16.2 * 3600)
+    w = 7.2921151467e-5
     cols = {"t_s": np.arange(1, n + 1, dtype=float)}
-    cols.update({f"dtheta_{a}_rad": np.zeros(n) for a in "xyz"})
-    cols.update({"dv_x_m_s": np.full(n, 5 * G), "dv_y_m_s": np.zeros(n), "dv_z_m_s": np.full(n, G)})
+    cols.update({"dtheta_x_rad": np.zeros(n), "dtheta_y_rad": np.full(n, w * np.cos(np.pi / 6))})
+    cols["dtheta_z_rad"] = np.full(n, w * np.sin(np.pi / 6))
+    dv_x = np.where(cols["t_s"] > 400.0, 5 * G, 0.0)
+    cols.update({"dv_x_m_s": dv_x, "dv_y_m_s": np.zeros(n), "dv_z_m_s": np.full(n, G)})
     cols["temp_c"] = np.full(n, 30.0)
     path = tmp_path_factory.mktemp("five_g") / "five_g.parquet"
     pq.write_table(pa.table(cols), path)

@@ -51,6 +51,15 @@ rows), and the first problem raises `LogError` naming the file, row and column:
 
 Only regular files are read: a device (``/dev/zero``), a FIFO or a folder is refused before it is opened.
 
+Before its first chunk, every log is checked against a static base over its first `STATIC_CHECK_SPAN_S` seconds
+(`ImuLog.check_static_base`; a simulated moving-base log's static part when shorter; a log or static part under
+`MIN_STATIC_CHECK_SPAN_S` is not checked): the mean specific force magnitude is normal gravity at the site within
+`SPECIFIC_FORCE_TOLERANCE_G`, it points along body up (within `MAX_UNDECLARED_TILT_DEG`, or the declared
+attitude's tilt), the horizontal gyros de-rotated by the table angle see the Earth rate's horizontal component and,
+with the table still, the axial gyro its vertical one (`EARTH_RATE_TOLERANCE_DEG_H` or a factor 2). A unit, scale,
+sign or axis slip fails one of them: `ImplausibleLogError` names the check, the measured and expected values and
+the columns (a log format's keys) to look at.
+
 Row numbers: for CSV the line of the file (the header is row 1, the first sample row 2, as in
 `gyrodrift.runs`); for the other sources the 1-based sample index.
 
@@ -77,13 +86,16 @@ import numpy as np
 import pyarrow as pa
 
 from gyrodrift import _core
+from gyrodrift.earth import OMEGA_IE_RAD_S, normal_gravity
 from gyrodrift.errors import CoreError, InputError, OptionError
 from gyrodrift.log_format import LogFormat, load_log_format
 from gyrodrift.runs import TEMPERATURE_LIMITS_C
 from gyrodrift.site import Site
+from gyrodrift.units import DEG_PER_H
 
 __all__ = [
     "LogError",
+    "ImplausibleLogError",
     "Site",
     "LogTruth",
     "LogChunk",
@@ -99,6 +111,13 @@ __all__ = [
     "MAX_RATE_HZ",
     "GAP_TOLERANCE",
     "DEFAULT_CHUNK_SAMPLES",
+    "STATIC_CHECK_SPAN_S",
+    "MIN_STATIC_CHECK_SPAN_S",
+    "SPECIFIC_FORCE_TOLERANCE_G",
+    "EARTH_RATE_TOLERANCE_DEG_H",
+    "MAX_UNDECLARED_TILT_DEG",
+    "DECLARED_TILT_TOLERANCE_DEG",
+    "TABLE_STILL_DEG",
 ]
 
 INCREMENT_COLUMNS = ("dtheta_x_rad", "dtheta_y_rad", "dtheta_z_rad", "dv_x_m_s", "dv_y_m_s", "dv_z_m_s")
@@ -121,6 +140,32 @@ GAP_TOLERANCE = 0.01
 """Largest relative deviation of a time step from the nominal 1 / rate_hz."""
 DEFAULT_CHUNK_SAMPLES = 100_000
 """Samples per chunk: 1000 s at 100 Hz, about 7 MB of float64 columns."""
+STATIC_CHECK_SPAN_S = 300.0
+"""Span at the start of every log whose means are checked against a static base [s] (`ImplausibleLogError`): the
+default coarse alignment (`gyrodrift.procedure.Timeline.coarse_s`), which every procedure needs static; a
+simulated moving-base log's static part (``[trajectory] static_h``) when that is shorter."""
+MIN_STATIC_CHECK_SPAN_S = 60.0
+"""A log (or a known static part) shorter than this [s] is not checked: too short to tell the Earth rate of a
+noisy gyro (a 0.05 deg/sqrt(h) ARW averages to 0.4 deg/h over 60 s)."""
+SPECIFIC_FORCE_TOLERANCE_G = 0.01
+"""Largest accepted difference [g] between the mean specific force magnitude and normal gravity at the site:
+10 mg is 100 times a navigation-grade accelerometer bias (<= 0.1 mg) and covers a tactical one, a site height
+off by kilometres (0.3 mg/km) and any gravity anomaly (< 0.5 mg); a unit slip is off by a factor 9.8 (g
+declared m/s^2), 1000 (mg, ug) or more."""
+EARTH_RATE_TOLERANCE_DEG_H = 1.0
+"""Additive tolerance [deg/h] of the gyro checks (a measured Earth-rate component is also accepted within a
+factor 2 of its expected range): 1 deg/h is 100 times a navigation-grade RLG bias (<= 0.01 deg/h) and covers
+the noise of a 60 s mean; a unit slip is off by a factor 57 (deg vs rad), 60, 1000 or 3600 (deg/s vs deg/h)."""
+MAX_UNDECLARED_TILT_DEG = 30.0
+"""Largest accepted angle [deg] between body up (the turntable axis) and the mean specific force, for a log that
+does not declare its mounting attitude: a single-axis rotation INS stands with its table axis near the vertical;
+an upside-down axis mapping gives 180 deg, a swapped up axis 90 deg."""
+DECLARED_TILT_TOLERANCE_DEG = 5.0
+"""Largest accepted difference [deg] between that angle and the one a log's declared attitude gives
+(``gyrodrift.scenario`` metadata: acos(cos pitch cos roll))."""
+TABLE_STILL_DEG = 10.0
+"""The table counts as still over the checked span when its angle (the axial gyro integrated, minus the Earth
+rate's vertical component) stays within this range [deg]; only then is the axial gyro's mean checked."""
 
 _G0 = float(_core.STANDARD_GRAVITY_M_S2)
 _SITE_LIMITS = {  # key: (low, high, option, unit), inclusive, the core's limits
@@ -134,6 +179,12 @@ _RATE_PROBE = 1000
 
 class LogError(InputError):
     """An IMU log that cannot be used; the message starts with the file (and row and column when known)."""
+
+
+class ImplausibleLogError(LogError):
+    """A log whose first minutes are not what a static base must show (gravity, up, the Earth rate): a unit,
+    scale, sign or axis slip; the message names the check, the measured and expected values and the columns (or
+    the log format's keys) to look at."""
 
 
 @dataclass(frozen=True)
@@ -263,8 +314,13 @@ class ImuLog:
         log_format: LogFormat | None = None,
         t0_ns: int | None = None,
         scenario: Any = None,
+        static_s: float | None = None,
     ):
         self.path = path
+        # The known length of the static part at the start [s] (a simulated moving-base log's static_h), or None:
+        # the static-base check then reads `STATIC_CHECK_SPAN_S`. `_static_checked` once that check has passed.
+        self.static_s = static_s
+        self._static_checked = False
         self.scenario = scenario  # the `gyrodrift.ins.Scenario` of a log simulated on the fly (its route), else None
         self.log_format = log_format
         self._t0_ns = t0_ns
@@ -318,16 +374,18 @@ class ImuLog:
         truth: LogTruth | None = None,
         label: str = "<memory>",
         require_temperature: bool = True,
+        static_s: float | None = None,
     ) -> ImuLog:
         """A log over in-memory columns (the names of the module docstring, 1-D arrays of one length).
 
         The arrays are not copied; chunks are checked exactly as a file's. `rate_hz` defaults to the
         time stamps' (1 / median dt of the first 1000 intervals). `source_site` is the site the data come
         with (as a file's metadata), `site` replaces or completes it as in `open_log`; `truth` the true
-        initial attitude.
+        initial attitude; `static_s` the length of the static part at the start [s] when the data say it (a
+        simulated moving base), for `check_static_base`.
         """
         names = list(columns)
-        kind, cols = _kind_from_header(names, label)
+        kind, cols = _kind_from_header(names, label, file=False)
         if require_temperature and "temp_c" not in names:
             raise LogError(f"{label}, row 1: missing column temp_c (system temperature, deg C; the features need it)")
         arrays: dict[str, np.ndarray] = {}
@@ -381,6 +439,7 @@ class ImuLog:
             has_truth_columns=has_truth,
             has_reference_height=has_href,
             blocks=blocks,
+            static_s=static_s,
         )
 
     @classmethod
@@ -421,6 +480,7 @@ class ImuLog:
             name="scenario",
             blocks=blocks,
             scenario=s,
+            static_s=None if s.trajectory is None else s.trajectory.static_h * 3600.0,
         )
 
     # ------------------------------------------------------------------------------------------
@@ -501,6 +561,8 @@ class ImuLog:
         """
         if not (isinstance(chunk_samples, int) and chunk_samples >= 1):
             raise OptionError(f"chunk_samples must be a positive integer, got {chunk_samples!r}")
+        if not self._static_checked:
+            self.check_static_base()
         validator = _Validator(self)
         done = 0
         for raw in self._source_blocks(chunk_samples):
@@ -518,6 +580,48 @@ class ImuLog:
                 f"{self.label}: the log ends after {done} samples ({done / self.rate_hz / 3600.0:.3f} h); "
                 f"{stop} samples ({stop / self.rate_hz / 3600.0:.3f} h) are needed"
             )
+
+    def check_static_base(self) -> None:
+        """Check that the start of the log is what a static base must show; `ImplausibleLogError` otherwise.
+
+        Reads (and validates) the first `STATIC_CHECK_SPAN_S` seconds (the static part, when the log says a
+        shorter one), chunk by chunk, and compares their means with the site (docs/procedure.md, "A log is
+        physically plausible"): the specific force magnitude with normal gravity, its direction with body up,
+        the horizontal gyros (de-rotated by the table angle the axial gyro gives) with the Earth rate's horizontal
+        component and, when the table stands still, the axial gyro with its vertical component. `chunks` calls it
+        before its first chunk, so every command checks every log before computing anything from it; a log (or
+        static part) shorter than `MIN_STATIC_CHECK_SPAN_S` is not checked. Passing is remembered.
+        """
+        span_s = STATIC_CHECK_SPAN_S if self.static_s is None else min(STATIC_CHECK_SPAN_S, float(self.static_s))
+        n = min(self.samples_for(span_s), self.n_samples)
+        if n / self.rate_hz < MIN_STATIC_CHECK_SPAN_S:
+            self._static_checked = True
+            return
+        validator = _Validator(self)
+        means = _StaticMeans(self)
+        done = 0
+        blocks = self._source_blocks(min(n, DEFAULT_CHUNK_SAMPLES))
+        try:
+            for raw in blocks:
+                k = len(raw.t)
+                if done + k > n:
+                    raw = _cut(raw, n - done)
+                    k = n - done
+                try:
+                    chunk = validator.check(raw, done)
+                except LogError:  # a bad row: the stream itself names it when it gets there, as without this check
+                    return
+                means.add(chunk)
+                done += k
+                if done >= n:
+                    break
+        finally:
+            close = getattr(blocks, "close", None)
+            if close is not None:
+                close()
+        if done / self.rate_hz >= MIN_STATIC_CHECK_SPAN_S:
+            means.verdict()
+        self._static_checked = True
 
     def _source_blocks(self, chunk_samples: int) -> Iterator[_Raw]:
         if self._blocks is not None:
@@ -971,6 +1075,179 @@ class _Validator:
             )
 
 
+class _StaticMeans:
+    """Running sums over the start of a log for `ImuLog.check_static_base` (flat memory: a few numbers).
+
+    The table turns about body up, so body up keeps its direction on a static base: the mean up specific force is
+    g cos(tilt) whatever the table does, and the horizontal gyros see the Earth rate's horizontal component
+    turning against the table. Rotating each sample's x/y angle increment by the table angle phi (the axial gyro
+    integrated, minus the Earth rate's vertical component w_ie sin L) brings them back to one frame fixed on the
+    ground, where their mean is that component (the x/y biases average out as the table turns); a wrong axial
+    gyro (unit, sign) smears it away.
+    """
+
+    def __init__(self, log: ImuLog):
+        self.log = log
+        self.dt = 1.0 / log.rate_hz
+        lat = None if log.site is None else math.radians(log.site.lat_deg)
+        self.w_up = 0.0 if lat is None else OMEGA_IE_RAD_S * math.sin(lat)  # [rad/s]
+        self.n = 0
+        self.phi = 0.0  # table angle [rad]
+        self.phi_low = self.phi_high = 0.0
+        self.h = np.zeros(2)  # de-rotated horizontal angle increments [rad]
+        self.z = 0.0  # axial angle [rad]
+        self.f_up = 0.0  # up velocity increments [m/s]
+        self.f_abs = 0.0  # sum of |dv| [m/s]
+
+    def add(self, chunk: LogChunk) -> None:
+        dth, dv = chunk.dtheta_rad, chunk.dv_m_s
+        dphi = dth[:, 2] - self.w_up * self.dt
+        phi = self.phi + np.cumsum(dphi)
+        mid = phi - 0.5 * dphi  # the table angle in the middle of each sample
+        c, s = np.cos(mid), np.sin(mid)
+        self.h += (float(np.sum(c * dth[:, 0] - s * dth[:, 1])), float(np.sum(s * dth[:, 0] + c * dth[:, 1])))
+        if len(phi):
+            self.phi = float(phi[-1])
+            self.phi_low = min(self.phi_low, float(phi.min()))
+            self.phi_high = max(self.phi_high, float(phi.max()))
+        self.z += float(np.sum(dth[:, 2]))
+        self.f_up += float(np.sum(dv[:, 2]))
+        self.f_abs += float(np.sum(np.sqrt(np.einsum("ij,ij->i", dv, dv))))
+        self.n += len(dth)
+
+    def verdict(self) -> None:
+        """Raise `ImplausibleLogError` at the first check the sums fail (the order of docs/procedure.md)."""
+        log = self.log
+        span = self.n * self.dt
+        site = log.site
+        g0 = _G0
+        f_abs = self.f_abs / span  # [m/s^2]
+        f_up = self.f_up / span
+        tol = SPECIFIC_FORCE_TOLERANCE_G * g0
+        if site is not None:
+            g_lo = g_hi = float(normal_gravity(math.radians(site.lat_deg), site.height_m))
+            where = f"normal gravity at {site.lat_deg:g} deg, {site.height_m:g} m"
+        else:
+            g_lo = float(normal_gravity(0.0, _HEIGHT_LIMITS_M[1]))
+            g_hi = float(normal_gravity(math.radians(float(_core.MAX_LAT_DEG)), _HEIGHT_LIMITS_M[0]))
+            where = "normal gravity anywhere (the log has no site)"
+        head = f"{log.label}: not a static base over its first {span:g} s"
+        if not g_lo - tol <= f_abs <= g_hi + tol:
+            want = f"{g_lo:.4f}" if g_lo == g_hi else f"{g_lo:.4f} to {g_hi:.4f}"
+            raise ImplausibleLogError(
+                f"{head} (specific force magnitude): measured {f_abs:.6g} m/s^2 ({f_abs / g0:.6g} g), expected "
+                f"{want} m/s^2 ({where}) +- {SPECIFIC_FORCE_TOLERANCE_G * 1e3:g} mg (any accelerometer bias); "
+                f"a unit or scale slip: check {_channels(log, 'accel', (0, 1, 2))}"
+            )
+        tilt = math.degrees(math.acos(max(-1.0, min(1.0, f_up / f_abs))))
+        if log.truth is not None:
+            p, r = math.radians(log.truth.pitch_deg), math.radians(log.truth.roll_deg)
+            declared = math.degrees(math.acos(max(-1.0, min(1.0, math.cos(p) * math.cos(r)))))
+            ok = abs(tilt - declared) <= DECLARED_TILT_TOLERANCE_DEG
+            want = (
+                f"{declared:.4g} deg +- {DECLARED_TILT_TOLERANCE_DEG:g} deg (the declared pitch "
+                f"{log.truth.pitch_deg:g} deg, roll {log.truth.roll_deg:g} deg)"
+            )
+        else:
+            ok = tilt <= MAX_UNDECLARED_TILT_DEG
+            want = f"at most {MAX_UNDECLARED_TILT_DEG:g} deg (the table axis near the vertical)"
+        if not ok:
+            raise ImplausibleLogError(
+                f"{head} (specific force points up): body up is {tilt:.4g} deg from the measured vertical (mean up "
+                f"specific force {f_up:.6g} m/s^2 of {f_abs:.6g}), expected {want}; a sign or axis slip: check "
+                f"{_channels(log, 'accel', (2,), axes=True)}"
+            )
+        # The Earth rate's direction makes an angle alpha with body up: 90 deg - latitude, +- the tilt (and 1 deg
+        # for the tilt's own error); the horizontal gyros see w_ie sin(alpha), the axial one w_ie cos(alpha).
+        w = OMEGA_IE_RAD_S / DEG_PER_H
+        t = min(180.0, tilt + 1.0)
+        if site is not None:
+            c = 90.0 - site.lat_deg
+            a_lo, a_hi = abs(c - t), min(c + t, 360.0 - c - t)
+            h_lo = w * min(math.sin(math.radians(a_lo)), math.sin(math.radians(a_hi)))
+            h_hi = w if a_lo <= 90.0 <= a_hi else w * max(math.sin(math.radians(a_lo)), math.sin(math.radians(a_hi)))
+            z_lo, z_hi = w * math.cos(math.radians(a_hi)), w * math.cos(math.radians(a_lo))
+            at = f"at {site.lat_deg:g} deg"
+        else:
+            h_lo, h_hi, z_lo, z_hi = 0.0, w, -w, w
+            at = "(the log has no site: anywhere)"
+        horizontal = float(np.hypot(*self.h)) / span / DEG_PER_H
+        axial = self.z / span / DEG_PER_H
+        still = math.degrees(self.phi_high - self.phi_low) <= TABLE_STILL_DEG
+        table = (
+            "the table standing still by the axial gyro"
+            if still
+            else f"de-rotated by the table angle of the axial gyro ({math.degrees(self.phi):.6g} deg at the end)"
+        )
+        if not _plausible(horizontal, h_lo, h_hi):
+            raise ImplausibleLogError(
+                f"{head} (horizontal Earth rate): the mean horizontal rate ({table}) is {horizontal:.6g} deg/h, "
+                f"expected {_shown_range(h_lo, h_hi)} deg/h (w_ie cos(latitude) {at}, tilt {tilt:.3g} deg) "
+                f"+- {EARTH_RATE_TOLERANCE_DEG_H:g} deg/h or within a factor 2; a unit, scale or sign slip: check "
+                f"{_channels(log, 'gyro', (0, 1, 2), up_note='the table angle')}"
+            )
+        if still:
+            if site is None:  # the whole Earth rate is w_ie anywhere
+                total = math.hypot(horizontal, axial)
+                ok, shown, want = _plausible(total, w, w), f"the Earth rate magnitude {total:.6g}", f"{w:.6g}"
+            else:
+                ok, shown, want = (
+                    _plausible(axial, z_lo, z_hi),
+                    f"the mean axial rate {axial:.6g}",
+                    _shown_range(z_lo, z_hi),
+                )
+            if not ok:
+                raise ImplausibleLogError(
+                    f"{head} (axial Earth rate): the table stands still and {shown} deg/h, expected {want} deg/h "
+                    f"(w_ie sin(latitude) {at}, tilt {tilt:.3g} deg) +- {EARTH_RATE_TOLERANCE_DEG_H:g} deg/h or "
+                    f"within a factor 2; a unit, scale or sign slip: check {_channels(log, 'gyro', (2,))}"
+                )
+
+
+def _plausible(x: float, lo: float, hi: float) -> bool:
+    """Whether a measured Earth-rate component `x` [deg/h] can be one expected in [lo, hi]: within
+    `EARTH_RATE_TOLERANCE_DEG_H` of the range, or (a range of one sign) within a factor 2 of it."""
+    tol = EARTH_RATE_TOLERANCE_DEG_H
+    if lo - tol <= x <= hi + tol:
+        return True
+    if lo > 0.0:
+        return 0.5 * lo <= x <= 2.0 * hi
+    if hi < 0.0:
+        return 2.0 * lo <= x <= 0.5 * hi
+    return False
+
+
+def _shown_range(lo: float, hi: float) -> str:
+    return f"{lo:.4g}" if abs(hi - lo) < 5e-4 else f"{lo:.4g} to {hi:.4g}"
+
+
+def _channels(log: ImuLog, sensor: str, body: tuple[int, ...], axes: bool = False, up_note: str = "") -> str:
+    """What a user checks for a failed static-base check: the columns of body axes `body` of `sensor` (a log
+    format's ``[columns.NAME]`` unit and scale keys, and its ``[axes]`` when `axes`); `up_note` says what the up
+    axis is checked for."""
+    fmt = log.log_format
+    names = ("right", "forward", "up")
+    note = f"; {up_note}" if up_note else ""
+    if fmt is None:
+        k = 0 if sensor == "gyro" else 3
+        cols = ", ".join(log._columns[k + j] + (note if j == 2 else "") for j in body)
+        hint = (
+            "; a log in other units or axes needs a log format (--format FILE, docs/procedure.md)"
+            if log.path is not None
+            else ""
+        )
+        return f"column(s) {cols} (body {', '.join(names[j] for j in body)}){hint}"
+    parts = []
+    for j in body:
+        spec, sign = fmt.body_source(sensor, j)
+        parts.append(
+            f"[columns.{spec.name}] unit/scale ({spec.quantity}, {spec.unit}; body {names[j]} = "
+            f"{'-' if sign < 0 else '+'}{spec.name}{note if j == 2 else ''})"
+        )
+    keys = ", ".join(parts) + (", [axes] up" if axes else "")
+    return f"{keys} of the log format {fmt.source}"
+
+
 # ----------------------------------------------------------------------------------------------
 # Opening
 # ----------------------------------------------------------------------------------------------
@@ -992,12 +1269,20 @@ def _require_regular(path: Path | None, label: str) -> None:
         raise LogError(f"{label}: not a regular file (a device, FIFO or socket); expected a log file")
 
 
-def _kind_from_header(names: list[str], label: str) -> tuple[str, tuple[str, ...]]:
+_FORMAT_HINT = (
+    "; a log with other column names, units or axes: describe the file's own columns with a log format "
+    "(--format FILE, docs/procedure.md)"
+)
+
+
+def _kind_from_header(names: list[str], label: str, file: bool = True) -> tuple[str, tuple[str, ...]]:
+    """The kind and sensor columns the header gives; `LogError` (with the ``--format`` hint for a `file`)."""
+    hint = _FORMAT_HINT if file else ""
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
         raise LogError(f"{label}, row 1: column {', '.join(dup)} appears more than once; column names must be unique")
     if "t_s" not in names:
-        raise LogError(f"{label}, row 1: missing column t_s (sample end time, s)")
+        raise LogError(f"{label}, row 1: missing column t_s (sample end time, s){hint}")
     if all(c in names for c in INCREMENT_COLUMNS):
         kind, cols = "increments", INCREMENT_COLUMNS
     elif all(c in names for c in RATE_COLUMNS):
@@ -1008,7 +1293,7 @@ def _kind_from_header(names: list[str], label: str) -> tuple[str, tuple[str, ...
         missing = inc if len(inc) <= len(rat) else rat
         raise LogError(
             f"{label}, row 1: missing column(s) {', '.join(missing)}: a log needs the increments "
-            f"{', '.join(INCREMENT_COLUMNS)} or the rates {', '.join(RATE_COLUMNS)}"
+            f"{', '.join(INCREMENT_COLUMNS)} or the rates {', '.join(RATE_COLUMNS)}{hint}"
         )
     return kind, cols
 
@@ -1066,6 +1351,18 @@ def _read_truth(meta: Mapping[str, str], label: str) -> LogTruth | None:
             for k in ("pitch_deg", "roll_deg", "yaw_deg")
         )
     )
+
+
+def _read_static_s(meta: Mapping[str, str], label: str) -> float | None:
+    """The static part [s] of a simulated moving-base log (``[trajectory] static_h`` of its scenario metadata),
+    or None (a static-base log, or no scenario)."""
+    if "gyrodrift.scenario" not in meta:
+        return None
+    s = _json_value(meta, "gyrodrift.scenario", label)
+    tr = s.get("trajectory") if isinstance(s, dict) else None
+    if not isinstance(tr, dict):
+        return None
+    return _number(tr.get("static_h", 0.0), label, "gyrodrift.scenario trajectory static_h") * 3600.0
 
 
 def _rate_from_times(t: np.ndarray, label: str) -> float:
@@ -1154,6 +1451,7 @@ def _open_parquet(p: Path, label: str, site, require_temperature: bool) -> ImuLo
             raise LogError(f"{label}: {n} sample(s); a log needs many")
         file_site = _read_site(meta, label)
         truth = _read_truth(meta, label)
+        static_s = _read_static_s(meta, label)
         if "gyrodrift.rate_hz" in meta:
             rate = _check_rate(_json_value(meta, "gyrodrift.rate_hz", label), label, "gyrodrift.rate_hz metadata")
             rate_source = "metadata"
@@ -1178,6 +1476,7 @@ def _open_parquet(p: Path, label: str, site, require_temperature: bool) -> ImuLo
         has_temperature=has_temp,
         has_truth_columns=has_truth,
         has_reference_height=has_href,
+        static_s=static_s,
     )
 
 

@@ -136,6 +136,7 @@ def as_log(
             source_site=Site(s.site.lat_deg, s.site.lon_deg, s.site.height_m),
             truth=LogTruth(s.attitude.pitch_deg, s.attitude.roll_deg, s.attitude.yaw_deg),
             require_temperature=require_temperature,
+            static_s=None if s.trajectory is None else s.trajectory.static_h * 3600.0,
         )
     if isinstance(imu, (str, os.PathLike)):
         return open_log(imu, site=site, require_temperature=require_temperature)
