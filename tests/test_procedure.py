@@ -326,10 +326,10 @@ def test_identification_on_held_out_runs(fleet, fleet_features, model):
     assert np.mean(np.abs(err)) < np.mean(np.abs(phys_err))
     h = held[0]
     assert h.model_std_deg_h is None and "cross-validation interval" in h.uncertainty_note
-    # the interval is centred on the prediction; its half-width is the quantile of the calibration scores times
-    # the spread model's 1-sigma at the run (docs/identification.md, "Intervals and extrapolation")
-    q = np.sort(np.abs(m.interval_scores()))[math.ceil(11 * 0.9) - 1]
-    for x, v in zip(held, m.predict_spread(test), strict=True):
+    # the interval is centred on the prediction; its half-width is the calibration (Student-t quantile times the
+    # scores' robust scale) times the run's 1-sigma (docs/identification.md, "Intervals and extrapolation")
+    q = m.interval_scale_.multiplier(0.9)
+    for x, v in zip(held, np.hypot(*m._interval_sigmas(test)), strict=True):
         lo, hi = x.interval_deg_h
         assert lo < x.drift_deg_h < hi and (hi - lo) / 2 == pytest.approx(q * v, rel=1e-12)
     assert h.physics_drift_deg_h == pytest.approx(physics_inversion(test)[0])

@@ -25,18 +25,37 @@ What it gives (unit of y, deg/h):
   scales, not of a tuned kernel width) ``g`` reverts to its prior and the trend's uncertainty grows with the
   distance;
 * ``loo_std_``: the leave-one-out predictive standard deviation of each training label, noise included,
-  ``1 / sqrt((K_y^-1)_ii)`` with ``K_y = K + diag(tau^2 + s_i^2)`` (Rasmussen & Williams 2006, eq. 5.12).
+  ``1 / sqrt((K_y^-1)_ii)`` with ``K_y = K + diag(tau^2 + s_i^2)`` (Rasmussen & Williams 2006, eq. 5.12);
+* ``prior_std()``: the 1-sigma of the learned term before any run, anywhere in the training runs' range
+  (``sqrt(c0 + c1 + tau^2 + max_i |z_i|^2)``, the trend's prior at the training input farthest from their
+  mean): what the learned term may be when nothing is known about it, the cap of the learner's share of the
+  interval far from the runs (`gyrodrift.model.DriftModel.predict_interval`);
+* ``predict_mean(Z)``: the predictive mean (the model compares it with the LSSVR's prediction).
 
-The model's interval (`gyrodrift.model.DriftModel.predict_interval`) is a normalised jackknife on these: the
-scores ``|r_i| / loo_std_i`` of the LSSVR's leave-one-out residuals, their conformal quantile ``q``, and the
-half-width ``q predict_std(x)``.
+The calibration of the interval (`calibration_scale`, used by the model): the scores ``z_i`` (each training run's
+out-of-sample residual over its predicted 1-sigma) give a scale ``c``, the interval's half-width is
+``t_{nu}((1 + coverage)/2) c`` times a run's 1-sigma (Student-t with ``nu = n_used - 1`` degrees of freedom:
+the prediction interval of one more score when ``c`` is estimated from ``n_used`` of them). ``c`` is a
+robust root mean square:
+
+1. *wild scores* are found by a leave-one-out test: the largest ``|z_i|`` against the rms of the others is,
+   for normal scores, Student-t with ``m - 1`` degrees of freedom (``m`` scores left); it is flagged when its
+   two-sided p-value is below ``OUTLIER_ALPHA / m`` (Bonferroni: a fleet of well-behaved scores loses one with
+   probability <= 5 %), and the test repeats on the rest, at most ``n // 4`` times. Flagged scores are left out
+   of the scale (the model names their runs in a warning);
+2. the rest give Huber's scale (proposal 2 with the location known, 0; ``HUBER_K`` = 2): the ``c`` that solves
+   ``mean(min(z_i^2 / c^2, k^2)) = E[min(Z^2, k^2)]`` for standard normal ``Z`` (consistent: ``c`` = 1 for
+   unit-normal scores), so a score that is large but not flagged counts as at most ``k c``.
 """
 
 from __future__ import annotations
 
+import math
 import warnings
+from dataclasses import dataclass
 
 import numpy as np
+from scipy import stats
 from scipy.linalg import cho_solve
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.gaussian_process import GaussianProcessRegressor
@@ -45,7 +64,7 @@ from sklearn.gaussian_process.kernels import RBF, ConstantKernel, DotProduct, Wh
 from gyrodrift.errors import InputError
 from gyrodrift.kernels import check_matrix_memory
 
-__all__ = ["SpreadGP", "LENGTH_SCALE_BOUNDS"]
+__all__ = ["SpreadGP", "LENGTH_SCALE_BOUNDS", "CalibrationScale", "calibration_scale", "OUTLIER_ALPHA", "HUBER_K"]
 
 LENGTH_SCALE_BOUNDS = (0.3, 1e3)
 """Bounds of the RBF length scales [standard deviations of the training inputs]. Below 0.3 a length scale is
@@ -124,6 +143,7 @@ class SpreadGP:
             warnings.simplefilter("ignore", ConvergenceWarning)
             gp.fit(self._z(Z), (y - self.y_mean_) / self.y_scale_)
         self.gp_ = gp
+        self.z_max_sq_ = float(np.max(np.sum(self._z(Z) ** 2, axis=1)))
         self.theta_ = np.array(gp.kernel_.theta, float)
         inv_diag = np.diag(cho_solve((gp.L_, True), np.eye(n)))
         self.loo_std_ = self.y_scale_ / np.sqrt(inv_diag)
@@ -140,6 +160,19 @@ class SpreadGP:
         _, std = self.gp_.predict(self._z(Z), return_std=True)  # includes the WhiteKernel's tau^2
         return self.y_scale_ * np.asarray(std, float)
 
+    def prior_std(self) -> float:
+        """The learned term's 1-sigma before any run, anywhere in the training runs' range [unit of y]: the
+        constant, the RBF part, the run-to-run term and the linear trend at the training input farthest from their
+        mean, ``y_scale sqrt(c0 + c1 + tau^2 + max_i |z_i|^2)`` (module docstring)."""
+        k = self.gp_.kernel_  # ((c0 + c1 RBF) + White) + 1 DotProduct, as `_kernel` builds it
+        c0, c1 = float(k.k1.k1.k1.constant_value), float(k.k1.k1.k2.k1.constant_value)
+        tau2 = float(k.k1.k2.noise_level)
+        return self.y_scale_ * math.sqrt(c0 + c1 + tau2 + self.z_max_sq_)
+
+    def predict_mean(self, Z) -> np.ndarray:
+        """The Gaussian process's predictive mean of the target at each row of ``Z`` [unit of y]."""
+        return self.y_mean_ + self.y_scale_ * np.asarray(self.gp_.predict(self._z(Z)), float)
+
     def _part(self, kind):
         """The fitted kernel's component of type ``kind`` (the first one)."""
         return next(v for v in self.gp_.kernel_.get_params().values() if isinstance(v, kind))
@@ -155,3 +188,92 @@ class SpreadGP:
             f"RBF length scales {', '.join(f'{v:.3g}' for v in self.length_scales())} (input standard deviations), "
             f"unexplained run-to-run 1-sigma {tau:.2e} deg/h"
         )
+
+
+OUTLIER_ALPHA = 0.05
+"""Family-wise level of the wild-score test of `calibration_scale` (module docstring)."""
+HUBER_K = 2.0
+"""Huber's constant of `calibration_scale`'s scale (in units of the scale)."""
+_HUBER_BETA = float(
+    (2 * stats.norm.cdf(HUBER_K) - 1) - 2 * HUBER_K * stats.norm.pdf(HUBER_K) + 2 * HUBER_K**2 * stats.norm.sf(HUBER_K)
+)
+"""``E[min(Z^2, k^2)]`` for standard normal Z: Huber's scale is consistent at the normal."""
+
+
+@dataclass(frozen=True)
+class CalibrationScale:
+    """The calibration of an interval from ``n`` out-of-sample scores (`calibration_scale`).
+
+    Attributes
+    ----------
+    scale : float
+        ``c``: Huber's scale of the kept scores times ``inflation`` (dimensionless).
+    kept : ndarray of bool, shape (n,)
+        False for the wild scores left out.
+    inflation : float
+        The factor applied for the optimism of the scores (1: none).
+    raw_rms : float
+        The plain rms of all scores (for reports: what one wild score does to it).
+    """
+
+    scale: float
+    kept: np.ndarray
+    inflation: float
+    raw_rms: float
+
+    @property
+    def n_used(self) -> int:
+        """How many scores the scale rests on."""
+        return int(np.sum(self.kept))
+
+    @property
+    def wild(self) -> np.ndarray:
+        """Indices of the wild scores left out."""
+        return np.flatnonzero(~self.kept)
+
+    def multiplier(self, coverage: float) -> float:
+        """Half-width of the interval in units of a run's 1-sigma: ``t_{n_used - 1}((1 + coverage)/2) c``."""
+        return float(stats.t.ppf(0.5 + coverage / 2.0, self.n_used - 1) * self.scale)
+
+
+def _huber_scale(z: np.ndarray) -> float:
+    """Huber's proposal-2 scale of ``z`` about 0 (module docstring), by fixed-point iteration from the rms."""
+    z2 = z**2
+    c2 = float(np.mean(z2))
+    if c2 == 0.0:
+        return 0.0
+    for _ in range(200):
+        new = float(np.mean(np.minimum(z2, HUBER_K**2 * c2)) / _HUBER_BETA)
+        if abs(new - c2) <= 1e-12 * c2:
+            c2 = new
+            break
+        c2 = new
+    return math.sqrt(c2)
+
+
+def calibration_scale(scores, *, inflation: float = 1.0) -> CalibrationScale:
+    """The robust scale of out-of-sample ``scores`` (dimensionless, signed) with wild ones left out (module
+    docstring); ``inflation`` multiplies it (the model's correction for tuning on the same residuals). Needs at
+    least 3 finite scores."""
+    z = np.asarray(scores, float).ravel()
+    if z.size < 3 or not np.all(np.isfinite(z)):
+        raise InputError(f"the interval's calibration needs at least 3 finite scores, got {z.size}")
+    kept = np.ones(z.size, bool)
+    for _ in range(z.size // 4):
+        idx = np.flatnonzero(kept)
+        m = idx.size
+        i = idx[np.argmax(np.abs(z[idx]))]
+        others = z[idx[idx != i]]
+        rms_others = math.sqrt(float(np.mean(others**2)))
+        if rms_others == 0.0:
+            break
+        p = 2.0 * float(stats.t.sf(abs(z[i]) / rms_others, m - 1))
+        if p >= OUTLIER_ALPHA / m:
+            break
+        kept[i] = False
+    return CalibrationScale(
+        scale=_huber_scale(z[kept]) * float(inflation),
+        kept=kept,
+        inflation=float(inflation),
+        raw_rms=math.sqrt(float(np.mean(z**2))),
+    )

@@ -211,6 +211,7 @@ def fit(
 
     check_output_file(out, inputs=[data], recognise=MODEL_FILE_RECOGNISER, what="model file")
     runs = _read_runs(data, lat0_deg, True, split)
+    _warn_labels_beyond_rlg(data, runs)
     if split is None and any(runs.split):
         click.echo(
             f"note: {data} has a split column; training on all {len(runs)} rows "
@@ -288,6 +289,7 @@ def fit(
                 "gamma": float(est.gamma),
                 "sigma": float(est.sigma),
                 "loo_mae_deg_h": loo_mae,
+                "interval": model.interval_summary(0.9),
                 "warnings": list(model.fit_warnings()),
             }
         )
@@ -305,6 +307,25 @@ def fit(
         if prior is not None:
             why += f"; pooled k_z prior {prior[0]:.3e} +- {prior[1]:.3e} deg/h/degC"
         click.echo(f"note: physics base: {model.physics_column_} ({why})", err=True)
+    click.echo(f"note: {model.interval_note(0.9)}", err=True)
+
+
+def _warn_labels_beyond_rlg(data, runs) -> None:
+    """A 'warning:' line naming the runs whose drift_deg_h label is beyond a navigation-grade RLG (fit goes on:
+    such a fleet may be real, and every drift its model then predicts that far is flagged too)."""
+    from gyrodrift.runs import NAVIGATION_GRADE_DRIFT_DEG_H, drift_range_problems
+
+    bad = [i for i, why in enumerate(drift_range_problems(runs.drift_deg_h)) if why]
+    if bad:
+        shown = ", ".join(f"{runs.run[i]} ({runs.drift_deg_h[i]:.6g})" for i in bad[:10]) + (
+            " ..." if len(bad) > 10 else ""
+        )
+        click.echo(
+            f"warning: {data}, column drift_deg_h: {len(bad)} of {len(runs)} label(s) beyond a navigation-grade RLG's "
+            f"{NAVIGATION_GRADE_DRIFT_DEG_H:g} deg/h, rows of run(s) {shown}: drift_deg_h is in deg/h (a table in "
+            "mdeg/h?); the model will predict drifts of that size",
+            err=True,
+        )
 
 
 @click.command(epilog="Example: gyrodrift predict runs.csv --model model.json --coverage 0.9")
@@ -346,7 +367,8 @@ def predict(data, model_file, out, coverage, lat0_deg, split, as_json, fmt, quie
 
     Runs whose inputs lie outside the training runs' range (per input, or jointly) get
     outside_training_range = 1 and a warning line on stderr: their drift is an extrapolation, and their
-    interval (--coverage) is wider there.
+    interval (--coverage) is wider there. A drift beyond a navigation-grade RLG's 0.1 deg/h, or far outside the
+    training labels' range, gets outside_drift_range = 1 and a warning line.
     """
     import numpy as np
 
@@ -380,12 +402,19 @@ def predict(data, model_file, out, coverage, lat0_deg, split, as_json, fmt, quie
     check = model.check_inputs(runs)
     for line in check.messages(runs):
         click.echo(f"warning: {line}", err=True)
+    from gyrodrift.runs import drift_range_problems
+
+    implausible = drift_range_problems(pred, model.training_["runs"].drift_deg_h)
+    for name, why in zip(runs.run, implausible, strict=True):
+        if why:
+            click.echo(f"warning: run {name}: identified drift {why}", err=True)
     rows = []
     for i, rec in enumerate(runs.records()):
         row = {"run": rec["run"], "drift_identified_deg_h": float(pred[i])}
         if coverage is not None:
             row["drift_lo_deg_h"], row["drift_hi_deg_h"] = float(lo[i]), float(hi[i])
         row["outside_training_range"] = int(check.outside[i])
+        row["outside_drift_range"] = int(implausible[i] is not None)
         if "drift_deg_h" in rec:
             row["drift_deg_h"] = rec["drift_deg_h"]
             row["error_deg_h"] = rec["drift_deg_h"] - float(pred[i])

@@ -7,11 +7,14 @@ error (`gyrodrift.baselines.physics_inversion`), the 12 h curve fit of the latit
 with its 1-sigma (`gyrodrift.curve_fit`), the 16 h smoother's drift with its 1-sigma (`gyrodrift.procedure.smoother`:
 the Cramer-Rao line of these 16 h) and the alignment's own z-drift estimate with its 1-sigma. The model's
 interval is a normalised cross-validation interval for the run's label (``DriftModel.predict_interval``, default
-coverage 90 %; conservative for the drift itself): the out-of-fold residuals of its training runs scaled by the
-spread of a Gaussian process with fitted length scales (`gyrodrift.spread`), wider where the run's inputs are
-far from the training runs'. A run outside the training runs' range (per input or jointly,
+coverage 90 %; conservative for the drift itself): the physics 1-sigmas and the spread of a Gaussian process
+with fitted length scales (`gyrodrift.spread`; wider where the run's inputs are far from the training runs'),
+scaled by the out-of-sample scores of its training runs; its note says on how many runs it rests and how much
+wider it is than the physics alone (``DriftModel.interval_note``). A run outside the training runs' range (per input or jointly,
 ``DriftModel.check_inputs``) is flagged (``outside_training_range``, ``range_warnings``): its drift is an
-extrapolation. ``model_std_deg_h`` stays None: the interval is empirical, not a Gaussian 1-sigma.
+extrapolation. A drift beyond a navigation-grade RLG's `gyrodrift.runs.NAVIGATION_GRADE_DRIFT_DEG_H`, or far
+outside the training labels' range (`gyrodrift.runs.drift_range_problems`), is flagged too (``outside_drift_range``,
+one more ``range_warnings`` line). ``model_std_deg_h`` stays None: the interval is empirical, not a Gaussian 1-sigma.
 
 A hybrid whose physics base is the fleet-prior smoother (``DriftModel.physics_column_ ==
 "drift_smoother_fleet_deg_h"``) gets the run's smoother columns, its thermal ones included (``features_run_table``),
@@ -34,6 +37,7 @@ from gyrodrift.procedure.features import extract_features, features_run_table
 from gyrodrift.procedure.noise import SensorNoise
 from gyrodrift.procedure.results import Identification, RunFeatures
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
+from gyrodrift.runs import drift_range_problems
 
 __all__ = ["identify", "fleet_base", "model_physics_column", "FLEET_BASE", "NO_UNCERTAINTY_NOTE", "INTERVAL_NOTE"]
 
@@ -42,9 +46,9 @@ FLEET_BASE = "drift_smoother_fleet_deg_h"
 
 NO_UNCERTAINTY_NOTE = "the LSSVR gives a point estimate, no predictive uncertainty"
 INTERVAL_NOTE = (
-    "normalised cross-validation interval of the run's label: the out-of-fold residuals of the model's {n} "
-    "training runs, scaled by the spread of a Gaussian process with fitted length scales at this run (empirical; "
-    "wider away from the training runs)"
+    "cross-validation interval of the run's label: the physics 1-sigma (label, base) and the learner's spread at "
+    "this run (a Gaussian process with fitted length scales: wider away from the training runs), scaled by the "
+    "out-of-sample scores of the model's training runs; {summary}"
 )
 
 
@@ -131,7 +135,7 @@ def identify(
         n = len(model.loo_residuals_deg_h)
         _, lo, hi = model.predict_interval(table, coverage)
         if math.isfinite(lo[0]) and math.isfinite(hi[0]):
-            interval, note = (float(lo[0]), float(hi[0])), INTERVAL_NOTE.format(n=n)
+            interval, note = (float(lo[0]), float(hi[0])), INTERVAL_NOTE.format(summary=model.interval_note(coverage))
         else:
             note = (
                 f"{NO_UNCERTAINTY_NOTE}; its {n} training runs are too few for a {100 * coverage:g} % "
@@ -139,6 +143,8 @@ def identify(
             )
     physics = float(physics_inversion(table, t_h=features.hours)[0])
     check = model.check_inputs(table)
+    implausible = drift_range_problems([drift], model.training_["runs"].drift_deg_h)[0]
+    warnings = tuple(check.messages(table)) + (() if implausible is None else (f"identified drift {implausible}",))
     err, kind = _training_error(model)
     base_column = model_physics_column(model)
     prior = getattr(model, "coefficient_prior_", None) if base_column == FLEET_BASE else None
@@ -162,7 +168,8 @@ def identify(
         smoother_drift_deg_h=features.drift_smoother_deg_h,
         smoother_drift_std_deg_h=features.drift_smoother_std_deg_h,
         outside_training_range=bool(check.outside[0]),
-        range_warnings=tuple(check.messages(table)),
+        range_warnings=warnings,
+        outside_drift_range=implausible is not None,
         model_physics_column=base_column,
         smoother_fleet_drift_deg_h=float(fleet[0]),
         smoother_fleet_drift_std_deg_h=float(fleet[1]),
