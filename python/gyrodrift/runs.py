@@ -58,6 +58,12 @@ TEMPERATURE_LIMITS_C = (-100.0, 200.0)
 """Plausible system temperatures [deg C], inclusive: every reader (run tables, IMU logs) refuses the rest (a
 kelvin value such as 303, or 1e6)."""
 
+NAVIGATION_GRADE_DRIFT_DEG_H = 0.1
+"""Largest axial drift [deg/h] of a navigation-grade RLG (`drift_range_problems`): its bias is at most about
+0.01 deg/h (the 1 nmi/h class), the paper's 32 runs lie within +-0.0035 deg/h; ten times that bias is no
+navigation-grade gyro (a tactical one drifts 1-10 deg/h). A table written in mdeg/h (0.2-3.5 for the paper's
+runs) lies beyond it in every row. Drifts beyond 10 deg/h are refused outright as no RLG at all."""
+
 SMOOTHER_THERMAL_COLUMNS = (
     "smoother_coeff_deg_h_per_c",
     "smoother_coeff_std_deg_h_per_c",
@@ -458,6 +464,32 @@ def _check_optional(where: str, key: str, value: float) -> None:
         )
     if ("_std_" in key) and not value > 0:
         raise RunTableError(f"{where}, column {key}: expected a 1-sigma > 0 {unit}, got {value}")
+
+
+def drift_range_problems(drift_deg_h, labels_deg_h=None) -> list[str | None]:
+    """Why each drift [deg/h] is implausible, or None: beyond a navigation-grade RLG's
+    `NAVIGATION_GRADE_DRIFT_DEG_H`, or far outside the training labels `labels_deg_h` [deg/h] (beyond their range
+    by more than its width: a model that extrapolates that far has left what it learned). Used by ``fit`` on its
+    labels and by ``predict`` and ``identify`` on their drifts (flagged, not refused: the drift may be real)."""
+    d = np.atleast_1d(np.asarray(drift_deg_h, dtype=float))
+    lim = NAVIGATION_GRADE_DRIFT_DEG_H
+    labels = None if labels_deg_h is None else np.asarray(labels_deg_h, dtype=float)
+    labels = None if labels is None or not np.isfinite(labels).any() else labels[np.isfinite(labels)]
+    out: list[str | None] = []
+    for x in d:
+        why = []
+        if math.isfinite(x) and abs(x) > lim:
+            why.append(f"|{x:.6g}| deg/h is beyond a navigation-grade RLG's {lim:g} deg/h (a table in mdeg/h?)")
+        if labels is not None and math.isfinite(x):
+            lo, hi = float(labels.min()), float(labels.max())
+            w = hi - lo
+            if x < lo - w or x > hi + w:
+                why.append(
+                    f"{x:.6g} deg/h is far outside the training labels' range [{lo:.6g}, {hi:.6g}] deg/h (beyond it "
+                    "by more than its width)"
+                )
+        out.append("; ".join(why) if why else None)
+    return out
 
 
 def _check_unique_runs(runs: list[str], source: str) -> None:

@@ -527,6 +527,9 @@ class Identification:
         The run's inputs lie outside the model's training runs' range (per input or jointly): an extrapolation.
     range_warnings : tuple of str
         What lies outside, one line each.
+    outside_drift_range : bool
+        The identified drift is beyond a navigation-grade RLG or far outside the training labels' range
+        (`gyrodrift.runs.drift_range_problems`; its line is in ``range_warnings``).
     model_physics_column : str or None
         The physics base of a hybrid model (``DriftModel.physics_column_``, e.g. ``"drift_smoother_fleet_deg_h"``);
         None for a model fitted on the drift itself.
@@ -555,6 +558,7 @@ class Identification:
     curvefit_drift_std_deg_h: float = math.nan
     outside_training_range: bool = False
     range_warnings: tuple[str, ...] = ()
+    outside_drift_range: bool = False
     smoother_drift_deg_h: float = math.nan
     smoother_drift_std_deg_h: float = math.nan
     model_physics_column: str | None = None
@@ -588,6 +592,7 @@ class Identification:
             ),
             "outside_training_range": self.outside_training_range,
             "range_warnings": list(self.range_warnings),
+            "outside_drift_range": self.outside_drift_range,
             "alignment_z_drift_deg_h": self.alignment_z_drift_deg_h,
             "alignment_z_drift_std_deg_h": self.alignment_z_drift_std_deg_h,
             "model_std_deg_h": self.model_std_deg_h,
