@@ -69,8 +69,10 @@ from __future__ import annotations
 
 import itertools
 import math
+import operator
 import warnings
 from collections.abc import Iterable
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 from scipy.linalg import lapack
@@ -380,7 +382,7 @@ def lssvr_loo_residuals(K, y, gamma) -> np.ndarray:
     return _loo_from_factor(U, alpha, p, s)
 
 
-def rbf_batch_errors(sqdist, y, gammas, sigmas, kind: str = "train", weights=None) -> np.ndarray:
+def rbf_batch_errors(sqdist, y, gammas, sigmas, kind: str = "train", weights=None, threads: int = 1) -> np.ndarray:
     """Per-sample errors of m RBF-LSSVMs (one per (gamma, sigma) candidate) on one training set.
 
     The tuner's workhorse: the squared distances are computed once (:func:`gyrodrift.kernels.
@@ -403,6 +405,9 @@ def rbf_batch_errors(sqdist, y, gammas, sigmas, kind: str = "train", weights=Non
         residuals ``y_i - f_(-i)(x_i)`` (see :func:`lssvr_loo_residuals`).
     weights : array_like, shape (n,), optional
         Sample weights of a weighted LS-SVM (module docstring): ``H = K + diag(1/(gamma w))``.
+    threads : int, default 1
+        For n > 32, the candidates are shared among this many threads (the rows do not depend on it). Give the
+        BLAS one thread meanwhile (``threadpoolctl``), as ``gyrodrift.tuning.tune_lssvr`` does.
 
     Returns
     -------
@@ -470,12 +475,24 @@ def rbf_batch_errors(sqdist, y, gammas, sigmas, kind: str = "train", weights=Non
             raise ValueError(f"{name}[{bad[0]}] must be a finite number > 0, got {float(values[bad[0]])!r}")
 
     w = check_sample_weight(weights, n)
+    threads = _check_threads(threads)
     if n <= _STACKED_MAX_N:
         try:
             return _rbf_batch_stacked(D, y, g, sg, kind, w)
         except np.linalg.LinAlgError:
             pass  # a non-PD candidate spoils the whole stack: redo candidate by candidate
-    return _rbf_batch_loop(D, y, g, sg, kind, w)
+    return _rbf_batch_loop(D, y, g, sg, kind, w, threads)
+
+
+def _check_threads(threads) -> int:
+    """``threads`` as an int >= 1, else ``ValueError``."""
+    try:
+        value = operator.index(threads)
+    except TypeError:
+        value = 0
+    if isinstance(threads, bool) or value < 1:
+        raise ValueError(f"threads must be an int >= 1, got {threads!r}")
+    return value
 
 
 #: Largest n for which :func:`rbf_batch_errors` stacks the candidates (see its Notes).
@@ -512,9 +529,11 @@ def _rbf_batch_stacked(D, y, g, sg, kind, w=None):
     return out
 
 
-def _rbf_batch_loop(D, y, g, sg, kind, w=None):
+def _rbf_batch_loop(D, y, g, sg, kind, w=None, threads: int = 1):
     """Candidate by candidate with LAPACK ``dpotrf``/``dpotrs``/``dtrtri``; non-PD rows are +inf. Candidates sharing
-    one sigma, ``EIG_MIN_GROUP`` or more of them, come from one :class:`RBFEigenSystem` instead."""
+    one sigma, ``EIG_MIN_GROUP`` or more of them, come from one :class:`RBFEigenSystem` instead. ``threads`` > 1:
+    the candidates are shared among that many threads (scipy's LAPACK wrappers release the GIL; each candidate is
+    computed exactly as alone, so the rows do not depend on ``threads``)."""
     n = D.shape[0]
     out = np.empty((g.size, n))
     B = np.column_stack([np.ones(n), y])
@@ -525,14 +544,15 @@ def _rbf_batch_loop(D, y, g, sg, kind, w=None):
         rows = np.flatnonzero(inverse == k)
         out[rows] = RBFEigenSystem(D, float(values[k]), w).errors(g[rows], y, kind)
         alone[rows] = False
-    for j in np.flatnonzero(alone):
+
+    def candidate(j: int) -> None:
         H = rbf_from_squared_distances(D, sg[j])
         H.flat[diag] += 1.0 / g[j] if w is None else 1.0 / (g[j] * w)
         anorm = _one_norm(H)
         U = _cholesky_upper(H)
         if U is None or not _condition_number(U, anorm) < COND_REFUSE:  # as LSSVR.fit refuses it
             out[j] = np.inf
-            continue
+            return
         pq = _cho_solve(U, B)
         p, q = pq[:, 0], pq[:, 1]
         s = p.sum()
@@ -541,6 +561,14 @@ def _rbf_batch_loop(D, y, g, sg, kind, w=None):
             out[j] = alpha / g[j] if w is None else alpha / (g[j] * w)
         else:
             out[j] = _loo_from_factor(U, alpha, p, s)
+
+    todo = [int(j) for j in np.flatnonzero(alone)]
+    if threads > 1 and len(todo) > 1:
+        with ThreadPoolExecutor(min(threads, len(todo))) as pool:
+            list(pool.map(candidate, todo))
+    else:
+        for j in todo:
+            candidate(j)
     return out
 
 

@@ -16,12 +16,17 @@ BLAS threads: :func:`tune_lssvr` runs its thousands of small factorisations with
 (``threadpoolctl``, a dependency of scikit-learn). OpenBLAS's own threads cost more than they give on matrices of
 this size, and on a loaded machine they wait for each other: one 10-iteration CPSO run on 200 synthetic runs took
 44.6 s with the default threads and 2.05 s with one, measured in the same process on the shared 2-core development
-machine (``benchmarks/bench_tuning.py`` prints the ratio on any machine).
+machine (``benchmarks/bench_learning_scale.py`` prints the ratio on any machine). Instead, the candidates of each
+swarm evaluation are shared among ``os.cpu_count()`` threads (scipy's LAPACK wrappers release the GIL: a Python
+thread keeps counting during their calls; the values do not depend on it). On the loaded development machine this
+gained nothing measurable (the process got a fifth of a core); on a quiet 2-core machine it should halve the tuning
+time for n > 32 (not measured there).
 """
 
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -153,12 +158,13 @@ def _kfold_errors(sqdist: np.ndarray, y: np.ndarray, gammas, sigmas, n_folds: in
     return errors
 
 
-def make_objective(X, y, objective: str = "loo_mae", *, n_folds: int = 5, sample_weight=None):
+def make_objective(X, y, objective: str = "loo_mae", *, n_folds: int = 5, sample_weight=None, threads: int = 1):
     """A vectorised objective ``f(params) -> fitness`` for (gamma, sigma) rows of ``params`` (shape (m, 2)).
 
     ``X`` is the scaled input matrix (n, d), ``y`` the targets (n,). Failed factorisations give +inf. With
     ``sample_weight`` (w_i > 0) the LSSVMs are weighted (``gyrodrift.lssvr``) and the fitness is the weighted
-    mean absolute error ``sum w_i |e_i| / sum w_i``.
+    mean absolute error ``sum w_i |e_i| / sum w_i``. ``threads``: the candidates of one call are shared among that
+    many threads (``gyrodrift.lssvr.rbf_batch_errors``; the values do not depend on it).
     """
     if objective not in OBJECTIVES:
         raise OptionError(f"unknown objective {objective!r}; expected one of {', '.join(OBJECTIVES)}")
@@ -178,7 +184,7 @@ def make_objective(X, y, objective: str = "loo_mae", *, n_folds: int = 5, sample
             errors = _kfold_errors(sqdist, y, gammas, sigmas, n_folds, w)
         else:
             kind = "train" if objective == "train_mae" else "loo"
-            errors = rbf_batch_errors(sqdist, y, gammas, sigmas, kind, w)
+            errors = rbf_batch_errors(sqdist, y, gammas, sigmas, kind, w, threads)
         out = np.mean(np.abs(errors), axis=1) if w is None else np.abs(errors) @ w / w.sum()
         return np.where(np.isfinite(out), out, np.inf)
 
@@ -215,7 +221,8 @@ def tune_lssvr(
     if method not in METHODS:
         raise OptionError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
     bounds = check_bounds(bounds)
-    fun = make_objective(X, y, objective, n_folds=n_folds, sample_weight=sample_weight)
+    threads = os.cpu_count() or 1  # module docstring: "BLAS threads"
+    fun = make_objective(X, y, objective, n_folds=n_folds, sample_weight=sample_weight, threads=threads)
     with threadpool_limits(limits=1, user_api="blas"):  # module docstring: "BLAS threads"
         if method == "grid":
             if grid_size < 2:
