@@ -190,3 +190,56 @@ def test_read_toml_reads_at_most_its_limit_plus_one_byte(tmp_path, monkeypatch):
     with pytest.raises(ValueError, match="more than 100 bytes; a scenario holds at most 100"):
         read_toml(path, ValueError, expected="a scenario", max_bytes=100)
     assert sum(seen) == 101
+
+
+# --- an output location that cannot be written is found before the work -----------------------------------------
+
+
+@pytest.fixture
+def unwritable(tmp_path):
+    """(a folder nothing can be written in, the reason the message gives): a read-only tmpfs as root, else a
+    folder without write permission."""
+    import subprocess
+    import sys
+
+    loc = tmp_path / "ro"
+    loc.mkdir()
+    if sys.platform.startswith("linux") and os.geteuid() == 0:
+        mount = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=1m,ro", "tmpfs", str(loc)], capture_output=True)
+        if mount.returncode != 0:
+            pytest.skip("root without mount: no unwritable folder to test with")
+        try:
+            yield loc, "read-only file system"
+        finally:
+            subprocess.run(["umount", "-l", str(loc)], check=False)
+        return
+    loc.chmod(0o555)
+    try:
+        yield loc, "permission denied"
+    finally:
+        loc.chmod(0o755)
+
+
+def test_an_unwritable_output_location_is_refused_before_the_work(tmp_path, monkeypatch, unwritable):
+    """`reproduce --out` under a read-only parent failed after 751 s of work; now every writer checks first."""
+    import gyrodrift.reproduce
+
+    loc, reason = unwritable
+    work = []
+    monkeypatch.setattr(gyrodrift.reproduce, "run_reproduction", lambda **kw: work.append(kw) or {})
+    scenario = tmp_path / "t.toml"
+    scenario.write_text("[run]\nduration_h = 0.01\nrate_hz = 10.0\n")
+    runs = tmp_path / "runs.csv"
+    runs.write_text("run,drift_deg_h\n")  # never read: the output is checked first
+    cases = {
+        "reproduce": (["reproduce", "--out", loc / "repro"], f"{loc / 'repro'}: cannot be created in {loc}"),
+        "reproduce --out LOC": (["reproduce", "--out", loc], f"{loc}: cannot be written"),
+        "simulate": (["simulate", scenario, "--out", loc / "a" / "b"], f"{loc / 'a' / 'b'}: cannot be created in"),
+        "fit": (["fit", runs, "--out", loc / "m.json"], f"{loc / 'm.json'}: cannot be written"),
+    }
+    for name, (args, where) in cases.items():
+        result = _run(args)
+        assert result.exit_code == 1, (name, result.output)
+        line = _error_line(result)
+        assert where in line and line.endswith(reason), (name, line)
+    assert work == [] and sorted(os.listdir(loc)) == []

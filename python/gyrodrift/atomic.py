@@ -241,6 +241,24 @@ def _same_file(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
         return os.path.realpath(a) == os.path.realpath(b)
 
 
+def _unwritable_reason(folder: Path) -> str | None:
+    """Why files cannot be created, renamed and removed in the existing `folder` ("read-only file system",
+    "permission denied"), or None. Asked of the file system (``access(W_OK | X_OK)``, which also reports a
+    read-only mount to root), without writing anything: the check before the work that the publication at
+    its end would otherwise be the first to fail."""
+    try:
+        if os.access(folder, os.W_OK | os.X_OK):
+            return None
+    except (OSError, ValueError):  # pragma: no cover - the publication says why
+        return None
+    try:
+        if os.statvfs(folder).f_flag & getattr(os, "ST_RDONLY", 1):
+            return _REASONS[errno.EROFS]
+    except (OSError, AttributeError):  # pragma: no cover - no statvfs (Windows)
+        pass
+    return _REASONS[errno.EACCES]
+
+
 def _head(path: Path) -> bytes:
     with open(path, "rb") as fh:
         return fh.read(_HEAD_BYTES)
@@ -295,6 +313,7 @@ def check_output_file(
     except FileNotFoundError:
         if not real.parent.is_dir():
             raise _fail(given, f"the folder {Path(given).parent} does not exist") from None
+        _check_writable(given, real.parent)
         return real
     except OSError as exc:
         raise _fail(given, os_error_reason(exc)) from None
@@ -311,7 +330,16 @@ def check_output_file(
                 f"exists and is not a {what} written by gyrodrift; gyrodrift replaces only its own outputs: "
                 "choose a new name, or move the file away yourself",
             )
+    _check_writable(given, real.parent)
     return real
+
+
+def _check_writable(given: str | os.PathLike[str], folder: Path) -> None:
+    """`OutputError` naming `given` if nothing can be written in `folder` (its output's folder), before the work."""
+    reason = _unwritable_reason(folder)
+    if reason is not None:
+        where = "" if Path(os.fspath(given)).parent.resolve() == folder.resolve() else f" (in {folder})"
+        raise _fail(given, f"cannot be written{where}: {reason}")
 
 
 @contextlib.contextmanager
@@ -830,6 +858,9 @@ class OutputFolder:
                 ancestor = ancestor.parent
             if ancestor.exists() and not ancestor.is_dir():
                 raise _fail(folder, f"cannot be created: {ancestor} is not a folder") from None
+            reason = _unwritable_reason(ancestor)
+            if reason is not None:
+                raise _fail(folder, f"cannot be created in {ancestor}: {reason}") from None
             return
         except OSError as exc:
             raise _fail(folder, os_error_reason(exc)) from None
@@ -852,6 +883,9 @@ class OutputFolder:
                 f"holds files gyrodrift did not write or that changed since ({shown}); gyrodrift writes only into "
                 "a new or empty folder or one holding only its own outputs: choose another --out folder",
             )
+        reason = _unwritable_reason(folder)
+        if reason is not None:
+            raise _fail(folder, f"cannot be written: {reason}")
 
     @contextlib.contextmanager
     def publish(self) -> Iterator[Stage]:
