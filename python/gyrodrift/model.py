@@ -696,15 +696,18 @@ class DriftModel(Pipeline):
         prior = self.coefficient_prior_ if column == FLEET_PHYSICS else None
         return physics_estimate(runs, column, prior=prior, with_std=with_std)
 
-    def fit(self, X, y=None, *, spread_theta=None, interval_calibration=None, **params) -> DriftModel:
+    def fit(
+        self, X, y=None, *, spread_theta=None, interval_calibration=None, interval_disagreement=None, **params
+    ) -> DriftModel:
         """Fit on runs (RunTable or structured array) and drifts ``y`` [deg/h] (default: the runs' own).
 
         With ``label_weighting="auto"`` and a ``drift_std_deg_h`` value for every run the LS-SVM is weighted
         by ``label_weights``; with ``target="residual"`` it is fitted on ``y`` minus the physics estimate.
         Then the interval's spread model (`gyrodrift.spread.SpreadGP`) and its calibration scores (module
-        docstring). ``spread_theta`` and ``interval_calibration`` (out-of-fold residuals and spreads, a model
-        file's record) are used as given: no likelihood is maximised and no fold is refitted, how a saved model
-        is rebuilt.
+        docstring). ``spread_theta``, ``interval_calibration`` (out-of-sample residuals and spreads) and
+        ``interval_disagreement`` (``disagreement_deg_h_``), a model file's record, are used as given: no
+        likelihood is maximised, no fold refitted, no leave-one-out spread or training prediction computed: how a
+        saved model is rebuilt.
         """
         self._check_options()
         runs = as_run_table(X)
@@ -740,7 +743,9 @@ class DriftModel(Pipeline):
         cov = np.atleast_2d(np.cov(Z, rowvar=False))
         self.input_precision_ = np.linalg.pinv(cov)
         self.mahalanobis_limit_ = float(self._mahalanobis(Z).max())
-        self.spread_ = SpreadGP(theta=spread_theta).fit(Z, trained.drift_deg_h - base, noise_std)
+        self.spread_ = SpreadGP(theta=spread_theta).fit(
+            Z, trained.drift_deg_h - base, noise_std, loo=interval_calibration is None
+        )
         if interval_calibration is not None:
             residuals, spreads = (np.asarray(v, float) for v in interval_calibration)
             if not (residuals.shape == spreads.shape == (len(trained),)) or not np.all(np.isfinite(residuals)):
@@ -757,7 +762,9 @@ class DriftModel(Pipeline):
         inflation = tuning_inflation(len(trained)) if tuned and self.calibration_folds == 0 else 1.0
         self.interval_scale_: CalibrationScale = calibration_scale(self.interval_scores_, inflation=inflation)
         self.learned_cap_deg_h_ = self.spread_.prior_std()
-        self.disagreement_deg_h_ = float(np.max(self._disagreement(Z)))
+        self.disagreement_deg_h_ = (
+            float(np.max(self._disagreement(Z))) if interval_disagreement is None else float(interval_disagreement)
+        )
         self.physics_std_deg_h_ = np.sqrt(noise_var)  # the training runs' physics-known 1-sigma (label, base)
         if interval_calibration is None:  # a loaded model's file carries the warning already
             for text in self.interval_warnings():
@@ -927,18 +934,19 @@ class DriftModel(Pipeline):
         """What the interval rests on: ``n_runs`` (training runs), ``n_used`` (scores in its scale),
         ``wild_runs`` (left out: `interval_warnings`), ``scale`` (c, inflation included), ``inflation``,
         ``multiplier`` (t c at ``coverage``), ``learned_cap_deg_h``, and ``physics_ratio``: the median over the
-        training runs of the half-width over the physics alone's (the normal quantile times
-        ``sqrt(s_rms^2 + b^2)``; None when the physics gives no 1-sigma)."""
+        training runs of the half-width at their out-of-sample 1-sigma, ``t c sqrt(m_i^2 + p_i^2)``, over the
+        physics alone's, ``z p_i`` (``p_i = sqrt(s_i^2 + b_i^2)`` the run's label and base 1-sigma, ``m_i`` the
+        learner's, ``z`` the normal quantile; None when the physics gives no 1-sigma). O(n): no prediction."""
         coverage = _check_coverage(coverage)
         check_is_fitted(self, "interval_scale_")
         cal = self.interval_scale_
         train = self.training_["runs"]
-        learned, physics = self._interval_sigmas(train)
         mult = cal.multiplier(coverage)
+        physics = self.physics_std_deg_h_
         ratio = None
         if np.all(physics > 0):
             z = float(stats.norm.ppf(0.5 + coverage / 2.0))
-            ratio = float(np.median(mult * np.sqrt(learned**2 + physics**2) / (z * physics)))
+            ratio = float(np.median(mult * np.hypot(self.interval_spreads_, physics) / (z * physics)))
         return {
             "coverage": coverage,
             "n_runs": len(train),

@@ -112,9 +112,10 @@ class SpreadGP:
         self.n_restarts = n_restarts
         self.random_state = random_state
 
-    def fit(self, Z, y, label_std=None) -> SpreadGP:
+    def fit(self, Z, y, label_std=None, *, loo: bool = True) -> SpreadGP:
         """Fit on inputs ``Z`` (n_runs, n_inputs), targets ``y`` (n_runs,) and label 1-sigmas ``label_std``
-        (n_runs,; same unit as y; None or NaN: unknown, taken as 0)."""
+        (n_runs,; same unit as y; None or NaN: unknown, taken as 0). ``loo=False`` skips ``loo_std_`` (an
+        n x n inverse: not needed when the calibration is given, as on loading a model file)."""
         Z = np.asarray(Z, float)
         y = np.asarray(y, float)
         n = len(y)
@@ -145,8 +146,9 @@ class SpreadGP:
         self.gp_ = gp
         self.z_max_sq_ = float(np.max(np.sum(self._z(Z) ** 2, axis=1)))
         self.theta_ = np.array(gp.kernel_.theta, float)
-        inv_diag = np.diag(cho_solve((gp.L_, True), np.eye(n)))
-        self.loo_std_ = self.y_scale_ / np.sqrt(inv_diag)
+        if loo:
+            inv_diag = np.diag(cho_solve((gp.L_, True), np.eye(n)))
+            self.loo_std_ = self.y_scale_ / np.sqrt(inv_diag)
         return self
 
     def _z(self, Z) -> np.ndarray:
