@@ -150,6 +150,13 @@ def test_an_impossible_campaign_is_refused_before_simulating(tmp_path):
     check_feasible(campaign('[vary."run.duration_h"]\ndist = "choice"\nvalues = [1.5, 2.0]\n'))  # some fail
     check_feasible(campaign('[vary."run.duration_h"]\ndist = "normal"\nmean = 1.5\nstd = 0.1\n'))  # unbounded
     check_feasible(campaign(""))  # exactly the 2 h needed
+    # a moving base: the vehicle must stand still over the whole time line (else every drift is silently wrong)
+    drive = '[base.trajectory]\nstatic_h = 1.5\nsegments = [{ kind = "straight", duration_s = 60 }]\n'
+    with pytest.raises(
+        CampaignError, match=r"c.toml: \[base.trajectory\] static_h: the vehicle drives off at 1.5 h, befo"
+    ):
+        check_feasible(campaign(drive))
+    check_feasible(campaign(drive.replace("static_h = 1.5", "static_h = 2.0")))
 
 
 def test_every_run_failed_exits_1_and_some_failed_is_said(tmp_path):

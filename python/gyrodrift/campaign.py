@@ -403,14 +403,14 @@ def check_feasible(campaign: Campaign) -> None:
     """Refuse, before anything is simulated, a campaign whose every run would fail: runs shorter than the
     procedure's time line (``[options]`` align_h + the longer of features_h and truth_h) by more than one sample
     even at the longest duration the campaign can draw (`CampaignError` naming the keys). Runs of which only
-    some are too short are left to fail one by one (their rows carry the error)."""
+    some are too short are left to fail one by one (their rows carry the error). A moving base (`_check_static`)
+    must stand still over that whole time line in every run."""
     timeline = _timeline(campaign.options)
     need_h = timeline.align_h + max(timeline.features_h, timeline.truth_h)
+    _check_static(campaign, need_h)
     first = campaign.scenario(0).run
     if "run.duration_h" in campaign.vary:
         longest_h, key = _largest(campaign.vary["run.duration_h"]), '[vary."run.duration_h"]'
-    elif any(k.startswith("trajectory.") for k in campaign.vary) and "duration_h" not in campaign.base.get("run", {}):
-        return  # a varied trajectory sets each run's duration: no one value to check
     else:
         longest_h = first.duration_h
         key = "[base.run] duration_h" + ("" if "duration_h" in campaign.base.get("run", {}) else " (its default)")
@@ -433,6 +433,23 @@ def check_feasible(campaign: Campaign) -> None:
             f"{timeline.features_h:g}{names['features_h']} and truth_h = {timeline.truth_h:g}{names['truth_h']}): "
             f"give duration_h >= {need_h:g} h or shorten the [options] time line",
         )
+
+
+def _check_static(campaign: Campaign, need_h: float) -> None:
+    """A campaign's procedure is a static base's: a route (``[base.trajectory]`` with segments; not a varied
+    key) must not start before `need_h` [h] (the vehicle would move under the alignment, the features or the
+    truth, and every run would give a wrong drift without an error). `CampaignError` naming the key otherwise."""
+    route = campaign.scenario(0).trajectory
+    if route is None or not route.segments or route.static_h >= need_h - 1e-9:
+        return
+    given = "static_h" in campaign.base.get("trajectory", {})
+    raise _fail(
+        campaign.source,
+        "[base.trajectory] static_h" + ("" if given else " (default)"),
+        f"the vehicle drives off at {route.static_h:g} h, before the {need_h:g} h of static base the procedure "
+        "needs (align_h + the longer of features_h and truth_h, [options]): a campaign's runs are identified on a "
+        f"static base; give static_h >= {need_h:g} h",
+    )
 
 
 def load_campaign(path: str | os.PathLike[str]) -> Campaign:
