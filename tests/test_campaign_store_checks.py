@@ -167,6 +167,9 @@ def test_every_run_failed_exits_1_and_some_failed_is_said(tmp_path):
     _one_line_error(args, f"{out}: every run failed (2 of 2 with an error); first error: r000000: LogError:")
     assert len(read_runs(out)) == 2  # the failed runs are committed with their errors
     _one_line_error(args, f"{out}: every run failed (2 of 2 with an error)")  # a rerun still says so
+    table = tmp_path / "runs.csv"
+    _one_line_error(["campaign", str(out), "--run-table", str(table)], "every one of its 2 committed run(s) failed")
+    assert not table.exists()
     # some runs fail: exit 0, one line on stderr with how many and the first error
     mixed = _write(tmp_path, "mixed", '[vary."run.duration_h"]\ndist = "choice"\nvalues = [1.5, 2.0]\n', count=4)
     r = CliRunner().invoke(main, ["campaign", str(mixed), "--out", str(tmp_path / "m"), "--workers", "1", "--quiet"])

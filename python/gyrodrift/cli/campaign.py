@@ -70,7 +70,13 @@ def campaign_command(source, out, workers, scheduler, connect_timeout_s, limit, 
         if run_table is None and export_run is None:
             raise OptionError(f"{source} is a campaign folder: give --run-table FILE or --export-log N --out DIR")
         if run_table is not None:
-            n = write_run_table(read_runs(source, curves=False), run_table)
+            runs = read_runs(source, curves=False)
+            if not runs.ok.any():  # a header-only table `fit` would refuse: say why here, write nothing
+                from gyrodrift.campaign import CampaignFailedError
+
+                why = f"every one of its {len(runs)} committed run(s) failed" if len(runs) else "no run is committed"
+                raise CampaignFailedError(f"{source}: no successful run to write to {run_table}: {why}")
+            n = write_run_table(runs, run_table)
             say_wrote([run_table], quiet=quiet, as_json=as_json, detail=f"{n} run(s)")
         if export_run is not None:
             _export(store.campaign(), export_run, out, quiet, as_json)
