@@ -107,6 +107,7 @@ __all__ = [
     "NonFiniteResultError",
     "NotPositiveDefiniteError",
     "RBFEigenSystem",
+    "StoredSolutionError",
     "lssvr_solve",
     "lssvr_loo_residuals",
     "rbf_batch_errors",
@@ -149,6 +150,10 @@ NotPositiveDefiniteError = IllConditionedError
 
 class IllConditionedWarning(UserWarning):
     """``H = K + I/gamma`` is ill-conditioned (``cond > COND_WARN``): results may be off beyond 1e-3 relative."""
+
+
+class StoredSolutionError(InputError):
+    """A stored LSSVR solution (a model file's) that does not solve the LSSVM system it claims to solve."""
 
 
 class NonFiniteResultError(InputError):
@@ -987,7 +992,8 @@ class LSSVR(RegressorMixin, BaseEstimator):
         terms (a backward-stable solve leaves about ``n eps`` of it; an edited coefficient leaves far more, in every
         row its kernel reaches and in the sum). ``loo_residuals`` and ``condition_number`` are taken as stored (an
         O(n^3) inverse would be needed to recompute them); ``predictive_scale`` factorises ``H`` on first use.
-        Raises ``ValueError`` naming what does not hold. ``X`` (scaled inputs, n x d) and ``y`` as given to ``fit``.
+        Raises :class:`StoredSolutionError` (an ``InputError``, a ``ValueError``) naming what does not hold. ``X``
+        (scaled inputs, n x d) and ``y`` as given to ``fit``.
         """
         est = cls(gamma=gamma, sigma=sigma)
         gamma = check_positive("gamma", gamma)
@@ -998,10 +1004,10 @@ class LSSVR(RegressorMixin, BaseEstimator):
         alpha = np.asarray(alpha, dtype=float)
         loo = np.asarray(loo_residuals, dtype=float)
         if alpha.shape != (n,) or loo.shape != (n,) or not (np.all(np.isfinite(alpha)) and np.all(np.isfinite(loo))):
-            raise ValueError(f"the stored solution must hold {n} finite dual coefficients and LOO residuals")
+            raise StoredSolutionError(f"the stored solution must hold {n} finite dual coefficients and LOO residuals")
         b = float(intercept)
         if not abs(alpha.sum()) <= rtol * max(np.abs(alpha).sum(), np.finfo(float).tiny):
-            raise ValueError(f"the stored dual coefficients do not sum to 0 (sum {alpha.sum():.3g})")
+            raise StoredSolutionError(f"the stored dual coefficients do not sum to 0 (sum {alpha.sum():.3g})")
         rows = np.unique(np.linspace(0, n - 1, min(n, 32)).round().astype(int))
         Kr = rbf_from_squared_distances(squared_distances(X[rows], X), sigma)
         ridge = alpha[rows] / (gamma * (1.0 if w is None else w[rows]))
@@ -1010,7 +1016,7 @@ class LSSVR(RegressorMixin, BaseEstimator):
         bad = np.flatnonzero(~(np.abs(residual) <= rtol * size))
         if bad.size:
             i = int(rows[bad[0]])
-            raise ValueError(
+            raise StoredSolutionError(
                 f"the stored solution does not solve the LSSVM system at sample {i}: residual {residual[bad[0]]:.3g} "
                 f"against terms of size {size[bad[0]]:.3g} (gamma {gamma!r}, sigma {sigma!r})"
             )

@@ -500,12 +500,17 @@ class TunedLSSVR(RegressorMixin, BaseEstimator):
         self.random_state = random_state
         self.callback = callback
 
-    def fit(self, X, y, *, tuning: TuningResult | None = None, sample_weight=None) -> TunedLSSVR:
+    def fit(
+        self, X, y, *, tuning: TuningResult | None = None, sample_weight=None, solution: dict | None = None
+    ) -> TunedLSSVR:
         """Tune (unless fixed) and fit.
 
         ``tuning``, a :class:`~gyrodrift.tuning.TuningResult` of an earlier fit on the same data (a model
         file's record), skips the search and uses its gamma and sigma: how a saved model is rebuilt.
         ``sample_weight`` (> 0 per sample) weights the LS-SVM and the tuning fitness (``gyrodrift.lssvr``).
+        ``solution``, a model file's stored LSSVR solution (``alpha``, ``intercept``, ``loo_residuals``,
+        ``condition_number``), is used as given after `LSSVR.from_solution`'s O(32 n) check (with every sample
+        weight > 0): how a saved model is rebuilt without solving the n x n system.
         """
         X, y = _validate_data(self, X, y, dtype=np.float64, y_numeric=True, ensure_min_samples=2)
         if (self.gamma is None) != (self.sigma is None):
@@ -542,7 +547,11 @@ class TunedLSSVR(RegressorMixin, BaseEstimator):
                 warnings.warn(
                     search_bound_message(on_bound, gamma, sigma, tuning.bounds), SearchBoundWarning, stacklevel=2
                 )
-        self.lssvr_ = LSSVR(gamma=gamma, sigma=sigma).fit(X, y, sample_weight=sample_weight)
+        positive = sample_weight is None or bool(np.all(np.asarray(sample_weight, float) > 0))
+        if solution is not None and positive:
+            self.lssvr_ = LSSVR.from_solution(X, y, gamma=gamma, sigma=sigma, sample_weight=sample_weight, **solution)
+        else:
+            self.lssvr_ = LSSVR(gamma=gamma, sigma=sigma).fit(X, y, sample_weight=sample_weight)
         self.gamma_, self.sigma_ = float(gamma), float(sigma)
         self.tuning_ = tuning
         self.on_search_bound_ = on_bound

@@ -10,9 +10,10 @@ Layout (``schema_version`` 4)::
                       "n_particles": 30, "max_iter": 100, "w": 0.75, "c1": 2.0, "c2": 2.0, "chaos_steps": 10,
                       "grid_size": 40, "n_folds": 5, "random_state": 0 or null},
      "tuning": {...TuningResult...} or null,
-     "fitted": {"gamma": ..., "sigma": ..., "intercept_deg_h": ..., "condition_number": ...,
+     "fitted": {"gamma": ..., "sigma": ..., "intercept_deg_h": ..., "dual_coef_deg_h": [...],
+                "condition_number": ...,
                 "on_search_bound": [...], "loo_residuals_deg_h": [...], "spread_theta": [...],
-                "interval_residuals_deg_h": [...], "interval_spreads_deg_h": [...],
+                "interval_residuals_deg_h": [...], "interval_spreads_deg_h": [...], "interval_disagreement_deg_h": ...,
                 "physics_column": "drift_smoother_fleet_deg_h" or ... or null,
                 "coefficient_prior": [mean, std] or null},
      "warnings": ["...", ...],
@@ -28,15 +29,20 @@ and refuses a file whose record differs (to the bit). Schema 3 files (a concrete
 (before the hybrid model and weighted labels) as ``target = "drift"`` models with unweighted labels.
 
 Loading rebuilds the model with :func:`gyrodrift.model.make_drift_model` from the parameters and fits it on the
-training runs with the recorded tuning (no search is repeated); nothing is set into fitted scikit-learn
-internals. The same code and data give the same floats, so a loaded model reproduces the saved model's
-predictions to the bit (tested). ``fitted`` is a record for readers, checked against the refit, except two
-entries the refit takes as given: ``spread_theta`` (the log hyperparameters of the interval's Gaussian process,
-`gyrodrift.spread.SpreadGP`: no likelihood is maximised again) and ``interval_residuals_deg_h`` and
-``interval_spreads_deg_h`` (the interval's calibration from ``calibration_folds`` re-tuned folds: no fold is
-refitted). Files without them (written
-before) get both recomputed, with leave-one-out scores (``calibration_folds`` 0). Floats are written with
-``repr`` precision.
+training runs with the recorded tuning (no search is repeated) and the stored LSSVR solution: ``dual_coef_deg_h``
+(the dual coefficients alpha, deg/h, one per training run), ``intercept_deg_h``, ``loo_residuals_deg_h`` and
+``condition_number`` are taken as given (`gyrodrift.lssvr.LSSVR.from_solution`, no n x n system is solved) after
+a check that costs O(32 n): the coefficients sum to 0 and solve 32 rows of the LSSVM system for the recorded gamma,
+sigma and the training runs to 1e-9 of their terms (an edited coefficient, intercept, gamma or run is refused).
+Files without ``dual_coef_deg_h`` (written before) get the LSSVR solved again and its intercept and LOO residuals
+checked against the record to 1e-9. The same code and data give the same floats, so a loaded model reproduces the
+saved model's predictions to the bit (tested). Three more entries are taken as given: ``spread_theta`` (the log
+hyperparameters of the interval's Gaussian process, `gyrodrift.spread.SpreadGP`: no likelihood is maximised
+again), ``interval_residuals_deg_h`` and ``interval_spreads_deg_h`` (the interval's calibration: nothing is
+recomputed, and the Gaussian process skips its leave-one-out inverse) and ``interval_disagreement_deg_h`` (the
+largest LSSVR/GP disagreement over the training runs, ``DriftModel.disagreement_deg_h_``: no prediction on the
+training runs). Files without them (written before) get them recomputed, the calibration with leave-one-out scores
+(``calibration_folds`` 0). Floats are written with ``repr`` precision.
 
 Schema 1 files (gyrodrift before the pipeline model: fitted internals, no training runs) are refused with a
 message saying how to refit them.
@@ -156,12 +162,14 @@ def model_to_dict(model: DriftModel) -> dict:
             "gamma": float(lssvr.gamma),
             "sigma": float(lssvr.sigma),
             "intercept_deg_h": float(lssvr.intercept_),
+            "dual_coef_deg_h": np.asarray(lssvr.alpha_, float).tolist(),
             "condition_number": float(lssvr.condition_number_),
             "on_search_bound": list(est.on_search_bound_),
             "loo_residuals_deg_h": np.asarray(model.loo_residuals_deg_h, float).tolist(),
             "spread_theta": np.asarray(model.spread_.theta_, float).tolist(),
             "interval_residuals_deg_h": np.asarray(model.interval_residuals_, float).tolist(),
             "interval_spreads_deg_h": np.asarray(model.interval_spreads_, float).tolist(),
+            "interval_disagreement_deg_h": float(model.disagreement_deg_h_),
             "physics_column": model.physics_column_,
             "coefficient_prior": None if model.coefficient_prior_ is None else list(model.coefficient_prior_),
         },
@@ -356,6 +364,7 @@ def model_from_dict(doc: dict, where: str = "<model>") -> DriftModel:
     if training_digest(runs) != sha:
         raise ModelFileError(f"{where}: the training runs do not match their sha256 (key 'training.sha256'): edited?")
     spread = _spread_record(doc.get("fitted"), len(runs), where)
+    solution = _solution_record(doc.get("fitted"), len(runs), where)
     folds = doc.get("calibration_folds", 0)  # files written before the cross-validated calibration: LOO
     if isinstance(folds, bool) or not isinstance(folds, int) or folds < 0 or folds == 1:
         raise ModelFileError(f"{where}: key 'calibration_folds' must be 0 or an integer >= 2, got {folds!r}")
@@ -365,7 +374,7 @@ def model_from_dict(doc: dict, where: str = "<model>") -> DriftModel:
             # the file's "warnings" already say so; a loaded model does not repeat them
             warnings.simplefilter("ignore", SearchBoundWarning)
             warnings.simplefilter("ignore", IllConditionedWarning)
-            model.fit(runs, lssvr__tuning=tuning, **spread)
+            model.fit(runs, lssvr__tuning=tuning, lssvr__solution=solution, **spread)
             model.training_["left_out"] = list(left_out)
     except GyrodriftError as exc:
         raise ModelFileError(
@@ -375,6 +384,21 @@ def model_from_dict(doc: dict, where: str = "<model>") -> DriftModel:
         raise ModelFileError(f"{where}: bad model parameters: {exc}") from None
     _check_fitted(doc.get("fitted"), model, where)
     return model
+
+
+def _solution_record(fitted: Any, n_runs: int, where: str) -> dict | None:
+    """The LSSVR's stored solution (``dual_coef_deg_h``, ``intercept_deg_h``, ``loo_residuals_deg_h``,
+    ``condition_number``) as ``TunedLSSVR.fit``'s ``solution``, or None for files written before it (then the LSSVR
+    is solved again)."""
+    if not isinstance(fitted, dict) or "dual_coef_deg_h" not in fitted:
+        return None
+    fw = where + " [fitted]"
+    return {
+        "alpha": _numbers(_need(fitted, "dual_coef_deg_h", list, fw), fw, "dual_coef_deg_h", n_runs),
+        "intercept": _number(_need(fitted, "intercept_deg_h", (int, float), fw), fw, "intercept_deg_h"),
+        "loo_residuals": _numbers(_need(fitted, "loo_residuals_deg_h", list, fw), fw, "loo_residuals_deg_h", n_runs),
+        "condition_number": _number(_need(fitted, "condition_number", (int, float), fw), fw, "condition_number"),
+    }
 
 
 def _spread_record(fitted: Any, n_runs: int, where: str) -> dict:
@@ -391,6 +415,11 @@ def _spread_record(fitted: Any, n_runs: int, where: str) -> dict:
         out["interval_calibration"] = tuple(_numbers(_need(fitted, k, list, fw), fw, k, n_runs) for k in keys)
         if min(out["interval_calibration"][1]) < 0:
             raise ModelFileError(f"{fw}: key 'interval_spreads_deg_h' must hold spreads >= 0")
+    if "interval_disagreement_deg_h" in fitted:
+        key = "interval_disagreement_deg_h"
+        out["interval_disagreement"] = _number(_need(fitted, key, (int, float), fw), fw, key)
+        if out["interval_disagreement"] < 0:
+            raise ModelFileError(f"{fw}: key {key!r} must be >= 0")
     return out
 
 
