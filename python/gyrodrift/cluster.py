@@ -6,6 +6,7 @@ The one place that talks to dask.distributed (an optional dependency: ``pip inst
 from __future__ import annotations
 
 import contextlib
+import logging
 import math
 from collections.abc import Iterator
 from typing import Any
@@ -98,6 +99,38 @@ def dask_client(
     try:
         yield client
     finally:
+        _close_quietly(client, cluster)
+
+
+_DASK_LOGGERS = ("distributed", "tornado")
+
+
+def _silence_dask_logs() -> None:
+    """Raise dask's and tornado's loggers to CRITICAL in this process (run on our own workers before shutdown)."""
+    for name in _DASK_LOGGERS:
+        logging.getLogger(name).setLevel(logging.CRITICAL)
+
+
+def _close_quietly(client: Any, cluster: Any | None) -> None:
+    """Close `client`, then our own `cluster`, without dask's shutdown noise.
+
+    Under load a LocalCluster's workers may still send a heartbeat after the scheduler closed, and log it as an
+    ERROR with a `CommClosedError` traceback ("Failed to communicate with scheduler during heartbeat"), or the
+    nanny warns "Worker process still alive after 4.0 seconds, killing": neither is a failure of the command
+    (its results are in). So our own workers are told to log nothing more (never the workers of a scheduler
+    given with --scheduler: they outlive us), and this process's dask loggers are raised to CRITICAL while the
+    client and cluster close, then restored.
+    """
+    loggers = [logging.getLogger(name) for name in _DASK_LOGGERS]
+    levels = [lg.level for lg in loggers]  # before the workers are told: threads of a LocalCluster share them
+    try:
+        if cluster is not None:
+            with contextlib.suppress(Exception):  # a worker already gone: nothing to silence there
+                client.run(_silence_dask_logs, on_error="ignore")
+        _silence_dask_logs()
         client.close()
         if cluster is not None:
             cluster.close()
+    finally:
+        for lg, level in zip(loggers, levels, strict=True):
+            lg.setLevel(level)
