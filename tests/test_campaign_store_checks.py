@@ -124,6 +124,14 @@ def test_a_run_file_gyrodrift_did_not_write_is_refused_before_any_work(fast_stor
     assert r.exit_code == 1 and "Traceback" not in r.output, r.output
     assert f"{victim}: exists and is not a campaign run written by gyrodrift" in r.output
     assert victim.read_text() == "my notes, not a run\n" and _mtimes(out) == before
+    # a damaged run file that links out of the folder is not written through
+    outside = tmp_path / "outside.parquet"
+    outside.write_bytes(b"")
+    victim.unlink()
+    victim.symlink_to(outside)
+    r = CliRunner().invoke(main, ["campaign", str(src), "--out", str(out), "--workers", "1", "--quiet"])
+    assert r.exit_code == 1 and f"{victim}: damaged (" in r.output and "a symbolic link" in r.output, r.output
+    assert outside.read_bytes() == b"" and victim.is_symlink()
 
 
 def test_an_impossible_campaign_is_refused_before_simulating(tmp_path):

@@ -1308,14 +1308,21 @@ def run_campaign(
 
 
 def _redo_damaged(store: CampaignStore, damaged: Mapping[int, str]) -> None:
-    """Before any work: a damaged run file must be one gyrodrift may replace (a Parquet head, or empty: else
-    `OutputError` naming it, nothing is done); then one line on stderr per file says it is run again."""
+    """Before any work: a damaged run file must be one gyrodrift may replace (a regular file with a Parquet head,
+    or empty: else `OutputError` naming it, nothing is done); then one line on stderr per file says it is run
+    again."""
     import sys
 
     from gyrodrift.atomic import check_output_file
 
     for i in sorted(damaged):
-        check_output_file(store.run_path(i), recognise=_parquet_recogniser, what="campaign run")
+        path = store.run_path(i)
+        if path.is_symlink():  # replacing it would write wherever it points
+            raise OutputError(
+                f"{path}: damaged ({damaged[i]}) and a symbolic link, not a run file gyrodrift wrote; move it out of "
+                f"{store.runs_dir} and rerun"
+            )
+        check_output_file(path, recognise=_parquet_recogniser, what="campaign run")
     for i in sorted(damaged):
         sys.stderr.write(f"campaign: {store.run_path(i)}: damaged ({damaged[i]}): run {i} is run again\n")
     sys.stderr.flush()
