@@ -243,3 +243,33 @@ def test_an_unwritable_output_location_is_refused_before_the_work(tmp_path, monk
         line = _error_line(result)
         assert where in line and line.endswith(reason), (name, line)
     assert work == [] and sorted(os.listdir(loc)) == []
+
+
+# --- a drift to compensate is a drift -----------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("value", ["1e308", "-101", "nan", "inf"])
+@pytest.mark.parametrize("command", ["navigate", "evaluate"])
+def test_drift_deg_h_is_checked_with_its_option_name_and_a_stated_bound(tmp_path, command, value):
+    """`navigate --drift-deg-h 1e308` named the core's gyro_bias_rad_s and showed the log's x/y biases."""
+    scenario = tmp_path / "t.toml"
+    scenario.write_text("[run]\nduration_h = 0.01\nrate_hz = 10.0\n")
+    assert _run(["simulate", scenario, "--out", tmp_path / "sim", "--quiet"]).exit_code == 0
+    result = _run([command, tmp_path / "sim" / "imu.parquet", f"--drift-deg-h={value}", "--out", tmp_path / "o"])
+    assert result.exit_code == 2
+    line = _error_line(result)
+    assert "'--drift-deg-h'" in line and "gyro_bias" not in line, line
+    if value in ("1e308", "-101"):
+        assert "is not in [-100, 100] deg/h: an axial gyro drift" in line
+    assert not (tmp_path / "o").exists()
+
+
+def test_the_library_refuses_a_drift_beyond_the_bound_by_the_options_name(tmp_path):
+    from gyrodrift.ins import navigate
+
+    scenario = tmp_path / "t.toml"
+    scenario.write_text("[run]\nduration_h = 0.01\nrate_hz = 10.0\n")
+    assert _run(["simulate", scenario, "--out", tmp_path / "sim", "--quiet"]).exit_code == 0
+    for bad in (1e308, -100.5, float("nan")):
+        with pytest.raises(OptionError, match=r"--drift-deg-h must be a finite drift within \+-100 deg/h"):
+            navigate(tmp_path / "sim" / "imu.parquet", compensate_drift_deg_h=bad)

@@ -11,6 +11,11 @@ SIGMA_RANGE = (sys.float_info.min**0.5, sys.float_info.max**0.5)
 
 Below, the RBF kernel's ``d / sigma^2`` is ``0/0`` on its diagonal; above, every distance is lost."""
 
+MAX_DRIFT_DEG_H = 100.0
+"""Largest axial drift [deg/h] a drift to compensate may be (``--drift-deg-h``): an RLG's is of order 0.001-0.01
+deg/h, a tactical-grade gyro's 1-10 deg/h; 100 deg/h is beyond any gyro an INS drift compensation serves (the
+core's own limit, 0.1 rad/s = 20 626 deg/h, is the sensor's range, not a drift)."""
+
 SCALINGS = ("standard", "minmax", "none")
 """Input scalings: zero mean / unit variance, [0, 1] per feature, or raw inputs."""
 

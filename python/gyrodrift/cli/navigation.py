@@ -15,7 +15,7 @@ from gyrodrift.cli.options import (
     site_from_options,
     site_options,
 )
-from gyrodrift.cli.types import FiniteFloat, InputPath, Seed
+from gyrodrift.cli.types import DRIFT_DEG_H, FiniteFloat, InputPath, Seed
 
 __all__ = ["simulate_command", "navigate_command"]
 
@@ -130,14 +130,14 @@ _INITIAL_WORDS = {
 )
 @click.option(
     "--drift-deg-h",
-    type=FiniteFloat(),
+    type=DRIFT_DEG_H,
     default=None,
     help="Axial drift estimate [deg/h] subtracted from the z gyro (measured - estimate). Default: 0.",
 )
 @click.option(
     "--compensate-drift-deg-h",
     "old_drift_deg_h",
-    type=FiniteFloat(),
+    type=DRIFT_DEG_H,
     default=None,
     hidden=True,
     help="Deprecated name of --drift-deg-h [deg/h].",

@@ -17,7 +17,7 @@ from gyrodrift.cli.options import (
     site_from_options,
     site_options,
 )
-from gyrodrift.cli.types import FiniteFloat, InputPath
+from gyrodrift.cli.types import DRIFT_DEG_H, FiniteFloat, InputPath
 
 __all__ = ["features_command", "truth_command", "evaluate_command", "identify_command"]
 
@@ -236,7 +236,7 @@ def truth_command(
 @click.argument("log", type=InputPath(path_type=Path))
 @click.option(
     "--drift-deg-h",
-    type=FiniteFloat(),
+    type=DRIFT_DEG_H,
     default=None,
     help="Axial drift estimate [deg/h] to compensate (subtracted from the z gyro). Default: none; give it or --model.",
 )

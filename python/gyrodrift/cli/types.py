@@ -6,7 +6,9 @@ import math
 
 import click
 
-__all__ = ["FiniteFloat", "InputPath", "MAX_SEED", "Seed"]
+from gyrodrift.choices import MAX_DRIFT_DEG_H
+
+__all__ = ["DRIFT_DEG_H", "FiniteFloat", "InputPath", "MAX_DRIFT_DEG_H", "MAX_SEED", "Seed"]
 
 MAX_SEED = 2**64 - 1
 """Largest seed [-]: the Rust core's seeds are unsigned 64-bit integers; numpy's take any integer >= 0."""
@@ -16,16 +18,23 @@ class FiniteFloat(click.ParamType):
     """A finite float (no NaN, no inf, nothing that overflows to inf), optionally within bounds.
 
     ``FiniteFloat()`` any finite number; ``FiniteFloat(min=0.0, min_open=True)`` a positive one;
-    ``FiniteFloat(-90.0, 90.0, min_open=True, max_open=True)`` a latitude. A refused value is click's usage
-    error naming the option (``Invalid value for '--hours': ...``), exit status 2.
+    ``FiniteFloat(-90.0, 90.0, min_open=True, max_open=True)`` a latitude; `why` is appended to the message of a
+    value out of bounds (`DRIFT_DEG_H`). A refused value is click's usage error naming the option (``Invalid value
+    for '--hours': ...``), exit status 2.
     """
 
     name = "float"
 
     def __init__(
-        self, min: float | None = None, max: float | None = None, *, min_open: bool = False, max_open: bool = False
+        self,
+        min: float | None = None,
+        max: float | None = None,
+        *,
+        min_open: bool = False,
+        max_open: bool = False,
+        why: str = "",
     ):
-        self.min, self.max, self.min_open, self.max_open = min, max, min_open, max_open
+        self.min, self.max, self.min_open, self.max_open, self.why = min, max, min_open, max_open, why
 
     def convert(self, value, param, ctx):
         if isinstance(value, float) and math.isfinite(value):
@@ -40,7 +49,7 @@ class FiniteFloat(click.ParamType):
         low_bad = self.min is not None and (x <= self.min if self.min_open else x < self.min)
         high_bad = self.max is not None and (x >= self.max if self.max_open else x > self.max)
         if low_bad or high_bad:
-            self.fail(f"{value!r} is not in {self._range()}", param, ctx)
+            self.fail(f"{value!r} is not in {self._range()}{self.why}", param, ctx)
         return x
 
     def _range(self) -> str:
@@ -103,3 +112,12 @@ class InputPath(click.Path):
         if reason is not None:
             self.fail(f"{where} {reason}; gyrodrift reads only regular files", param, ctx)
         return path
+
+
+DRIFT_DEG_H = FiniteFloat(
+    -MAX_DRIFT_DEG_H,
+    MAX_DRIFT_DEG_H,
+    why=" deg/h: an axial gyro drift (an RLG's is of order 0.001-0.01 deg/h, a tactical-grade gyro's 1-10 deg/h); "
+    "is it in another unit?",
+)
+"""The type of ``--drift-deg-h`` (`navigate`, `evaluate`): a finite drift within +-`MAX_DRIFT_DEG_H` deg/h."""

@@ -15,6 +15,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from gyrodrift.atomic import OutputFolder, Stage, output_folder, staged, write_json
+from gyrodrift.choices import MAX_DRIFT_DEG_H
 from gyrodrift.errors import OptionError
 from gyrodrift.ins.nav_errors import attitude_errors_arcsec, position_errors
 from gyrodrift.ins.scenario import Scenario
@@ -315,8 +316,11 @@ def navigate(
     if hours is not None and not math.isfinite(hours):
         raise OptionError(f"navigate: --hours must be a finite number of hours, got {hours!r}")
     gyro_est = _vector3("gyro_bias_deg_h", gyro_bias_deg_h)
-    if not math.isfinite(compensate_drift_deg_h):
-        raise OptionError(f"navigate: --drift-deg-h must be finite, got {compensate_drift_deg_h!r}")
+    if not (math.isfinite(compensate_drift_deg_h) and abs(compensate_drift_deg_h) <= MAX_DRIFT_DEG_H):
+        raise OptionError(
+            f"navigate: --drift-deg-h must be a finite drift within +-{MAX_DRIFT_DEG_H:g} deg/h (an RLG's is of "
+            f"order 0.001-0.01 deg/h), got {compensate_drift_deg_h!r}"
+        )
     gyro_est[2] += float(compensate_drift_deg_h)
     accel_est = _vector3("accel_bias_ug", accel_bias_ug)
     if plot and out_dir is None:
