@@ -400,3 +400,17 @@ def label_sigma(
     vel_sigma_m_s: float,
     rms: bool,
 ) -> dict[str, Any]: ...
+def drift_std_curve(
+    smoother_config: SmootherConfig, simulator_config: SimulatorConfig, spans_s: list[float]
+) -> FloatArray: ...
+def mission_covariance(
+    *,
+    lat_rad: float,
+    height_m: float,
+    span_s: float,
+    step_s: float,
+    gyro_arw_rad_rts: float,
+    accel_vrw_m_s_rts: float,
+    att_sigma_rad: list[float],
+    vel_sigma_m_s: float,
+) -> dict[str, Any]: ...

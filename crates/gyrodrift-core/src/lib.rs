@@ -13,6 +13,8 @@
 //! - [`coarse_alignment`], [`kalman`], [`alignment`]: the static-base alignment (coarse, 12-state filter, driver).
 //! - [`smoother`]: forward filter + RTS smoother over a whole static log (the axial drift with its 1-sigma), and
 //!   the covariance analysis of the true-drift label.
+//! - [`plan`]: covariance analysis for planning an identification (the smoother's drift 1-sigma against the span,
+//!   the position error of a mission), with no IMU samples.
 //! - [`limits`]: the ranges of the shared quantities (site, rate, attitude, samples), checked in one place.
 //! - [`error`]: [`error::CoreError`], the one error type; library code does not panic on data.
 //!
@@ -27,6 +29,7 @@ pub mod error;
 pub mod imu_error;
 pub mod kalman;
 pub mod limits;
+pub mod plan;
 pub mod simulator;
 pub mod smoother;
 pub mod strapdown;

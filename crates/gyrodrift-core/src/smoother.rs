@@ -236,7 +236,7 @@ impl SmootherConfig {
     }
 
     /// The aligner settings these share (the coarse alignment, the priors and the noise).
-    fn aligner_config(&self) -> AlignerConfig {
+    pub(crate) fn aligner_config(&self) -> AlignerConfig {
         AlignerConfig {
             coarse_s: self.coarse_s,
             fine_s: 0.0,
@@ -298,14 +298,14 @@ pub fn state_names(cfg: &SmootherConfig) -> Vec<&'static str> {
 
 /// The error model of the smoother at a site (module docs).
 #[derive(Clone, Debug)]
-struct Model {
+pub(crate) struct Model {
     base: ErrorModel,
-    n: usize,
+    pub(crate) n: usize,
     w_n: f64,
     w_u: f64,
     inv_rm_h: f64,
-    gm: Option<usize>,
-    rrw: Option<usize>,
+    pub(crate) gm: Option<usize>,
+    pub(crate) rrw: Option<usize>,
     thermal: Option<usize>,
     tau: f64,
     /// Continuous noise densities squared on the diagonal.
@@ -313,7 +313,7 @@ struct Model {
 }
 
 impl Model {
-    fn new(cfg: &SmootherConfig) -> Self {
+    pub(crate) fn new(cfg: &SmootherConfig) -> Self {
         let n = cfg.n_states();
         let w = earth::earth_rate_enu(cfg.lat);
         let mut qc = DVector::zeros(n);
@@ -383,7 +383,7 @@ impl Model {
     }
 
     /// Phi = exp(F t) (Taylor to order 8) and Q (trapezoidal).
-    fn discretise(&self, c: &Mat3, dtemp: f64, t: f64) -> (DMatrix<f64>, DMatrix<f64>) {
+    pub(crate) fn discretise(&self, c: &Mat3, dtemp: f64, t: f64) -> (DMatrix<f64>, DMatrix<f64>) {
         let ft = self.system_matrix(c, dtemp) * t;
         let mut phi = DMatrix::identity(self.n, self.n);
         let mut term = DMatrix::identity(self.n, self.n);
@@ -397,8 +397,53 @@ impl Model {
     }
 }
 
-fn symmetrise(m: DMatrix<f64>) -> DMatrix<f64> {
+pub(crate) fn symmetrise(m: DMatrix<f64>) -> DMatrix<f64> {
     (&m + m.transpose()) * 0.5
+}
+
+/// Prior 1-sigma of every state when the forward filter starts at `t_s` [s] (the end of the coarse alignment),
+/// in the order of `state_names` (SI).
+pub(crate) fn initial_sigma(cfg: &SmootherConfig, t_s: f64) -> Vec<f64> {
+    let n = cfg.n_states();
+    let att = cfg
+        .att_sigma
+        .unwrap_or_else(|| coarse_attitude_sigma(&cfg.aligner_config()));
+    let mut sigma = vec![0.0; n];
+    sigma[PHI..PHI + 3].copy_from_slice(&att);
+    sigma[DV..DV + 3].copy_from_slice(&[cfg.zupt_sigma; 3]);
+    sigma[EPS..EPS + 3].copy_from_slice(&cfg.gyro_bias_sigma);
+    sigma[NABLA..NABLA + 3].copy_from_slice(&cfg.accel_bias_sigma);
+    sigma[POS] = cfg.position_sigma;
+    sigma[POS + 1] = cfg.position_sigma;
+    if let Some(g) = cfg.gm_index() {
+        sigma[g..g + 3].copy_from_slice(&[cfg.gyro_bias_instability; 3]);
+    }
+    if let Some(r) = cfg.rrw_index() {
+        // The random walk starts at zero with the log; by the end of the coarse span it has spread.
+        sigma[r..r + 3].copy_from_slice(&[cfg.gyro_rrw * t_s.sqrt(); 3]);
+    }
+    if let Some(k) = cfg.thermal_index() {
+        sigma[k] = cfg.thermal_sigma;
+    }
+    sigma
+}
+
+/// The measurement matrix and noise covariance of one update (velocity E N U [m/s], position north, east [m]).
+pub(crate) fn measurement_model(cfg: &SmootherConfig, n: usize) -> (DMatrix<f64>, DMatrix<f64>) {
+    let mut h = DMatrix::zeros(5, n);
+    for i in 0..3 {
+        h[(i, DV + i)] = 1.0;
+    }
+    h[(3, POS)] = 1.0;
+    h[(4, POS + 1)] = 1.0;
+    let mut r = DMatrix::zeros(5, 5);
+    for i in 0..3 {
+        r[(i, i)] = cfg.zupt_sigma * cfg.zupt_sigma;
+    }
+    for i in 3..5 {
+        r[(i, i)] = cfg.position_sigma * cfg.position_sigma;
+    }
+    (h, r)
 }
 
 /// What the forward pass keeps of one update for the backward pass.
@@ -644,26 +689,7 @@ impl Smoother {
         .map_err(|e| diverged(format!("the coarse attitude is outside the navigator's range: {e}")))?;
         let model = Model::new(cfg);
         let n = model.n;
-        let att = cfg
-            .att_sigma
-            .unwrap_or_else(|| coarse_attitude_sigma(&cfg.aligner_config()));
-        let mut sigma = vec![0.0; n];
-        sigma[PHI..PHI + 3].copy_from_slice(&att);
-        sigma[DV..DV + 3].copy_from_slice(&[cfg.zupt_sigma; 3]);
-        sigma[EPS..EPS + 3].copy_from_slice(&cfg.gyro_bias_sigma);
-        sigma[NABLA..NABLA + 3].copy_from_slice(&cfg.accel_bias_sigma);
-        sigma[POS] = cfg.position_sigma;
-        sigma[POS + 1] = cfg.position_sigma;
-        if let Some(g) = cfg.gm_index() {
-            sigma[g..g + 3].copy_from_slice(&[cfg.gyro_bias_instability; 3]);
-        }
-        if let Some(r) = cfg.rrw_index() {
-            // The random walk starts at zero with the log; by the end of the coarse span it has spread.
-            sigma[r..r + 3].copy_from_slice(&[cfg.gyro_rrw * t_s.sqrt(); 3]);
-        }
-        if let Some(k) = cfg.thermal_index() {
-            sigma[k] = cfg.thermal_sigma;
-        }
+        let sigma = initial_sigma(cfg, t_s);
         let temp_ref = if cfg.thermal {
             cfg.temp_ref.unwrap_or(self.temp_last)
         } else {
@@ -745,19 +771,7 @@ impl Forward {
             (s.lon - cfg.lon) * rn * cfg.lat.cos(),
         ]);
         let n = self.model.n;
-        let mut h = DMatrix::zeros(5, n);
-        for i in 0..3 {
-            h[(i, DV + i)] = 1.0;
-        }
-        h[(3, POS)] = 1.0;
-        h[(4, POS + 1)] = 1.0;
-        let mut r = DMatrix::zeros(5, 5);
-        for i in 0..3 {
-            r[(i, i)] = cfg.zupt_sigma * cfg.zupt_sigma;
-        }
-        for i in 3..5 {
-            r[(i, i)] = cfg.position_sigma * cfg.position_sigma;
-        }
+        let (h, r) = measurement_model(cfg, n);
         let diverged = |message: String| CoreError::Diverged {
             key: "dv_m_s",
             t_s,

@@ -4,6 +4,7 @@
 
 mod alignment;
 mod config;
+mod plan;
 mod smoother;
 
 use config::{AlignerConfig, NavigatorConfig, SimulatorConfig};
@@ -577,5 +578,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<smoother::SmootherConfig>()?;
     m.add_class::<smoother::Smoother>()?;
     m.add_function(wrap_pyfunction!(smoother::label_sigma, m)?)?;
+    m.add_function(wrap_pyfunction!(plan::drift_std_curve, m)?)?;
+    m.add_function(wrap_pyfunction!(plan::mission_covariance, m)?)?;
     Ok(())
 }

@@ -13,7 +13,7 @@ use pyo3::types::PyDict;
 /// Validated settings of the full-information smoother (SI; keyword-only; None takes the core's default).
 #[pyclass(module = "gyrodrift._core", frozen)]
 pub struct SmootherConfig {
-    inner: CoreSmootherConfig,
+    pub(crate) inner: CoreSmootherConfig,
     #[pyo3(get)]
     lat_rad: f64,
     #[pyo3(get)]

@@ -5,6 +5,7 @@ One module per family of commands, each registering its commands in the one grou
 - `gyrodrift.cli.learning`: `fit`, `predict`, `reproduce` (run tables and drift models);
 - `gyrodrift.cli.navigation`: `simulate`, `navigate` (the Rust core on scenarios and IMU logs);
 - `gyrodrift.cli.procedure`: `features`, `truth`, `evaluate`, `identify` (from an IMU log to a compensation);
+- `gyrodrift.cli.plan`: `plan` (how long to observe before the mission);
 - `gyrodrift.cli.sensors`: `allan` (noise of a static log).
 
 Heavy imports (numpy, pyarrow, scikit-learn, the Rust extension) happen inside the commands, so that
@@ -58,9 +59,9 @@ def main() -> None:
 
 
 def _register_commands() -> None:
-    from gyrodrift.cli import campaign, export, learning, navigation, procedure, sensors
+    from gyrodrift.cli import campaign, export, learning, navigation, plan, procedure, sensors
 
-    for module in (learning, navigation, procedure, sensors, export, campaign):
+    for module in (learning, navigation, procedure, plan, sensors, export, campaign):
         for command in module.COMMANDS:
             main.add_command(command)
 

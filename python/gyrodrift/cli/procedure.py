@@ -415,6 +415,10 @@ def identify_command(
             f"physics base: {res.smoother_fleet_drift_deg_h:.6f} +- {res.smoother_fleet_drift_std_deg_h:.6f} deg/h "
             f"(1-sigma); the model's learned correction {res.drift_deg_h - res.smoother_fleet_drift_deg_h:+.6f} deg/h"
         )
+    if res.mission is not None:
+        q = ", ".join(f"{100 * float(p):g} % {v:.2f}" for p, v in res.mission["quantiles_nmi"].items())
+        click.echo(f"  72 h mission after compensation (from {res.mission['drift_std_source']}): {q} nmi")
+        click.echo(f"    {res.mission['note']}")
     click.echo(
         f"  alignment z estimate: {res.alignment_z_drift_deg_h:.6f} +- {res.alignment_z_drift_std_deg_h:.6f} "
         f"deg/h (1-sigma)"

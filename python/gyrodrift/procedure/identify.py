@@ -35,6 +35,7 @@ from gyrodrift.logs import ImuLog
 from gyrodrift.model import DriftModel, min_runs_for_coverage
 from gyrodrift.procedure.features import extract_features, features_run_table
 from gyrodrift.procedure.noise import SensorNoise
+from gyrodrift.procedure.plan import mission_outlook
 from gyrodrift.procedure.results import Identification, RunFeatures
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 from gyrodrift.runs import drift_range_problems
@@ -150,6 +151,12 @@ def identify(
     prior = getattr(model, "coefficient_prior_", None) if base_column == FLEET_BASE else None
     fleet = (math.nan, math.nan) if prior is None else fleet_base(features, prior)
     al = features.alignment
+    sm, fleet_ok = features.smoother, math.isfinite(fleet[1])
+    sigma = fleet[1] if fleet_ok else features.drift_smoother_std_deg_h
+    mission = None  # what the drift's 1-sigma means for the 72 h (gyrodrift.procedure.plan, as `gyrodrift plan`)
+    if sm is not None and math.isfinite(sigma):
+        src = "the smoother with the fleet's k_z prior" if fleet_ok else "the smoother (the Cramer-Rao line)"
+        mission = mission_outlook(sigma, features.lat0_deg, sm.noise, span_h=sm.span_h, source=src)
     return Identification(
         run=features.run,
         drift_deg_h=drift,
@@ -174,4 +181,5 @@ def identify(
         smoother_fleet_drift_deg_h=float(fleet[0]),
         smoother_fleet_drift_std_deg_h=float(fleet[1]),
         coefficient_prior_deg_h_per_c=None if prior is None else (float(prior[0]), float(prior[1])),
+        mission=mission,
     )

@@ -540,6 +540,10 @@ class Identification:
     coefficient_prior_deg_h_per_c : tuple of 2 floats or None
         With the fleet base: the model's pooled k_z prior (mean, 1-sigma) [deg/h/degC]
         (``DriftModel.coefficient_prior_``); None otherwise.
+    mission : dict or None
+        What the smoother's drift 1-sigma (with the fleet's k_z prior under the fleet base) means for the 72 h
+        mission at the run's latitude (`gyrodrift.procedure.plan.mission_outlook`: predicted error quantiles after
+        compensation, ``ready``, ``more_static_h``, ``note``); None when the smoother did not run.
     """
 
     run: str
@@ -565,6 +569,7 @@ class Identification:
     smoother_fleet_drift_deg_h: float = math.nan
     smoother_fleet_drift_std_deg_h: float = math.nan
     coefficient_prior_deg_h_per_c: tuple[float, float] | None = None
+    mission: dict[str, Any] | None = None
 
     @property
     def smoother_model(self) -> str | None:
@@ -601,6 +606,7 @@ class Identification:
             "uncertainty_note": self.uncertainty_note,
             "training_error_deg_h": self.training_error_deg_h,
             "training_error_kind": self.training_error_kind,
+            "mission": self.mission,
             "features": {
                 **f.row(),
                 "lat_err_arcsec": f.lat_err_arcsec,

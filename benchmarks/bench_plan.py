@@ -1,0 +1,191 @@
+"""The planner (`gyrodrift plan`) against simulated campaigns: predicted vs measured share of runs within the budget.
+
+    python benchmarks/bench_plan.py [--runs 100] [--grades 0.0002,0.0005] [--spans-h 10,16,24] [--lat-deg 40]
+                                    [--workers 2] [--out DIR] [--json FILE]
+
+For each noise grade (ARW [deg/sqrt(h)]; VRW 2 ug/sqrt(Hz) at ARW <= 0.0003, else 5, the default campaign's
+grades) and each observation span T (from the first sample): a campaign (`gyrodrift.campaign`, the same seed for
+every span, so the spans see the same simulated runs) of `--runs` 76 h static runs at `--lat-deg`, 10 Hz,
+reciprocating table, random heading, horizontal gyro biases and axial drift, constant temperature (the planner's
+thermal term is zero), options ``align_h = 4``, ``features_h = T - 4``, ``truth_h = 72``: each run's smoother
+over the first T hours and its linear 72 h error curves. Measured per point:
+
+- the share of runs whose 72 h position error after compensating the smoother's drift is within the budget
+  (1 nmi), with its binomial 1-sigma sqrt(p (1 - p) / n); the planner's predicted share beside it
+  (target: within 5 percentage points at >= 100 runs per point);
+- the smoother's reported 1-sigma (mean over the runs) against the planner's (target: within 10 %), and the RMS of
+  the z-scores (smoother drift - the noise-free twin's truth) / reported sigma (the smoother's calibration on the
+  drift that matters for the 72 h);
+- the noise floor: the share within the budget and the 95 % quantile after compensating the twin's truth
+  (the exact drift) against the planner's floor.
+
+Only reports; never fails on a slow machine. The campaign folders are kept under `--out` (default: a temporary
+folder, removed) and reused by a rerun (finished runs are skipped).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import shutil
+import tempfile
+import time
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+from gyrodrift.campaign import parse_campaign, read_runs, run_campaign
+from gyrodrift.procedure.noise import SensorNoise
+from gyrodrift.procedure.plan import MissionBudget, drift_std_curve_deg_h, mission_error_model
+
+CAMPAIGN = """
+[campaign]
+name = "{name}"
+count = {runs}
+seed = 2311
+
+[options]
+align_h = 4.0
+features_h = {features_h}
+truth_h = 72.0
+
+[base.site]
+lat_deg = {lat}
+
+[base.run]
+duration_h = 76.0
+rate_hz = 10.0
+
+[base.gyro]
+bias_deg_h = [0.0, 0.0, 0.002]
+arw_deg_rth = {arw}
+
+[base.accel]
+vrw_ug_rthz = {vrw}
+
+[base.temperature]
+start_c = 25.0
+end_c = 25.0
+t0_c = 25.0
+
+[vary."gyro.bias_deg_h[0]"]
+dist = "normal"
+mean = 0.0
+std = 0.003
+
+[vary."gyro.bias_deg_h[1]"]
+dist = "normal"
+mean = 0.0
+std = 0.003
+
+[vary."gyro.bias_deg_h[2]"]
+dist = "normal"
+mean = 0.002
+std = 0.0008
+
+[vary."attitude.yaw_deg"]
+dist = "uniform"
+low = -180.0
+high = 180.0
+"""
+
+
+def vrw_for(arw: float) -> float:
+    return 2.0 if arw <= 0.0003 else 5.0
+
+
+def run_point(out: Path, arw: float, span_h: float, args) -> dict:
+    name = f"plan-arw{arw:g}-span{span_h:g}"
+    text = CAMPAIGN.format(
+        name=name, runs=args.runs, features_h=span_h - 4.0, lat=args.lat_deg, arw=arw, vrw=vrw_for(arw)
+    )
+    campaign = parse_campaign(tomllib.loads(text), source=name)
+    folder = out / name
+    t0 = time.perf_counter()
+    run_campaign(campaign, folder, text=text, workers=args.workers, quiet=True)
+    wall = time.perf_counter() - t0
+    runs = read_runs(folder)
+    failed = int(len(runs) - np.count_nonzero(runs.ok))
+    runs = runs.select(runs.ok & np.isfinite(runs.numbers("drift_smoother_deg_h")))
+    n = len(runs)
+    budget = MissionBudget()
+    err = runs.errors_nmi(runs.numbers("drift_smoother_deg_h"))[:, -1]
+    floor = runs.errors_nmi(runs.numbers("drift_effective_deg_h"))[:, -1]
+    sigma_rep = runs.numbers("drift_smoother_std_deg_h")
+    z = (runs.numbers("drift_smoother_deg_h") - runs.numbers("drift_effective_deg_h")) / sigma_rep
+    noise = SensorNoise(arw_deg_rth=arw, vrw_ug_rthz=vrw_for(arw))
+    t_start = time.perf_counter()
+    sigma_plan = float(drift_std_curve_deg_h(noise, [span_h], lat_deg=args.lat_deg)[0])
+    mission = mission_error_model(args.lat_deg, noise, hours=budget.hours)
+    predicted = mission.share_within(sigma_plan, budget.error_nmi)
+    plan_s = time.perf_counter() - t_start
+    measured = float(np.mean(err <= budget.error_nmi))
+    floor_share = float(np.mean(floor <= budget.error_nmi))
+    return {
+        "arw_deg_rth": arw,
+        "span_h": span_h,
+        "runs": n,
+        "failed": failed,
+        "campaign_wall_s": wall,
+        "planner_s": plan_s,
+        "sigma_planner_deg_h": sigma_plan,
+        "sigma_smoother_mean_deg_h": float(np.mean(sigma_rep)),
+        "sigma_ratio": sigma_plan / float(np.mean(sigma_rep)),
+        "z_rms": float(np.sqrt(np.mean(z**2))),
+        "share_predicted": predicted,
+        "share_measured": measured,
+        "share_measured_std": math.sqrt(max(measured * (1 - measured), 1e-12) / n),
+        "floor_share_predicted": mission.share_within(0.0, budget.error_nmi),
+        "floor_share_measured": floor_share,
+        "floor_q95_predicted_nmi": mission.quantile_nmi(0.0, 0.95),
+        "floor_q95_measured_nmi": float(np.quantile(floor, 0.95)),
+        "q95_predicted_nmi": mission.quantile_nmi(sigma_plan, 0.95),
+        "q95_measured_nmi": float(np.quantile(err, 0.95)),
+    }
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--runs", type=int, default=100, help="runs per point (default 100)")
+    ap.add_argument("--grades", default="0.0002,0.0005", help="ARW grades [deg/sqrt(h)], comma-separated")
+    ap.add_argument("--spans-h", default="10,16,24", help="observation spans [h], comma-separated")
+    ap.add_argument("--lat-deg", type=float, default=40.0)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--out", type=Path, default=None, help="keep the campaigns here (default: a temporary folder)")
+    ap.add_argument("--json", type=Path, default=None, help="also write the rows as JSON")
+    args = ap.parse_args()
+    grades = [float(g) for g in args.grades.split(",")]
+    spans = [float(s) for s in args.spans_h.split(",")]
+    out = args.out or Path(tempfile.mkdtemp(prefix="bench_plan_"))
+    rows = []
+    try:
+        for arw in grades:
+            for span in spans:
+                row = run_point(out, arw, span, args)
+                rows.append(row)
+                diff = row["share_measured"] - row["share_predicted"]
+                print(
+                    f"ARW {arw:g} span {span:g} h, {row['runs']} runs ({row['failed']} failed, campaign "
+                    f"{row['campaign_wall_s']:.0f} s wall, planner {row['planner_s']:.2f} s): within 1 nmi at 72 h "
+                    f"predicted {100 * row['share_predicted']:.1f} %, measured {100 * row['share_measured']:.1f} "
+                    f"+- {100 * row['share_measured_std']:.1f} % (diff {100 * diff:+.1f} pp); "
+                    f"sigma planner {row['sigma_planner_deg_h']:.3e} / smoother {row['sigma_smoother_mean_deg_h']:.3e} "
+                    f"deg/h (x{row['sigma_ratio']:.3f}), z rms {row['z_rms']:.2f}; 95 % quantile predicted "
+                    f"{row['q95_predicted_nmi']:.2f}, measured {row['q95_measured_nmi']:.2f} nmi; floor within 1 nmi "
+                    f"predicted {100 * row['floor_share_predicted']:.1f} %, "
+                    f"measured {100 * row['floor_share_measured']:.1f} %, "
+                    f"floor 95 % quantile predicted {row['floor_q95_predicted_nmi']:.2f}, measured "
+                    f"{row['floor_q95_measured_nmi']:.2f} nmi",
+                    flush=True,
+                )
+    finally:
+        if args.json is not None:
+            args.json.write_text(json.dumps(rows, indent=1))
+        if args.out is None:
+            shutil.rmtree(out, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main()

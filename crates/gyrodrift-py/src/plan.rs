@@ -1,0 +1,68 @@
+//! Binding of `gyrodrift_core::plan` as `_core.drift_std_curve` and `_core.mission_covariance` (the planner's
+//! covariance analysis, `gyrodrift.procedure.plan`). It converts types and releases the GIL, nothing else.
+
+use super::config::SimulatorConfig;
+use super::core_err;
+use super::smoother::SmootherConfig;
+use gyrodrift_core::plan::{
+    drift_std_curve as core_curve, mission_covariance as core_mission, MissionConfig, PlanConfig,
+};
+use numpy::{PyArray1, PyArray2};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+/// The smoother's 1-sigma of the z drift carried into navigation [rad/s] at each span [s] from the first sample
+/// (gyrodrift-core `plan::drift_std_curve`): the smoother's settings (`span_s` the longest span, `thermal` off),
+/// the rotation scheme and attitude at table angle zero of `simulator_config` (its other settings are not used).
+#[pyfunction]
+#[pyo3(signature = (smoother_config, simulator_config, spans_s))]
+pub fn drift_std_curve<'py>(
+    py: Python<'py>,
+    smoother_config: &SmootherConfig,
+    simulator_config: &SimulatorConfig,
+    spans_s: Vec<f64>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let cfg = PlanConfig {
+        smoother: smoother_config.inner.clone(),
+        scheme: simulator_config.inner.scheme.clone(),
+        attitude: simulator_config.inner.attitude,
+        spans_s,
+    };
+    let out = py.detach(|| core_curve(&cfg)).map_err(core_err)?;
+    Ok(PyArray1::from_vec(py, out))
+}
+
+/// Position error after a free navigation (gyrodrift-core `plan::mission_covariance`): a dict with `pos_cov_m2`
+/// (2 x 2, north, east) and `response_m_per_rad_s` (north, east per unit z drift).
+#[pyfunction]
+#[pyo3(signature = (*, lat_rad, height_m, span_s, step_s, gyro_arw_rad_rts, accel_vrw_m_s_rts, att_sigma_rad,
+                    vel_sigma_m_s))]
+#[allow(clippy::too_many_arguments)]
+pub fn mission_covariance<'py>(
+    py: Python<'py>,
+    lat_rad: f64,
+    height_m: f64,
+    span_s: f64,
+    step_s: f64,
+    gyro_arw_rad_rts: f64,
+    accel_vrw_m_s_rts: f64,
+    att_sigma_rad: [f64; 3],
+    vel_sigma_m_s: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let cfg = MissionConfig {
+        lat: lat_rad,
+        height: height_m,
+        span_s,
+        step_s,
+        gyro_arw: gyro_arw_rad_rts,
+        accel_vrw: accel_vrw_m_s_rts,
+        att_sigma: att_sigma_rad,
+        vel_sigma: vel_sigma_m_s,
+    };
+    let r = py.detach(|| core_mission(&cfg)).map_err(core_err)?;
+    let d = PyDict::new(py);
+    let cov = vec![r.pos_cov[0].to_vec(), r.pos_cov[1].to_vec()];
+    d.set_item("pos_cov_m2", PyArray2::from_vec2(py, &cov)?)?;
+    d.set_item("response_m_per_rad_s", PyArray1::from_slice(py, &r.response))?;
+    Ok(d)
+}

@@ -1,0 +1,522 @@
+"""Planning an identification: how long to observe a static base, and what the 72 h mission will bring.
+
+`plan_identification` answers the engineer's question before a run, by covariance analysis alone (no IMU samples
+are simulated; a few seconds): for a noise block, a site, a rotation scheme, a thermal situation and a budget
+(default 1 nmi at 72 h for 95 % of runs), the 1-sigma of the identified axial drift against the observation span
+(alignment + static navigation, from the first sample), the predicted quantile of the 72 h position error after
+compensating it, and the shortest span that meets the budget. `mission_outlook` says the same of one identified
+run (`gyrodrift identify`): its drift 1-sigma and latitude give the predicted 72 h quantiles, whether the run is
+ready and about how much more static time it needs otherwise. Both use `MissionErrorModel`: one implementation.
+
+The model (docs/procedure.md, "Planning the static time"):
+
+1. Identification. The 1-sigma ``s_id(T)`` of the drift the 16 h smoother (`gyrodrift.procedure.smoother`)
+   carries into navigation after a span T from the first sample: the smoother's own filter covariance, run as a
+   Riccati recursion over the same linear-Gaussian error model, priors and measurements (zero velocity and the
+   known position every 10 s) with the table turning (`_core.drift_std_curve`, gyrodrift-core ``plan``). It is
+   the smoother's reported 1-sigma on a run with the same settings, and the Cramer-Rao line of any method.
+2. Thermal term. The smoother's thermal state is not in the planner. The drift carried into navigation misses
+   k_z dT, dT [degC] the temperature change the identification does not see through (after the span, or during
+   it when too small to learn k_z), k_z [deg/h/degC] known to ``coeff_std`` (a fleet prior: `gyrodrift fit`'s
+   pooled k_z prior, or a datasheet): ``s(T)^2 = s_id(T)^2 + (coeff_std dT)^2``. Conservative when the span's own
+   temperature change teaches the smoother k_z.
+3. Mission. The north/east position error e after compensating the drift, at the end of the mission (72 h of
+   free navigation from the end of the alignment), is a zero-mean 2-D Gaussian with covariance
+   ``Sigma = Sigma_floor + s^2 g g'``: ``g`` the response to a unit drift error (close to the closed forms
+   dL(t) = (eps cos L / w)(1 - cos w t) north and dlon(t) = eps sin L (t - sin(w t) / w) east, Schuler terms
+   aside), ``Sigma_floor`` the noise floor, the error the angle and velocity random walks leave over the mission
+   even with the exact drift (`_core.mission_covariance`). The drift error is taken independent of the
+   navigation's noise (they share the span's hours: an approximation the benchmark checks), and the horizontal
+   sensor biases are modulated away by the table. The share of runs within a radius r is
+   ``P(|e| <= r) = (1 / 2 pi) int_0^{2 pi} (1 - exp(-r^2 / (2 s(theta)))) dtheta``, s(theta) = l1 cos^2 theta +
+   l2 sin^2 theta (l1, l2 the eigenvalues of Sigma; polar coordinates of the whitened error), integrated by the
+   midpoint rule (a smooth periodic integrand: the error falls geometrically with the points); quantiles by root
+   finding on it.
+
+Units at the edges: drift deg/h, spans and mission h, position nmi (1852 m), latitude deg.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy.optimize import brentq
+
+from gyrodrift.earth import NMI_M
+from gyrodrift.errors import InputError
+from gyrodrift.procedure.noise import SensorNoise
+from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
+from gyrodrift.units import DEG, DEG_PER_H, HOUR
+
+__all__ = [
+    "MissionBudget",
+    "MissionErrorModel",
+    "Plan",
+    "drift_std_curve_deg_h",
+    "mission_error_model",
+    "mission_outlook",
+    "norm_cdf",
+    "norm_quantile",
+    "plan_identification",
+    "DEFAULT_QUANTILES",
+]
+
+DEFAULT_QUANTILES = (0.5, 0.9, 0.95, 0.99)
+"""Probabilities of the 72 h error quantiles reported."""
+_THETA_POINTS = 2048
+"""Midpoints over a quarter turn for `norm_cdf` (the integrand is symmetric in each quadrant)."""
+_MISSION_STEP_S = 60.0
+"""Propagation step of the mission covariance [s]."""
+_UPDATE_S = 10.0
+"""The smoother's measurement interval [s] (its default)."""
+
+
+def _finite(name: str, value: Any, *, low: float | None = None, high: float | None = None, open_low=False) -> float:
+    """A finite number within bounds, or one-line `InputError` naming `name`."""
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise InputError(f"{name}: expected a finite number, got {value!r}")
+    v = float(value)
+    if low is not None and (v < low or (open_low and v == low)):
+        raise InputError(f"{name}: expected a number {'>' if open_low else '>='} {low:g}, got {v:g}")
+    if high is not None and v > high:
+        raise InputError(f"{name}: expected a number <= {high:g}, got {v:g}")
+    return v
+
+
+@dataclass(frozen=True)
+class MissionBudget:
+    """A position-error budget: at most ``error_nmi`` [nmi] after ``hours`` [h] of navigation for a ``share``
+    (0-1) of runs (default: 1 nmi at 72 h for 95 %)."""
+
+    error_nmi: float = 1.0
+    hours: float = 72.0
+    share: float = 0.95
+
+    def __post_init__(self):
+        _finite("budget error_nmi", self.error_nmi, low=0.0, open_low=True)
+        _finite("budget hours", self.hours, low=1.0 / 60.0, high=1000.0)
+        s = _finite("budget share", self.share, low=0.0, open_low=True)
+        if not s < 1.0:
+            raise InputError(f"budget share: expected a number in (0, 1), got {s:g}")
+
+    def describe(self) -> str:
+        return f"{self.error_nmi:g} nmi at {self.hours:g} h for {100 * self.share:g} % of runs"
+
+
+def _eigen(cov: np.ndarray) -> tuple[float, float]:
+    c = np.asarray(cov, dtype=float)
+    if c.shape != (2, 2) or not np.all(np.isfinite(c)):
+        raise InputError(f"covariance: expected a finite 2 x 2 matrix, got shape {c.shape}")
+    lam = np.linalg.eigvalsh(0.5 * (c + c.T))
+    return float(max(lam[1], 0.0)), float(max(lam[0], 0.0))
+
+
+def norm_cdf(cov, radius) -> float:
+    """P(|e| <= radius) for a zero-mean 2-D Gaussian e with covariance `cov` (module docs; same units squared)."""
+    l1, l2 = _eigen(cov)
+    r = float(radius)
+    if r <= 0:
+        return 0.0
+    if l1 == 0.0:
+        return 1.0
+    theta = (np.arange(_THETA_POINTS) + 0.5) * (0.5 * math.pi / _THETA_POINTS)
+    s = l1 * np.cos(theta) ** 2 + l2 * np.sin(theta) ** 2
+    with np.errstate(divide="ignore", over="ignore"):
+        return float(np.mean(1.0 - np.exp(-(r * r) / (2.0 * s))))
+
+
+def norm_quantile(cov, p: float) -> float:
+    """The radius r with P(|e| <= r) = p (0 < p < 1) for the Gaussian of `norm_cdf` (units of sqrt(cov))."""
+    p = _finite("quantile probability", p, low=0.0, open_low=True)
+    if not p < 1.0:
+        raise InputError(f"quantile probability: expected a number in (0, 1), got {p:g}")
+    l1, _ = _eigen(cov)
+    if l1 == 0.0:
+        return 0.0
+    high = math.sqrt(-2.0 * l1 * math.log1p(-p)) * 1.0001  # the circular Gaussian of the largest axis
+    return float(brentq(lambda r: norm_cdf(cov, r) - p, 0.0, high, xtol=1e-12 * high, rtol=1e-12))
+
+
+@dataclass(frozen=True)
+class MissionErrorModel:
+    """The position error at the end of a mission after compensating a drift (module docs, point 3).
+
+    Attributes
+    ----------
+    lat_deg, hours : float
+        Site latitude [deg] and mission length [h] (free navigation from the end of the alignment).
+    floor_cov_m2 : tuple of 2 tuples
+        Covariance of the north, east noise floor [m^2].
+    response_m_per_deg_h : tuple of 2 floats
+        North, east position error per deg/h of uncompensated drift [m/(deg/h)] (computed minus true).
+    """
+
+    lat_deg: float
+    hours: float
+    floor_cov_m2: tuple[tuple[float, float], tuple[float, float]]
+    response_m_per_deg_h: tuple[float, float]
+
+    def covariance_m2(self, drift_std_deg_h: float) -> np.ndarray:
+        """Sigma = Sigma_floor + s^2 g g' [m^2] for a drift 1-sigma s [deg/h]."""
+        s = _finite("drift_std_deg_h", drift_std_deg_h, low=0.0)
+        g = np.asarray(self.response_m_per_deg_h, dtype=float)
+        return np.asarray(self.floor_cov_m2, dtype=float) + s * s * np.outer(g, g)
+
+    def share_within(self, drift_std_deg_h: float, error_nmi: float) -> float:
+        """Share of runs whose error is at most `error_nmi` [nmi]."""
+        return norm_cdf(self.covariance_m2(drift_std_deg_h), error_nmi * NMI_M)
+
+    def quantile_nmi(self, drift_std_deg_h: float, p: float) -> float:
+        """The p-quantile of the error [nmi]."""
+        return norm_quantile(self.covariance_m2(drift_std_deg_h), p) / NMI_M
+
+    def max_drift_std_deg_h(self, budget: MissionBudget) -> float | None:
+        """The largest drift 1-sigma [deg/h] meeting `budget` (the share falls with it); None when the noise floor
+        alone misses it."""
+        if self.share_within(0.0, budget.error_nmi) < budget.share:
+            return None
+        g = float(np.hypot(*self.response_m_per_deg_h))
+        hi = 10.0 * budget.error_nmi * NMI_M / g  # a 10 nmi 1-sigma drift term: far outside any budget
+        return float(brentq(lambda s: self.share_within(s, budget.error_nmi) - budget.share, 0.0, hi, xtol=1e-12))
+
+
+def mission_error_model(
+    lat_deg: float, noise: SensorNoise, *, hours: float = 72.0, height_m: float = 0.0
+) -> MissionErrorModel:
+    """The `MissionErrorModel` of a site and a noise model (`_core.mission_covariance`: the ARW and VRW over the
+    mission, no initial attitude or velocity error: a compensated run starts from its alignment, whose
+    noise-driven errors are small beside the mission's)."""
+    from gyrodrift import _core
+
+    lat = _finite("lat_deg", lat_deg, low=-90.0, high=90.0)
+    h = _finite("hours", hours, low=1.0 / 60.0, high=1000.0)
+    r = _core.mission_covariance(
+        lat_rad=lat * DEG,
+        height_m=float(height_m),
+        span_s=h * HOUR,
+        step_s=_MISSION_STEP_S,
+        gyro_arw_rad_rts=noise.arw_rad_rts,
+        accel_vrw_m_s_rts=noise.vrw_m_s_rts,
+        att_sigma_rad=[0.0, 0.0, 0.0],
+        vel_sigma_m_s=0.0,
+    )
+    c = np.asarray(r["pos_cov_m2"], dtype=float)
+    g = np.asarray(r["response_m_per_rad_s"], dtype=float) * DEG_PER_H
+    if not float(np.hypot(g[0], g[1])) > 0:
+        raise InputError(f"lat_deg: the {h:g} h position error does not depend on the axial drift at {lat:g} deg")
+    return MissionErrorModel(
+        lat_deg=lat,
+        hours=h,
+        floor_cov_m2=((float(c[0, 0]), float(c[0, 1])), (float(c[1, 0]), float(c[1, 1]))),
+        response_m_per_deg_h=(float(g[0]), float(g[1])),
+    )
+
+
+def _scenario_for(lat_deg: float, scenario=None):
+    """The scenario whose site, rate, rotation scheme and attitude the planner uses (default: the default
+    scenario at `lat_deg`)."""
+    from gyrodrift.ins.scenario import Scenario
+
+    if scenario is not None:
+        return scenario
+    return Scenario.from_dict({"site": {"lat_deg": float(lat_deg)}})
+
+
+def drift_std_curve_deg_h(
+    noise: SensorNoise,
+    spans_h: Sequence[float] | np.ndarray,
+    *,
+    scenario=None,
+    lat_deg: float | None = None,
+    timeline: Timeline = DEFAULT_TIMELINE,
+) -> np.ndarray:
+    """The smoother's drift 1-sigma [deg/h] after each span [h] from the first sample (module docs, point 1).
+
+    `scenario` (a `gyrodrift.ins.scenario.Scenario`) gives the site, the sample rate, the rotation scheme and the
+    attitude; without it the default scenario at `lat_deg`. The smoother's settings are `smooth_log`'s: its
+    coarse span (``timeline.coarse_s``), the noise floored as there, no thermal state.
+    """
+    from gyrodrift import _core
+
+    if scenario is None and lat_deg is None:
+        raise InputError("the planner needs a scenario or a latitude (lat_deg)")
+    scn = _scenario_for(lat_deg if lat_deg is not None else 0.0, scenario)
+    spans = np.asarray([_finite("span_h", s, low=0.0, open_low=True) for s in spans_h], dtype=float)
+    if spans.size == 0 or np.any(np.diff(spans) <= 0):
+        raise InputError("span_h: expected spans in ascending order")
+    site = scn.site
+    keywords: dict[str, Any] = {
+        "lat_rad": site.lat_deg * DEG,
+        "lon_rad": site.lon_deg * DEG,
+        "height_m": float(site.height_m),
+        "rate_hz": float(scn.run.rate_hz),
+        "coarse_s": float(timeline.coarse_s),
+        "span_s": float(spans[-1]) * HOUR,
+        "update_s": _UPDATE_S,
+        "thermal": False,
+        **noise.floored().core_keywords(),
+    }
+    config = _core.SmootherConfig(**keywords)
+    out = _core.drift_std_curve(config, scn.to_core_config(), [float(s) * HOUR for s in spans])
+    return np.asarray(out, dtype=float) / DEG_PER_H
+
+
+@dataclass(frozen=True)
+class Plan:
+    """What `plan_identification` found.
+
+    Attributes
+    ----------
+    spans_h : ndarray
+        Observation spans from the first sample [h] (alignment + static navigation).
+    drift_std_id_deg_h, drift_std_deg_h : ndarray
+        The smoother's drift 1-sigma [deg/h] at each span, and with the thermal term added (module docs).
+    share_within : ndarray
+        Predicted share of runs within the budget's error at each span.
+    quantile_nmi : ndarray
+        Predicted ``budget.share`` quantile of the mission error [nmi] at each span.
+    floor_quantile_nmi : float
+        The same with the exact drift (the noise floor alone).
+    max_drift_std_deg_h : float or None
+        The largest drift 1-sigma meeting the budget (None: the floor misses it).
+    shortest_span_h : float or None
+        The shortest span of `spans_h` meeting the budget; None when none does (`reason` says why).
+    reason : str
+        One sentence: the answer and why.
+    """
+
+    lat_deg: float
+    noise: SensorNoise
+    rotation: str
+    budget: MissionBudget
+    coeff_std_deg_h_per_c: float
+    temp_change_c: float
+    spans_h: np.ndarray
+    drift_std_id_deg_h: np.ndarray
+    drift_std_deg_h: np.ndarray
+    share_within: np.ndarray
+    quantile_nmi: np.ndarray
+    floor_quantile_nmi: float
+    max_drift_std_deg_h: float | None
+    shortest_span_h: float | None
+    reason: str
+    mission: MissionErrorModel = field(repr=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        def arr(a) -> list[float]:
+            return [float(x) for x in a]
+
+        return {
+            "format": "gyrodrift-plan/1",
+            "answer": self.reason,
+            "shortest_span_h": self.shortest_span_h,
+            "lat_deg": self.lat_deg,
+            "rotation": self.rotation,
+            "noise": self.noise.to_dict(),
+            "budget": {
+                "error_nmi": self.budget.error_nmi,
+                "hours": self.budget.hours,
+                "share": self.budget.share,
+            },
+            "thermal": {"coeff_std_deg_h_per_c": self.coeff_std_deg_h_per_c, "temp_change_c": self.temp_change_c},
+            "max_drift_std_deg_h": self.max_drift_std_deg_h,
+            "floor_quantile_nmi": self.floor_quantile_nmi,
+            "mission": {
+                "floor_cov_m2": [list(r) for r in self.mission.floor_cov_m2],
+                "response_m_per_deg_h": list(self.mission.response_m_per_deg_h),
+            },
+            "spans_h": arr(self.spans_h),
+            "drift_std_id_deg_h": arr(self.drift_std_id_deg_h),
+            "drift_std_deg_h": arr(self.drift_std_deg_h),
+            "share_within": arr(self.share_within),
+            "quantile_nmi": arr(self.quantile_nmi),
+        }
+
+
+def _thermal_std(coeff_std: float, temp_change: float) -> float:
+    return _finite("coeff_std_deg_h_per_c", coeff_std, low=0.0) * abs(_finite("temp_change_c", temp_change))
+
+
+def plan_identification(
+    noise: SensorNoise,
+    *,
+    scenario=None,
+    lat_deg: float | None = None,
+    budget: MissionBudget | None = None,
+    coeff_std_deg_h_per_c: float = 0.0,
+    temp_change_c: float = 0.0,
+    min_span_h: float = 6.0,
+    max_span_h: float = 48.0,
+    step_h: float = 0.25,
+    timeline: Timeline = DEFAULT_TIMELINE,
+) -> Plan:
+    """How long to observe: the drift 1-sigma, the predicted mission error and the shortest span meeting `budget`.
+
+    Parameters
+    ----------
+    noise : SensorNoise
+        The sensors' noise (`gyrodrift allan`'s noise.toml, a scenario's keys).
+    scenario : Scenario, optional
+        Site, sample rate, rotation scheme and attitude (default: the default scenario at `lat_deg`).
+    lat_deg : float, optional
+        Site latitude [deg] when no scenario is given (with one, it overrides the scenario's site).
+    budget : MissionBudget, optional
+        Default 1 nmi at 72 h for 95 % of runs.
+    coeff_std_deg_h_per_c, temp_change_c : float
+        Thermal situation: the 1-sigma of the z gyro's thermal coefficient [deg/h/degC] and the temperature change
+        the identification does not see through [degC] (module docs, point 2).
+    min_span_h, max_span_h, step_h : float
+        The spans searched [h] from the first sample (every `step_h`; at most about 55 h: the smoother's
+        20 000 updates of 10 s).
+    """
+    budget = budget or MissionBudget()
+    lo = _finite("min_span_h", min_span_h, low=0.5)
+    hi = _finite("max_span_h", max_span_h, low=lo, high=55.0)
+    step = _finite("step_h", step_h, low=1.0 / 60.0, open_low=False)
+    if not hi > lo:
+        raise InputError(f"max_span_h: expected a number > min_span_h ({lo:g} h), got {hi:g}")
+    if scenario is None:
+        if lat_deg is None:
+            raise InputError("the planner needs a scenario or a latitude (lat_deg)")
+        scn = _scenario_for(_finite("lat_deg", lat_deg, low=-90.0, high=90.0))
+    elif lat_deg is not None:
+        site = dataclasses.replace(scenario.site, lat_deg=_finite("lat_deg", lat_deg, low=-90.0, high=90.0))
+        scn = dataclasses.replace(scenario, site=site)
+    else:
+        scn = scenario
+    thermal = _thermal_std(coeff_std_deg_h_per_c, temp_change_c)
+    spans = np.arange(lo, hi + 1e-9, step)
+    if spans[-1] < hi - 1e-9:
+        spans = np.append(spans, hi)
+    sid = drift_std_curve_deg_h(noise, spans, scenario=scn, timeline=timeline)
+    s = np.hypot(sid, thermal)
+    mission = mission_error_model(scn.site.lat_deg, noise, hours=budget.hours, height_m=scn.site.height_m)
+    share = np.array([mission.share_within(x, budget.error_nmi) for x in s])
+    quant = np.array([mission.quantile_nmi(x, budget.share) for x in s])
+    floor_q = mission.quantile_nmi(0.0, budget.share)
+    s_max = mission.max_drift_std_deg_h(budget)
+    meets = share >= budget.share
+    pct = f"{100 * budget.share:g} %"
+    if s_max is None:
+        shortest, reason = (
+            None,
+            (
+                f"no span meets {budget.describe()}: the noise floor alone (the exact drift) leaves the {pct} quantile "
+                f"at {floor_q:.2f} nmi"
+            ),
+        )
+    elif s_max <= thermal:
+        shortest, reason = (
+            None,
+            (
+                f"no span meets {budget.describe()}: the thermal term alone ({thermal:.2e} deg/h: k_z 1-sigma "
+                f"{coeff_std_deg_h_per_c:g} deg/h/degC over {temp_change_c:g} degC) exceeds the {s_max:.2e} deg/h the "
+                "budget allows; learn k_z better or keep the temperature steadier"
+            ),
+        )
+    elif not meets.any():
+        shortest, reason = (
+            None,
+            (
+                f"no span up to {spans[-1]:g} h meets {budget.describe()}: the drift 1-sigma there is "
+                f"{s[-1]:.2e} deg/h, the budget allows {s_max:.2e} ({pct} quantile {quant[-1]:.2f} nmi)"
+            ),
+        )
+    else:
+        i = int(np.argmax(meets))
+        shortest = float(spans[i])
+        if i == 0:
+            reason = (
+                f"the shortest span searched, {shortest:g} h, already meets {budget.describe()} ({pct} quantile "
+                f"{quant[0]:.2f} nmi; drift 1-sigma {s[0]:.2e} deg/h, the budget allows {s_max:.2e})"
+            )
+        else:
+            reason = (
+                f"observe at least {shortest:g} h (alignment + static navigation) to meet {budget.describe()}: "
+                f"drift 1-sigma {s[i]:.2e} deg/h (the budget allows {s_max:.2e}), {pct} quantile {quant[i]:.2f} nmi"
+            )
+    return Plan(
+        lat_deg=float(scn.site.lat_deg),
+        noise=noise,
+        rotation=str(scn.rotation.scheme),
+        budget=budget,
+        coeff_std_deg_h_per_c=float(coeff_std_deg_h_per_c),
+        temp_change_c=float(temp_change_c),
+        spans_h=spans,
+        drift_std_id_deg_h=sid,
+        drift_std_deg_h=s,
+        share_within=share,
+        quantile_nmi=quant,
+        floor_quantile_nmi=floor_q,
+        max_drift_std_deg_h=s_max,
+        shortest_span_h=shortest,
+        reason=reason,
+        mission=mission,
+    )
+
+
+def mission_outlook(
+    drift_std_deg_h: float,
+    lat_deg: float,
+    noise: SensorNoise,
+    *,
+    span_h: float,
+    budget: MissionBudget | None = None,
+    probs: Sequence[float] = DEFAULT_QUANTILES,
+    source: str = "",
+) -> dict[str, Any]:
+    """What an identified drift's 1-sigma [deg/h] means for the mission at `lat_deg` (`gyrodrift identify`).
+
+    Returns a JSON-ready dict: ``quantiles_nmi`` (probability -> predicted error quantile after compensation
+    [nmi]), ``share_within`` (predicted share within the budget), ``ready`` (meets the budget), ``max_drift_std_deg_h``
+    (what the budget allows), ``more_static_h`` (None when ready or when no span would do; else about how many
+    more hours of static observation: the planner's curve for this noise and site with the default rotation
+    scheme, scaled to pass through this run's 1-sigma at its `span_h`), and a one-line ``note``.
+    """
+    budget = budget or MissionBudget()
+    s = _finite("drift_std_deg_h", drift_std_deg_h, low=0.0)
+    mission = mission_error_model(lat_deg, noise, hours=budget.hours)
+    quant = {f"{p:g}": mission.quantile_nmi(s, p) for p in probs}
+    share = mission.share_within(s, budget.error_nmi)
+    s_max = mission.max_drift_std_deg_h(budget)
+    ready = share >= budget.share
+    more: float | None = None
+    q = mission.quantile_nmi(s, budget.share)
+    if ready:
+        note = f"ready: predicted {100 * budget.share:g} % quantile {q:.2f} nmi meets {budget.describe()}"
+    elif s_max is None:
+        note = f"not ready, and no static time will do: the noise floor alone misses {budget.describe()}"
+    else:
+        spans = np.arange(span_h, 55.0, 0.25)
+        curve = drift_std_curve_deg_h(noise, spans, lat_deg=lat_deg) if spans.size > 1 else np.array([math.nan])
+        scaled = curve * (s / curve[0]) if curve[0] > 0 else curve
+        ok = np.nonzero(scaled <= s_max)[0]
+        if ok.size:
+            more = float(spans[ok[0]] - span_h)
+            note = (
+                f"not ready: predicted {100 * budget.share:g} % quantile {q:.2f} nmi misses {budget.describe()}; "
+                f"about {more:g} h more static time would bring the drift 1-sigma from {s:.2e} to the {s_max:.2e} "
+                "deg/h the budget allows"
+            )
+        else:
+            note = (
+                f"not ready: predicted {100 * budget.share:g} % quantile {q:.2f} nmi misses {budget.describe()}, and "
+                f"no span up to 55 h brings the drift 1-sigma ({s:.2e} deg/h) to the {s_max:.2e} the budget allows"
+            )
+    return {
+        "drift_std_deg_h": s,
+        "drift_std_source": source,
+        "lat_deg": float(lat_deg),
+        "budget": {"error_nmi": budget.error_nmi, "hours": budget.hours, "share": budget.share},
+        "quantiles_nmi": quant,
+        "share_within": share,
+        "max_drift_std_deg_h": s_max,
+        "ready": bool(ready),
+        "more_static_h": more,
+        "note": note,
+    }
