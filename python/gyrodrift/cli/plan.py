@@ -34,7 +34,12 @@ SCHEMES = ("none", "continuous", "reciprocating", "indexing")
     "the noise. Default: the default scenario at --lat0-deg.",
 )
 @noise_options
-@click.option("--lat0-deg", type=float, default=None, help="Site latitude [deg] (overrides the scenario's).")
+@click.option(
+    "--lat0-deg",
+    type=float,
+    default=None,
+    help="Site latitude [deg] (overrides the scenario's). Default: the scenario's; one of the two is required.",
+)
 @click.option(
     "--rotation",
     type=click.Choice(SCHEMES),
