@@ -273,3 +273,17 @@ def test_the_library_refuses_a_drift_beyond_the_bound_by_the_options_name(tmp_pa
     for bad in (1e308, -100.5, float("nan")):
         with pytest.raises(OptionError, match=r"--drift-deg-h must be a finite drift within \+-100 deg/h"):
             navigate(tmp_path / "sim" / "imu.parquet", compensate_drift_deg_h=bad)
+
+
+@pytest.mark.parametrize("kind", ["fifo", "dev/zero", "socket"])
+def test_the_library_readers_of_run_tables_and_models_refuse_non_regular_files(kind, specials):
+    """Without the CLI's type: `read_runs_csv` and `load_model` read through `read_limited` too."""
+    from gyrodrift.model_io import ModelFileError, load_model
+    from gyrodrift.runs import RunTableError, read_runs_csv
+
+    path, reason = specials[kind]
+    with _deadline(30):
+        with pytest.raises(RunTableError, match=reason):
+            read_runs_csv(path)
+        with pytest.raises(ModelFileError, match=reason):
+            load_model(path)

@@ -65,7 +65,13 @@ def read_limited(path: str | os.PathLike[str], max_bytes: int) -> bytes:
         The file cannot be opened or read (``FileNotFoundError``, ``PermissionError``, ...).
     """
     flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0)
-    fd = os.open(path, flags)
+    try:
+        fd = os.open(path, flags)
+    except OSError:
+        reason = non_regular_reason(path, dir_ok=False)  # a socket cannot be opened at all (ENXIO): say what it is
+        if reason is not None:
+            raise NotRegularFileError(os.fspath(path), file_kind(os.stat(path).st_mode)) from None
+        raise
     try:
         mode = os.fstat(fd).st_mode
         if not stat.S_ISREG(mode):

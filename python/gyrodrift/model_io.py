@@ -71,6 +71,7 @@ from gyrodrift.choices import (
     TARGETS,
 )
 from gyrodrift.errors import GyrodriftError, InputError
+from gyrodrift.input_files import read_limited
 from gyrodrift.lssvr import IllConditionedWarning
 from gyrodrift.model import DriftModel, make_drift_model, training_digest
 from gyrodrift.runs import RunTable, RunTableError
@@ -464,11 +465,18 @@ def _check_fitted(fitted: Any, model: DriftModel, where: str) -> None:
             raise ModelFileError(f"{fw}: key {key!r} differs from the model rebuilt from the file (edited?)")
 
 
+MAX_MODEL_BYTES = 1 << 30
+"""Largest model file read [bytes] (its training runs take a few hundred bytes each)."""
+
+
 def load_model(path) -> DriftModel:
     """Read a model file written by ``save_model``; clear ``ModelFileError`` for anything else."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        raw = read_limited(path, MAX_MODEL_BYTES)  # a device or FIFO is refused, never read or waited on
+        if len(raw) > MAX_MODEL_BYTES:
+            raise ModelFileError(f"{path}: more than {MAX_MODEL_BYTES} bytes; not a model file")
+        text = raw.decode("utf-8")
     except OSError as exc:
         raise ModelFileError(f"{path}: cannot read: {exc.strerror}") from None
     except UnicodeDecodeError:

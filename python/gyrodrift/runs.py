@@ -50,9 +50,14 @@ from pathlib import Path
 import numpy as np
 
 from gyrodrift.errors import InputError
+from gyrodrift.input_files import read_limited
 
 PAPER_LAT0_DEG = 28.222
 """Site latitude of the paper's experiments [deg] (Yu et al. 2013, section 3)."""
+
+MAX_RUN_TABLE_BYTES = 1 << 30
+"""Largest run table read [bytes] (a row of `features` is a few hundred bytes: millions of runs); a larger file is
+refused after reading this much, never all of it."""
 
 TEMPERATURE_LIMITS_C = (-100.0, 200.0)
 """Plausible system temperatures [deg C], inclusive: every reader (run tables, IMU logs) refuses the rest (a
@@ -556,9 +561,11 @@ def read_runs_csv(path, *, lat0_deg: float | None = None, require_truth: bool = 
     if lat0_deg is not None and not (math.isfinite(lat0_deg) and -90.0 <= lat0_deg <= 90.0):
         raise RunTableError(f"{name}: site latitude lat0_deg must be within [-90, 90] deg, got {lat0_deg}")
     try:
-        raw = path.read_bytes()
+        raw = read_limited(path, MAX_RUN_TABLE_BYTES)  # a device or FIFO is refused, never read or waited on
     except OSError as exc:
         raise RunTableError(f"{name}: cannot open: {exc.strerror}") from None
+    if len(raw) > MAX_RUN_TABLE_BYTES:
+        raise RunTableError(f"{name}: more than {MAX_RUN_TABLE_BYTES} bytes; a run table holds at most that")
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
