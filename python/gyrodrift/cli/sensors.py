@@ -44,29 +44,36 @@ def allan_command(
     as_json: bool,
     quiet: bool,
 ) -> None:
-    """Allan deviation of every gyro and accelerometer axis of a static LOG (turntable still), with the fitted
-    angle/velocity random walk, Gauss-Markov bias and rate random walk, and a [gyro]/[accel] noise block
-    for scenario files.
+    """Allan deviation of every gyro and accelerometer axis of a static LOG (turntable still), with the angle/velocity
+    random walk, Gauss-Markov bias and rate random walk the log shows (a term not above the 99 % confidence interval
+    of the Allan deviation at the averaging times the log reaches is "not resolved"), and a [gyro]/[accel] noise
+    block for scenario files that says which axes it averages. Constant channels are named and left out; a log
+    whose channels are all constant is refused. --json prints allan.json without its curves.
     """
-    from gyrodrift.allan import allan_deviation, scenario_noise_block
-    from gyrodrift.allan_output import ALLAN_FILES, allan_files
+    from gyrodrift.allan import allan_deviation
+    from gyrodrift.allan_output import ALLAN_FILES, allan_files, noise_summary
     from gyrodrift.atomic import OutputFolder
     from gyrodrift.logs import open_log
 
     out = OutputFolder(out_dir, "allan", ALLAN_FILES, inputs=[log])
     imu = open_log(log, site=site_from_options(lat0_deg, lon0_deg, height_m), format=log_format)
     result = allan_deviation(imu, quiet=quiet)
-    paths = allan_files(result, out)
-    noise = scenario_noise_block(result)
-    if as_json:
-        print_json(noise)
-    elif not quiet:
-        g, a = noise["gyro"], noise["accel"]
+    if result.constant_axes:
         click.echo(
-            f"{imu.name}: gyro ARW {g['arw_deg_rth']:.4g} deg/sqrt(h), Gauss-Markov {g['bias_instability_deg_h']:.3g} "
-            f"deg/h over {g['correlation_s']:.0f} s, RRW {g['rrw_deg_h_rth']:.3g} deg/h/sqrt(h); "
-            f"accel VRW {a['vrw_ug_rthz']:.4g} ug/sqrt(Hz)"
+            f"warning: {imu.name}: {', '.join(result.constant_axes)} constant (every sample equal): no noise to "
+            "measure, left out of the noise block",
+            err=True,
         )
+    paths = allan_files(result, out)
+    if as_json:
+        doc = result.to_dict()
+        curves = ("tau_s", "adev_", "edf")
+        doc["axes"] = {
+            name: {k: v for k, v in entry.items() if not k.startswith(curves)} for name, entry in doc["axes"].items()
+        }
+        print_json(doc)
+    elif not quiet:
+        click.echo(f"{imu.name}: {noise_summary(result)}")
     say_wrote(paths, quiet=quiet, as_json=as_json)
 
 
