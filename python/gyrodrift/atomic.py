@@ -784,7 +784,7 @@ class Stage:
         the rest of the set). Writers taking a stage call this for each of their files."""
         if name in self.files:
             raise ValueError(f"{name} is staged twice")
-        if os.sep in name or (os.altsep and os.altsep in name) or name.startswith(".") or name == MANIFEST_NAME:
+        if _plain_name_problem(name) is not None:  # the rule a manifest's names are held to
             raise ValueError(f"{name!r} is not a plain output file name")
         with _naming(self.folder / name):
             self.files[name] = _create_temporary(self.folder, name)
