@@ -17,6 +17,7 @@ from sklearn.utils.estimator_checks import parametrize_with_checks
 from gyrodrift.kernels import kernel_matrix, squared_distances
 from gyrodrift.lssvr import (
     LSSVR,
+    EigenCache,
     NotPositiveDefiniteError,
     RBFEigenSystem,
     lssvr_loo_residuals,
@@ -706,3 +707,22 @@ def test_batch_rows_do_not_depend_on_the_number_of_threads():
     for bad in (0, -1, 1.5, True):
         with pytest.raises(ValueError, match="threads must be an int >= 1"):
             rbf_batch_errors(D, y, gammas, sigmas, "loo", threads=bad)
+
+
+def test_eigen_cache_serves_a_sigma_asked_again_with_the_values_of_the_cholesky_path():
+    X, y = make_data(n=40, seed=33)
+    D = squared_distances(X)
+    cache = EigenCache(D)
+    bound = 3.0
+    first = rbf_batch_errors(D, y, 10.0 ** np.arange(-1, 5), bound, "loo", cache=cache)  # 6 on one sigma: cached
+    assert cache.get(bound) is not None
+    again = rbf_batch_errors(D, y, [7.0, 70.0], [bound, 0.5], "loo", cache=cache)  # one on the cached sigma
+    plain = rbf_batch_errors(D, y, [7.0, 70.0], [bound, 0.5], "loo")
+    assert rel_err(again, plain) < 1e-8 and rel_err(first[1], rbf_batch_errors(D, y, [1.0], [bound], "loo")[0]) < 1e-8
+    np.testing.assert_array_equal(again[1], plain[1])  # not cached: the same Cholesky path
+    with pytest.raises(ValueError, match="another training set"):
+        rbf_batch_errors(squared_distances(X[:-1]), y[:-1], [1.0], [bound], "loo", cache=cache)
+    small = EigenCache(D, size=2)
+    for sigma in (1.0, 2.0, 3.0):
+        small.put(sigma, RBFEigenSystem(D, sigma))
+    assert small.get(1.0) is None and small.get(3.0) is not None

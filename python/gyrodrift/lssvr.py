@@ -101,6 +101,7 @@ except ImportError:  # pragma: no cover - older scikit-learn
 __all__ = [
     "COND_REFUSE",
     "COND_WARN",
+    "EigenCache",
     "LSSVR",
     "IllConditionedError",
     "IllConditionedWarning",
@@ -387,7 +388,9 @@ def lssvr_loo_residuals(K, y, gamma) -> np.ndarray:
     return _loo_from_factor(U, alpha, p, s)
 
 
-def rbf_batch_errors(sqdist, y, gammas, sigmas, kind: str = "train", weights=None, threads: int = 1) -> np.ndarray:
+def rbf_batch_errors(
+    sqdist, y, gammas, sigmas, kind: str = "train", weights=None, threads: int = 1, cache: EigenCache | None = None
+) -> np.ndarray:
     """Per-sample errors of m RBF-LSSVMs (one per (gamma, sigma) candidate) on one training set.
 
     The tuner's workhorse: the squared distances are computed once (:func:`gyrodrift.kernels.
@@ -413,6 +416,10 @@ def rbf_batch_errors(sqdist, y, gammas, sigmas, kind: str = "train", weights=Non
     threads : int, default 1
         For n > 32, the candidates are shared among this many threads (the rows do not depend on it). Give the
         BLAS one thread meanwhile (``threadpoolctl``), as ``gyrodrift.tuning.tune_lssvr`` does.
+    cache : EigenCache, optional
+        For n > 32, the eigendecompositions of recently used sigmas of this training set (``EigenCache(sqdist,
+        weights)``, kept across calls): a candidate on a cached sigma costs O(n^2) (a swarm whose particles sit on
+        a sigma bound asks for that sigma every iteration).
 
     Returns
     -------
@@ -486,7 +493,9 @@ def rbf_batch_errors(sqdist, y, gammas, sigmas, kind: str = "train", weights=Non
             return _rbf_batch_stacked(D, y, g, sg, kind, w)
         except np.linalg.LinAlgError:
             pass  # a non-PD candidate spoils the whole stack: redo candidate by candidate
-    return _rbf_batch_loop(D, y, g, sg, kind, w, threads)
+    if cache is not None and not cache.serves(D, w):
+        raise ValueError("cache belongs to another training set (EigenCache(sqdist, weights) of these)")
+    return _rbf_batch_loop(D, y, g, sg, kind, w, threads, cache)
 
 
 def _check_threads(threads) -> int:
@@ -534,9 +543,10 @@ def _rbf_batch_stacked(D, y, g, sg, kind, w=None):
     return out
 
 
-def _rbf_batch_loop(D, y, g, sg, kind, w=None, threads: int = 1):
+def _rbf_batch_loop(D, y, g, sg, kind, w=None, threads: int = 1, cache: EigenCache | None = None):
     """Candidate by candidate with LAPACK ``dpotrf``/``dpotrs``/``dtrtri``; non-PD rows are +inf. Candidates sharing
-    one sigma, ``EIG_MIN_GROUP`` or more of them, come from one :class:`RBFEigenSystem` instead. ``threads`` > 1:
+    one sigma, ``EIG_MIN_GROUP`` or more of them, or one in ``cache``, come from one :class:`RBFEigenSystem` instead
+    (kept in ``cache``). ``threads`` > 1:
     the candidates are shared among that many threads (scipy's LAPACK wrappers release the GIL; each candidate is
     computed exactly as alone, so the rows do not depend on ``threads``)."""
     n = D.shape[0]
@@ -545,10 +555,16 @@ def _rbf_batch_loop(D, y, g, sg, kind, w=None, threads: int = 1):
     diag = np.arange(n) * (n + 1)
     values, inverse, counts = np.unique(sg, return_inverse=True, return_counts=True)
     alone = np.ones(g.size, dtype=bool)
-    for k in np.flatnonzero(counts >= EIG_MIN_GROUP):
-        rows = np.flatnonzero(inverse == k)
-        out[rows] = RBFEigenSystem(D, float(values[k]), w).errors(g[rows], y, kind)
-        alone[rows] = False
+    for k, sigma in enumerate(values.tolist()):
+        system = None if cache is None else cache.get(sigma)
+        if system is None and counts[k] >= EIG_MIN_GROUP:
+            system = RBFEigenSystem(D, sigma, w)
+            if cache is not None:
+                cache.put(sigma, system)
+        if system is not None:
+            rows = np.flatnonzero(inverse == k)
+            out[rows] = system.errors(g[rows], y, kind)
+            alone[rows] = False
 
     def candidate(j: int) -> None:
         H = rbf_from_squared_distances(D, sg[j])
@@ -585,6 +601,34 @@ def _rbf_batch_loop(D, y, g, sg, kind, w=None, threads: int = 1):
 #: one eigendecomposition instead of one Cholesky factor each: ``eigh`` costs about 4-5 factorisations with their
 #: triangular inverse (measured at n = 200 and 1000, one BLAS thread; ``benchmarks/bench_tuning.py``).
 EIG_MIN_GROUP = 6
+
+
+class EigenCache:
+    """The :class:`RBFEigenSystem` of the ``size`` most recently used sigmas of one training set (``sqdist`` and
+    ``weights`` as given to :func:`rbf_batch_errors`, which refuses a cache of another set). Memory: two n x n
+    float64 matrices per sigma (16 MB at n = 1000)."""
+
+    def __init__(self, sqdist, weights=None, size: int = 4) -> None:
+        self._sqdist, self._weights, self.size = sqdist, weights, int(size)
+        self._systems: dict[float, RBFEigenSystem] = {}
+
+    def serves(self, sqdist, weights) -> bool:
+        """Whether this cache belongs to the training set ``(sqdist, weights)`` (the same arrays, or equal ones)."""
+        same_w = (weights is None and self._weights is None) or (
+            weights is not None and self._weights is not None and np.array_equal(weights, self._weights)
+        )
+        return same_w and (sqdist is self._sqdist or np.array_equal(sqdist, self._sqdist))
+
+    def get(self, sigma: float) -> RBFEigenSystem | None:
+        system = self._systems.pop(sigma, None)
+        if system is not None:
+            self._systems[sigma] = system  # most recent last
+        return system
+
+    def put(self, sigma: float, system: RBFEigenSystem) -> None:
+        self._systems[sigma] = system
+        while len(self._systems) > self.size:
+            del self._systems[next(iter(self._systems))]
 
 
 class RBFEigenSystem:

@@ -9,8 +9,10 @@ Objectives (all mean absolute errors in the target's unit, deg/h for drift model
 
 The search runs in log10 space over both parameters. Every objective evaluation handles the whole swarm at
 once and reuses one squared-distance matrix of the (already scaled) inputs; candidates that share one sigma (a
-grid's column, particles clipped onto a sigma bound) share one eigendecomposition (``gyrodrift.lssvr.
-rbf_batch_errors``).
+grid's column, particles clipped onto a sigma bound) share one eigendecomposition, kept for the next calls
+(``gyrodrift.lssvr.rbf_batch_errors``, ``EigenCache``): a swarm pressing on a sigma bound evaluates the particles
+there in O(n^2) each. Their values agree with the per-candidate Cholesky path to about cond(H) eps (1e-12 to
+1e-9 relative), so a swarm's trajectory may differ from before only where two candidates tie to that precision.
 
 BLAS threads: :func:`tune_lssvr` runs its thousands of small factorisations with one BLAS thread
 (``threadpoolctl``, a dependency of scikit-learn). OpenBLAS's own threads cost more than they give on matrices of
@@ -37,7 +39,7 @@ from gyrodrift.choices import METHODS, OBJECTIVES
 from gyrodrift.cpso import minimize_cpso
 from gyrodrift.errors import OptionError
 from gyrodrift.kernels import SIGMA_MAX, SIGMA_MIN, check_matrix_memory, squared_distances
-from gyrodrift.lssvr import check_sample_weight, lssvr_solve, rbf_batch_errors
+from gyrodrift.lssvr import EigenCache, check_sample_weight, lssvr_solve, rbf_batch_errors
 
 DEFAULT_BOUNDS = ((1e-2, 1e5), (1e-3, 1e2))
 """Default search box ((gamma_lo, gamma_hi), (sigma_lo, sigma_hi)); sigma in the scaled input units."""
@@ -176,6 +178,7 @@ def make_objective(X, y, objective: str = "loo_mae", *, n_folds: int = 5, sample
     check_matrix_memory(len(y), len(y), 4, "tuning the LSSVR", unit="samples")
     sqdist = squared_distances(X)
     w = check_sample_weight(sample_weight, len(y))
+    cache = EigenCache(sqdist, w)  # sigmas the swarm asks for again (particles on a sigma bound)
 
     def fitness(params: np.ndarray) -> np.ndarray:
         params = np.atleast_2d(np.asarray(params, float))
@@ -184,7 +187,7 @@ def make_objective(X, y, objective: str = "loo_mae", *, n_folds: int = 5, sample
             errors = _kfold_errors(sqdist, y, gammas, sigmas, n_folds, w)
         else:
             kind = "train" if objective == "train_mae" else "loo"
-            errors = rbf_batch_errors(sqdist, y, gammas, sigmas, kind, w, threads)
+            errors = rbf_batch_errors(sqdist, y, gammas, sigmas, kind, w, threads, cache)
         out = np.mean(np.abs(errors), axis=1) if w is None else np.abs(errors) @ w / w.sum()
         return np.where(np.isfinite(out), out, np.inf)
 
