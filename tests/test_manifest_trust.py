@@ -208,3 +208,14 @@ def test_a_valid_manifest_with_a_journal_still_recovers(tmp_path):
     atomic._recover(folder, atomic._read_manifest(folder))
     assert (folder / "a.json").read_text() == "2" and not tmp.exists()
     check_complete(folder / "a.json")
+
+
+def test_navigate_into_a_folder_whose_manifest_names_an_absolute_path_keeps_the_victim(tmp_path, sim):
+    """The issue's second case: an absolute name in another command's set, `navigate` into the folder."""
+    out, victim = sim
+    entry = _describe(victim)
+    _edit(out, lambda doc: doc["sets"].update({"navigate": {"files": {str(victim): entry}}}))
+    result = CliRunner().invoke(main, ["navigate", str(out / "imu.parquet"), "--out", str(out), "--quiet"])
+    _assert_refused(result, "the set 'navigate'", "absolute path")
+    assert victim.read_text() == "precious\n"
+    assert sorted(os.listdir(out)) == [MANIFEST_NAME, "imu.parquet", "scenario.resolved.toml"]
