@@ -88,19 +88,26 @@ def test_rbf_from_squared_distances_broadcasts_a_stack_of_widths():
     stack = rbf_from_squared_distances(D, sig[:, None, None])
     assert stack.shape == (3, 4, 4)
     for k, s in enumerate(sig):
-        np.testing.assert_array_equal(stack[k], rbf_from_squared_distances(D, s))
+        # numpy's exp may take a SIMD or a scalar path by array layout: the same values to 2 ulps
+        np.testing.assert_array_max_ulp(stack[k], rbf_from_squared_distances(D, s), maxulp=2)
 
 
 def test_linear_and_polynomial_match_sklearn():
     rng = np.random.default_rng(3)
     X, Z = rng.normal(size=(7, 3)), rng.normal(size=(5, 3))
-    np.testing.assert_allclose(linear_kernel(X, Z), pairwise.linear_kernel(X, Z), rtol=1e-14)
+    # two BLAS dot products (summation order, FMA): equal to a few ulps of the terms' size |x||z|, not of a
+    # result that may cancel towards 0
+    scale = np.linalg.norm(X, axis=1)[:, None] * np.linalg.norm(Z, axis=1)[None, :]
+    np.testing.assert_array_less(
+        np.abs(linear_kernel(X, Z) - pairwise.linear_kernel(X, Z)), 8 * np.finfo(float).eps * scale
+    )
     for sigma, degree, coef0 in [(1.0, 3, 1.0), (0.7, 2, 0.0), (2.5, 4, -0.3), (1.3, 1, 2.0)]:
-        np.testing.assert_allclose(
-            polynomial_kernel(X, Z, sigma=sigma, degree=degree, coef0=coef0),
-            pairwise.polynomial_kernel(X, Z, degree=degree, gamma=1 / sigma**2, coef0=coef0),
-            rtol=1e-12,
-        )
+        # (x.z / sigma^2 + coef0)^degree: the base's rounding is a few ulps of its terms' size t, the power's
+        # error at most degree * t^degree times that (bases here come within 0.01 of 0 with terms up to 11)
+        t = np.abs(X) @ np.abs(Z).T / sigma**2 + abs(coef0)
+        got = polynomial_kernel(X, Z, sigma=sigma, degree=degree, coef0=coef0)
+        want = pairwise.polynomial_kernel(X, Z, degree=degree, gamma=1 / sigma**2, coef0=coef0)
+        np.testing.assert_array_less(np.abs(got - want), 16 * np.finfo(float).eps * degree * t**degree)
 
 
 def test_kernel_matrix_dispatch_and_alias():
