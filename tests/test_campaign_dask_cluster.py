@@ -20,30 +20,14 @@ from typing import Any
 import pytest
 
 from gyrodrift.campaign import read_runs
+from test_campaign_store_checks import FAST
 
 COUNT = 4
-CAMPAIGN = f"""
-[campaign]
-name = "cluster"
-count = {COUNT}
-seed = 3
-
-[options]
-align_h = 1.0
-features_h = 1
-truth_h = 1.0
-smoother = false
-
-[base.run]
-duration_h = 2.0
-rate_hz = 4.0
-
-[vary."site.lat_deg"]
-dist = "uniform"
-low = 20.0
-high = 60.0
-"""
-"""Four 2 h runs at 4 Hz (1 h alignment, 1 h navigation): about 2 s each on a quiet machine."""
+CAMPAIGN = FAST.format(count=COUNT).replace("rate_hz = 1.0", "rate_hz = 4.0") + (
+    '\n[vary."site.lat_deg"]\ndist = "uniform"\nlow = 20.0\nhigh = 60.0\n'
+)
+"""Four 2 h runs at 4 Hz (1 h alignment, 1 h navigation; test_campaign_store_checks's): about 2 s each on a quiet
+machine."""
 
 DEADLINE_S = 90.0
 """The longest any single wait of these tests may take [s] (a loaded 2-core machine)."""
@@ -105,13 +89,17 @@ def cluster(tmp_path):
     logs: list[object] = []
     watcher = None
 
-    def start(args: list[str], log_name: str) -> subprocess.Popen:
-        log = open(tmp_path / log_name, "w")  # a file, not a pipe: dask's logging can never block on it
+    def start(args: list[str], log_name: str, stdout_name: str | None = None) -> subprocess.Popen:
+        log = open(tmp_path / log_name, "w")  # files, not pipes: dask's logging can never block on them
         logs.append(log)
+        stdout = subprocess.STDOUT
+        if stdout_name is not None:
+            stdout = open(tmp_path / stdout_name, "w")
+            logs.append(stdout)
         proc = subprocess.Popen(
             args,
-            stdout=log,
-            stderr=subprocess.STDOUT,
+            stdout=log if stdout_name is None else stdout,
+            stderr=subprocess.STDOUT if stdout_name is None else log,
             stdin=subprocess.DEVNULL,
             start_new_session=True,
             env={**os.environ, "DASK_TEMPORARY_DIRECTORY": str(tmp_path / "scratch")},  # not /tmp/dask-scratch-space
@@ -185,12 +173,18 @@ def _worker_pid(out: Path, name: str) -> int:
     return int(pq.read_table(out / "runs" / name, columns=["worker"]).column("worker")[0].as_py().rsplit("-", 1)[1])
 
 
-@pytest.mark.slow  # 50-95 s under a load average of 20 on 2 cores (interpreter start-ups)
-def test_a_worker_killed_mid_run_loses_nothing_and_duplicates_nothing(cluster, tmp_path):
+def _start_campaign(cluster: Cluster, tmp_path: Path) -> tuple[Path, Path, subprocess.Popen]:
+    """``(campaign file, store, client)``: `CAMPAIGN` started on `cluster`, once its first run is committed."""
     src, out = tmp_path / "c.toml", tmp_path / "out"
     src.write_text(CAMPAIGN)
-    client = cluster.start(_campaign_cmd(src, out, cluster.address), "client.log")
+    client = cluster.start(_campaign_cmd(src, out, cluster.address), "client.log", "client.json")
     _wait("the first run committed", lambda: len(_files(out)) >= 1, [(client, tmp_path / "client.log")])
+    return src, out, client
+
+
+@pytest.mark.slow  # 50-95 s under a load average of 20 on 2 cores (interpreter start-ups)
+def test_a_worker_killed_mid_run_loses_nothing_and_duplicates_nothing(cluster, tmp_path):
+    _, out, client = _start_campaign(cluster, tmp_path)
     processing = {addr: keys for addr, keys in cluster.watcher.processing().items() if keys}
     assert processing, "every run was done before a worker could be killed: make the runs longer"
     victim = cluster.worker(sorted(processing)[0])  # a worker in the middle of a run
@@ -198,9 +192,8 @@ def test_a_worker_killed_mid_run_loses_nothing_and_duplicates_nothing(cluster, t
     os.killpg(victim.pid, signal.SIGKILL)
     victim.wait(timeout=30)
     _wait("the campaign", lambda: client.poll() is not None, timeout=3 * DEADLINE_S)
-    log = (tmp_path / "client.log").read_text()
-    assert client.returncode == 0, log
-    doc = json.loads(log[log.index("{") :])
+    assert client.returncode == 0, (tmp_path / "client.log").read_text()
+    doc = json.loads((tmp_path / "client.json").read_text())
     assert (doc["done_now"], doc["failed_now"], doc["not_committed"]) == (COUNT, 0, 0), doc
     _check_every_run_once(out)
     survivor = next(w for w in cluster.workers if w is not victim)
@@ -210,10 +203,7 @@ def test_a_worker_killed_mid_run_loses_nothing_and_duplicates_nothing(cluster, t
 
 @pytest.mark.slow  # 50-95 s under a load average of 20 on 2 cores (interpreter start-ups)
 def test_the_client_killed_mid_run_resumes_every_run_once(cluster, tmp_path):
-    src, out = tmp_path / "c.toml", tmp_path / "out"
-    src.write_text(CAMPAIGN)
-    client = cluster.start(_campaign_cmd(src, out, cluster.address), "client.log")
-    _wait("the first run committed", lambda: len(_files(out)) >= 1, [(client, tmp_path / "client.log")])
+    src, out, client = _start_campaign(cluster, tmp_path)
     os.killpg(client.pid, signal.SIGKILL)
     client.wait(timeout=30)
     before = _files(out)
