@@ -1167,7 +1167,7 @@ class _StaticMeans:
             h_lo = w * min(math.sin(math.radians(a_lo)), math.sin(math.radians(a_hi)))
             h_hi = w if a_lo <= 90.0 <= a_hi else w * max(math.sin(math.radians(a_lo)), math.sin(math.radians(a_hi)))
             z_lo, z_hi = w * math.cos(math.radians(a_hi)), w * math.cos(math.radians(a_lo))
-            at = f"at {site.lat_deg:g} deg"
+            at = f"at {site.lat_deg:g} deg, the site's latitude"
         else:
             h_lo, h_hi, z_lo, z_hi = 0.0, w, -w, w
             at = "(the log has no site: anywhere)"
