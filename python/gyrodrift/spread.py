@@ -144,6 +144,7 @@ class SpreadGP:
             warnings.simplefilter("ignore", ConvergenceWarning)
             gp.fit(self._z(Z), (y - self.y_mean_) / self.y_scale_)
         self.gp_ = gp
+        self.n_runs_ = n
         self.z_max_sq_ = float(np.max(np.sum(self._z(Z) ** 2, axis=1)))
         self.theta_ = np.array(gp.kernel_.theta, float)
         if loo:
@@ -158,7 +159,7 @@ class SpreadGP:
         """Predictive 1-sigma of a new run's drift at each row of ``Z`` [unit of y], label noise excluded
         (the run-to-run variation ``tau`` included)."""
         Z = np.asarray(Z, float)
-        check_matrix_memory(len(Z), len(self.loo_std_), 3, "the interval's Gaussian process", unit="runs")
+        check_matrix_memory(len(Z), self.n_runs_, 3, "the interval's Gaussian process", unit="runs")
         _, std = self.gp_.predict(self._z(Z), return_std=True)  # includes the WhiteKernel's tau^2
         return self.y_scale_ * np.asarray(std, float)
 
