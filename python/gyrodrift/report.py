@@ -303,7 +303,7 @@ def conclusion(results: dict) -> list[str]:
         f"The model chosen without looking at the test runs ({chosen['name']}) identifies the 10 test drifts "
         f"with a mean absolute error of {_fmt(chosen['test_mae_deg_h'])} deg/h (largest "
         f"{_fmt(chosen['test_max_abs_err_deg_h'])} deg/h; {within} of 10 within the 0.0005 deg/h that "
-        f"1 nmi / 72 h needs); its 90 % interval (calibrated on re-tuned cross-validation folds), +-"
+        f"1 nmi / 72 h needs); its 90 % interval (calibrated on the training runs' leave-one-out scores), +-"
         f"{_fmt(chosen['interval_90_half_width_deg_h'])} deg/h, covers {chosen['test_covered_by_interval_90']} of "
         f"the 10 test runs. The paper's Table 3 implies a mean absolute error of {_fmt(paper_mae)} deg/h: "
         f"the reproduction is {chosen['test_mae_deg_h'] / paper_mae:.1f} times less accurate than the paper claims.",
