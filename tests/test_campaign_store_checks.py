@@ -106,6 +106,11 @@ def test_a_truncated_run_is_named_by_readers_and_run_again_on_resume(fast_store,
 
 def test_a_run_file_holding_another_run_is_damaged(fast_store, tmp_path):
     out, _ = _copy(fast_store, tmp_path)
+    bare = tmp_path / "bare"  # a manifest without its runs/ folder
+    bare.mkdir()
+    for name in ("campaign.toml", "campaign.json"):
+        shutil.copyfile(out / name, bare / name)
+    _one_line_error(["campaign", str(bare), "--run-table", str(tmp_path / "t.csv")], f"{bare / 'runs'}: no such folder")
     store = CampaignStore(out)
     shutil.copyfile(store.run_path(0), store.run_path(2))  # a whole Parquet file, but of run 0
     good, damaged = store.verify()

@@ -919,6 +919,8 @@ def read_runs(path: str | os.PathLike[str], *, curves: bool = True) -> CampaignR
 
     store = CampaignStore(path)
     store.manifest()
+    if not store.runs_dir.is_dir():
+        raise InputError(f"{store.runs_dir}: no such folder: {store.path} is a campaign folder without its runs/")
     _raise_damaged(store, store.verify()[1])
     campaign = store.campaign()
     try:
