@@ -338,3 +338,23 @@ def test_identify_refuses_a_deg_s_log_declared_deg_h(sim, tmp_path):
     r = _cli("identify", csv_path, "--model", model, "--format", fmt, *SITE)
     _one_line_refusal(r, "(horizontal Earth rate)", "deg/h")
     assert "drift" not in r.output.split("Error:")[0]
+
+
+def test_the_check_reads_only_the_span_chunk_by_chunk(sim, monkeypatch):
+    """Streaming: the check reads the first `STATIC_CHECK_SPAN_S` of the log (3000 of 3600 samples here), in chunks of
+    at most `DEFAULT_CHUNK_SAMPLES`, and passing is remembered (a second `chunks` does not read it again)."""
+    _, native, _, _ = sim
+    log = open_log(native)
+    seen = []
+    source = log._source_blocks
+
+    def counting(chunk_samples):
+        for raw in source(chunk_samples):
+            seen.append(len(raw.t))
+            yield raw
+
+    monkeypatch.setattr(log, "_source_blocks", counting)
+    log.check_static_base()
+    assert sum(seen) == int(STATIC_CHECK_SPAN_S * 10.0) and max(seen) <= 3000
+    seen.clear()
+    assert sum(len(c) for c in log.chunks(500)) == 3600 and sum(seen) == 3600  # the stream alone
