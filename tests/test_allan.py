@@ -183,6 +183,19 @@ def test_one_noisy_gyro_and_two_dead_ones_the_dead_are_named_and_left_out(tmp_pa
     Scenario.from_dict({**block, "run": {"duration_h": 0.5, "rate_hz": 100.0}, "rotation": {"scheme": "none"}})
 
 
+def test_a_log_whose_gyros_are_all_constant_measures_its_accelerometers_and_says_so(tmp_path):
+    log = _static_log(tmp_path, 9, hours=0.05)
+    dead = _constant_columns(log, ["dtheta_x_rad", "dtheta_y_rad", "dtheta_z_rad"], tmp_path / "g.parquet")
+    out = tmp_path / "allan"
+    r = CliRunner().invoke(main, ["allan", str(dead), "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    assert "g: gyro: every channel constant; accel VRW" in r.stdout
+    text = (out / "noise.toml").read_text()
+    assert "# [gyro] arw_deg_rth = 0: every gyro channel is constant, nothing measured." in text
+    block = tomllib.loads(text)
+    assert block["gyro"]["arw_deg_rth"] == 0.0 and block["accel"]["vrw_ug_rthz"] == pytest.approx(20.0, rel=0.10)
+
+
 def test_two_hours_of_pure_white_noise_report_no_rate_random_walk_nor_bias_instability(tmp_path):
     # issue 18: such a log reported a rate random walk of 0.0019 deg/h/sqrt(h)
     result = allan_deviation(open_log(_static_log(tmp_path, 8, hours=2.0)))

@@ -29,11 +29,16 @@ def noise_summary(result: AllanResult) -> str:
         return f"{value:.4g} {unit} ({', '.join(axes)})" if axes else "not resolved"
 
     gm_unit = f"deg/h over {g['correlation_s']:.0f} s" if ug["bias_instability_deg_h"] else "deg/h"
-    return (
+    gyro = (
         f"gyro ARW {term(g['arw_deg_rth'], 'deg/sqrt(h)', ug['arw_deg_rth'])}, "
         f"Gauss-Markov {term(g['bias_instability_deg_h'], gm_unit, ug['bias_instability_deg_h'])}, "
-        f"RRW {term(g['rrw_deg_h_rth'], 'deg/h/sqrt(h)', ug['rrw_deg_h_rth'])}; "
-        f"accel VRW {term(a['vrw_ug_rthz'], 'ug/sqrt(Hz)', ua['vrw_ug_rthz'])}"
+        f"RRW {term(g['rrw_deg_h_rth'], 'deg/h/sqrt(h)', ug['rrw_deg_h_rth'])}"
+    )
+    accel = f"accel VRW {term(a['vrw_ug_rthz'], 'ug/sqrt(Hz)', ua['vrw_ug_rthz'])}"
+    varying = {kind: any(x.axis.startswith(kind) for x in result.axes) for kind in ("gyro", "accel")}
+    return (
+        f"{gyro if varying['gyro'] else 'gyro: every channel constant'}; "
+        f"{accel if varying['accel'] else 'accel: every channel constant'}"
     )
 
 
@@ -106,6 +111,8 @@ def noise_toml(result: AllanResult) -> str:
                 continue
             if axes:
                 lines.append(f"[{sensor}] {key}: mean of {', '.join(axes)}.")
+            elif not any(a.axis.startswith(sensor) for a in result.axes):
+                lines.append(f"[{sensor}] {key} = 0: every {sensor} channel is constant, nothing measured.")
             else:
                 lines.append(
                     f"[{sensor}] {key} = 0: not resolved on any axis (not above the {CONFIDENCE:.0%} confidence "
