@@ -112,6 +112,8 @@ def test_a_run_file_holding_another_run_is_damaged(fast_store, tmp_path):
         shutil.copyfile(out / name, bare / name)
     _one_line_error(["campaign", str(bare), "--run-table", str(tmp_path / "t.csv")], f"{bare / 'runs'}: no such folder")
     store = CampaignStore(out)
+    (out / "runs" / "notes.txt").write_text("a file of the user's: not read, not touched\n")
+    assert len(read_runs(out)) == COUNT
     shutil.copyfile(store.run_path(0), store.run_path(2))  # a whole Parquet file, but of run 0
     good, damaged = store.verify()
     assert set(good) == {0, 1} and set(damaged) == {2}

@@ -921,15 +921,17 @@ def read_runs(path: str | os.PathLike[str], *, curves: bool = True) -> CampaignR
     store.manifest()
     if not store.runs_dir.is_dir():
         raise InputError(f"{store.runs_dir}: no such folder: {store.path} is a campaign folder without its runs/")
-    _raise_damaged(store, store.verify()[1])
+    good, damaged = store.verify()
+    _raise_damaged(store, damaged)
     campaign = store.campaign()
+    files = [str(store.run_path(i)) for i in sorted(good)]  # the run files only: any other file there is not read
     try:
         # one schema over every run file and the current code's: a store written before a column existed
         # (resumed by newer code, or read as it is) gets that column as null in its older runs, whichever file
         # comes first
-        found = ds.dataset(store.runs_dir, format="parquet")
+        found = ds.dataset(files, format="parquet")
         schemas = [f.physical_schema for f in found.get_fragments()] + [_schema(campaign)]
-        dataset = ds.dataset(store.runs_dir, format="parquet", schema=pa.unify_schemas(schemas))
+        dataset = ds.dataset(files, format="parquet", schema=pa.unify_schemas(schemas))
         names = [n for n in dataset.schema.names if n not in CURVE_COLUMNS]
         table = dataset.to_table(columns=names + (list(CURVE_COLUMNS) if curves else []))
     except (pa.ArrowException, OSError, ValueError) as exc:  # a column the quick check did not decode
