@@ -59,8 +59,10 @@ def campaign_command(source, out, workers, scheduler, connect_timeout_s, limit, 
     Each run is simulated in the worker (no log written), aligned, navigated for the 12 h features and the 72 h
     truth, its 12 h curve fit, 16 h smoother estimate and linear 72 h error curves computed, and its noise-free
     twin's truth (the simulated effective drift) found; one Parquet file per run under OUT/runs/, each written
-    atomically. Rerunning the same command resumes an interrupted campaign. Ctrl-C once: no new runs, the runs in
-    progress are finished and committed (exit 130); twice: abort at once.
+    atomically. Rerunning the same command resumes an interrupted campaign (every run file is checked first; a
+    damaged one is run again). Ctrl-C once: no new runs, the runs in progress are finished and committed (exit
+    130); twice: abort at once. A campaign whose every run would be too short is refused before any work; exit 1
+    when every run failed.
     """
     from gyrodrift.campaign import CampaignStore, load_campaign, read_runs, run_campaign, write_run_table
     from gyrodrift.errors import OptionError
