@@ -1,6 +1,6 @@
 """Interval quality over many closed-form fleets: coverage and width of the default model's 90 % interval.
 
-Run: ``python examples/interval_study.py [--sizes 8,16,24,48,140] [--seeds 8] [--held-out 300]``
+Run: ``python examples/interval_study.py [--sizes 8,16,24,48,140] [--seeds 8] [--held-out 300] [--before]``
 (``--seeds 8`` means seeds 1-8, or a list ``--seeds 1,2,3``; about 2 minutes per seed with the default sizes on
 one core of a loaded 2-core machine). docs/studies/2026-11-27-intervals.md quotes its output.
 
@@ -26,7 +26,8 @@ run can). Each fleet is fitted as ``gyrodrift fit`` does with no options (`fit_d
 ``target="residual"``, ``encoding="temperature"``, the swarm seeded 0). Per fleet: the coverage of the nominal
 90 % interval (of the held-out labels, and of the effective drifts), the median half-width, the held-out RMS
 error against the effective drift, and what the interval rests on. Per size: pooled coverage, median over fleets
-of width / RMS with its min-max.
+of width / RMS with its min-max. ``--before`` adds, on the same fleets, the interval this replaced (10 re-tuned
+calibration folds, the jackknife order statistic of their scores): 11 tunings per fit.
 """
 
 from __future__ import annotations
@@ -39,7 +40,7 @@ import warnings
 import numpy as np
 
 from gyrodrift.baselines import latitude_error_at
-from gyrodrift.model import THERMAL_COLUMNS, fit_drift_model
+from gyrodrift.model import THERMAL_COLUMNS, fit_drift_model, jackknife_half_width
 from gyrodrift.runs import RunTable
 from gyrodrift.units import HOUR
 
@@ -113,8 +114,22 @@ def held_out(rng, n: int) -> tuple[RunTable, np.ndarray, np.ndarray]:
     return runs, effective, np.r_[np.zeros(n - n_out, bool), np.ones(n_out, bool)]
 
 
-def one_fleet(n_train: int, seed: int, n_held: int, coverage: float = 0.9) -> dict:
-    """Fit the default model on ``n_train`` runs of fleet ``seed`` and measure its interval on ``n_held`` runs."""
+def before(train: RunTable, test: RunTable, coverage: float = 0.9) -> tuple[np.ndarray, np.ndarray]:
+    """``(pred, half)``: the interval before issue 20 on the same fleet: the default model with 10 re-tuned
+    calibration folds, the jackknife order statistic ``q`` of their scores, ``q sqrt(spread^2 + s_rms^2 + b^2)``
+    (no cap)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = fit_drift_model(train, encoding="temperature", target="residual", rng=0, calibration_folds=10)
+    q = jackknife_half_width(model.interval_scores(), coverage)
+    _, base_std = model._base(test, with_std=True)
+    half = q * np.sqrt(model.predict_spread(test) ** 2 + model.label_std_rms_**2 + base_std**2)
+    return model.predict(test), half
+
+
+def one_fleet(n_train: int, seed: int, n_held: int, coverage: float = 0.9, with_before: bool = False) -> dict:
+    """Fit the default model on ``n_train`` runs of fleet ``seed`` and measure its interval on ``n_held`` runs
+    (``with_before``: also the interval before issue 20, `before`)."""
     rng = np.random.default_rng([seed, n_train])
     train, _ = draw_runs(rng, n_train)
     test, effective, outside = held_out(rng, n_held)
@@ -147,7 +162,14 @@ def one_fleet(n_train: int, seed: int, n_held: int, coverage: float = 0.9) -> di
         "z_loo_scale": model.interval_scale_.scale / model.interval_scale_.inflation,
         "summary": summary,
         "warnings": [str(w.message) for w in caught if "interval" in str(w.message)],
-    }
+    } | (_before_numbers(train, test, effective, coverage) if with_before else {})
+
+
+def _before_numbers(train, test, effective, coverage) -> dict:
+    pred, half = before(train, test, coverage)
+    rms = float(np.sqrt(np.mean((effective - pred) ** 2)))
+    inside = np.abs(test.drift_deg_h - pred) <= half
+    return {"before_cover_label": float(np.mean(inside)), "before_ratio": float(np.median(half)) / rms}
 
 
 def parse_list(text: str) -> list[int]:
@@ -165,10 +187,13 @@ def main() -> None:
     ap.add_argument("--sizes", type=parse_list, default=[8, 16, 24, 48, 140], help="training fleet sizes")
     ap.add_argument("--seeds", type=parse_seeds, default=list(range(1, 9)), help="N (seeds 1..N) or a list")
     ap.add_argument("--held-out", type=int, default=300, help="held-out runs per fleet")
+    ap.add_argument(
+        "--before", action="store_true", help="also the interval before issue 20 (10 re-tuned folds, jackknife)"
+    )
     args = ap.parse_args()
     print(
         f"# python examples/interval_study.py --sizes {','.join(map(str, args.sizes))} "
-        f"--seeds {','.join(map(str, args.seeds))} --held-out {args.held_out}"
+        f"--seeds {','.join(map(str, args.seeds))} --held-out {args.held_out}{' --before' if args.before else ''}"
     )
     print(
         "size seed  cover_label cover_eff cover_out  half_med   rms_eff    half/rms out/in  used  z_loo z_held  "
@@ -177,7 +202,7 @@ def main() -> None:
     rows = []
     for size in args.sizes:
         for seed in args.seeds:
-            r = one_fleet(size, seed, args.held_out)
+            r = one_fleet(size, seed, args.held_out, with_before=args.before)
             rows.append(r)
             s = r["summary"]
             phys = math.nan if s["physics_ratio"] is None else s["physics_ratio"]
@@ -186,7 +211,8 @@ def main() -> None:
                 f"{r['cover_effective_outside']:9.3f}  {r['half_median']:.3e}  {r['rms']:.3e}  "
                 f"{r['half_median'] / r['rms']:7.2f} {r['half_outside_ratio']:6.2f}  {s['n_used']:4d}  "
                 f"{r['z_loo_scale']:5.2f} {r['z_heldout_rms']:6.2f}  {phys:6.2f}  {r['seconds']:5.1f}  "
-                f"{'; '.join(r['warnings'])[:60]}",
+                + (f"before: {r['before_cover_label']:.3f} {r['before_ratio']:.2f}  " if args.before else "")
+                + f"{'; '.join(r['warnings'])[:60]}",
                 flush=True,
             )
     print()
@@ -204,6 +230,13 @@ def main() -> None:
             f"{np.median(ratio):8.2f} ({ratio.min():.2f}-{ratio.max():.2f})         "
             f"{np.median(opt):10.2f}              {np.median([r['seconds'] for r in rs]):.2f}"
         )
+        if args.before:
+            b = np.array([r["before_ratio"] for r in rs])
+            cover = np.mean([r["before_cover_label"] for r in rs])
+            print(
+                f"      before issue 20: pooled coverage of the labels {cover:.3f}"
+                f", half/rms median {np.median(b):.2f} ({b.min():.2f}-{b.max():.2f})"
+            )
 
 
 if __name__ == "__main__":

@@ -326,6 +326,7 @@ def test_identification_on_held_out_runs(fleet, fleet_features, model):
     assert np.mean(np.abs(err)) < np.mean(np.abs(phys_err))
     h = held[0]
     assert h.model_std_deg_h is None and "cross-validation interval" in h.uncertainty_note
+    assert "% interval rests on" in h.uncertainty_note and "training runs" in h.uncertainty_note  # how many
     # the interval is centred on the prediction; its half-width is the calibration (Student-t quantile times the
     # scores' robust scale) times the run's 1-sigma (docs/identification.md, "Intervals and extrapolation")
     q = m.interval_scale_.multiplier(0.9)
