@@ -1261,7 +1261,9 @@ def run_campaign(
         text = Path(campaign.source).read_text(encoding="utf-8")
     store = CampaignStore.create_or_open(out, campaign, text)
     schema = _schema(campaign)
-    good, damaged = store.verify()
+    found, broken = store.verify()  # a file numbered past the count is not this campaign's to redo
+    good = {i: ok for i, ok in found.items() if i < campaign.count}
+    damaged = {i: why for i, why in broken.items() if i < campaign.count}
     _redo_damaged(store, damaged)
     todo = [i for i in range(campaign.count) if i not in good]
     if limit is not None:
