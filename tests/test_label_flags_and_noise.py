@@ -114,3 +114,54 @@ def test_noise_file_and_options(tmp_path):
         assert r.exit_code == 1 and r.output.count("\n") == 1 and "missing.toml: missing key" in r.output, r.output
         r = runner.invoke(main, [command, "nothing.parquet", *extra, "--accel-vrw-ug-rthz", "-1"])
         assert r.exit_code == 2 and "--accel-vrw-ug-rthz" in r.output
+
+
+def test_label_sigma_matches_the_closed_form_of_the_earth_rate_error_model():
+    # An independent derivation of truth's 1-sigma (criterion final, span T, ARW N, no VRW). Over many Schuler
+    # periods the psi-angle error obeys psi' = -Omega x psi + eps (Omega the Earth rate), and the horizontal
+    # position angle is psi_h minus a Schuler oscillation driven by the same gyro noise. White isotropic eps of
+    # density N: psi_h has N^2 T per horizontal axis (rotations keep it isotropic), the oscillation N^2 T / 2
+    # (their cross term stays bounded): var(position angle) = 1.5 N^2 T per axis. A constant z drift d moves the
+    # position angle by d (sin L cos L (T - sin(W T) / W), cos L (1 - cos(W T)) / W) (east, north; method.md's
+    # dlon and dL). d* - d = -g'e / |g|^2, so sigma(d*) = sqrt(1.5 T) N / |g| (the Earth radius cancels).
+    from gyrodrift.procedure.truth import label_sigma_deg_h
+
+    w = 7.2921151467e-5  # rad/s
+    arw = 0.0005  # deg/sqrt(h)
+    for hours in (24.0, 72.0):
+        t = hours * 3600.0
+        for lat in (20.0, 40.0, 60.0):
+            lat_r = math.radians(lat)
+            g = math.hypot(
+                math.sin(lat_r) * math.cos(lat_r) * (t - math.sin(w * t) / w),
+                math.cos(lat_r) * (1.0 - math.cos(w * t)) / w,
+            )
+            closed = math.sqrt(1.5 * t) * arw / 60.0 / g * 3600.0  # deg/h (N in deg/sqrt(s) times s^0.5 / s)
+            core = label_sigma_deg_h(lat, SensorNoise(arw_deg_rth=arw, vrw_ug_rthz=0.0), hours=hours)[0]
+            # the closed form drops the bounded Schuler cross terms: within 0.6 % at these spans and latitudes
+            assert core == pytest.approx(closed, rel=0.015), (hours, lat, core, closed)
+            # VRW at RLG grade (5 ug/sqrt(Hz)) adds under 0.5 %; the sigma is linear in the ARW
+            with_vrw = label_sigma_deg_h(lat, SensorNoise(arw_deg_rth=arw, vrw_ug_rthz=5.0), hours=hours)[0]
+            assert core < with_vrw < 1.005 * core
+            double = label_sigma_deg_h(lat, SensorNoise(arw_deg_rth=2 * arw, vrw_ug_rthz=0.0), hours=hours)[0]
+            assert double == pytest.approx(2 * core, rel=1e-6)
+
+
+def test_label_sigma_takes_the_z_gyro_bias_instability_and_rate_random_walk_in_user_units():
+    # The core's covariance analysis is checked against closed forms in crates/gyrodrift-core/tests/smoother.rs;
+    # here the units the procedure hands it. A Gauss-Markov bias whose correlation time dwarfs the span is a
+    # random constant the label absorbs in full: sigma = bias_instability_deg_h.
+    from gyrodrift.procedure.truth import label_sigma_deg_h
+
+    const = SensorNoise(arw_deg_rth=0.0, vrw_ug_rthz=0.0, bias_instability_deg_h=0.002, correlation_s=1e9)
+    assert label_sigma_deg_h(40.0, const)[0] == pytest.approx(0.002, rel=0.01)
+    # A rate random walk's value when the navigation starts (after align_h hours) adds rrw^2 align_h.
+    rrw = SensorNoise(arw_deg_rth=0.0, vrw_ug_rthz=0.0, rrw_deg_h_rth=0.0005)
+    s4, s0 = (label_sigma_deg_h(40.0, rrw, align_h=a)[0] for a in (4.0, 0.0))
+    assert s4**2 - s0**2 == pytest.approx(0.0005**2 * 4.0, rel=1e-6)
+    # White noise alone is unchanged by the new terms' defaults, and they add to it.
+    white = SensorNoise(arw_deg_rth=0.0005, vrw_ug_rthz=5.0)
+    both = SensorNoise(arw_deg_rth=0.0005, vrw_ug_rthz=5.0, bias_instability_deg_h=0.002, correlation_s=1e9)
+    assert label_sigma_deg_h(40.0, both)[0] ** 2 == pytest.approx(
+        label_sigma_deg_h(40.0, white)[0] ** 2 + label_sigma_deg_h(40.0, const)[0] ** 2, rel=1e-6
+    )

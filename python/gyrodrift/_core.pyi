@@ -399,6 +399,10 @@ def label_sigma(
     att_sigma_rad: list[float],
     vel_sigma_m_s: float,
     rms: bool,
+    gyro_bias_instability_rad_s: float = ...,
+    gyro_correlation_s: float = ...,
+    gyro_rrw_rad_s_rts: float = ...,
+    rrw_start_s: float = ...,
 ) -> dict[str, Any]: ...
 def drift_std_curve(
     smoother_config: SmootherConfig, simulator_config: SimulatorConfig, spans_s: list[float]

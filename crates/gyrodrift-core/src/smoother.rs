@@ -1007,6 +1007,35 @@ pub struct LabelConfig {
     pub vel_sigma: f64,
     /// `true`: the criterion is the root mean square of the position error over the curve; `false`: its last value.
     pub rms: bool,
+    /// The z gyro's slowly varying bias, which the label's constant absorbs and the run's noise-free twin lacks:
+    /// first-order Gauss-Markov bias instability (stationary 1-sigma) [rad/s] with correlation time \[s\], and
+    /// rate random walk [rad/s/sqrt(s)] that has walked `rrw_start_s` \[s\] (the alignment) before the navigation
+    /// starts (0: none). The x and y ones are modulated by the table and left out, like the constant biases.
+    pub gyro_bias_instability: f64,
+    pub gyro_correlation: f64,
+    pub gyro_rrw: f64,
+    pub rrw_start_s: f64,
+}
+
+impl LabelConfig {
+    /// White noise only (no bias instability, no rate random walk), the alignment's errors left out.
+    pub fn white(lat: f64, span_s: f64, step_s: f64, gyro_arw: f64, accel_vrw: f64, rms: bool) -> Self {
+        LabelConfig {
+            lat,
+            height: 0.0,
+            span_s,
+            step_s,
+            gyro_arw,
+            accel_vrw,
+            att_sigma: [0.0; 3],
+            vel_sigma: 0.0,
+            rms,
+            gyro_bias_instability: 0.0,
+            gyro_correlation: 3600.0,
+            gyro_rrw: 0.0,
+            rrw_start_s: 0.0,
+        }
+    }
 }
 
 /// The label's uncertainty ([`label_sigma`]).
@@ -1029,11 +1058,16 @@ pub struct LabelSigma {
 ///   final: d* - d = -g(T)' e(T) / |g(T)|^2,  var = g(T)' Cov(e(T)) g(T) / |g(T)|^4;
 ///   rms:   d* - d = -sum_k g_k' e_k / sum_k |g_k|^2, whose variance comes from an accumulator state s,
 ///          s <- s + g_k' e_k at every curve point, propagated with the error state.
-/// e is driven by the angle and velocity random walks over the span and by the attitude and velocity errors
-/// left by the alignment (`att_sigma`, `vel_sigma`, independent of the drift: an approximation, since the
-/// alignment's heading error and its z-bias estimate are correlated).
+/// e is driven by the angle and velocity random walks over the span, by the z gyro's Gauss-Markov bias and rate
+/// random walk when given (states of the same model; the Gauss-Markov one stationary, the random walk with the
+/// spread it has at the start: variance rrw^2 `rrw_start_s`), and by the attitude and velocity errors left by
+/// the alignment (`att_sigma`, `vel_sigma`, independent of the drift: an approximation, since the alignment's
+/// heading error and its z-bias estimate are correlated). With white noise only, `final`, and T >> the Schuler
+/// period this is close to sqrt(1.5 T) N / |g(T)| (N the ARW; tests/test_label_flags_and_noise.py derives it).
 pub fn label_sigma(cfg: &LabelConfig) -> Result<LabelSigma, CoreError> {
-    use crate::error::{all_in_range, in_range, Unit, DEG_PER_RTH, MICRO_G_PER_RTHZ};
+    use crate::error::{
+        all_in_range, all_positive_at_most, in_range, Unit, DEG_H_PER_RTH, DEG_PER_RTH, MICRO_G_PER_RTHZ,
+    };
     check_site(cfg.lat, 0.0, cfg.height, 1.0)?;
     let s = Unit::Si("s");
     in_range("span_s", "span", cfg.span_s, 60.0, 1e7, s)?;
@@ -1063,11 +1097,43 @@ pub fn label_sigma(cfg: &LabelConfig) -> Result<LabelSigma, CoreError> {
         10.0,
         Unit::Si("m/s"),
     )?;
+    in_range(
+        "gyro_bias_instability_rad_s",
+        "bias instability",
+        cfg.gyro_bias_instability,
+        0.0,
+        0.1,
+        Unit::DegPerH,
+    )?;
+    all_positive_at_most(
+        "gyro_correlation_s",
+        "correlation time",
+        &[cfg.gyro_correlation],
+        1e9,
+        s,
+    )?;
+    in_range(
+        "gyro_rrw_rad_s_rts",
+        "rate random walk",
+        cfg.gyro_rrw,
+        0.0,
+        0.1,
+        DEG_H_PER_RTH,
+    )?;
+    in_range("rrw_start_s", "random-walk start", cfg.rrw_start_s, 0.0, 1e7, s)?;
     let mut sc = SmootherConfig::new(cfg.lat, 0.0, cfg.height, 1.0);
     sc.gyro_arw = cfg.gyro_arw;
     sc.accel_vrw = cfg.accel_vrw;
-    let model = Model::new(&sc);
+    sc.gyro_bias_instability = cfg.gyro_bias_instability;
+    sc.gyro_correlation = cfg.gyro_correlation;
+    sc.gyro_rrw = cfg.gyro_rrw;
+    let mut model = Model::new(&sc);
     let n = model.n;
+    // The z gyro's slow bias only: the x and y states keep zero variance and no process noise.
+    for first in [model.gm, model.rrw].into_iter().flatten() {
+        model.qc[first] = 0.0;
+        model.qc[first + 1] = 0.0;
+    }
     let identity: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     let (phi, q) = model.discretise(&identity, 0.0, cfg.step_s);
     // Augmented covariance: the error state and the accumulator s (last).
@@ -1078,6 +1144,12 @@ pub fn label_sigma(cfg: &LabelConfig) -> Result<LabelSigma, CoreError> {
     }
     for i in 0..2 {
         p[(DV + i, DV + i)] = cfg.vel_sigma * cfg.vel_sigma;
+    }
+    if let Some(g) = model.gm {
+        p[(g + 2, g + 2)] = cfg.gyro_bias_instability * cfg.gyro_bias_instability;
+    }
+    if let Some(r) = model.rrw {
+        p[(r + 2, r + 2)] = cfg.gyro_rrw * cfg.gyro_rrw * cfg.rrw_start_s;
     }
     let mut phi_a = DMatrix::identity(na, na);
     phi_a.view_mut((0, 0), (n, n)).copy_from(&phi);

@@ -114,20 +114,8 @@ fn white_noise_z_scores_have_unit_rms() {
 
 #[test]
 fn label_sigma_follows_one_over_sin_cos_latitude() {
-    let at = |lat_deg: f64| {
-        label_sigma(&LabelConfig {
-            lat: lat_deg * DEG,
-            height: 0.0,
-            span_s: 72.0 * 3600.0,
-            step_s: 60.0,
-            gyro_arw: ARW,
-            accel_vrw: VRW,
-            att_sigma: [0.0; 3],
-            vel_sigma: 0.0,
-            rms: false,
-        })
-        .unwrap()
-    };
+    let at =
+        |lat_deg: f64| label_sigma(&LabelConfig::white(lat_deg * DEG, 72.0 * 3600.0, 60.0, ARW, VRW, false)).unwrap();
     let s45 = at(45.0).drift_std;
     for lat in [10.0, 80.0] {
         let law = s45 * (0.5 / ((lat * DEG).sin() * (lat * DEG).cos()));
@@ -143,19 +131,98 @@ fn label_sigma_follows_one_over_sin_cos_latitude() {
     assert!((1.0e-4..2.5e-4).contains(&s40), "{s40}");
     assert!(label_sigma(&LabelConfig {
         gyro_arw: f64::NAN,
-        ..LabelConfig {
-            lat: 0.5,
-            height: 0.0,
-            span_s: 3600.0,
-            step_s: 60.0,
-            gyro_arw: 0.0,
-            accel_vrw: 0.0,
-            att_sigma: [0.0; 3],
-            vel_sigma: 0.0,
-            rms: true
-        }
+        ..LabelConfig::white(0.5, 3600.0, 60.0, 0.0, 0.0, true)
     })
     .is_err());
+}
+
+#[test]
+fn label_sigma_adds_the_z_gyro_bias_instability_and_rate_random_walk() {
+    // 72 h at 40 deg, final criterion.
+    let white = LabelConfig::white(40.0 * DEG, 72.0 * 3600.0, 60.0, ARW, VRW, false);
+    let s_white = label_sigma(&white).unwrap().drift_std;
+    // A Gauss-Markov z bias (1-sigma bi, correlation time tau): independent of the white noise, so the label's
+    // variances add.
+    let (bi, tau) = (0.001 * DEG_PER_HOUR, 600.0);
+    let gm = LabelConfig {
+        gyro_bias_instability: bi,
+        gyro_correlation: tau,
+        ..white.clone()
+    };
+    let s_gm = label_sigma(&gm).unwrap().drift_std;
+    let gm_only = LabelConfig::white(40.0 * DEG, 72.0 * 3600.0, 60.0, 0.0, 0.0, false);
+    let s_gm_only = label_sigma(&LabelConfig {
+        gyro_bias_instability: bi,
+        gyro_correlation: tau,
+        ..gm_only.clone()
+    })
+    .unwrap()
+    .drift_std;
+    assert!((s_gm * s_gm - s_white * s_white - s_gm_only * s_gm_only).abs() < 1e-6 * s_gm * s_gm);
+    // Short memory (tau << 24 h): white z rate noise of density q = sigma sqrt(2 tau). It reaches the position
+    // through the Earth-rate coupling only (psi' = -Omega x psi + eps): a unit drift impulse tau' before the end
+    // moves (east, north) by G(tau') = R (sin L cos L (1 - cos W tau'), cos L sin W tau'), whose integral is the
+    // drift response g (method.md's dlon and dL); var(d*) = q^2 int (g . G)^2 / |g|^4 (R cancels).
+    let (t, w, lat) = (72.0 * 3600.0, 7.2921151467e-5, 40.0 * DEG);
+    let (sl, cl) = (lat.sin(), lat.cos());
+    let steps = 200_000;
+    let h = t / steps as f64;
+    let (mut gn, mut ge) = (0.0, 0.0);
+    let resp: Vec<(f64, f64)> = (0..steps)
+        .map(|k| {
+            let u = (k as f64 + 0.5) * h;
+            let r = (sl * cl * (1.0 - (w * u).cos()), cl * (w * u).sin());
+            gn += r.0 * h;
+            ge += r.1 * h;
+            r
+        })
+        .collect();
+    let num: f64 = resp.iter().map(|r| (gn * r.0 + ge * r.1).powi(2) * h).sum();
+    let g2 = gn * gn + ge * ge;
+    let closed = (2.0 * bi * bi * tau * num / (g2 * g2)).sqrt();
+    let ratio = s_gm_only / closed;
+    println!(
+        "GM only (tau {tau} s): {:.3e} deg/h, {ratio:.4} of the closed form",
+        s_gm_only / DEG_PER_HOUR
+    );
+    assert!((0.97..1.03).contains(&ratio), "{ratio}");
+    // Long memory (tau >> 72 h): a random constant, which the label absorbs in full: sigma(d*) = sigma.
+    let s_const = label_sigma(&LabelConfig {
+        gyro_bias_instability: bi,
+        gyro_correlation: 1e9,
+        ..gm_only.clone()
+    })
+    .unwrap()
+    .drift_std;
+    assert!((s_const / bi - 1.0).abs() < 0.01, "{}", s_const / bi);
+    // A rate random walk that has walked `start` before the navigation: its value then is a constant the label
+    // absorbs in full (variance rrw^2 start), independent of its walk during the span: the variances add.
+    let rrw = 0.0005 * DEG_PER_HOUR / 60.0;
+    let start = 4.0 * 3600.0;
+    let only_start = label_sigma(&LabelConfig {
+        gyro_rrw: rrw,
+        rrw_start_s: start,
+        ..gm_only.clone()
+    })
+    .unwrap()
+    .drift_std;
+    assert!(only_start > rrw * start.sqrt());
+    let walking = label_sigma(&LabelConfig {
+        gyro_rrw: rrw,
+        rrw_start_s: 0.0,
+        ..gm_only.clone()
+    })
+    .unwrap()
+    .drift_std;
+    let both = (rrw * rrw * start + walking * walking).sqrt();
+    assert!((only_start - both).abs() < 1e-6 * both, "{only_start} {both}");
+    // Refused settings name their key.
+    let bad = label_sigma(&LabelConfig {
+        gyro_correlation: 0.0,
+        ..gm
+    })
+    .unwrap_err();
+    assert_eq!(bad.key(), "gyro_correlation_s");
 }
 
 #[test]

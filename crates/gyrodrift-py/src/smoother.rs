@@ -250,10 +250,13 @@ impl Smoother {
 }
 
 /// 1-sigma of the true-drift label (gyrodrift-core `smoother::label_sigma`): returns a dict with
-/// `drift_std_rad_s`, `sensitivity_m_per_rad_s` and `pos_std_m` (north, east at the end).
+/// `drift_std_rad_s`, `sensitivity_m_per_rad_s` and `pos_std_m` (north, east at the end). The z gyro's
+/// Gauss-Markov bias and rate random walk (`rrw_start_s`: how long it has walked when the navigation starts)
+/// default to none.
 #[pyfunction]
 #[pyo3(signature = (*, lat_rad, height_m, span_s, step_s, gyro_arw_rad_rts, accel_vrw_m_s_rts, att_sigma_rad,
-                    vel_sigma_m_s, rms))]
+                    vel_sigma_m_s, rms, gyro_bias_instability_rad_s=0.0, gyro_correlation_s=3600.0,
+                    gyro_rrw_rad_s_rts=0.0, rrw_start_s=0.0))]
 #[allow(clippy::too_many_arguments)]
 pub fn label_sigma<'py>(
     py: Python<'py>,
@@ -266,6 +269,10 @@ pub fn label_sigma<'py>(
     att_sigma_rad: [f64; 3],
     vel_sigma_m_s: f64,
     rms: bool,
+    gyro_bias_instability_rad_s: f64,
+    gyro_correlation_s: f64,
+    gyro_rrw_rad_s_rts: f64,
+    rrw_start_s: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
     let cfg = LabelConfig {
         lat: lat_rad,
@@ -277,6 +284,10 @@ pub fn label_sigma<'py>(
         att_sigma: att_sigma_rad,
         vel_sigma: vel_sigma_m_s,
         rms,
+        gyro_bias_instability: gyro_bias_instability_rad_s,
+        gyro_correlation: gyro_correlation_s,
+        gyro_rrw: gyro_rrw_rad_s_rts,
+        rrw_start_s,
     };
     let r = py.detach(|| core_label_sigma(&cfg)).map_err(core_err)?;
     let d = PyDict::new(py);

@@ -32,9 +32,13 @@ alignment's own z estimate plays no part.
 Uncertainty of the label: with sensor noise, d* is the constant that best cancels this run's random
 walk, not the sensor's drift. Its 1-sigma ``drift_std_deg_h`` comes from a linear covariance analysis of the 72 h
 navigation with the core's error model (`_core.label_sigma`, gyrodrift-core ``smoother::label_sigma``: attitude,
-velocity and north/east position errors driven by ARW and VRW over the navigation; the alignment's errors are
-left out: they are the same in the run and in its noise-free twin but for their noise-driven part, which is
-small; with the alignment's whole attitude 1-sigma the ``rms`` sigma came out 1.4 times the observed spread):
+velocity and north/east position errors driven by ARW and VRW over the navigation, and by the z gyro's
+Gauss-Markov bias instability and rate random walk when the noise model has them (`SensorNoise`; a noise measured
+from the log has none): d* follows their weighted average over the span, which the run's noise-free twin lacks;
+the x/y ones are modulated by the table and left out; the alignment's errors are left out: they are the same
+in the run and in its noise-free twin but for their noise-driven part, which is small (40 noisy runs at 40 deg,
+10 Hz, navigated from their twin's alignment instead: z rms 1.007 against 1.008); with the alignment's whole
+attitude 1-sigma the ``rms`` sigma came out 1.4 times the observed spread):
 ``final``: ``var = g' Cov(e(T)) g / |g|^4`` with g the position response to the drift at hour 72 and e the
 position error it does not explain; ``rms``: the same for the sums over the curve points (an accumulator
 state); ``max`` has no closed form and takes the ``rms`` value (an approximation). ARW and VRW are measured
@@ -121,9 +125,12 @@ def label_sigma_deg_h(
     height_m: float = 0.0,
     att_std_arcsec: tuple[float, float, float] = (0.0, 0.0, 0.0),
     decimation_s: float = 60.0,
+    align_h: float = DEFAULT_TIMELINE.align_h,
 ) -> tuple[float, float]:
     """(1-sigma of the label [deg/h], sensitivity of the final position error [nmi per deg/h]) from the core's
-    covariance analysis (module docstring) at latitude `lat_deg` with the noise's ARW and VRW."""
+    covariance analysis (module docstring) at latitude `lat_deg` with the noise's ARW and VRW, and its z-gyro bias
+    instability and rate random walk if it has them (the rate random walk has walked `align_h` hours when the
+    navigation starts)."""
     from gyrodrift import _core
 
     if criterion not in CRITERIA:
@@ -138,6 +145,10 @@ def label_sigma_deg_h(
         att_sigma_rad=[float(a) * ARCSEC for a in att_std_arcsec],
         vel_sigma_m_s=0.0,
         rms=criterion != "final",
+        gyro_bias_instability_rad_s=noise.bias_instability_deg_h * DEG_PER_H,
+        gyro_correlation_s=float(noise.correlation_s),
+        gyro_rrw_rad_s_rts=noise.rrw_deg_h_rth * DEG_PER_H / math.sqrt(HOUR),
+        rrw_start_s=float(align_h) * HOUR,
     )
     return float(r["drift_std_rad_s"]) / DEG_PER_H, float(r["sensitivity_m_per_rad_s"]) * DEG_PER_H / NMI_M
 
@@ -289,6 +300,7 @@ def find_true_drift(
         hours=hours,
         height_m=float(alignment.site.height_m),
         decimation_s=decimation_s,
+        align_h=timeline.align_h,
     )
     budget = label_budget_deg_h(hours, decimation_s)
     flagged = bool(sigma > budget) or not math.isfinite(sigma)
