@@ -17,7 +17,9 @@ over the first T hours and its linear 72 h error curves. Measured per point:
   the z-scores (smoother drift - the noise-free twin's truth) / reported sigma (the smoother's calibration on the
   drift that matters for the 72 h);
 - the noise floor: the share within the budget and the 95 % quantile after compensating the twin's truth
-  (the exact drift) against the planner's floor.
+  (the exact drift) against the planner's floor;
+- the correlation of the drift error (twin's truth - smoother) with the floor's east error at 72 h, measured and
+  predicted (the planner's cross term), and the share the planner predicts with the two taken independent.
 
 Only reports; never fails on a slow machine. The campaign folders are kept under `--out` (default: a temporary
 folder, removed) and reused by a rerun (finished runs are skipped).
@@ -38,7 +40,7 @@ import numpy as np
 
 from gyrodrift.campaign import parse_campaign, read_runs, run_campaign
 from gyrodrift.procedure.noise import SensorNoise
-from gyrodrift.procedure.plan import MissionBudget, drift_std_curve_deg_h, mission_error_model
+from gyrodrift.procedure.plan import MissionBudget, identification_curve, mission_error_model
 
 CAMPAIGN = """
 [campaign]
@@ -117,10 +119,19 @@ def run_point(out: Path, arw: float, span_h: float, args) -> dict:
     z = (runs.numbers("drift_smoother_deg_h") - runs.numbers("drift_effective_deg_h")) / sigma_rep
     noise = SensorNoise(arw_deg_rth=arw, vrw_ug_rthz=vrw_for(arw))
     t_start = time.perf_counter()
-    sigma_plan = float(drift_std_curve_deg_h(noise, [span_h], lat_deg=args.lat_deg)[0])
+    curve = identification_curve(noise, [span_h], lat_deg=args.lat_deg, mission_h=budget.hours)
+    sigma_plan, cross = float(curve.drift_std_deg_h[0]), curve.cross_m_deg_h[0]
     mission = mission_error_model(args.lat_deg, noise, hours=budget.hours)
-    predicted = mission.share_within(sigma_plan, budget.error_nmi)
+    predicted = mission.share_within(sigma_plan, budget.error_nmi, cross)
+    independent = mission.share_within(sigma_plan, budget.error_nmi)
     plan_s = time.perf_counter() - t_start
+    # The drift error's correlation with the floor's east error, measured and predicted (the planner's cross term).
+    c = runs.curves
+    ge = np.array([x[-1] for x in c["curve_east_per_deg_h"]], dtype=float)
+    floor_east = np.array([x[-1] for x in c["curve_east0_m"]], dtype=float) + runs.numbers("drift_effective_deg_h") * ge
+    d_err = runs.numbers("drift_effective_deg_h") - runs.numbers("drift_smoother_deg_h")  # d - d_hat
+    corr_measured = float(np.corrcoef(d_err, floor_east)[0, 1])
+    corr_predicted = float(cross[1] / (sigma_plan * np.sqrt(mission.floor_cov_m2[1][1])))
     measured = float(np.mean(err <= budget.error_nmi))
     floor_share = float(np.mean(floor <= budget.error_nmi))
     return {
@@ -135,6 +146,9 @@ def run_point(out: Path, arw: float, span_h: float, args) -> dict:
         "sigma_ratio": sigma_plan / float(np.mean(sigma_rep)),
         "z_rms": float(np.sqrt(np.mean(z**2))),
         "share_predicted": predicted,
+        "share_predicted_independent": independent,
+        "corr_measured": corr_measured,
+        "corr_predicted": corr_predicted,
         "share_measured": measured,
         "share_measured_std": math.sqrt(max(measured * (1 - measured), 1e-12) / n),
         "floor_share_predicted": mission.share_within(0.0, budget.error_nmi),
@@ -170,7 +184,9 @@ def main() -> None:
                     f"ARW {arw:g} span {span:g} h, {row['runs']} runs ({row['failed']} failed, campaign "
                     f"{row['campaign_wall_s']:.0f} s wall, planner {row['planner_s']:.2f} s): within 1 nmi at 72 h "
                     f"predicted {100 * row['share_predicted']:.1f} %, measured {100 * row['share_measured']:.1f} "
-                    f"+- {100 * row['share_measured_std']:.1f} % (diff {100 * diff:+.1f} pp); "
+                    f"+- {100 * row['share_measured_std']:.1f} % (diff {100 * diff:+.1f} pp; drift error taken "
+                    f"independent of the floor: {100 * row['share_predicted_independent']:.1f} %); corr(d - d_hat, "
+                    f"floor east) measured {row['corr_measured']:+.2f}, predicted {row['corr_predicted']:+.2f}; "
                     f"sigma planner {row['sigma_planner_deg_h']:.3e} / smoother {row['sigma_smoother_mean_deg_h']:.3e} "
                     f"deg/h (x{row['sigma_ratio']:.3f}), z rms {row['z_rms']:.2f}; 95 % quantile predicted "
                     f"{row['q95_predicted_nmi']:.2f}, measured {row['q95_measured_nmi']:.2f} nmi; floor within 1 nmi "

@@ -405,8 +405,13 @@ def label_sigma(
     rrw_start_s: float = ...,
 ) -> dict[str, Any]: ...
 def drift_std_curve(
-    smoother_config: SmootherConfig, simulator_config: SimulatorConfig, spans_s: list[float]
-) -> FloatArray: ...
+    smoother_config: SmootherConfig,
+    simulator_config: SimulatorConfig,
+    spans_s: list[float],
+    *,
+    mission_start_s: float,
+    mission_s: float,
+) -> dict[str, Any]: ...
 def mission_covariance(
     *,
     lat_rad: float,

@@ -23,8 +23,10 @@ def plot_plan(plan: Plan, path: str | os.PathLike[str]) -> None:
     b = plan.budget
     fig = Figure(figsize=(7.5, 7.5))
     top, bottom = fig.add_subplot(2, 1, 1), fig.add_subplot(2, 1, 2, sharex=None)
-    top.semilogy(plan.spans_h, plan.drift_std_deg_h, color="C0", lw=1.5, label="drift 1-sigma (with thermal term)")
-    if plan.coeff_std_deg_h_per_c * abs(plan.temp_change_c) > 0:
+    thermal = plan.coeff_std_deg_h_per_c * abs(plan.temp_change_c) > 0
+    label = "drift 1-sigma (with the thermal term)" if thermal else "drift 1-sigma"
+    top.semilogy(plan.spans_h, plan.drift_std_deg_h, color="C0", lw=1.5, label=label)
+    if thermal:
         top.semilogy(plan.spans_h, plan.drift_std_id_deg_h, color="C0", lw=0.8, ls=":", label="smoother alone")
     if plan.max_drift_std_deg_h is not None:
         top.axhline(plan.max_drift_std_deg_h, color="C3", lw=1, ls="--", label="largest the budget allows")

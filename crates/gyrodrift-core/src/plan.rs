@@ -11,12 +11,19 @@
 //! averaged over each update interval at the sample rate as the smoother averages its navigator's. The thermal
 //! state is not part of it (the planner adds the thermal term apart; `thermal` must be off).
 //!
+//! The same pass carries the covariance of the drift error with the mission's noise floor. The mission navigates
+//! freely from the end of the alignment (`mission_start_s`) while the span may still run: over the hours both
+//! cover, the same gyro noise drives the smoother's estimation error x~ (true minus estimate) and the mission's
+//! error y. With y started at zero and the same model (its bias states stay zero, so the table does not matter),
+//! E[x~ y'] is propagated as Phi C Phi' + Q once the mission runs and (I - K H) C at each update, then carried
+//! freely to the mission's end: `cross` = E[(d - d_hat) p_end] (north, east).
+//!
 //! [`mission_covariance`]: the north/east position error after a free navigation of `span_s` (72 h) from the
 //! smoother's error model with no measurements: its covariance from the angle and velocity random walks and the
-//! initial attitude and velocity errors, and the deterministic response to a unit z drift (the level body: the
+//! initial attitude and velocity errors, and the deterministic response g to a unit z drift (the level body: the
 //! axial column of C_b^n is Up whatever the table does; the horizontal sensor biases are modulated away by the
 //! table and left out). With an identified drift of 1-sigma s, the error after compensation is the Gaussian with
-//! covariance `pos_cov + s^2 g g'` (the drift error taken independent of the noise of the navigation).
+//! covariance `pos_cov + s^2 g g' + g c' + c g'`, c the `cross` of [`drift_std_curve`].
 
 use crate::attitude::{euler_to_dcm, mat_mul, rot_z, Euler, Mat3};
 use crate::error::{check, CoreError};
@@ -36,10 +43,26 @@ pub struct PlanConfig {
     pub attitude: Euler,
     /// Spans from the first sample \[s\], ascending, each after the first update and at most `smoother.span_s`.
     pub spans_s: Vec<f64>,
+    /// Start of the mission's free navigation from the first sample \[s\] (the end of the alignment, 4 h) and its
+    /// length \[s\] (72 h); the mission must end after the longest span.
+    pub mission_start_s: f64,
+    pub mission_s: f64,
 }
 
-/// The smoother's 1-sigma of the z drift carried into navigation [rad/s] at each of `cfg.spans_s` (module docs).
-pub fn drift_std_curve(cfg: &PlanConfig) -> Result<Vec<f64>, CoreError> {
+/// What [`drift_std_curve`] gives at each span.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DriftCurve {
+    /// 1-sigma of the z drift carried into navigation [rad/s].
+    pub drift_std: Vec<f64>,
+    /// E[(d - d_hat) p], p the north, east position error at the mission's end from the noise alone (the
+    /// mission's noise floor) [rad/s m]: the drift error and the floor share the noise of the hours the span and the
+    /// mission overlap.
+    pub cross: Vec<[f64; 2]>,
+}
+
+/// The smoother's 1-sigma of the z drift carried into navigation at each of `cfg.spans_s`, and its covariance with
+/// the mission's noise floor (module docs).
+pub fn drift_std_curve(cfg: &PlanConfig) -> Result<DriftCurve, CoreError> {
     let sc = &cfg.smoother;
     sc.validate()?;
     check(
@@ -65,6 +88,16 @@ pub fn drift_std_curve(cfg: &PlanConfig) -> Result<Vec<f64>, CoreError> {
         )?;
         last = s;
     }
+    check(
+        cfg.mission_start_s.is_finite() && cfg.mission_start_s >= 0.0,
+        "mission_start_s",
+        "must be a finite time >= 0 s",
+    )?;
+    check(
+        cfg.mission_s.is_finite() && cfg.mission_s >= 60.0 && cfg.mission_start_s + cfg.mission_s >= last,
+        "mission_s",
+        format!("the mission must last >= 60 s and end after the longest span ({last} s)"),
+    )?;
     let model = Model::new(sc);
     let n = model.n;
     let c0 = euler_to_dcm(cfg.attitude);
@@ -80,11 +113,22 @@ pub fn drift_std_curve(cfg: &PlanConfig) -> Result<Vec<f64>, CoreError> {
         a[first + 2] = 1.0;
     }
     let identity = DMatrix::<f64>::identity(n, n);
-    let mut out = Vec::with_capacity(cfg.spans_s.len());
+    // E[x~ y'], x~ the filter's estimation error (true minus estimate) and y the free mission navigation's error
+    // from the noise alone, started at zero at `mission_start_s`: the same model, the same noise w_k in both
+    // (predict: Phi C Phi' + Q once the mission runs), the measurements only on x~ (update: (I - K H) C).
+    let mut cross = DMatrix::<f64>::zeros(n, n);
+    // The free mission's transition (level body: the bias states of y stay zero, so the table does not matter).
+    let level: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    let mission_end = cfg.mission_start_s + cfg.mission_s;
+    let mut out = DriftCurve {
+        drift_std: Vec::with_capacity(cfg.spans_s.len()),
+        cross: Vec::with_capacity(cfg.spans_s.len()),
+    };
     let mut k = n_coarse;
     let mut want = cfg.spans_s.iter().peekable();
     while want.peek().is_some() {
         // One update interval: the mean attitude over its samples (each at the end of its sample).
+        let t_start = k as f64 / rate;
         let mut c_sum: Mat3 = [[0.0; 3]; 3];
         for j in 1..=n_update {
             let c = mat_mul(&c0, &rot_z(table.angle((k + j) as f64 / rate)));
@@ -97,7 +141,10 @@ pub fn drift_std_curve(cfg: &PlanConfig) -> Result<Vec<f64>, CoreError> {
         k += n_update;
         let c_mean: Mat3 = std::array::from_fn(|i| std::array::from_fn(|j| c_sum[i][j] / n_update as f64));
         let (phi, q) = model.discretise(&c_mean, 0.0, n_update as f64 / rate);
-        p = symmetrise(&phi * &p * phi.transpose() + q);
+        p = symmetrise(&phi * &p * phi.transpose() + &q);
+        if t_start >= cfg.mission_start_s - 1e-9 {
+            cross = &phi * &cross * phi.transpose() + &q;
+        }
         let s_inv = (&h * &p * h.transpose() + &r).try_inverse().ok_or(CoreError::Setting {
             key: "update_s",
             message: "the planner's innovation covariance is singular".to_string(),
@@ -105,14 +152,30 @@ pub fn drift_std_curve(cfg: &PlanConfig) -> Result<Vec<f64>, CoreError> {
         let gain = &p * h.transpose() * s_inv;
         let i_kh = &identity - &gain * &h;
         p = symmetrise(&i_kh * &p * i_kh.transpose() + &gain * &r * gain.transpose());
+        cross = &i_kh * &cross;
         let t = k as f64 / rate;
         while want.peek().is_some_and(|&&s| t >= s - 1e-9) {
             want.next();
-            out.push(a.dot(&(&p * &a)).max(0.0).sqrt());
+            out.drift_std.push(a.dot(&(&p * &a)).max(0.0).sqrt());
+            // E[y a'x~] carried freely to the mission's end (after t if the mission started, else from its start).
+            let mut u: DVector<f64> = cross.transpose() * &a;
+            let from = t.max(cfg.mission_start_s);
+            let rest = (mission_end - from).max(0.0);
+            let steps = (rest / MISSION_STEP_S).ceil() as usize;
+            if steps > 0 {
+                let (phi_free, _) = model.discretise(&level, 0.0, rest / steps as f64);
+                for _ in 0..steps {
+                    u = &phi_free * u;
+                }
+            }
+            out.cross.push([u[POS], u[POS + 1]]);
         }
     }
     Ok(out)
 }
+
+/// Step of the free propagations \[s\].
+const MISSION_STEP_S: f64 = 60.0;
 
 /// Settings of [`mission_covariance`] (SI).
 #[derive(Clone, Debug, PartialEq)]
@@ -230,12 +293,16 @@ mod tests {
                 yaw: 0.0,
             },
             spans_s: spans_h.iter().map(|h| h * 3600.0).collect(),
+            mission_start_s: 4.0 * 3600.0,
+            mission_s: 72.0 * 3600.0,
         }
     }
 
     #[test]
     fn the_drift_sigma_falls_with_the_span() {
-        let s = drift_std_curve(&plan_config(40.0, &[6.0, 10.0, 16.0, 24.0])).unwrap();
+        let s = drift_std_curve(&plan_config(40.0, &[6.0, 10.0, 16.0, 24.0]))
+            .unwrap()
+            .drift_std;
         assert!(s.windows(2).all(|w| w[1] < w[0]), "{s:?}");
         // Between the alignment-only 2e-3 deg/h of method.md and zero; 16 h near the 1.9e-4 deg/h.
         let s16 = s[2] / DEG_PER_HOUR;
@@ -250,7 +317,7 @@ mod tests {
         let mut cfg = plan_config(40.0, &[2.0]);
         cfg.smoother.rate_hz = 5.0;
         cfg.smoother.span_s = 7200.0;
-        let planned = drift_std_curve(&cfg).unwrap()[0];
+        let planned = drift_std_curve(&cfg).unwrap().drift_std[0];
         let sim_cfg = ImuSimulatorConfig {
             lat: cfg.smoother.lat,
             rate_hz: 5.0,
@@ -266,6 +333,29 @@ mod tests {
         sm.process(&chunk.dtheta, &chunk.dv, None).unwrap();
         let got = sm.result().unwrap().drift_end_std;
         assert!((planned / got - 1.0).abs() < 0.01, "planned {planned}, smoother {got}");
+    }
+
+    #[test]
+    fn the_drift_error_shares_the_mission_noise_only_where_they_overlap() {
+        let mut cfg = plan_config(40.0, &[3.0, 16.0]);
+        let curve = drift_std_curve(&cfg).unwrap();
+        assert_eq!(curve.cross[0], [0.0, 0.0]); // the span ends before the mission starts
+        let m = mission_covariance(&MissionConfig {
+            lat: cfg.smoother.lat,
+            height: 0.0,
+            span_s: cfg.mission_s,
+            step_s: 60.0,
+            gyro_arw: cfg.smoother.gyro_arw,
+            accel_vrw: cfg.smoother.accel_vrw,
+            att_sigma: [0.0; 3],
+            vel_sigma: 0.0,
+        })
+        .unwrap();
+        // Cauchy-Schwarz on the east axis, and a correlation that is there after 12 h of overlap (about -0.05).
+        let (c, s, floor) = (curve.cross[1][1], curve.drift_std[1], m.pos_cov[1][1].sqrt());
+        assert!(c.abs() < s * floor && c.abs() > 0.01 * s * floor, "{c} {s} {floor}");
+        cfg.mission_start_s = 20.0 * 3600.0;
+        assert_eq!(drift_std_curve(&cfg).unwrap().cross[1], [0.0, 0.0]);
     }
 
     #[test]

@@ -11,25 +11,35 @@ use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-/// The smoother's 1-sigma of the z drift carried into navigation [rad/s] at each span [s] from the first sample
-/// (gyrodrift-core `plan::drift_std_curve`): the smoother's settings (`span_s` the longest span, `thermal` off),
-/// the rotation scheme and attitude at table angle zero of `simulator_config` (its other settings are not used).
+/// The smoother's 1-sigma of the z drift carried into navigation at each span [s] from the first sample, and its
+/// covariance with the mission's noise floor (gyrodrift-core `plan::drift_std_curve`): the smoother's settings
+/// (`span_s` the longest span, `thermal` off), the rotation scheme and attitude at table angle zero of
+/// `simulator_config` (its other settings are not used), the mission's start and length [s]. Returns a dict with
+/// `drift_std_rad_s` (per span) and `cross_rad_s_m` (per span: north, east).
 #[pyfunction]
-#[pyo3(signature = (smoother_config, simulator_config, spans_s))]
+#[pyo3(signature = (smoother_config, simulator_config, spans_s, *, mission_start_s, mission_s))]
 pub fn drift_std_curve<'py>(
     py: Python<'py>,
     smoother_config: &SmootherConfig,
     simulator_config: &SimulatorConfig,
     spans_s: Vec<f64>,
-) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    mission_start_s: f64,
+    mission_s: f64,
+) -> PyResult<Bound<'py, PyDict>> {
     let cfg = PlanConfig {
         smoother: smoother_config.inner.clone(),
         scheme: simulator_config.inner.scheme.clone(),
         attitude: simulator_config.inner.attitude,
         spans_s,
+        mission_start_s,
+        mission_s,
     };
     let out = py.detach(|| core_curve(&cfg)).map_err(core_err)?;
-    Ok(PyArray1::from_vec(py, out))
+    let d = PyDict::new(py);
+    d.set_item("drift_std_rad_s", PyArray1::from_vec(py, out.drift_std))?;
+    let cross: Vec<Vec<f64>> = out.cross.iter().map(|c| c.to_vec()).collect();
+    d.set_item("cross_rad_s_m", PyArray2::from_vec2(py, &cross)?)?;
+    Ok(d)
 }
 
 /// Position error after a free navigation (gyrodrift-core `plan::mission_covariance`): a dict with `pos_cov_m2`

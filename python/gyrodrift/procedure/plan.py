@@ -22,11 +22,15 @@ The model (docs/procedure.md, "Planning the static time"):
    temperature change teaches the smoother k_z.
 3. Mission. The north/east position error e after compensating the drift, at the end of the mission (72 h of
    free navigation from the end of the alignment), is a zero-mean 2-D Gaussian with covariance
-   ``Sigma = Sigma_floor + s^2 g g'``: ``g`` the response to a unit drift error (close to the closed forms
+   ``Sigma = Sigma_floor + s^2 g g' + g c' + c g'``: ``g`` the response to a unit drift error (close to the closed forms
    dL(t) = (eps cos L / w)(1 - cos w t) north and dlon(t) = eps sin L (t - sin(w t) / w) east, Schuler terms
    aside), ``Sigma_floor`` the noise floor, the error the angle and velocity random walks leave over the mission
-   even with the exact drift (`_core.mission_covariance`). The drift error is taken independent of the
-   navigation's noise (they share the span's hours: an approximation the benchmark checks), and the horizontal
+   even with the exact drift (`_core.mission_covariance`), and ``c = E[(d - d_hat) p]`` the covariance of the
+   drift error with that floor p: the mission navigates from the end of the alignment while the span may still
+   run, and over the hours both cover the same gyro noise drives both (the smoother partly reads the noise's
+   walk as drift, which then cancels part of it in the mission); the same Riccati pass carries it
+   (`_core.drift_std_curve`). The mission starts from the alignment with no attitude error (its noise-driven part
+   is small beside the mission's), and the horizontal
    sensor biases are modulated away by the table. The share of runs within a radius r is
    ``P(|e| <= r) = (1 / 2 pi) int_0^{2 pi} (1 - exp(-r^2 / (2 s(theta)))) dtheta``, s(theta) = l1 cos^2 theta +
    l2 sin^2 theta (l1, l2 the eigenvalues of Sigma; polar coordinates of the whitened error), integrated by the
@@ -57,7 +61,9 @@ __all__ = [
     "MissionBudget",
     "MissionErrorModel",
     "Plan",
+    "IdentificationCurve",
     "drift_std_curve_deg_h",
+    "identification_curve",
     "mission_error_model",
     "mission_outlook",
     "norm_cdf",
@@ -74,6 +80,8 @@ _MISSION_STEP_S = 60.0
 """Propagation step of the mission covariance [s]."""
 _UPDATE_S = 10.0
 """The smoother's measurement interval [s] (its default)."""
+_MAX_SPAN_H = 55.0
+"""Longest span [h]: the smoother keeps at most 20 000 updates of 10 s."""
 
 
 def _finite(name: str, value: Any, *, low: float | None = None, high: float | None = None, open_low=False) -> float:
@@ -161,28 +169,35 @@ class MissionErrorModel:
     floor_cov_m2: tuple[tuple[float, float], tuple[float, float]]
     response_m_per_deg_h: tuple[float, float]
 
-    def covariance_m2(self, drift_std_deg_h: float) -> np.ndarray:
-        """Sigma = Sigma_floor + s^2 g g' [m^2] for a drift 1-sigma s [deg/h]."""
+    def covariance_m2(self, drift_std_deg_h: float, cross_m_deg_h=(0.0, 0.0)) -> np.ndarray:
+        """Sigma = Sigma_floor + s^2 g g' + g c' + c g' [m^2] for a drift 1-sigma s [deg/h] and its covariance c
+        with the floor [m deg/h] (`IdentificationCurve.cross_m_deg_h`; 0: independent)."""
         s = _finite("drift_std_deg_h", drift_std_deg_h, low=0.0)
         g = np.asarray(self.response_m_per_deg_h, dtype=float)
-        return np.asarray(self.floor_cov_m2, dtype=float) + s * s * np.outer(g, g)
+        c = np.asarray(cross_m_deg_h, dtype=float).reshape(2)
+        return np.asarray(self.floor_cov_m2, dtype=float) + s * s * np.outer(g, g) + np.outer(g, c) + np.outer(c, g)
 
-    def share_within(self, drift_std_deg_h: float, error_nmi: float) -> float:
+    def share_within(self, drift_std_deg_h: float, error_nmi: float, cross_m_deg_h=(0.0, 0.0)) -> float:
         """Share of runs whose error is at most `error_nmi` [nmi]."""
-        return norm_cdf(self.covariance_m2(drift_std_deg_h), error_nmi * NMI_M)
+        return norm_cdf(self.covariance_m2(drift_std_deg_h, cross_m_deg_h), error_nmi * NMI_M)
 
-    def quantile_nmi(self, drift_std_deg_h: float, p: float) -> float:
+    def quantile_nmi(self, drift_std_deg_h: float, p: float, cross_m_deg_h=(0.0, 0.0)) -> float:
         """The p-quantile of the error [nmi]."""
-        return norm_quantile(self.covariance_m2(drift_std_deg_h), p) / NMI_M
+        return norm_quantile(self.covariance_m2(drift_std_deg_h, cross_m_deg_h), p) / NMI_M
 
-    def max_drift_std_deg_h(self, budget: MissionBudget) -> float | None:
-        """The largest drift 1-sigma [deg/h] meeting `budget` (the share falls with it); None when the noise floor
-        alone misses it."""
+    def max_drift_std_deg_h(self, budget: MissionBudget, cross_per_std_m=(0.0, 0.0)) -> float | None:
+        """The largest drift 1-sigma s [deg/h] meeting `budget`, the covariance with the floor scaling with it
+        (c = s `cross_per_std_m` [m]); None when the noise floor alone misses it."""
         if self.share_within(0.0, budget.error_nmi) < budget.share:
             return None
+        rho = np.asarray(cross_per_std_m, dtype=float).reshape(2)
         g = float(np.hypot(*self.response_m_per_deg_h))
         hi = 10.0 * budget.error_nmi * NMI_M / g  # a 10 nmi 1-sigma drift term: far outside any budget
-        return float(brentq(lambda s: self.share_within(s, budget.error_nmi) - budget.share, 0.0, hi, xtol=1e-12))
+
+        def miss(s: float) -> float:
+            return self.share_within(s, budget.error_nmi, s * rho) - budget.share
+
+        return float(brentq(miss, 0.0, hi, xtol=1e-12))
 
 
 def mission_error_model(
@@ -227,15 +242,37 @@ def _scenario_for(lat_deg: float, scenario=None):
     return Scenario.from_dict({"site": {"lat_deg": float(lat_deg)}})
 
 
-def drift_std_curve_deg_h(
+@dataclass(frozen=True)
+class IdentificationCurve:
+    """The smoother's drift against the span (`identification_curve`).
+
+    Attributes
+    ----------
+    spans_h : ndarray
+        Spans from the first sample [h].
+    drift_std_deg_h : ndarray
+        The smoother's 1-sigma of the drift carried into navigation [deg/h].
+    cross_m_deg_h : ndarray, shape (spans, 2)
+        E[(d - d_hat) p] [m deg/h], p the north, east noise floor at the mission's end (module docs, point 3).
+    """
+
+    spans_h: np.ndarray
+    drift_std_deg_h: np.ndarray
+    cross_m_deg_h: np.ndarray
+
+
+def identification_curve(
     noise: SensorNoise,
     spans_h: Sequence[float] | np.ndarray,
     *,
     scenario=None,
     lat_deg: float | None = None,
     timeline: Timeline = DEFAULT_TIMELINE,
-) -> np.ndarray:
-    """The smoother's drift 1-sigma [deg/h] after each span [h] from the first sample (module docs, point 1).
+    mission_h: float = 72.0,
+) -> IdentificationCurve:
+    """The smoother's drift 1-sigma after each span [h] from the first sample and its covariance with the noise
+    floor of a mission of `mission_h` [h] from the end of the alignment (``timeline.align_h``) (module docs,
+    points 1 and 3; `_core.drift_std_curve`).
 
     `scenario` (a `gyrodrift.ins.scenario.Scenario`) gives the site, the sample rate, the rotation scheme and the
     attitude; without it the default scenario at `lat_deg`. The smoother's settings are `smooth_log`'s: its
@@ -249,6 +286,9 @@ def drift_std_curve_deg_h(
     spans = np.asarray([_finite("span_h", s, low=0.0, open_low=True) for s in spans_h], dtype=float)
     if spans.size == 0 or np.any(np.diff(spans) <= 0):
         raise InputError("span_h: expected spans in ascending order")
+    mission = _finite("mission_h", mission_h, low=1.0 / 60.0, high=1000.0)
+    if timeline.align_h + mission < spans[-1]:
+        raise InputError(f"span_h: {spans[-1]:g} h outlasts the mission (ends at {timeline.align_h + mission:g} h)")
     site = scn.site
     keywords: dict[str, Any] = {
         "lat_rad": site.lat_deg * DEG,
@@ -262,8 +302,30 @@ def drift_std_curve_deg_h(
         **noise.floored().core_keywords(),
     }
     config = _core.SmootherConfig(**keywords)
-    out = _core.drift_std_curve(config, scn.to_core_config(), [float(s) * HOUR for s in spans])
-    return np.asarray(out, dtype=float) / DEG_PER_H
+    out = _core.drift_std_curve(
+        config,
+        scn.to_core_config(),
+        [float(s) * HOUR for s in spans],
+        mission_start_s=timeline.align_h * HOUR,
+        mission_s=mission * HOUR,
+    )
+    return IdentificationCurve(
+        spans_h=spans,
+        drift_std_deg_h=np.asarray(out["drift_std_rad_s"], dtype=float) / DEG_PER_H,
+        cross_m_deg_h=np.asarray(out["cross_rad_s_m"], dtype=float).reshape(-1, 2) / DEG_PER_H,
+    )
+
+
+def drift_std_curve_deg_h(
+    noise: SensorNoise,
+    spans_h: Sequence[float] | np.ndarray,
+    *,
+    scenario=None,
+    lat_deg: float | None = None,
+    timeline: Timeline = DEFAULT_TIMELINE,
+) -> np.ndarray:
+    """The smoother's drift 1-sigma [deg/h] after each span [h] (`identification_curve`'s ``drift_std_deg_h``)."""
+    return identification_curve(noise, spans_h, scenario=scenario, lat_deg=lat_deg, timeline=timeline).drift_std_deg_h
 
 
 @dataclass(frozen=True)
@@ -276,6 +338,8 @@ class Plan:
         Observation spans from the first sample [h] (alignment + static navigation).
     drift_std_id_deg_h, drift_std_deg_h : ndarray
         The smoother's drift 1-sigma [deg/h] at each span, and with the thermal term added (module docs).
+    cross_m_deg_h : ndarray, shape (spans, 2)
+        The drift error's covariance with the mission's noise floor, north and east [m deg/h].
     share_within : ndarray
         Predicted share of runs within the budget's error at each span.
     quantile_nmi : ndarray
@@ -283,7 +347,8 @@ class Plan:
     floor_quantile_nmi : float
         The same with the exact drift (the noise floor alone).
     max_drift_std_deg_h : float or None
-        The largest drift 1-sigma meeting the budget (None: the floor misses it).
+        The largest drift 1-sigma meeting the budget (None: the floor misses it), with the covariance with the floor
+        scaled from the shortest span meeting it (else the longest span).
     shortest_span_h : float or None
         The shortest span of `spans_h` meeting the budget; None when none does (`reason` says why).
     reason : str
@@ -298,6 +363,7 @@ class Plan:
     temp_change_c: float
     spans_h: np.ndarray
     drift_std_id_deg_h: np.ndarray
+    cross_m_deg_h: np.ndarray
     drift_std_deg_h: np.ndarray
     share_within: np.ndarray
     quantile_nmi: np.ndarray
@@ -332,6 +398,7 @@ class Plan:
             },
             "spans_h": arr(self.spans_h),
             "drift_std_id_deg_h": arr(self.drift_std_id_deg_h),
+            "cross_m_deg_h": [arr(c) for c in self.cross_m_deg_h],
             "drift_std_deg_h": arr(self.drift_std_deg_h),
             "share_within": arr(self.share_within),
             "quantile_nmi": arr(self.quantile_nmi),
@@ -376,7 +443,7 @@ def plan_identification(
     """
     budget = budget or MissionBudget()
     lo = _finite("min_span_h", min_span_h, low=0.5)
-    hi = _finite("max_span_h", max_span_h, low=lo, high=55.0)
+    hi = _finite("max_span_h", max_span_h, low=lo, high=_MAX_SPAN_H)
     step = _finite("step_h", step_h, low=1.0 / 60.0, open_low=False)
     if not hi > lo:
         raise InputError(f"max_span_h: expected a number > min_span_h ({lo:g} h), got {hi:g}")
@@ -393,14 +460,16 @@ def plan_identification(
     spans = np.arange(lo, hi + 1e-9, step)
     if spans[-1] < hi - 1e-9:
         spans = np.append(spans, hi)
-    sid = drift_std_curve_deg_h(noise, spans, scenario=scn, timeline=timeline)
+    curve = identification_curve(noise, spans, scenario=scn, timeline=timeline, mission_h=budget.hours)
+    sid, cross = curve.drift_std_deg_h, curve.cross_m_deg_h
     s = np.hypot(sid, thermal)
     mission = mission_error_model(scn.site.lat_deg, noise, hours=budget.hours, height_m=scn.site.height_m)
-    share = np.array([mission.share_within(x, budget.error_nmi) for x in s])
-    quant = np.array([mission.quantile_nmi(x, budget.share) for x in s])
+    share = np.array([mission.share_within(x, budget.error_nmi, c) for x, c in zip(s, cross, strict=True)])
+    quant = np.array([mission.quantile_nmi(x, budget.share, c) for x, c in zip(s, cross, strict=True)])
     floor_q = mission.quantile_nmi(0.0, budget.share)
-    s_max = mission.max_drift_std_deg_h(budget)
     meets = share >= budget.share
+    at = int(np.argmax(meets)) if meets.any() else len(spans) - 1  # the span the budget's allowance is quoted at
+    s_max = mission.max_drift_std_deg_h(budget, cross[at] / sid[at] if sid[at] > 0 else (0.0, 0.0))
     pct = f"{100 * budget.share:g} %"
     if s_max is None:
         shortest, reason = (
@@ -449,6 +518,7 @@ def plan_identification(
         temp_change_c=float(temp_change_c),
         spans_h=spans,
         drift_std_id_deg_h=sid,
+        cross_m_deg_h=cross,
         drift_std_deg_h=s,
         share_within=share,
         quantile_nmi=quant,
@@ -480,33 +550,39 @@ def mission_outlook(
     """
     budget = budget or MissionBudget()
     s = _finite("drift_std_deg_h", drift_std_deg_h, low=0.0)
+    span = _finite("span_h", span_h, low=0.5, high=_MAX_SPAN_H - 0.25)
     mission = mission_error_model(lat_deg, noise, hours=budget.hours)
-    quant = {f"{p:g}": mission.quantile_nmi(s, p) for p in probs}
-    share = mission.share_within(s, budget.error_nmi)
-    s_max = mission.max_drift_std_deg_h(budget)
+    # The planner's curve from this span on, scaled through this run's 1-sigma (and its covariance with the floor).
+    curve = identification_curve(noise, np.arange(span, _MAX_SPAN_H, 0.25), lat_deg=lat_deg, mission_h=budget.hours)
+    scale = s / curve.drift_std_deg_h[0] if curve.drift_std_deg_h[0] > 0 else 0.0
+    stds, crosses = curve.drift_std_deg_h * scale, curve.cross_m_deg_h * scale
+    quant = {f"{p:g}": mission.quantile_nmi(s, p, crosses[0]) for p in probs}
+    share = mission.share_within(s, budget.error_nmi, crosses[0])
+    s_max = mission.max_drift_std_deg_h(budget, crosses[0] / s if s > 0 else (0.0, 0.0))
     ready = share >= budget.share
     more: float | None = None
-    q = mission.quantile_nmi(s, budget.share)
+    q = mission.quantile_nmi(s, budget.share, crosses[0])
     if ready:
         note = f"ready: predicted {100 * budget.share:g} % quantile {q:.2f} nmi meets {budget.describe()}"
     elif s_max is None:
         note = f"not ready, and no static time will do: the noise floor alone misses {budget.describe()}"
     else:
-        spans = np.arange(span_h, 55.0, 0.25)
-        curve = drift_std_curve_deg_h(noise, spans, lat_deg=lat_deg) if spans.size > 1 else np.array([math.nan])
-        scaled = curve * (s / curve[0]) if curve[0] > 0 else curve
-        ok = np.nonzero(scaled <= s_max)[0]
-        if ok.size:
-            more = float(spans[ok[0]] - span_h)
+        ok = [
+            k
+            for k in range(1, len(stds))
+            if mission.share_within(stds[k], budget.error_nmi, crosses[k]) >= budget.share
+        ][:1]
+        if ok:
+            more = float(curve.spans_h[ok[0]] - span)
             note = (
                 f"not ready: predicted {100 * budget.share:g} % quantile {q:.2f} nmi misses {budget.describe()}; "
-                f"about {more:g} h more static time would bring the drift 1-sigma from {s:.2e} to the {s_max:.2e} "
-                "deg/h the budget allows"
+                f"about {more:g} h more static time would bring the drift 1-sigma from {s:.2e} to "
+                f"{stds[ok[0]]:.2e} deg/h"
             )
         else:
             note = (
                 f"not ready: predicted {100 * budget.share:g} % quantile {q:.2f} nmi misses {budget.describe()}, and "
-                f"no span up to 55 h brings the drift 1-sigma ({s:.2e} deg/h) to the {s_max:.2e} the budget allows"
+                f"no span up to {_MAX_SPAN_H:g} h brings the drift 1-sigma ({s:.2e} deg/h) within it"
             )
     return {
         "drift_std_deg_h": s,
