@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import math
+import os
+import stat
 
 import click
 
 from gyrodrift.choices import MAX_DRIFT_DEG_H
+from gyrodrift.input_files import non_regular_reason
 
 __all__ = ["DRIFT_DEG_H", "FiniteFloat", "InputPath", "MAX_DRIFT_DEG_H", "MAX_SEED", "Seed"]
 
@@ -82,8 +85,8 @@ class InputPath(click.Path):
     the argument, before any work (``Invalid value for 'LOG': /dev/zero is a device, not a regular file ...``),
     exit status 2. A missing path passes: the reader says so in its own words (`gyrodrift.input_files`).
 
-    ``InputPath()`` a file; ``InputPath(dir_okay=True)`` a file or a folder; ``InputPath(file_okay=False)`` a
-    folder; `exists` and `path_type` are click's.
+    ``InputPath()`` a file; ``InputPath(dir_okay=True)`` a file or a folder; ``InputPath(dir_okay=True,
+    file_okay=False)`` a folder; `exists` and `path_type` are click's.
     """
 
     def __init__(
@@ -93,11 +96,6 @@ class InputPath(click.Path):
         self.input_dir_okay, self.input_file_okay = dir_okay, file_okay
 
     def convert(self, value, param, ctx):
-        import os
-        import stat
-
-        from gyrodrift.input_files import non_regular_reason
-
         path = super().convert(value, param, ctx)
         where = os.fsdecode(path)
         try:
