@@ -214,3 +214,17 @@ def test_tuned_lssvr_passes_scikit_learns_estimator_checks():
         results = check_estimator(est, on_fail=None)
         failed = [(r["check_name"], str(r["exception"])[:200]) for r in results if r["status"] == "failed"]
         assert len(results) > 40 and failed == []
+
+
+def test_candidate_threads_and_cached_eigendecompositions_fit_in_the_available_memory(monkeypatch):
+    import gyrodrift.tuning as tuning
+
+    n, matrix = 500, 8 * 500 * 500
+    monkeypatch.setattr(tuning, "available_memory_bytes", lambda: 100 * matrix)
+    assert tuning._fit_in_memory(n, 2) == (2, 4)
+    monkeypatch.setattr(tuning, "available_memory_bytes", lambda: 7 * matrix)  # one candidate + one thread more
+    assert tuning._fit_in_memory(n, 4) == (2, 0)
+    monkeypatch.setattr(tuning, "available_memory_bytes", lambda: 6 * matrix)  # one candidate + one cached sigma
+    assert tuning._fit_in_memory(n, 4) == (1, 1)
+    monkeypatch.setattr(tuning, "available_memory_bytes", lambda: None)  # unknown: as asked, a full cache
+    assert tuning._fit_in_memory(n, 3) == (3, 4)

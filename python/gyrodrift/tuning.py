@@ -38,7 +38,7 @@ from threadpoolctl import threadpool_limits
 from gyrodrift.choices import METHODS, OBJECTIVES
 from gyrodrift.cpso import minimize_cpso
 from gyrodrift.errors import OptionError
-from gyrodrift.kernels import SIGMA_MAX, SIGMA_MIN, check_matrix_memory, squared_distances
+from gyrodrift.kernels import SIGMA_MAX, SIGMA_MIN, available_memory_bytes, check_matrix_memory, squared_distances
 from gyrodrift.lssvr import EigenCache, check_sample_weight, lssvr_solve, rbf_batch_errors
 
 DEFAULT_BOUNDS = ((1e-2, 1e5), (1e-3, 1e2))
@@ -160,6 +160,15 @@ def _kfold_errors(sqdist: np.ndarray, y: np.ndarray, gammas, sigmas, n_folds: in
     return errors
 
 
+def _fit_in_memory(n: int, threads: int) -> tuple[int, int]:
+    """``(threads, cache size)`` whose n x n float64 matrices fit in the available memory beside the 4 of one
+    candidate: 3 more per extra thread (its H, factor, inverse factor), 2 per cached eigendecomposition (up to 4)."""
+    avail = available_memory_bytes()
+    spare = 10**9 if avail is None else avail // (8 * n * n) - 4
+    threads = max(1, min(int(threads), 1 + max(spare, 0) // 3))
+    return threads, int(max(0, min(4, (spare - 3 * (threads - 1)) // 2)))
+
+
 def make_objective(X, y, objective: str = "loo_mae", *, n_folds: int = 5, sample_weight=None, threads: int = 1):
     """A vectorised objective ``f(params) -> fitness`` for (gamma, sigma) rows of ``params`` (shape (m, 2)).
 
@@ -176,9 +185,11 @@ def make_objective(X, y, objective: str = "loo_mae", *, n_folds: int = 5, sample
         raise OptionError(f"n_folds must be within [2, {len(y)}] for {len(y)} samples, got {n_folds}")
     # distances, one candidate's H, its factor and inverse factor; the stacked path (n <= 32) is small
     check_matrix_memory(len(y), len(y), 4, "tuning the LSSVR", unit="samples")
+    threads, cache_size = _fit_in_memory(len(y), threads)
     sqdist = squared_distances(X)
     w = check_sample_weight(sample_weight, len(y))
-    cache = EigenCache(sqdist, w)  # sigmas the swarm asks for again (particles on a sigma bound)
+    # sigmas the swarm asks for again (particles on a sigma bound)
+    cache = EigenCache(sqdist, w, size=cache_size) if cache_size else None
 
     def fitness(params: np.ndarray) -> np.ndarray:
         params = np.atleast_2d(np.asarray(params, float))
