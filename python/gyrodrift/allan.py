@@ -451,7 +451,8 @@ def fit_noise(
         trials = []
         for term in sorted(kept):
             without = fit.violation(kept - {term}, lo**2, hi**2)
-            if without <= miss + 1e-9:  # parsimony first: drop the two-parameter Gauss-Markov term if it can go
+            # within the LP's tolerance; parsimony first: the two-parameter Gauss-Markov term goes if it can
+            if without <= miss + 1e-6:
                 trials.append((term != "gauss_markov", without, term))
         if not trials:
             break
