@@ -10,9 +10,9 @@ interval is a normalised cross-validation interval for the run's label (``DriftM
 coverage 90 %; conservative for the drift itself): the physics 1-sigmas and the spread of a Gaussian process
 with fitted length scales (`gyrodrift.spread`; wider where the run's inputs are far from the training runs'),
 scaled by the out-of-sample scores of its training runs; its note says on how many runs it rests and how much
-wider it is than the physics alone (``DriftModel.interval_note``). A run outside the training runs' range (per input or jointly,
-``DriftModel.check_inputs``) is flagged (``outside_training_range``, ``range_warnings``): its drift is an
-extrapolation. A drift beyond a navigation-grade RLG's `gyrodrift.runs.NAVIGATION_GRADE_DRIFT_DEG_H`, or far
+wider it is than the physics alone (``DriftModel.interval_note``). A run outside the training runs' range (per
+input or jointly, ``DriftModel.check_inputs``) is flagged (``outside_training_range``, ``range_warnings``): its
+drift is an extrapolation. A drift beyond a navigation-grade RLG's `gyrodrift.runs.NAVIGATION_GRADE_DRIFT_DEG_H`, or far
 outside the training labels' range (`gyrodrift.runs.drift_range_problems`), is flagged too (``outside_drift_range``,
 one more ``range_warnings`` line). ``model_std_deg_h`` stays None: the interval is empirical, not a Gaussian 1-sigma.
 
