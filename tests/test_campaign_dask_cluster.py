@@ -182,7 +182,7 @@ def _start_campaign(cluster: Cluster, tmp_path: Path) -> tuple[Path, Path, subpr
     return src, out, client
 
 
-@pytest.mark.slow  # 50-95 s under a load average of 20 on 2 cores (interpreter start-ups)
+@pytest.mark.slow  # 23-26 s at a load average of 7-12 on 2 cores, 65-75 s at 17-26 (interpreter start-ups)
 def test_a_worker_killed_mid_run_loses_nothing_and_duplicates_nothing(cluster, tmp_path):
     _, out, client = _start_campaign(cluster, tmp_path)
     processing = {addr: keys for addr, keys in cluster.watcher.processing().items() if keys}
@@ -201,7 +201,7 @@ def test_a_worker_killed_mid_run_loses_nothing_and_duplicates_nothing(cluster, t
     assert survivor.pid in pids  # the surviving worker took the runs over
 
 
-@pytest.mark.slow  # 50-95 s under a load average of 20 on 2 cores (interpreter start-ups)
+@pytest.mark.slow  # 23-26 s at a load average of 7-12 on 2 cores, 65-75 s at 17-26 (interpreter start-ups)
 def test_the_client_killed_mid_run_resumes_every_run_once(cluster, tmp_path):
     src, out, client = _start_campaign(cluster, tmp_path)
     os.killpg(client.pid, signal.SIGKILL)
