@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 import tomllib
 
 import allantools
@@ -250,3 +251,14 @@ def test_cli_writes_json_png_and_a_noise_block_a_scenario_accepts(tmp_path):
 def test_cli_on_a_missing_log_is_one_line(tmp_path):
     r = CliRunner().invoke(main, ["allan", str(tmp_path / "nope.parquet"), "--out", str(tmp_path / "o")])
     assert r.exit_code == 1 and "Traceback" not in r.output and "nope.parquet" in r.output
+
+
+def test_cli_without_the_allan_extra_says_how_to_install_it(tmp_path, monkeypatch):
+    # allantools is an extra (it pulls pytest and numpydoc at run time): without it, one line naming the install
+    log = _static_log(tmp_path, 4)
+    monkeypatch.setitem(sys.modules, "allantools", None)  # the next `import allantools` fails
+    out = tmp_path / "allan"
+    r = CliRunner().invoke(main, ["allan", str(log), "--out", str(out)])
+    assert r.exit_code == 1 and "Traceback" not in r.output
+    assert 'pip install "gyrodrift[allan]"' in r.output
+    assert not out.exists() or not any(p.name.endswith(".json") for p in out.iterdir())

@@ -49,7 +49,7 @@ from typing import Any
 
 import numpy as np
 
-from gyrodrift.errors import InputError
+from gyrodrift.errors import InputError, MissingExtraError
 
 __all__ = [
     "AxisNoise",
@@ -293,14 +293,24 @@ def scenario_noise_block(result: AllanResult) -> dict[str, dict[str, float]]:
     return block
 
 
+def _allantools() -> Any:
+    """allantools, the optional extra behind `gyrodrift allan` (``pip install "gyrodrift[allan]"``)."""
+    try:
+        import allantools
+    except ImportError:
+        raise MissingExtraError(
+            'the Allan deviation (gyrodrift allan) needs allantools: pip install "gyrodrift[allan]"'
+        ) from None
+    return allantools
+
+
 def allan_edf(tau_s: np.ndarray, alpha: np.ndarray, n_phase: int, base_tau_s: float) -> np.ndarray:
     """Greenhall's equivalent degrees of freedom (`allantools.edf_greenhall`, overlapping ADEV) of each point.
 
     `alpha` is the noise type at each `tau_s` (frequency PSD exponent: 0 white rate, -1 flicker, -2 random walk),
     `n_phase` the number of phase points and `base_tau_s` their spacing [s].
     """
-    import allantools
-
+    allantools = _allantools()
     m = np.maximum(np.round(np.asarray(tau_s, dtype=float) / base_tau_s), 1).astype(int)
     return np.array(
         [
@@ -311,8 +321,7 @@ def allan_edf(tau_s: np.ndarray, alpha: np.ndarray, n_phase: int, base_tau_s: fl
 
 
 def _intervals(dev: np.ndarray, edf: np.ndarray, ci: float) -> tuple[np.ndarray, np.ndarray]:
-    import allantools
-
+    allantools = _allantools()
     bounds = np.array(
         [allantools.confidence_interval(float(d), float(e), ci=ci) for d, e in zip(dev, edf, strict=True)]
     )
@@ -540,9 +549,9 @@ def allan_deviation(log: Any, *, chunk_samples: int = 200_000, quiet: bool = Tru
         The log is shorter than 100 samples, its turntable turns (z rate varying by more than
         `MAX_TABLE_RATE_DEG_S` between 1 s means), or all six channels are constant.
     """
-    import allantools
-
     from gyrodrift.progress import progress
+
+    allantools = _allantools()
 
     n = int(log.n_samples)
     if n < 100:

@@ -11,7 +11,7 @@ import math
 from collections.abc import Iterator
 from typing import Any
 
-from gyrodrift.errors import GyrodriftError, OptionError
+from gyrodrift.errors import GyrodriftError, MissingExtraError, OptionError
 
 __all__ = ["DEFAULT_CONNECT_TIMEOUT_S", "DaskMissingError", "SchedulerUnreachableError", "dask_client"]
 
@@ -19,7 +19,7 @@ DEFAULT_CONNECT_TIMEOUT_S = 10.0
 """How long [s] to wait for a scheduler to answer before giving up (CLI: ``--connect-timeout-s``)."""
 
 
-class DaskMissingError(GyrodriftError, ImportError):
+class DaskMissingError(MissingExtraError):
     """dask.distributed is needed for --workers / --scheduler but is not installed."""
 
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 __all__ = [
     "GyrodriftError",
     "InputError",
+    "MissingExtraError",
     "CoreError",
     "OptionError",
     "OutputError",
@@ -38,3 +39,7 @@ class OutputError(GyrodriftError, OSError):
 
 class CoreError(InputError):
     """The Rust core refused its configuration or data; the message names the quantity and its limit."""
+
+
+class MissingExtraError(GyrodriftError, ImportError):
+    """An optional part of gyrodrift whose extra is not installed; the message says which ``pip install`` adds it."""
