@@ -60,6 +60,7 @@ from scipy.linalg import cho_solve
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.gaussian_process import GaussianProcessRegressor
 from sklearn.gaussian_process.kernels import RBF, ConstantKernel, DotProduct, WhiteKernel
+from threadpoolctl import threadpool_limits
 
 from gyrodrift.errors import InputError
 from gyrodrift.kernels import check_matrix_memory
@@ -140,8 +141,10 @@ class SpreadGP:
             n_restarts_optimizer=0 if fixed else self.n_restarts,
             random_state=self.random_state,
         )
-        with warnings.catch_warnings():  # a length scale at its upper bound: that input does not matter
-            warnings.simplefilter("ignore", ConvergenceWarning)
+        # one BLAS thread (as `gyrodrift.tuning.tune_lssvr`): the likelihood search's small solves and L-BFGS-B's
+        # vector operations waited on OpenBLAS's threads, 2-3x slower on a quiet 2-core machine, 10-50x loaded
+        with threadpool_limits(limits=1, user_api="blas"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", ConvergenceWarning)  # a length scale at its upper bound: input irrelevant
             gp.fit(self._z(Z), (y - self.y_mean_) / self.y_scale_)
         self.gp_ = gp
         self.n_runs_ = n
