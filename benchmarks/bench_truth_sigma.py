@@ -1,7 +1,7 @@
 """Calibration of `truth`'s 1-sigma: z = (truth - effective drift) / reported sigma over many seeds.
 
     python benchmarks/bench_truth_sigma.py [--seeds 60] [--first-seed 0] [--rate-hz 10] [--lat-deg 20,40,60]
-        [--hours 72] [--workers 1] [--thermal] [--noise log|given] [--gm-rrw]
+        [--hours 72] [--workers 1] [--thermal] [--noise log|given] [--gm-rrw] [--twin-alignment]
 
 For every latitude and seed: a noisy 4 h + `--hours` static log (RLG grade: ARW 0.0005 deg/sqrt(h), VRW
 5 ug/sqrt(Hz); reciprocating table; x/y gyro biases 0.004, -0.003 deg/h, accelerometer biases 20, -10, 5 ug;
@@ -22,6 +22,9 @@ the drift unevenly in time, and a daily swing is resonant with the Earth-rate er
 told the noise model (``--noise given`` implied: a log's first hour does not measure them). It also prints z
 against the white-noise-only sigma (what `truth` reported before it took these terms).
 
+``--twin-alignment``: every noisy run is navigated from its twin's alignment instead of its own, so the
+alignment's noise-driven errors (which the label's covariance analysis leaves out) play no part.
+
 Printed per latitude: the rms of z with its 95 % interval (n rms^2 / s^2 ~ chi-square with n degrees of freedom
 for Gaussian z of scale s: the rms of 60 z-scores has a relative standard error of about 1 / sqrt(2 n) = 9 %),
 the mean z, the observed rms deviation and the mean reported sigma. Only reports; never fails.
@@ -40,6 +43,7 @@ from scipy.stats import chi2
 from gyrodrift.ins.scenario import Scenario
 from gyrodrift.logs import ImuLog
 from gyrodrift.procedure import SensorNoise, find_true_drift
+from gyrodrift.procedure.align import align_log
 from gyrodrift.procedure.truth import label_sigma_deg_h
 
 RLG = {"arw_deg_rth": 0.0005, "vrw_ug_rthz": 5.0}
@@ -106,12 +110,16 @@ def mean_simulated_drift(seed: int, hours: float) -> float:
 
 def one(task: tuple) -> tuple:
     """``(key, drift [deg/h], reported sigma [deg/h])`` of one truth."""
-    lat, seed, rate, hours, noise, thermal, noise_mode, gm_rrw = task
+    lat, seed, rate, hours, noise, thermal, noise_mode, gm_rrw, twin_alignment = task
     log = ImuLog.from_scenario(scenario(lat, seed, rate, hours, noise=noise, thermal=thermal, gm_rrw=gm_rrw))
+    alignment = None
+    if twin_alignment and noise:
+        alignment = align_log(ImuLog.from_scenario(scenario(lat, seed, rate, hours, noise=False, thermal=thermal)))
     trial = thermal_spec(seed, hours)["constant"] if thermal else 0.003
     told = SensorNoise(**RLG, **(GM_RRW if gm_rrw else {}))
     t = find_true_drift(
         log,
+        alignment=alignment,
         hours=hours,
         verify=False,
         trial_deg_h=trial,
@@ -141,6 +149,7 @@ def main() -> None:
     ap.add_argument("--thermal", action="store_true", help="warm-up and daily swing, a twin per seed")
     ap.add_argument("--noise", choices=("log", "given"), default="log", help="ARW/VRW of the sigma")
     ap.add_argument("--gm-rrw", action="store_true", help="Gauss-Markov bias and rate random walk on every gyro")
+    ap.add_argument("--twin-alignment", action="store_true", help="navigate each noisy run from its twin's alignment")
     a = ap.parse_args()
     if a.gm_rrw:
         a.noise = "given"
@@ -149,14 +158,16 @@ def main() -> None:
     tasks = []
     for lat in lats:
         twin_seeds = seeds if a.thermal else [a.first_seed]
-        tasks += [(lat, s, a.rate_hz, a.hours, False, a.thermal, a.noise, a.gm_rrw) for s in twin_seeds]
-        tasks += [(lat, s, a.rate_hz, a.hours, True, a.thermal, a.noise, a.gm_rrw) for s in seeds]
+        common = (a.thermal, a.noise, a.gm_rrw, a.twin_alignment)
+        tasks += [(lat, s, a.rate_hz, a.hours, False, *common) for s in twin_seeds]
+        tasks += [(lat, s, a.rate_hz, a.hours, True, *common) for s in seeds]
     t0 = time.perf_counter()
     with Pool(a.workers) as pool:
         out = {key: (d, s) for key, d, s in pool.imap_unordered(one, tasks)}
     wall = time.perf_counter() - t0
     env = "thermal (warm-up + daily swing)" if a.thermal else "constant drift"
     env += ", Gauss-Markov + rate random walk" if a.gm_rrw else ""
+    env += ", navigated from the twin's alignment" if a.twin_alignment else ""
     print(
         f"truth's 1-sigma: {a.seeds} seeds ({seeds[0]}-{seeds[-1]}), {a.rate_hz:g} Hz, {a.hours:g} h navigation, "
         f"{env}, noise {a.noise}; {len(tasks)} truths in {wall:.0f} s with {a.workers} worker(s)"

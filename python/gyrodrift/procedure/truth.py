@@ -36,8 +36,7 @@ velocity and north/east position errors driven by ARW and VRW over the navigatio
 Gauss-Markov bias instability and rate random walk when the noise model has them (`SensorNoise`; a noise measured
 from the log has none): d* follows their weighted average over the span, which the run's noise-free twin lacks;
 the x/y ones are modulated by the table and left out; the alignment's errors are left out: they are the same
-in the run and in its noise-free twin but for their noise-driven part, which is small (40 noisy runs at 40 deg,
-10 Hz, navigated from their twin's alignment instead: z rms 1.007 against 1.008); with the alignment's whole
+in the run and in its noise-free twin but for their noise-driven part, which is small; with the alignment's whole
 attitude 1-sigma the ``rms`` sigma came out 1.4 times the observed spread):
 ``final``: ``var = g' Cov(e(T)) g / |g|^4`` with g the position response to the drift at hour 72 and e the
 position error it does not explain; ``rms``: the same for the sums over the curve points (an accumulator
