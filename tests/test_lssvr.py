@@ -726,3 +726,31 @@ def test_eigen_cache_serves_a_sigma_asked_again_with_the_values_of_the_cholesky_
     for sigma in (1.0, 2.0, 3.0):
         small.put(sigma, RBFEigenSystem(D, sigma))
     assert small.get(1.0) is None and small.get(3.0) is not None
+
+
+def test_eigen_cache_takes_a_sigma_asked_again_from_an_eigendecomposition_and_keeps_at_most_its_size():
+    X, y = make_data(n=40, seed=34)
+    D = squared_distances(X)
+    cache = EigenCache(D, size=3)
+    sigmas = [0.4, 0.6, 0.9, 1.3, 2.0]
+    first = rbf_batch_errors(D, y, [3.0] * 5, sigmas, "loo", cache=cache)  # each alone and new: Cholesky
+    assert len(cache) == 0 and all(cache.wants(s) for s in sigmas) and not cache.wants(0.5)
+    plain = rbf_batch_errors(D, y, [3.0] * 5, sigmas, "loo")
+    np.testing.assert_array_equal(first, plain)
+    again = rbf_batch_errors(D, y, [30.0] * 5, sigmas, "loo", cache=cache, threads=2)  # asked again: eigen, kept
+    assert len(cache) == 3 and [cache.get(s) is not None for s in sigmas] == [False, False, True, True, True]
+    assert rel_err(again, rbf_batch_errors(D, y, [30.0] * 5, sigmas, "loo")) < 1e-8
+    for k in range(10):  # many sigmas, each asked twice: never more than 3 kept
+        rbf_batch_errors(D, y, [1.0, 10.0], [0.3 + 0.1 * k] * 2, "loo", cache=cache)
+        rbf_batch_errors(D, y, [5.0], [0.3 + 0.1 * k], "loo", cache=cache)
+        assert len(cache) <= 3
+
+
+def test_eigen_system_reuses_its_projection_of_y_only_for_the_same_y():
+    X, y = make_data(n=30, seed=35)
+    system = RBFEigenSystem(squared_distances(X), 0.8)
+    e1 = system.errors([2.0, 20.0], y)
+    e2 = system.errors([2.0, 20.0], 2.0 * y + 1.0)  # another y: projected anew
+    fresh = RBFEigenSystem(squared_distances(X), 0.8).errors([2.0, 20.0], 2.0 * y + 1.0)
+    np.testing.assert_array_equal(e2, fresh)
+    np.testing.assert_array_equal(system.errors([2.0, 20.0], y), e1)

@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from gyrodrift.errors import OptionError
 from gyrodrift.lssvr import LSSVR
 from gyrodrift.tuning import make_objective, tune_lssvr
 
@@ -221,10 +222,73 @@ def test_candidate_threads_and_cached_eigendecompositions_fit_in_the_available_m
 
     n, matrix = 500, 8 * 500 * 500
     monkeypatch.setattr(tuning, "available_memory_bytes", lambda: 100 * matrix)
-    assert tuning._fit_in_memory(n, 2) == (2, 4)
+    # 96 spare matrices, 3 for the second thread: the cache takes a quarter of the 93 left (2 matrices each)
+    assert tuning._fit_in_memory(n, 2) == (2, 23)
     monkeypatch.setattr(tuning, "available_memory_bytes", lambda: 7 * matrix)  # one candidate + one thread more
     assert tuning._fit_in_memory(n, 4) == (2, 0)
     monkeypatch.setattr(tuning, "available_memory_bytes", lambda: 6 * matrix)  # one candidate + one cached sigma
     assert tuning._fit_in_memory(n, 4) == (1, 1)
-    monkeypatch.setattr(tuning, "available_memory_bytes", lambda: None)  # unknown: as asked, a full cache
-    assert tuning._fit_in_memory(n, 3) == (3, 4)
+    monkeypatch.setattr(tuning, "available_memory_bytes", lambda: None)  # unknown: as asked, the byte budget
+    assert tuning._fit_in_memory(n, 3) == (3, tuning.EIGEN_CACHE_BYTES // (16 * n * n))
+    monkeypatch.setattr(tuning, "available_memory_bytes", lambda: 10**12)  # plenty: never past the byte budget
+    for n in (40, 200, 1000, 3000):
+        threads, size = tuning._fit_in_memory(n, 2)
+        assert threads == 2 and 4 <= size and (size == 4 or size * 16 * n * n <= tuning.EIGEN_CACHE_BYTES)
+
+
+def _smooth_data(n, seed=5):
+    rng = np.random.default_rng(seed)
+    X = rng.uniform(-1, 1, size=(n, 2))
+    return X, np.sin(2 * X[:, 0]) + 0.3 * X[:, 1] + 0.05 * rng.standard_normal(n)
+
+
+def test_snapped_sigmas_give_the_exact_objective_at_the_snapped_sigma():
+    from gyrodrift.tuning import DEFAULT_BOUNDS, snap_sigmas
+
+    X, y = _smooth_data(60)
+    step, (low, high) = 0.05, DEFAULT_BOUNDS[1]
+    rng = np.random.default_rng(1)
+    # 40 candidates in a narrow sigma band: several share a snapped sigma (eigendecompositions, cached)
+    params = np.column_stack([10 ** rng.uniform(-1, 3, 40), 10 ** rng.uniform(-0.3, 0.1, 40)])
+    params[:3, 1] = [low, high, 1.5 * low]  # on and beside the bounds
+    snapped = snap_sigmas(params[:, 1], step, low, high)
+    k = np.log10(snapped / low) / step
+    assert np.all(np.abs(k - np.round(k)) < 1e-9) and np.all((low <= snapped) & (snapped <= high))
+    assert np.all(np.abs(np.log10(snapped / params[:, 1])) <= step / 2 + 1e-12)
+    fun = make_objective(X, y, "loo_mae", sigma_snap=(step, low, high), threads=2)
+    first, again = fun(params), fun(params[::-1])[::-1]  # the second call from the cache
+    exact = np.array(
+        [make_objective(X, y, "loo_mae")(np.array([[g, s]]))[0] for g, s in zip(params[:, 0], snapped, strict=True)]
+    )
+    assert np.all(np.isfinite(exact))
+    np.testing.assert_allclose(first, exact, rtol=1e-8)
+    np.testing.assert_allclose(again, exact, rtol=1e-8)
+
+
+def test_snapping_leaves_small_sets_alone_and_reports_the_snapped_sigma(paper):
+    from sklearn.preprocessing import StandardScaler
+
+    from gyrodrift.encodings import encode
+    from gyrodrift.tuning import SNAP_MIN_N, snap_sigmas
+
+    Xs = StandardScaler().fit_transform(encode(paper.train, "temp_range"))
+    y = paper.train.drift_deg_h
+    assert len(y) <= SNAP_MIN_N
+    before = tune_lssvr(Xs, y, rng=3, max_iter=15, sigma_step=None)  # the swarm as before snapping existed
+    now = tune_lssvr(Xs, y, rng=3, max_iter=15)
+    assert (now.gamma, now.sigma, now.fitness, now.history) == (
+        before.gamma,
+        before.sigma,
+        before.fitness,
+        before.history,
+    )
+    assert "sigma_step_decades" not in now.settings
+
+    X, y = _smooth_data(SNAP_MIN_N + 8)
+    res = tune_lssvr(X, y, rng=3, max_iter=15, n_particles=10)
+    step = res.settings["sigma_step_decades"]
+    assert res.sigma == snap_sigmas(res.sigma, step, *res.bounds[1])
+    exact = make_objective(X, y, "loo_mae")(np.array([[res.gamma, res.sigma]]))[0]
+    assert res.fitness == pytest.approx(exact, rel=1e-8)
+    with pytest.raises(OptionError, match="sigma_step must be"):
+        tune_lssvr(X, y, sigma_step=0.0)

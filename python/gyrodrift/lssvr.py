@@ -545,26 +545,31 @@ def _rbf_batch_stacked(D, y, g, sg, kind, w=None):
 
 def _rbf_batch_loop(D, y, g, sg, kind, w=None, threads: int = 1, cache: EigenCache | None = None):
     """Candidate by candidate with LAPACK ``dpotrf``/``dpotrs``/``dtrtri``; non-PD rows are +inf. Candidates sharing
-    one sigma, ``EIG_MIN_GROUP`` or more of them, or one in ``cache``, come from one :class:`RBFEigenSystem` instead
-    (kept in ``cache``). ``threads`` > 1:
-    the candidates are shared among that many threads (scipy's LAPACK wrappers release the GIL; each candidate is
-    computed exactly as alone, so the rows do not depend on ``threads``)."""
+    one sigma, ``EIG_MIN_GROUP`` or more of them, or one in ``cache``, or one ``cache`` saw in an earlier call (a
+    sigma asked for again: :meth:`EigenCache.wants`), come from one :class:`RBFEigenSystem` instead (kept in
+    ``cache``). ``threads`` > 1: the candidates and the new eigendecompositions are shared among that many threads
+    (scipy's and numpy's LAPACK wrappers release the GIL; each is computed exactly as alone, so the rows do not
+    depend on ``threads``)."""
     n = D.shape[0]
     out = np.empty((g.size, n))
     B = np.column_stack([np.ones(n), y])
     diag = np.arange(n) * (n + 1)
     values, inverse, counts = np.unique(sg, return_inverse=True, return_counts=True)
     alone = np.ones(g.size, dtype=bool)
+    systems: dict[int, RBFEigenSystem | None] = {}
     for k, sigma in enumerate(values.tolist()):
-        system = None if cache is None else cache.get(sigma)
-        if system is None and counts[k] >= EIG_MIN_GROUP:
-            system = RBFEigenSystem(D, sigma, w)
-            if cache is not None:
-                cache.put(sigma, system)
-        if system is not None:
-            rows = np.flatnonzero(inverse == k)
-            out[rows] = system.errors(g[rows], y, kind)
-            alone[rows] = False
+        systems[k] = None if cache is None else cache.get(sigma)
+        if systems[k] is not None or counts[k] >= EIG_MIN_GROUP or (cache is not None and cache.wants(sigma)):
+            alone[inverse == k] = False
+    if cache is not None:
+        cache.saw(values.tolist())
+
+    def group(k: int) -> None:
+        system = systems[k]
+        if system is None:
+            system = systems[k] = RBFEigenSystem(D, float(values[k]), w)
+        rows = np.flatnonzero(inverse == k)
+        out[rows] = system.errors(g[rows], y, kind)
 
     def candidate(j: int) -> None:
         H = rbf_from_squared_distances(D, sg[j])
@@ -583,13 +588,17 @@ def _rbf_batch_loop(D, y, g, sg, kind, w=None, threads: int = 1, cache: EigenCac
         else:
             out[j] = _loo_from_factor(U, alpha, p, s)
 
-    todo = [int(j) for j in np.flatnonzero(alone)]
+    groups = [k for k in systems if not alone[inverse == k].any()]
+    todo = [(group, k) for k in groups] + [(candidate, int(j)) for j in np.flatnonzero(alone)]
     if threads > 1 and len(todo) > 1:
         with ThreadPoolExecutor(min(threads, len(todo))) as pool:
-            list(pool.map(candidate, todo))
+            list(pool.map(lambda task: task[0](task[1]), todo))
     else:
-        for j in todo:
-            candidate(j)
+        for task, arg in todo:
+            task(arg)
+    if cache is not None:
+        for k in groups:
+            cache.put(float(values[k]), systems[k])  # type: ignore[arg-type]
     return out
 
 
@@ -606,11 +615,29 @@ EIG_MIN_GROUP = 6
 class EigenCache:
     """The :class:`RBFEigenSystem` of the ``size`` most recently used sigmas of one training set (``sqdist`` and
     ``weights`` as given to :func:`rbf_batch_errors`, which refuses a cache of another set). Memory: two n x n
-    float64 matrices per sigma (16 MB at n = 1000)."""
+    float64 matrices per sigma (16 MB at n = 1000); never more than ``size`` of them.
+
+    It also remembers every sigma it was asked about (a set of floats, not matrices): a sigma asked for a second
+    time is worth an eigendecomposition (:meth:`wants`) even alone, since a swarm whose sigmas are snapped to a grid
+    (``gyrodrift.tuning``) keeps coming back to the same few. An eigendecomposition costs about 2 (n = 200) to 5
+    (n = 1000) Cholesky factorisations with their triangular inverse, so paying it on the second visit costs at
+    most that much more than the Cholesky path for a sigma never seen again."""
 
     def __init__(self, sqdist, weights=None, size: int = 4) -> None:
         self._sqdist, self._weights, self.size = sqdist, weights, int(size)
         self._systems: dict[float, RBFEigenSystem] = {}
+        self._seen: set[float] = set()
+
+    def wants(self, sigma: float) -> bool:
+        """Whether ``sigma`` was asked about before (:meth:`saw`): take it from an eigendecomposition and keep it."""
+        return sigma in self._seen
+
+    def saw(self, sigmas) -> None:
+        """Remember that ``sigmas`` were asked about."""
+        self._seen.update(float(v) for v in sigmas)
+
+    def __len__(self) -> int:
+        return len(self._systems)
 
     def serves(self, sqdist, weights) -> bool:
         """Whether this cache belongs to the training set ``(sqdist, weights)`` (the same arrays, or equal ones)."""
@@ -678,6 +705,8 @@ class RBFEigenSystem:
         self._V = V
         self._V2 = V * V
         self._c1 = V.T @ sw  # V' S 1
+        self._y: np.ndarray | None = None
+        self._cy = self._c1
 
     def _d(self, gammas: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(d, ok)``: ``1/(lam + 1/gamma)`` as an (n, m) array and which gammas give a positive definite H."""
@@ -705,12 +734,16 @@ class RBFEigenSystem:
         y = np.asarray(y, dtype=float)
         d, ok = self._d(g)
         V, sw = self._V, self._sw
-        cy = V.T @ (sw * y)
+        if self._y is None or not np.array_equal(self._y, y):  # the tuner asks about one y again and again
+            self._y, self._cy = y.copy(), V.T @ (sw * y)
+        cy = self._cy
         c1 = self._c1
         s = c1**2 @ d  # 1' H^-1 1
         b = (c1 * cy) @ d / s
-        p = sw[:, None] * (V @ (c1[:, None] * d))  # (n, m)
-        alpha = sw[:, None] * (V @ ((cy[:, None] - c1[:, None] * b[None, :]) * d))
+        m = g.size
+        # p and alpha from one pass over V (memory-bound at large n)
+        pa = sw[:, None] * (V @ np.hstack([c1[:, None] * d, (cy[:, None] - c1[:, None] * b[None, :]) * d]))
+        p, alpha = pa[:, :m], pa[:, m:]
         hinv_diag = (sw * sw)[:, None] * (self._V2 @ d)
         out = alpha.T, b, hinv_diag.T, p.T, s
         for a in out:
