@@ -10,12 +10,16 @@ pi to 0.3 %, which changes 1 - cos by < 0.01 %):
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-from sklearn.linear_model import LinearRegression
 
 from gyrodrift.earth import OMEGA_IE_RAD_S
 from gyrodrift.runs import RunTable
 from gyrodrift.units import ARCSEC, DEG, DEG_PER_H, HOUR
+
+if TYPE_CHECKING:
+    from sklearn.linear_model import LinearRegression
 
 
 def latitude_error_at(t_s, drift_deg_h, lat0_deg):
@@ -61,6 +65,8 @@ def physics_inversion(runs: RunTable, t_h: float = 12.0) -> np.ndarray:
 
 def fit_latitude_line(train: RunTable) -> LinearRegression:
     """Least-squares line drift_deg_h = a * lat_err_arcsec + b fitted on ``train``."""
+    from sklearn.linear_model import LinearRegression  # here: its import costs ~0.2 s of every command's start
+
     model = LinearRegression()
     model.fit(train.lat_err_arcsec.reshape(-1, 1), train.drift_deg_h)
     return model
