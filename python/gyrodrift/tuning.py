@@ -24,15 +24,15 @@ thread keeps counting during their calls; the values do not depend on it). On th
 gained nothing measurable (the process got a fifth of a core); on a quiet 2-core machine it should halve the tuning
 time for n > 32 (not measured there).
 
-Snapped sigmas: for more than ``SNAP_MIN_N`` (32) samples, :func:`tune_lssvr` moves every sigma the swarm asks
-for onto a log grid of ``SIGMA_STEP_DECADES`` (0.05 decade, anchored at the lower sigma bound) before evaluating
-it, and reports the snapped sigma as the tuned one (with the fitness evaluated there; ``settings`` records the
-step). Each grid point the swarm comes back to is then served by one cached eigendecomposition
-(``EigenCache.wants``: from its second visit on), every gamma of it in O(n^2); at n = 1000 an eigendecomposition
-costs about 5 Cholesky factorisations, and a CPSO run of 4030 evaluations visits a few dozen grid points. The
-swarm's trajectory differs from the unsnapped one; the paper's 22 runs (n <= 32) keep it to the bit
-(``sigma_step=None`` turns snapping off everywhere). Measured with ``benchmarks/bench_learning_scale.py``: see
-its section 2 for times and for the tuned LOO MAE against the unsnapped tuner's on the same seed.
+Snapped sigmas: for more than ``SNAP_MIN_N`` (32) samples, :func:`tune_lssvr` moves every sigma the swarm asks for
+onto a log grid anchored at the lower sigma bound (step :func:`sigma_step_for`: 0.01 decade up to 200 samples, 0.05
+at 1000) before evaluating it, and reports the snapped sigma as the tuned one (with the fitness evaluated there;
+``settings`` records the step). Each grid point the swarm comes back to is then served by one cached
+eigendecomposition (``EigenCache.wants``: from its second visit on), every gamma of it in O(n^2); at n = 1000 an
+eigendecomposition costs about 5 Cholesky factorisations, and a CPSO run of 4030 evaluations visits a few dozen grid
+points. The swarm's trajectory differs from the unsnapped one; the paper's 22 runs (n <= 32) keep it to the bit
+(``sigma_step=None`` turns snapping off everywhere). Measured with ``benchmarks/bench_learning_scale.py``: see its
+section 2 for times and for the tuned LOO MAE against the unsnapped tuner's on the same seed.
 """
 
 from __future__ import annotations
@@ -174,9 +174,13 @@ EIGEN_CACHE_BYTES = 512 * 2**20
 """Most memory the tuner's cached eigendecompositions may hold (``gyrodrift.lssvr.EigenCache``, 16 n^2 bytes per
 sigma: 32 sigmas at n = 1000), and never more than half of the memory left beside the candidates."""
 
-SIGMA_STEP_DECADES = 0.05
-"""Grid step, in decades, onto which the swarm's sigmas are snapped for n > ``SNAP_MIN_N`` (``tune_lssvr``,
-``sigma_step``): a factor 1.122 in sigma. See the module docstring ("Snapped sigmas")."""
+SIGMA_STEP_DECADES = 0.01
+"""Grid step, in decades, onto which the swarm's sigmas are snapped for ``SNAP_MIN_N`` < n <= 200 samples (a
+factor 1.023 in sigma); it grows as n / 200 above (0.05 at n = 1000), at most ``SIGMA_STEP_MAX``
+(:func:`sigma_step_for`). See the module docstring ("Snapped sigmas")."""
+
+SIGMA_STEP_MAX = 0.1
+"""Coarsest snapping step, in decades (a factor 1.26 in sigma), reached at n = 2000."""
 
 SNAP_MIN_N = _STACKED_MAX_N
 """Sigmas are snapped only for more training samples than this (the paper's 22 runs keep the swarm of before)."""
@@ -192,6 +196,16 @@ def _fit_in_memory(n: int, threads: int) -> tuple[int, int]:
     left = spare - 3 * (threads - 1)
     budget = max(4, EIGEN_CACHE_BYTES // (16 * n * n))
     return threads, int(max(0, min(budget, left // 2 if left < 16 else left // 4)))
+
+
+def sigma_step_for(n: int) -> float | None:
+    """The default snapping step [decades] for ``n`` training samples: None (no snapping) for n <= ``SNAP_MIN_N``,
+    ``SIGMA_STEP_DECADES * max(1, n / 200)`` up to ``SIGMA_STEP_MAX`` above. An eigendecomposition costs O(n^3)
+    and the swarm visits about 1/step grid points, so the tuning's eigendecompositions cost about n^2 (as its
+    O(n^2) evaluations per candidate) instead of n^3."""
+    if n <= SNAP_MIN_N:
+        return None
+    return min(SIGMA_STEP_MAX, SIGMA_STEP_DECADES * max(1.0, n / 200.0))
 
 
 def snap_sigmas(sigmas, step_decades: float, low: float, high: float) -> np.ndarray:
@@ -269,7 +283,7 @@ def tune_lssvr(
     rng=None,
     callback=None,
     sample_weight=None,
-    sigma_step: float | None = SIGMA_STEP_DECADES,
+    sigma_step: float | str | None = "auto",
 ) -> TuningResult:
     """Tune (gamma, sigma) of an RBF LSSVR on scaled inputs ``X`` (n, d) and targets ``y`` (n,).
 
@@ -277,15 +291,20 @@ def tune_lssvr(
     10 chaos steps); ``"pso"`` the same swarm with the chaos search off; ``"grid"`` a ``grid_size`` x
     ``grid_size`` log grid over ``bounds``. ``callback(intermediate_result)`` is passed to the optimiser
     (called once per iteration); ``rng`` seeds the swarm; ``sample_weight`` weights the LSSVMs and the
-    fitness (``make_objective``). ``sigma_step`` (decades; None: off): for more than ``SNAP_MIN_N`` samples the
-    swarm's sigmas are snapped onto a log grid of that step anchored at the lower sigma bound, and the tuned sigma
-    is the snapped one (module docstring, "Snapped sigmas"); not for ``"grid"`` or ``"kfold_mae"``.
+    fitness (``make_objective``). ``sigma_step`` (decades; ``"auto"``: :func:`sigma_step_for`; None: off): for
+    more than ``SNAP_MIN_N`` samples the swarm's sigmas are snapped onto a log grid of that step anchored at the
+    lower sigma bound, and the tuned sigma is the snapped one (module docstring, "Snapped sigmas"); not for
+    ``"grid"`` or ``"kfold_mae"``.
     """
     if method not in METHODS:
         raise OptionError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
     bounds = check_bounds(bounds)
-    if sigma_step is not None and not (isinstance(sigma_step, (int, float)) and 0 < sigma_step < math.inf):
-        raise OptionError(f"sigma_step must be a finite number of decades > 0 or None, got {sigma_step!r}")
+    if sigma_step == "auto":
+        sigma_step = sigma_step_for(len(y))
+    elif sigma_step is not None and not (
+        isinstance(sigma_step, (int, float)) and not isinstance(sigma_step, bool) and 0 < sigma_step < math.inf
+    ):
+        raise OptionError(f"sigma_step must be 'auto', a finite number of decades > 0 or None, got {sigma_step!r}")
     threads = os.cpu_count() or 1  # module docstring: "BLAS threads"
     snap = (
         (float(sigma_step), *bounds[1])
