@@ -343,3 +343,26 @@ def test_the_spread_likelihood_search_is_scikit_learns(n_inputs):
         fitted = GaussianProcessRegressor(kernel, alpha=noise, n_restarts_optimizer=2, random_state=0).fit(Z, y)
     ours = _maximise_likelihood(kernel, Z, y, noise, 2, 0)
     np.testing.assert_allclose(ours, fitted.kernel_.theta, atol=1e-4)
+
+
+def test_the_spread_prediction_is_scikit_learns_at_the_same_hyperparameters():
+    """SpreadGP's own predictive mean, 1-sigma and LOO 1-sigma (issue 20: no GaussianProcessRegressor, whose fit
+    factorises twice) equal scikit-learn's GP at the fitted hyperparameters, near and far from the runs."""
+    from sklearn.gaussian_process import GaussianProcessRegressor
+
+    from gyrodrift.spread import SpreadGP, _kernel
+
+    rng = np.random.default_rng(7)
+    Z = rng.normal(size=(40, 2))
+    y = np.sin(Z[:, 0]) + 0.1 * rng.normal(size=40)
+    s = rng.uniform(0.0, 0.05, 40)
+    gp = SpreadGP().fit(Z, y, s)
+    ref = GaussianProcessRegressor(
+        _kernel(2).clone_with_theta(gp.theta_), alpha=(s / gp.y_scale_) ** 2 + 1e-10, optimizer=None
+    ).fit(gp._z(Z), (y - gp.y_mean_) / gp.y_scale_)
+    new = np.vstack([3.0 * rng.normal(size=(30, 2)), Z[:5]])
+    mean, std = ref.predict(gp._z(new), return_std=True)
+    np.testing.assert_allclose(gp.predict_std(new), gp.y_scale_ * std, rtol=1e-9)
+    np.testing.assert_allclose(gp.predict_mean(new), gp.y_mean_ + gp.y_scale_ * mean, rtol=0, atol=1e-9 * gp.y_scale_)
+    loo = gp.y_scale_ / np.sqrt(np.diag(np.linalg.inv(ref.L_ @ ref.L_.T)))
+    np.testing.assert_allclose(gp.loo_std_, loo, rtol=1e-8)

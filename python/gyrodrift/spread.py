@@ -2,8 +2,8 @@
 
 The drift model's point estimate is the LSSVR's (`gyrodrift.model`); its interval needs, for every run, how
 far that estimate may be from the run's drift. `SpreadGP` models the LSSVR's target (the drift, or a hybrid's
-label minus physics) over the model's scaled inputs as a Gaussian process (scikit-learn
-``GaussianProcessRegressor``)::
+label minus physics) over the model's scaled inputs as a Gaussian process (scikit-learn's kernels; the likelihood,
+its search and the prediction computed here, as ``GaussianProcessRegressor`` computes them)::
 
     y_i = b + beta'z_i + g(z_i) + u_i + n_i,
     b ~ N(0, c0), beta ~ N(0, sd(y)^2 I), g ~ GP(0, c1 RBF(l_1 .. l_d)), u_i ~ N(0, tau^2), n_i ~ N(0, s_i^2)
@@ -56,10 +56,10 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy import stats
-from scipy.linalg import cho_solve, cholesky
+from scipy.linalg import cho_solve, cholesky, solve_triangular
 from scipy.optimize import minimize
+from scipy.spatial.distance import cdist
 from sklearn.exceptions import ConvergenceWarning
-from sklearn.gaussian_process import GaussianProcessRegressor
 from sklearn.gaussian_process.kernels import RBF, ConstantKernel, DotProduct, WhiteKernel
 from threadpoolctl import threadpool_limits
 
@@ -117,6 +117,16 @@ def _neg_log_likelihood(theta: np.ndarray, Z: np.ndarray, sqd: np.ndarray, y: np
     return -lml, -0.5 * grad
 
 
+def _cross_kernel(theta: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """``_kernel``'s covariance between the rows of ``A`` and ``B`` (standardised inputs) at log hyperparameters
+    ``theta``, without the run-to-run term (``WhiteKernel``: on the diagonal of the training covariance only):
+    ``c0 + c1 exp(-|a - b|^2_l / 2) + a'b``, the distances as scikit-learn's RBF takes them (``cdist`` of the
+    inputs over their length scales)."""
+    c0, c1 = math.exp(theta[0]), math.exp(theta[1])
+    length = np.exp(theta[2:-1])
+    return c0 + c1 * np.exp(-0.5 * cdist(A / length, B / length, "sqeuclidean")) + A @ B.T
+
+
 def _maximise_likelihood(kernel, Z: np.ndarray, y: np.ndarray, noise: np.ndarray, n_restarts: int, seed: int):
     """ML-II log hyperparameters of ``kernel`` (``_kernel``'s form) on standardised inputs ``Z`` and targets
     ``y``: L-BFGS-B from the kernel's start and ``n_restarts`` uniform draws in the log bounds, the best kept, as
@@ -148,9 +158,14 @@ class SpreadGP:
 
     Attributes (after ``fit``)
     --------------------------
-    gp_ : GaussianProcessRegressor
+    kernel_ : scikit-learn kernel
+        The fitted kernel (``_kernel``'s form at ``theta_``; for its parts' values).
     theta_ : ndarray
-        The fitted log hyperparameters (``gp_.kernel_.theta``).
+        The fitted log hyperparameters (log c0, log c1, log l_1 .. l_d, log tau^2).
+    L_, alpha_ : ndarray
+        Lower Cholesky factor of the training covariance (noise included) and its solve with the standardised
+        targets: the predictive mean and variance (R&W 2006 algorithm 2.1) without scikit-learn's
+        ``GaussianProcessRegressor`` (whose fit computes the likelihood again: a second factorisation).
     loo_std_ : ndarray, shape (n_runs,)
         Leave-one-out predictive 1-sigma of each training label, label noise included [unit of y].
     """
@@ -187,14 +202,18 @@ class SpreadGP:
                 theta = _maximise_likelihood(kernel, Zs, ys, alpha, self.n_restarts, self.random_state)
             else:
                 theta = np.asarray(self.theta, float)
-            gp = GaussianProcessRegressor(kernel.clone_with_theta(theta), alpha=alpha, optimizer=None)
-            gp.fit(Zs, ys)
-        self.gp_ = gp
+            K = _cross_kernel(theta, Zs, Zs)
+            K[np.diag_indices(n)] += math.exp(theta[-1]) + alpha
+            self.L_ = cholesky(K, lower=True, check_finite=False)
+            self.alpha_ = cho_solve((self.L_, True), ys, check_finite=False)
+            if loo:
+                inv_diag = np.diag(cho_solve((self.L_, True), np.eye(n), check_finite=False))
+        self.kernel_ = kernel.clone_with_theta(theta)
+        self.Z_train_ = Zs
         self.n_runs_ = n
-        self.z_max_sq_ = float(np.max(np.sum(self._z(Z) ** 2, axis=1)))
-        self.theta_ = np.array(gp.kernel_.theta, float)
+        self.z_max_sq_ = float(np.max(np.sum(Zs**2, axis=1)))
+        self.theta_ = np.array(theta, float)
         if loo:
-            inv_diag = np.diag(cho_solve((gp.L_, True), np.eye(n)))
             self.loo_std_ = self.y_scale_ / np.sqrt(inv_diag)
         return self
 
@@ -206,25 +225,30 @@ class SpreadGP:
         (the run-to-run variation ``tau`` included)."""
         Z = np.asarray(Z, float)
         check_matrix_memory(len(Z), self.n_runs_, 3, "the interval's Gaussian process", unit="runs")
-        _, std = self.gp_.predict(self._z(Z), return_std=True)  # includes the WhiteKernel's tau^2
-        return self.y_scale_ * np.asarray(std, float)
+        Zs = self._z(Z)
+        c0, c1, tau2 = np.exp(self.theta_[[0, 1, -1]])
+        with threadpool_limits(limits=1, user_api="blas"):
+            V = solve_triangular(self.L_, _cross_kernel(self.theta_, self.Z_train_, Zs), lower=True, check_finite=False)
+        var = c0 + c1 + tau2 + np.sum(Zs**2, axis=1) - np.sum(V**2, axis=0)  # the prior includes tau^2
+        return self.y_scale_ * np.sqrt(np.maximum(var, 0.0))
 
     def prior_std(self) -> float:
         """The learned term's 1-sigma before any run, anywhere in the training runs' range [unit of y]: the
         constant, the RBF part, the run-to-run term and the linear trend at the training input farthest from their
         mean, ``y_scale sqrt(c0 + c1 + tau^2 + max_i |z_i|^2)`` (module docstring)."""
-        k = self.gp_.kernel_  # ((c0 + c1 RBF) + White) + 1 DotProduct, as `_kernel` builds it
+        k = self.kernel_  # ((c0 + c1 RBF) + White) + 1 DotProduct, as `_kernel` builds it
         c0, c1 = float(k.k1.k1.k1.constant_value), float(k.k1.k1.k2.k1.constant_value)
         tau2 = float(k.k1.k2.noise_level)
         return self.y_scale_ * math.sqrt(c0 + c1 + tau2 + self.z_max_sq_)
 
     def predict_mean(self, Z) -> np.ndarray:
         """The Gaussian process's predictive mean of the target at each row of ``Z`` [unit of y]."""
-        return self.y_mean_ + self.y_scale_ * np.asarray(self.gp_.predict(self._z(Z)), float)
+        mean = _cross_kernel(self.theta_, self._z(Z), self.Z_train_) @ self.alpha_
+        return self.y_mean_ + self.y_scale_ * mean
 
     def _part(self, kind):
         """The fitted kernel's component of type ``kind`` (the first one)."""
-        return next(v for v in self.gp_.kernel_.get_params().values() if isinstance(v, kind))
+        return next(v for v in self.kernel_.get_params().values() if isinstance(v, kind))
 
     def length_scales(self) -> np.ndarray:
         """The fitted RBF length scales [standard deviations of each training input]."""
