@@ -1,33 +1,144 @@
-"""Benchmark: wall time of ``gyrodrift reproduce`` (all methods, no report) on one core.
+"""Benchmark: wall time of ``gyrodrift reproduce`` and of its parts (issue 20's target: <= 5 s wall on 2 cores).
 
-Run: ``OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 python benchmarks/bench_reproduce.py``. Prints the time of the
-whole reproduction and, as the reference measured in the same run, the time of one paper-settings CPSO tuning
-run, with the ratio (the reproduction does 9 swarm runs, 3 grids and 9 fixed fits).
+Run: ``python benchmarks/bench_reproduce.py [--repeat 1]``. Prints, with the references measured in the same run:
+
+1. the command ``gyrodrift reproduce --out <tmp> --quiet`` (Python start-up and imports included), wall and CPU
+   of the child, beside ``python -c pass`` and ``python -c "import gyrodrift.reproduce"``;
+2. in this process: ``run_reproduction(seed=0)`` (24 drift models, 15 tunings, the 72 h navigations) as it is and
+   with the interval GP's hyperparameters searched as before issue 20's speed-up (scikit-learn's
+   ``GaussianProcessRegressor`` L-BFGS-B search, OpenBLAS's default threads), its ratio, and the largest relative
+   difference between the two results' numbers (timings left out); the report's figures (``make_figures``);
+3. one paper-settings CPSO tuning run (30 x 100, chaos 10), the reproduction's unit of work.
+
+Wall times depend on what else runs on the machine: the CPU times (``time.process_time`` / the child's rusage)
+say how much of a wall time was the work. Only reports.
 """
 
 from __future__ import annotations
 
+import argparse
+import contextlib
+import math
+import resource
+import subprocess
+import sys
+import tempfile
 import time
-
-from sklearn.preprocessing import StandardScaler
-
-from gyrodrift.datasets import load_paper
-from gyrodrift.encodings import encode
-from gyrodrift.reproduce import run_reproduction
-from gyrodrift.tuning import tune_lssvr
+from pathlib import Path
 
 
-def main():
+def child(cmd: list[str], cwd: Path) -> tuple[float, float]:
+    """Wall and CPU (user + system) seconds of a child process."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    done = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if done.returncode != 0:
+        print(f"   FAILED ({done.returncode}): {' '.join(cmd)}: {done.stderr.strip().splitlines()[-1:]}")
+    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+
+
+def timed(fn):
+    t0, c0 = time.perf_counter(), time.process_time()
+    out = fn()
+    return out, time.perf_counter() - t0, time.process_time() - c0
+
+
+def _numbers(x, path=""):
+    """(path, float) of every number in a results dict, timings left out."""
+    if isinstance(x, dict):
+        for k, v in x.items():
+            if not any(w in k for w in ("time", "seconds", "elapsed")):
+                yield from _numbers(v, f"{path}/{k}")
+    elif isinstance(x, list | tuple):
+        for i, v in enumerate(x):
+            yield from _numbers(v, f"{path}[{i}]")
+    elif isinstance(x, float) and math.isfinite(x):
+        yield path, x
+
+
+def worst_relative_difference(a: dict, b: dict) -> tuple[float, str, int]:
+    da, db = dict(_numbers(a)), dict(_numbers(b))
+    worst, where = 0.0, ""
+    for k, u in da.items():
+        v = db.get(k)
+        if v is None:
+            continue
+        d = abs(u - v) / max(abs(u), abs(v), 1e-300)
+        if d > worst:
+            worst, where = d, k
+    return worst, where, len(da)
+
+
+@contextlib.contextmanager
+def gp_search_as_before():
+    """The interval GP's hyperparameters searched by scikit-learn's GaussianProcessRegressor, default BLAS threads."""
+    from sklearn.gaussian_process import GaussianProcessRegressor
+
+    import gyrodrift.spread as spread
+
+    def search(kernel, Z, y, noise, n_restarts, seed):
+        gp = GaussianProcessRegressor(kernel, alpha=noise, n_restarts_optimizer=n_restarts, random_state=seed)
+        return gp.fit(Z, y).kernel_.theta
+
+    saved = spread._maximise_likelihood, spread.threadpool_limits
+    spread._maximise_likelihood = search
+    spread.threadpool_limits = lambda **_: contextlib.nullcontext()
+    try:
+        yield
+    finally:
+        spread._maximise_likelihood, spread.threadpool_limits = saved
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=1, help="repetitions of each measurement (best kept)")
+    args = parser.parse_args()
+    rep = max(1, args.repeat)
+
+    print("1. the command, wall / CPU [s]")
+    with tempfile.TemporaryDirectory(prefix="bench_reproduce_") as tmp:
+        d = Path(tmp)
+        runs = [child(["gyrodrift", "reproduce", "--out", f"out{i}", "--quiet"], d) for i in range(rep)]
+        wall, cpu = min(runs)
+        print(f"   gyrodrift reproduce --out DIR --quiet      : {wall:6.2f} / {cpu:6.2f}  (target <= 5 s wall)")
+        wall, cpu = min(child([sys.executable, "-c", "import gyrodrift.reproduce"], d) for _ in range(rep))
+        print(f"   python -c 'import gyrodrift.reproduce'     : {wall:6.2f} / {cpu:6.2f}")
+        wall, cpu = min(child([sys.executable, "-c", "pass"], d) for _ in range(rep))
+        print(f"   python -c pass                             : {wall:6.2f} / {cpu:6.2f}")
+
+    from gyrodrift.reproduce import run_reproduction
+
+    print("2. in this process, wall / CPU [s]")
+    run_reproduction(seed=0, quiet=True)  # warm: imports, caches
+    now = min((timed(lambda: run_reproduction(seed=0, quiet=True)) for _ in range(rep)), key=lambda r: r[1])
+    with gp_search_as_before():
+        old = min((timed(lambda: run_reproduction(seed=0, quiet=True)) for _ in range(rep)), key=lambda r: r[1])
+    print(f"   run_reproduction(seed=0)                   : {now[1]:6.2f} / {now[2]:6.2f}")
+    print(
+        f"   the same, the GP searched as before        : {old[1]:6.2f} / {old[2]:6.2f}  "
+        f"(now / before: wall {now[1] / old[1]:.2f}, CPU {now[2] / old[2]:.2f})"
+    )
+    worst, where, n = worst_relative_difference(now[0], old[0])
+    print(f"   largest relative difference of {n} numbers: {worst:.1e} ({where})")
+    from gyrodrift.report import make_figures
+
+    make_figures(now[0])  # warm: matplotlib's import and font cache
+    _, wall, cpu = min((timed(lambda: make_figures(now[0])) for _ in range(rep)), key=lambda r: r[1])
+    print(f"   the report's 4 figures (make_figures)      : {wall:6.2f} / {cpu:6.2f}")
+
+    from sklearn.preprocessing import StandardScaler
+
+    from gyrodrift.datasets import load_paper
+    from gyrodrift.encodings import encode
+    from gyrodrift.tuning import tune_lssvr
+
     data = load_paper()
     X = StandardScaler().fit_transform(encode(data.train, "temp_range"))
-    t0 = time.perf_counter()
-    tune_lssvr(X, data.train.drift_deg_h, objective="train_mae", rng=0)
-    one = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    run_reproduction(seed=0, quiet=True)
-    whole = time.perf_counter() - t0
-    print(f"one CPSO tuning run (30 x 100, chaos 10): {one:.2f} s")
-    print(f"whole reproduction (no report)         : {whole:.2f} s  ({whole / one:.1f} x one tuning run)")
+    _, wall, cpu = timed(lambda: tune_lssvr(X, data.train.drift_deg_h, objective="train_mae", rng=0))
+    print("3. reference")
+    print(f"   one CPSO tuning run (30 x 100, chaos 10)   : {wall:6.2f} / {cpu:6.2f}")
 
 
 if __name__ == "__main__":

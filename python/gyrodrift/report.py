@@ -73,6 +73,9 @@ REPORT_FILES = ("results.json", "report.md", "report.html") + tuple(f"{name}.png
 
 
 def _png(fig) -> bytes:
+    # tight_layout() leaves a placeholder layout engine, for which savefig draws the figure once more before
+    # drawing it (a layout pass that does nothing here): dropped, the same pixels ~10 % sooner
+    fig.set_layout_engine(None)
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=110)
     return buffer.getvalue()
