@@ -78,7 +78,8 @@ def gp_search_as_before():
 
     import gyrodrift.spread as spread
 
-    def search(kernel, Z, y, noise, n_restarts, seed):
+    def search(Z, y, noise, n_restarts, seed):
+        kernel = spread._kernel(Z.shape[1])
         gp = GaussianProcessRegressor(kernel, alpha=noise, n_restarts_optimizer=n_restarts, random_state=seed)
         return gp.fit(Z, y).kernel_.theta
 

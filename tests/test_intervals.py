@@ -323,7 +323,7 @@ def test_the_spread_likelihood_search_is_scikit_learns(n_inputs):
     and optimum (its GaussianProcessRegressor with fmin_l_bfgs_b, restarts included)."""
     from sklearn.gaussian_process import GaussianProcessRegressor
 
-    from gyrodrift.spread import _kernel, _maximise_likelihood, _neg_log_likelihood
+    from gyrodrift.spread import _kernel, _maximise_likelihood, _neg_log_likelihood, _start_and_bounds
 
     rng = np.random.default_rng(n_inputs)
     Z = rng.normal(size=(22, n_inputs))
@@ -341,7 +341,10 @@ def test_the_spread_likelihood_search_is_scikit_learns(n_inputs):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # scikit-learn's ConvergenceWarning at a bound
         fitted = GaussianProcessRegressor(kernel, alpha=noise, n_restarts_optimizer=2, random_state=0).fit(Z, y)
-    ours = _maximise_likelihood(kernel, Z, y, noise, 2, 0)
+    start, bounds = _start_and_bounds(n_inputs)
+    np.testing.assert_array_equal(start, kernel.theta)
+    np.testing.assert_array_equal(bounds, kernel.bounds)
+    ours = _maximise_likelihood(Z, y, noise, 2, 0)
     np.testing.assert_allclose(ours, fitted.kernel_.theta, atol=1e-4)
 
 

@@ -2,8 +2,8 @@
 
 The drift model's point estimate is the LSSVR's (`gyrodrift.model`); its interval needs, for every run, how
 far that estimate may be from the run's drift. `SpreadGP` models the LSSVR's target (the drift, or a hybrid's
-label minus physics) over the model's scaled inputs as a Gaussian process (scikit-learn's kernels; the likelihood,
-its search and the prediction computed here, as ``GaussianProcessRegressor`` computes them)::
+label minus physics) over the model's scaled inputs as a Gaussian process (the likelihood, its search and the
+prediction computed here as scikit-learn's ``GaussianProcessRegressor`` computes them for ``_kernel``'s kernel)::
 
     y_i = b + beta'z_i + g(z_i) + u_i + n_i,
     b ~ N(0, c0), beta ~ N(0, sd(y)^2 I), g ~ GP(0, c1 RBF(l_1 .. l_d)), u_i ~ N(0, tau^2), n_i ~ N(0, s_i^2)
@@ -51,7 +51,6 @@ robust root mean square:
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -59,8 +58,6 @@ from scipy import stats
 from scipy.linalg import cho_solve, cholesky, solve_triangular
 from scipy.optimize import minimize
 from scipy.spatial.distance import cdist
-from sklearn.exceptions import ConvergenceWarning
-from sklearn.gaussian_process.kernels import RBF, ConstantKernel, DotProduct, WhiteKernel
 from threadpoolctl import threadpool_limits
 
 from gyrodrift.errors import InputError
@@ -80,12 +77,24 @@ _JITTER = 1e-10
 
 
 def _kernel(n_inputs: int):
+    """The same covariance as scikit-learn's kernel, with the same start and bounds (for tests and benchmarks that
+    compare with ``GaussianProcessRegressor``; `SpreadGP` does not import scikit-learn's GP: ~0.1 s of a start)."""
+    from sklearn.gaussian_process.kernels import RBF, ConstantKernel, DotProduct, WhiteKernel
+
     return (
         ConstantKernel(1.0, _AMPLITUDE_BOUNDS)
         + ConstantKernel(1.0, _AMPLITUDE_BOUNDS) * RBF(np.ones(n_inputs), LENGTH_SCALE_BOUNDS)
         + WhiteKernel(0.1, _NOISE_BOUNDS)
         + ConstantKernel(1.0, "fixed") * DotProduct(0.0, "fixed")
     )
+
+
+def _start_and_bounds(n_inputs: int) -> tuple[np.ndarray, np.ndarray]:
+    """The likelihood search's start and bounds, log hyperparameters (log c0, log c1, log l_1 .. l_d, log tau^2):
+    c0 = c1 = 1, l = 1, tau^2 = 0.1 (the order and values of `_kernel`'s ``theta`` and ``bounds``)."""
+    start = np.log(np.r_[1.0, 1.0, np.ones(n_inputs), 0.1])
+    bounds = np.log(np.array([_AMPLITUDE_BOUNDS, _AMPLITUDE_BOUNDS, *[LENGTH_SCALE_BOUNDS] * n_inputs, _NOISE_BOUNDS]))
+    return start, bounds
 
 
 def _neg_log_likelihood(theta: np.ndarray, Z: np.ndarray, sqd: np.ndarray, y: np.ndarray, noise: np.ndarray):
@@ -127,14 +136,14 @@ def _cross_kernel(theta: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray
     return c0 + c1 * np.exp(-0.5 * cdist(A / length, B / length, "sqeuclidean")) + A @ B.T
 
 
-def _maximise_likelihood(kernel, Z: np.ndarray, y: np.ndarray, noise: np.ndarray, n_restarts: int, seed: int):
-    """ML-II log hyperparameters of ``kernel`` (``_kernel``'s form) on standardised inputs ``Z`` and targets
-    ``y``: L-BFGS-B from the kernel's start and ``n_restarts`` uniform draws in the log bounds, the best kept, as
+def _maximise_likelihood(Z: np.ndarray, y: np.ndarray, noise: np.ndarray, n_restarts: int, seed: int):
+    """ML-II log hyperparameters (`_start_and_bounds`) on standardised inputs ``Z`` and targets ``y``: L-BFGS-B
+    from `_start_and_bounds`'s start and ``n_restarts`` uniform draws in the log bounds, the best kept, as
     scikit-learn's ``GaussianProcessRegressor.fit`` with ``fmin_l_bfgs_b`` does (same start, bounds, draws and
     optimiser defaults) on `_neg_log_likelihood`, 20-30x faster on a few dozen runs."""
     sqd = (Z.T[:, :, None] - Z.T[:, None, :]) ** 2
-    bounds = kernel.bounds
-    starts = [kernel.theta]
+    start, bounds = _start_and_bounds(Z.shape[1])
+    starts = [start]
     rng = np.random.RandomState(seed)
     starts += [rng.uniform(bounds[:, 0], bounds[:, 1]) for _ in range(n_restarts)]
     results = [
@@ -158,8 +167,6 @@ class SpreadGP:
 
     Attributes (after ``fit``)
     --------------------------
-    kernel_ : scikit-learn kernel
-        The fitted kernel (``_kernel``'s form at ``theta_``; for its parts' values).
     theta_ : ndarray
         The fitted log hyperparameters (log c0, log c1, log l_1 .. l_d, log tau^2).
     L_, alpha_ : ndarray
@@ -192,14 +199,12 @@ class SpreadGP:
         self.y_mean_ = float(y.mean())
         self.y_scale_ = float(y.std()) or float(np.max(s)) or 1.0
         alpha = (s / self.y_scale_) ** 2 + _JITTER
-        kernel = _kernel(Z.shape[1])
         Zs, ys = self._z(Z), (y - self.y_mean_) / self.y_scale_
         # one BLAS thread (as `gyrodrift.tuning.tune_lssvr`): the likelihood search's small solves and L-BFGS-B's
         # vector operations waited on OpenBLAS's threads, 2-3x slower on a quiet 2-core machine, 10-50x loaded
-        with threadpool_limits(limits=1, user_api="blas"), warnings.catch_warnings():
-            warnings.simplefilter("ignore", ConvergenceWarning)  # a length scale at its upper bound: input irrelevant
+        with threadpool_limits(limits=1, user_api="blas"):
             if self.theta is None:
-                theta = _maximise_likelihood(kernel, Zs, ys, alpha, self.n_restarts, self.random_state)
+                theta = _maximise_likelihood(Zs, ys, alpha, self.n_restarts, self.random_state)
             else:
                 theta = np.asarray(self.theta, float)
             K = _cross_kernel(theta, Zs, Zs)
@@ -208,7 +213,6 @@ class SpreadGP:
             self.alpha_ = cho_solve((self.L_, True), ys, check_finite=False)
             if loo:
                 inv_diag = np.diag(cho_solve((self.L_, True), np.eye(n), check_finite=False))
-        self.kernel_ = kernel.clone_with_theta(theta)
         self.Z_train_ = Zs
         self.n_runs_ = n
         self.z_max_sq_ = float(np.max(np.sum(Zs**2, axis=1)))
@@ -236,9 +240,7 @@ class SpreadGP:
         """The learned term's 1-sigma before any run, anywhere in the training runs' range [unit of y]: the
         constant, the RBF part, the run-to-run term and the linear trend at the training input farthest from their
         mean, ``y_scale sqrt(c0 + c1 + tau^2 + max_i |z_i|^2)`` (module docstring)."""
-        k = self.kernel_  # ((c0 + c1 RBF) + White) + 1 DotProduct, as `_kernel` builds it
-        c0, c1 = float(k.k1.k1.k1.constant_value), float(k.k1.k1.k2.k1.constant_value)
-        tau2 = float(k.k1.k2.noise_level)
+        c0, c1, tau2 = (float(v) for v in np.exp(self.theta_[[0, 1, -1]]))
         return self.y_scale_ * math.sqrt(c0 + c1 + tau2 + self.z_max_sq_)
 
     def predict_mean(self, Z) -> np.ndarray:
@@ -246,17 +248,13 @@ class SpreadGP:
         mean = _cross_kernel(self.theta_, self._z(Z), self.Z_train_) @ self.alpha_
         return self.y_mean_ + self.y_scale_ * mean
 
-    def _part(self, kind):
-        """The fitted kernel's component of type ``kind`` (the first one)."""
-        return next(v for v in self.kernel_.get_params().values() if isinstance(v, kind))
-
     def length_scales(self) -> np.ndarray:
         """The fitted RBF length scales [standard deviations of each training input]."""
-        return np.atleast_1d(np.asarray(self._part(RBF).length_scale, float))
+        return np.exp(self.theta_[2:-1])
 
     def describe(self) -> str:
         """The fitted kernel in words (for reports)."""
-        tau = self.y_scale_ * np.sqrt(self._part(WhiteKernel).noise_level)
+        tau = self.y_scale_ * math.exp(0.5 * self.theta_[-1])
         return (
             f"RBF length scales {', '.join(f'{v:.3g}' for v in self.length_scales())} (input standard deviations), "
             f"unexplained run-to-run 1-sigma {tau:.2e} deg/h"
