@@ -1,7 +1,7 @@
 """Benchmark: what the learning side costs as the fleet grows (issue 20). Prints times and ratios; never fails.
 
-    python benchmarks/bench_learning_scale.py [--sizes 22,200,1000] [--tune-sizes 22,200] [--model-runs 1500]
-                                              [--no-cli]
+    python benchmarks/bench_learning_scale.py [--sizes 22,200,1000] [--tune-sizes 22,200] [--exact-max 200]
+                                              [--model-runs 1500] [--no-cli]
 
 1. **One LOO evaluation** of the tuner (closed-form LOO residuals of one (gamma, sigma) candidate) on ``n`` runs,
    per candidate, three ways in the same process: ``rbf_batch_errors`` with the BLAS's default threads (what the
@@ -9,8 +9,10 @@
    one ``RBFEigenSystem`` (a grid's column, particles on a sigma bound); with the largest relative difference of
    the eigen path from the Cholesky path.
 2. **One CPSO tuning run** with the paper's settings (30 particles x 100 iterations, 10 chaos steps, LOO MAE) on
-   ``--tune-sizes`` runs: wall time with one BLAS thread, and the ratio against the default threads measured on the
-   first 10 iterations of the same run (the default-thread run of 100 iterations takes minutes at 200 runs).
+   ``--tune-sizes`` runs: wall and CPU time with the sigmas snapped to a log grid (the default for n > 32,
+   ``gyrodrift.tuning.sigma_step_for``) and, up to ``--exact-max`` runs, the same seed unsnapped (as before): the
+   ratio and the tuned LOO MAE of both; for n <= 200 also the ratio of the default BLAS threads to one, measured on
+   the first 10 iterations (the default-thread run of 100 iterations takes minutes at 200 runs).
 3. **The CLI** (subprocesses, wall time including Python's start-up and imports): ``gyrodrift fit`` with defaults on
    the paper's 22 training runs and on ``--sizes`` synthetic runs; ``gyrodrift reproduce``; ``gyrodrift predict``
    and ``gyrodrift export`` with a model of ``--model-runs`` runs (fitted with a fixed ``--gamma 100 --sigma 0.7``
@@ -82,26 +84,44 @@ def loo_evaluation(sizes: list[int]) -> None:
         )
 
 
-def tuning_runs(sizes: list[int]) -> None:
-    print("2. one CPSO tuning run (30 x 100, chaos 10, loo_mae, seed 0)")
+def tuning_runs(sizes: list[int], exact_max: int) -> None:
+    print(
+        "2. one CPSO tuning run (30 x 100, chaos 10, loo_mae, seed 0): sigmas snapped (the default for n > 32, "
+        "tuning.sigma_step_for) against the same run unsnapped (sigma_step=None, as before); wall and CPU seconds"
+    )
     for n in sizes:
         X, y = scaled_inputs(n)
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         res = tune_lssvr(X, y, rng=0)
-        whole = time.perf_counter() - t0
-        t0 = time.perf_counter()
-        short_one = tune_lssvr(X, y, rng=0, max_iter=10)
-        one = time.perf_counter() - t0
-        with threadpool_limits(limits=None):  # tune_lssvr's own limit applies inside: measure the old code path
-            t0 = time.perf_counter()
-            short = _tune_default_threads(X, y, max_iter=10)
-            threads = time.perf_counter() - t0
-        same = (short.gamma, short.sigma) == (short_one.gamma, short_one.sigma)
+        whole, cpu = time.perf_counter() - t0, time.process_time() - c0
+        step = res.settings.get("sigma_step_decades")
         print(
-            f"   n = {n:5d}: {whole:7.2f} s, nfev {res.nfev}, {1e3 * whole / res.nfev:.3f} ms per evaluation; "
-            f"first 10 iterations: default threads {threads:.2f} s, one thread {one:.2f} s ({threads / one:.1f}x), "
-            f"same result: {same}"
+            f"   n = {n:5d}: snapped (step {step} decade): {whole:7.2f} s wall, {cpu:7.2f} s CPU, nfev {res.nfev}, "
+            f"gamma {res.gamma:.6g}, sigma {res.sigma:.6g}, LOO MAE {res.fitness:.6e}"
         )
+        if n <= exact_max:
+            t0, c0 = time.perf_counter(), time.process_time()
+            old = tune_lssvr(X, y, rng=0, sigma_step=None)
+            whole_old, cpu_old = time.perf_counter() - t0, time.process_time() - c0
+            print(
+                f"   {'':9s} unsnapped:            {whole_old:7.2f} s wall, {cpu_old:7.2f} s CPU, nfev {old.nfev}, "
+                f"gamma {old.gamma:.6g}, sigma {old.sigma:.6g}, LOO MAE {old.fitness:.6e}\n"
+                f"   {'':9s} unsnapped/snapped: {whole_old / whole:5.1f}x wall, {cpu_old / cpu:5.1f}x CPU; "
+                f"LOO MAE snapped/unsnapped - 1 = {res.fitness / old.fitness - 1:+.2e}"
+            )
+        if n <= 200:
+            t0 = time.perf_counter()
+            short_one = tune_lssvr(X, y, rng=0, max_iter=10, sigma_step=None)
+            one = time.perf_counter() - t0
+            with threadpool_limits(limits=None):  # tune_lssvr's own limit applies inside: measure the old code path
+                t0 = time.perf_counter()
+                short = _tune_default_threads(X, y, max_iter=10)
+                threads = time.perf_counter() - t0
+            same = (short.gamma, short.sigma) == (short_one.gamma, short_one.sigma)
+            print(
+                f"   {'':9s} first 10 iterations unsnapped: default BLAS threads {threads:.2f} s, one thread "
+                f"{one:.2f} s ({threads / one:.1f}x), same result: {same}"
+            )
 
 
 def _tune_default_threads(X, y, max_iter: int):
@@ -158,12 +178,15 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--sizes", default="22,200,1000", help="training runs, comma-separated (sections 1 and 3)")
     parser.add_argument("--tune-sizes", default="22,200", help="training runs of section 2, comma-separated")
+    parser.add_argument(
+        "--exact-max", type=int, default=200, help="largest n of section 2 also tuned unsnapped (minutes at 1000)"
+    )
     parser.add_argument("--model-runs", type=int, default=1500, help="training runs of the model predict/export load")
     parser.add_argument("--no-cli", action="store_true", help="skip section 3")
     args = parser.parse_args()
     sizes = [int(v) for v in args.sizes.split(",")]
     loo_evaluation(sizes)
-    tuning_runs([int(v) for v in args.tune_sizes.split(",") if v])
+    tuning_runs([int(v) for v in args.tune_sizes.split(",") if v], args.exact_max)
     if not args.no_cli:
         cli([n for n in sizes if n != 22], args.model_runs)
 

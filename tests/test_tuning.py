@@ -269,7 +269,11 @@ def test_snapping_leaves_small_sets_alone_and_reports_the_snapped_sigma(paper):
     from sklearn.preprocessing import StandardScaler
 
     from gyrodrift.encodings import encode
-    from gyrodrift.tuning import SNAP_MIN_N, snap_sigmas
+    from gyrodrift.tuning import SIGMA_STEP_DECADES, SIGMA_STEP_MAX, SNAP_MIN_N, sigma_step_for, snap_sigmas
+
+    steps = [sigma_step_for(n) for n in range(SNAP_MIN_N + 1, 3000)]
+    assert sigma_step_for(SNAP_MIN_N) is None and steps[0] == SIGMA_STEP_DECADES == sigma_step_for(200)
+    assert np.all(np.diff(steps) >= 0) and sigma_step_for(1000) == SIGMA_STEP_MAX == steps[-1]
 
     Xs = StandardScaler().fit_transform(encode(paper.train, "temp_range"))
     y = paper.train.drift_deg_h

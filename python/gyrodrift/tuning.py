@@ -176,11 +176,11 @@ sigma: 32 sigmas at n = 1000), and never more than half of the memory left besid
 
 SIGMA_STEP_DECADES = 0.01
 """Grid step, in decades, onto which the swarm's sigmas are snapped for ``SNAP_MIN_N`` < n <= 200 samples (a
-factor 1.023 in sigma); it grows as n / 200 above (0.05 at n = 1000), at most ``SIGMA_STEP_MAX``
-(:func:`sigma_step_for`). See the module docstring ("Snapped sigmas")."""
+factor 1.023 in sigma); it grows linearly to ``SIGMA_STEP_MAX`` at 1000 samples (:func:`sigma_step_for`). See the
+module docstring ("Snapped sigmas")."""
 
 SIGMA_STEP_MAX = 0.1
-"""Coarsest snapping step, in decades (a factor 1.26 in sigma), reached at n = 2000."""
+"""Coarsest snapping step, in decades (a factor 1.26 in sigma), from n = 1000 samples on."""
 
 SNAP_MIN_N = _STACKED_MAX_N
 """Sigmas are snapped only for more training samples than this (the paper's 22 runs keep the swarm of before)."""
@@ -200,12 +200,14 @@ def _fit_in_memory(n: int, threads: int) -> tuple[int, int]:
 
 def sigma_step_for(n: int) -> float | None:
     """The default snapping step [decades] for ``n`` training samples: None (no snapping) for n <= ``SNAP_MIN_N``,
-    ``SIGMA_STEP_DECADES * max(1, n / 200)`` up to ``SIGMA_STEP_MAX`` above. An eigendecomposition costs O(n^3)
-    and the swarm visits about 1/step grid points, so the tuning's eigendecompositions cost about n^2 (as its
-    O(n^2) evaluations per candidate) instead of n^3."""
+    ``SIGMA_STEP_DECADES`` up to 200 samples, linear from there to ``SIGMA_STEP_MAX`` at 1000 and that above. An
+    eigendecomposition costs O(n^3) and the swarm comes back to fewer grid points of a coarser grid: at 200 samples
+    one costs about 2 Cholesky factorisations and a fine grid is nearly free, at 1000 about 5 and the grid's
+    coarseness halves the tuning's cost (module docstring, "Snapped sigmas")."""
     if n <= SNAP_MIN_N:
         return None
-    return min(SIGMA_STEP_MAX, SIGMA_STEP_DECADES * max(1.0, n / 200.0))
+    fraction = min(1.0, max(0.0, (n - 200.0) / 800.0))
+    return SIGMA_STEP_DECADES + fraction * (SIGMA_STEP_MAX - SIGMA_STEP_DECADES)
 
 
 def snap_sigmas(sigmas, step_decades: float, low: float, high: float) -> np.ndarray:
