@@ -24,6 +24,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import warnings
 from pathlib import Path
 
 
@@ -74,6 +75,7 @@ def worst_relative_difference(a: dict, b: dict) -> tuple[float, str, int]:
 @contextlib.contextmanager
 def gp_search_as_before():
     """The interval GP's hyperparameters searched by scikit-learn's GaussianProcessRegressor, default BLAS threads."""
+    from sklearn.exceptions import ConvergenceWarning
     from sklearn.gaussian_process import GaussianProcessRegressor
 
     import gyrodrift.spread as spread
@@ -87,7 +89,9 @@ def gp_search_as_before():
     spread._maximise_likelihood = search
     spread.threadpool_limits = lambda **_: contextlib.nullcontext()
     try:
-        yield
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ConvergenceWarning)  # as SpreadGP did then: a length scale at its bound
+            yield
     finally:
         spread._maximise_likelihood, spread.threadpool_limits = saved
 
