@@ -95,8 +95,9 @@ def tuning_runs(sizes: list[int], exact_max: int) -> None:
         res = tune_lssvr(X, y, rng=0)
         whole, cpu = time.perf_counter() - t0, time.process_time() - c0
         step = res.settings.get("sigma_step_decades")
+        how = "off, n <= 32" if step is None else f"step {step:g} decade"
         print(
-            f"   n = {n:5d}: snapped (step {step} decade): {whole:7.2f} s wall, {cpu:7.2f} s CPU, nfev {res.nfev}, "
+            f"   n = {n:5d}: snapped ({how}): {whole:7.2f} s wall, {cpu:7.2f} s CPU, nfev {res.nfev}, "
             f"gamma {res.gamma:.6g}, sigma {res.sigma:.6g}, LOO MAE {res.fitness:.6e}"
         )
         if n <= exact_max:

@@ -419,7 +419,8 @@ def rbf_batch_errors(
     cache : EigenCache, optional
         For n > 32, the eigendecompositions of recently used sigmas of this training set (``EigenCache(sqdist,
         weights)``, kept across calls): a candidate on a cached sigma costs O(n^2) (a swarm whose particles sit on
-        a sigma bound asks for that sigma every iteration).
+        a sigma bound asks for that sigma every iteration, a swarm whose sigmas are snapped to a grid comes back to
+        its grid points); a sigma the cache saw in an earlier call is decomposed and kept (``EigenCache.wants``).
 
     Returns
     -------
