@@ -24,7 +24,7 @@ from gyrodrift.errors import InputError
 from gyrodrift.fleet_prior import drift_with_coefficient_prior, pooled_coefficient_prior
 from gyrodrift.model import fit_drift_model
 from gyrodrift.model_io import load_model, save_model
-from gyrodrift.runs import RunTable
+from gyrodrift.runs import RunTable, RunTableError
 
 CC = shutil.which("cc")
 CARGO = shutil.which("cargo")
@@ -192,15 +192,20 @@ def fleet():
 def test_the_reference_is_the_models_prediction(fleet):
     """`DriftModel.predict` gives the bits the generated code is checked against, on every row: the LSSVR's
     compensated sum with `drift_with_coefficient_prior` of the row and the model's fleet prior as offset. A row
-    with some but not all k_z inputs (edge rows here) passes through as the constant model there, as in the
-    generated code, whose `in_range` is false on it (neither of the smoother's models writes such a row)."""
+    with some but not all k_z inputs (edge rows here; neither of the smoother's models writes one) is refused by
+    `predict`, naming it; the generated code takes it as the constant model and says `in_range` false."""
     model, rows, exp = fleet
-    with np.errstate(over="ignore"):  # a k_z 1-sigma squaring to inf (an edge row)
-        np.testing.assert_array_equal(_bits(model.predict(rows)), _bits(exp["pred"]))
     kz = np.column_stack([rows.column(name) for name in KZ])
-    partial = ~exp["thermal"] & np.isfinite(kz).any(axis=1)
+    present = np.isfinite(kz)
+    partial = present.any(axis=1) & ~present.all(axis=1)  # runs.check_smoother_thermal's rule
+    whole = ~partial
+    with np.errstate(over="ignore"):  # a k_z 1-sigma squaring to inf (an edge row)
+        np.testing.assert_array_equal(_bits(model.predict(rows.select(whole))), _bits(exp["pred"][whole]))
     assert 0 < partial.sum() < 60 and not exp["inside"][partial].any()
     assert np.array_equal(exp["base"][partial], rows.column("drift_smoother_deg_h")[partial])
+    first = int(np.flatnonzero(partial)[0])
+    with pytest.raises(RunTableError, match=f"{rows.run[first]} \\(missing"):
+        model.predict(rows.select(partial))
 
 
 def test_auto_exports_the_base_it_resolved_to_and_the_model_file_keeps_it(fleet, tmp_path):
