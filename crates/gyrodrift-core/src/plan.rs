@@ -28,7 +28,9 @@
 use crate::attitude::{euler_to_dcm, mat_mul, rot_z, Euler, Mat3};
 use crate::error::{check, CoreError};
 use crate::kalman::EPS;
-use crate::smoother::{initial_sigma, measurement_model, symmetrise, Model, SmootherConfig, POS};
+use crate::smoother::{
+    check_free_navigation, initial_sigma, measurement_model, symmetrise, FreeNavigation, Model, SmootherConfig, POS,
+};
 use crate::turntable::{RotationScheme, Turntable};
 use nalgebra::{DMatrix, DVector};
 
@@ -207,36 +209,17 @@ pub struct MissionCovariance {
 
 /// The north/east position error after `span_s` of free navigation (module docs).
 pub fn mission_covariance(cfg: &MissionConfig) -> Result<MissionCovariance, CoreError> {
-    use crate::error::{all_in_range, in_range, Unit, DEG_PER_RTH, MICRO_G_PER_RTHZ};
-    crate::limits::check_site(cfg.lat, 0.0, cfg.height, 1.0)?;
-    let s = Unit::Si("s");
-    in_range("span_s", "span", cfg.span_s, 60.0, 1e7, s)?;
-    in_range("step_s", "propagation step", cfg.step_s, 1.0, cfg.span_s, s)?;
-    in_range(
-        "gyro_arw_rad_rts",
-        "angle random walk",
-        cfg.gyro_arw,
-        0.0,
-        0.1,
-        DEG_PER_RTH,
-    )?;
-    in_range(
-        "accel_vrw_m_s_rts",
-        "velocity random walk",
-        cfg.accel_vrw,
-        0.0,
-        1.0,
-        MICRO_G_PER_RTHZ,
-    )?;
-    all_in_range("att_sigma_rad", "attitude sigma", &cfg.att_sigma, 0.0, 0.2, Unit::Deg)?;
-    in_range(
-        "vel_sigma_m_s",
-        "velocity sigma",
-        cfg.vel_sigma,
-        0.0,
-        10.0,
-        Unit::Si("m/s"),
-    )?;
+    check_free_navigation(&FreeNavigation {
+        lat: cfg.lat,
+        height: cfg.height,
+        span_s: cfg.span_s,
+        step_s: cfg.step_s,
+        step_what: "propagation step",
+        gyro_arw: cfg.gyro_arw,
+        accel_vrw: cfg.accel_vrw,
+        att_sigma: cfg.att_sigma,
+        vel_sigma: cfg.vel_sigma,
+    })?;
     let mut sc = SmootherConfig::new(cfg.lat, 0.0, cfg.height, 1.0);
     sc.gyro_arw = cfg.gyro_arw;
     sc.accel_vrw = cfg.accel_vrw;

@@ -150,7 +150,7 @@ impl SmootherConfig {
 
     /// Range checks; errors name the key.
     pub fn validate(&self) -> Result<(), CoreError> {
-        use crate::error::{all_positive_at_most, in_range, sig, Unit, DEG_H_PER_RTH};
+        use crate::error::{all_positive_at_most, in_range, sig, Unit};
         check_site(self.lat, self.lon, self.height, self.rate_hz)?;
         // The aligner's checks of the shared settings (one set of limits).
         self.aligner_config().validate()?;
@@ -166,29 +166,7 @@ impl SmootherConfig {
             "the smoother needs positive noise densities (model a noise-free log with small ones)",
         )?;
         in_range("span_s", "span", self.span_s, self.coarse_s + self.update_s, 1e6, s)?;
-        in_range(
-            "gyro_bias_instability_rad_s",
-            "bias instability",
-            self.gyro_bias_instability,
-            0.0,
-            0.1,
-            Unit::DegPerH,
-        )?;
-        all_positive_at_most(
-            "gyro_correlation_s",
-            "correlation time",
-            &[self.gyro_correlation],
-            1e9,
-            s,
-        )?;
-        in_range(
-            "gyro_rrw_rad_s_rts",
-            "rate random walk",
-            self.gyro_rrw,
-            0.0,
-            0.1,
-            DEG_H_PER_RTH,
-        )?;
+        check_slow_bias(self.gyro_bias_instability, self.gyro_correlation, self.gyro_rrw)?;
         all_positive_at_most(
             "position_sigma_m",
             "position sigma",
@@ -1038,6 +1016,76 @@ impl LabelConfig {
     }
 }
 
+/// The z gyro's slow bias terms (Gauss-Markov 1-sigma [rad/s] and correlation time \[s\], rate random walk
+/// [rad/s/sqrt(s)]): one set of limits for the smoother, the label's sigma and the planner.
+pub(crate) fn check_slow_bias(instability: f64, correlation: f64, rrw: f64) -> Result<(), CoreError> {
+    use crate::error::{all_positive_at_most, in_range, Unit, DEG_H_PER_RTH};
+    in_range(
+        "gyro_bias_instability_rad_s",
+        "bias instability",
+        instability,
+        0.0,
+        0.1,
+        Unit::DegPerH,
+    )?;
+    all_positive_at_most(
+        "gyro_correlation_s",
+        "correlation time",
+        &[correlation],
+        1e9,
+        Unit::Si("s"),
+    )?;
+    in_range("gyro_rrw_rad_s_rts", "rate random walk", rrw, 0.0, 0.1, DEG_H_PER_RTH)
+}
+
+/// A free navigation propagated by covariance alone ([`label_sigma`], the planner's mission): the settings both
+/// check with one set of limits (SI; `step_what` names the step in the message).
+pub(crate) struct FreeNavigation<'a> {
+    pub lat: f64,
+    pub height: f64,
+    pub span_s: f64,
+    pub step_s: f64,
+    pub step_what: &'a str,
+    pub gyro_arw: f64,
+    pub accel_vrw: f64,
+    pub att_sigma: [f64; 3],
+    pub vel_sigma: f64,
+}
+
+/// Range checks of a [`FreeNavigation`]; errors name the key.
+pub(crate) fn check_free_navigation(f: &FreeNavigation) -> Result<(), CoreError> {
+    use crate::error::{all_in_range, in_range, Unit, DEG_PER_RTH, MICRO_G_PER_RTHZ};
+    check_site(f.lat, 0.0, f.height, 1.0)?;
+    let s = Unit::Si("s");
+    in_range("span_s", "span", f.span_s, 60.0, 1e7, s)?;
+    in_range("step_s", f.step_what, f.step_s, 1.0, f.span_s, s)?;
+    in_range(
+        "gyro_arw_rad_rts",
+        "angle random walk",
+        f.gyro_arw,
+        0.0,
+        0.1,
+        DEG_PER_RTH,
+    )?;
+    in_range(
+        "accel_vrw_m_s_rts",
+        "velocity random walk",
+        f.accel_vrw,
+        0.0,
+        1.0,
+        MICRO_G_PER_RTHZ,
+    )?;
+    all_in_range("att_sigma_rad", "attitude sigma", &f.att_sigma, 0.0, 0.2, Unit::Deg)?;
+    in_range(
+        "vel_sigma_m_s",
+        "velocity sigma",
+        f.vel_sigma,
+        0.0,
+        10.0,
+        Unit::Si("m/s"),
+    )
+}
+
 /// The label's uncertainty ([`label_sigma`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LabelSigma {
@@ -1065,61 +1113,20 @@ pub struct LabelSigma {
 /// heading error and its z-bias estimate are correlated). With white noise only, `final`, and T >> the Schuler
 /// period this is close to sqrt(1.5 T) N / |g(T)| (N the ARW; tests/test_label_flags_and_noise.py derives it).
 pub fn label_sigma(cfg: &LabelConfig) -> Result<LabelSigma, CoreError> {
-    use crate::error::{
-        all_in_range, all_positive_at_most, in_range, Unit, DEG_H_PER_RTH, DEG_PER_RTH, MICRO_G_PER_RTHZ,
-    };
-    check_site(cfg.lat, 0.0, cfg.height, 1.0)?;
+    use crate::error::{in_range, Unit};
+    check_free_navigation(&FreeNavigation {
+        lat: cfg.lat,
+        height: cfg.height,
+        span_s: cfg.span_s,
+        step_s: cfg.step_s,
+        step_what: "curve interval",
+        gyro_arw: cfg.gyro_arw,
+        accel_vrw: cfg.accel_vrw,
+        att_sigma: cfg.att_sigma,
+        vel_sigma: cfg.vel_sigma,
+    })?;
     let s = Unit::Si("s");
-    in_range("span_s", "span", cfg.span_s, 60.0, 1e7, s)?;
-    in_range("step_s", "curve interval", cfg.step_s, 1.0, cfg.span_s, s)?;
-    in_range(
-        "gyro_arw_rad_rts",
-        "angle random walk",
-        cfg.gyro_arw,
-        0.0,
-        0.1,
-        DEG_PER_RTH,
-    )?;
-    in_range(
-        "accel_vrw_m_s_rts",
-        "velocity random walk",
-        cfg.accel_vrw,
-        0.0,
-        1.0,
-        MICRO_G_PER_RTHZ,
-    )?;
-    all_in_range("att_sigma_rad", "attitude sigma", &cfg.att_sigma, 0.0, 0.2, Unit::Deg)?;
-    in_range(
-        "vel_sigma_m_s",
-        "velocity sigma",
-        cfg.vel_sigma,
-        0.0,
-        10.0,
-        Unit::Si("m/s"),
-    )?;
-    in_range(
-        "gyro_bias_instability_rad_s",
-        "bias instability",
-        cfg.gyro_bias_instability,
-        0.0,
-        0.1,
-        Unit::DegPerH,
-    )?;
-    all_positive_at_most(
-        "gyro_correlation_s",
-        "correlation time",
-        &[cfg.gyro_correlation],
-        1e9,
-        s,
-    )?;
-    in_range(
-        "gyro_rrw_rad_s_rts",
-        "rate random walk",
-        cfg.gyro_rrw,
-        0.0,
-        0.1,
-        DEG_H_PER_RTH,
-    )?;
+    check_slow_bias(cfg.gyro_bias_instability, cfg.gyro_correlation, cfg.gyro_rrw)?;
     in_range("rrw_start_s", "random-walk start", cfg.rrw_start_s, 0.0, 1e7, s)?;
     let mut sc = SmootherConfig::new(cfg.lat, 0.0, cfg.height, 1.0);
     sc.gyro_arw = cfg.gyro_arw;
