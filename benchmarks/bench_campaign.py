@@ -43,7 +43,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gyrodrift.campaign import STAGES, Campaign, parse_campaign, process_run, read_runs, run_campaign
+from gyrodrift.fleet.campaign import STAGES, Campaign, parse_campaign, process_run, read_runs, run_campaign
 
 VOLATILE = {"worker"} | {f"{k}_{s}_s" for k in ("t", "cpu") for s in (*STAGES, "total")}
 KINDS = ("sim_noisy", "sim_clean", "navigator", "aligner", "smoother", "smoother_backward")
@@ -154,7 +154,7 @@ class CoreMeter:
 def core_rates(campaign, meter: CoreMeter) -> dict[str, float]:
     """Samples per CPU second inside the core per kind (the smoother's backward pass: CPU seconds per call),
     best of 3 on the campaign's first scenario (8 h of navigation)."""
-    from gyrodrift.campaign import _noise_model, _timeline
+    from gyrodrift.fleet.campaign import _noise_model, _timeline
     from gyrodrift.logs import ImuLog
     from gyrodrift.procedure import align_log, navigate_after_alignment
     from gyrodrift.procedure.smoother import smooth_log
@@ -217,7 +217,7 @@ def profile(campaign_path: str, n_runs: int, meter: CoreMeter) -> dict:
 def compare(a: list[dict], b: list[dict]) -> dict:
     """Largest differences between two paths' rows: drifts [deg/h], error curves [nmi] within 0.002 deg/h of
     the truth, and whether every other scalar is identical."""
-    from gyrodrift.campaign import CURVE_COLUMNS, CampaignRuns
+    from gyrodrift.fleet.campaign import CURVE_COLUMNS, CampaignRuns
 
     out = {"drift": 0.0, "effective": 0.0, "curves_nmi": 0.0}
     identical = True
@@ -237,7 +237,7 @@ def compare(a: list[dict], b: list[dict]) -> dict:
 def cluster(campaign, n_runs: int, warm) -> dict:
     """`n_runs` of `campaign` on a LocalCluster of 1 then 2 workers; each worker first processes run 0 of the
     short campaign `warm` (its first run imports the procedure's modules: about 1.3 s of CPU) before the clock."""
-    from gyrodrift.cluster import dask_client
+    from gyrodrift.fleet.cluster import dask_client
 
     out: dict = {}
     folders = {}
@@ -276,7 +276,7 @@ def cluster(campaign, n_runs: int, warm) -> dict:
 _MEMORY_CHILD = """
 import json, sys, threading, time, tomllib
 import psutil
-from gyrodrift.campaign import parse_campaign, process_run
+from gyrodrift.fleet.campaign import parse_campaign, process_run
 data = tomllib.loads(open(sys.argv[1]).read())
 h = float(sys.argv[2])
 data.setdefault("options", {})["truth_h"] = h

@@ -18,7 +18,7 @@ import time
 import numpy as np
 from scipy import stats
 
-from gyrodrift.cpso import minimize_cpso
+from gyrodrift.learn.cpso import minimize_cpso
 from gyrodrift.testing import ackley, griewank, rastrigin, rosenbrock, sphere
 
 PROBLEMS = [  # (name, function, half-width of the symmetric box)

@@ -10,7 +10,7 @@
    the eigen path from the Cholesky path.
 2. **One CPSO tuning run** with the paper's settings (30 particles x 100 iterations, 10 chaos steps, LOO MAE) on
    ``--tune-sizes`` runs: wall and CPU time with the sigmas snapped to a log grid (the default for n > 32,
-   ``gyrodrift.tuning.sigma_step_for``) and, up to ``--exact-max`` runs, the same seed unsnapped (as before): the
+   ``gyrodrift.learn.tuning.sigma_step_for``) and, up to ``--exact-max`` runs, the same seed unsnapped (as before): the
    ratio and the tuned LOO MAE of both; for n <= 200 also the ratio of the default BLAS threads to one, measured on
    the first 10 iterations (the default-thread run of 100 iterations takes minutes at 200 runs).
 3. **The CLI** (subprocesses, wall time including Python's start-up and imports): ``gyrodrift fit`` with defaults on
@@ -38,10 +38,10 @@ import numpy as np
 from sklearn.preprocessing import StandardScaler
 from threadpoolctl import threadpool_limits
 
-from gyrodrift.encodings import encode
-from gyrodrift.kernels import squared_distances
-from gyrodrift.lssvr import RBFEigenSystem, rbf_batch_errors
-from gyrodrift.tuning import tune_lssvr
+from gyrodrift.learn.encodings import encode
+from gyrodrift.learn.kernels import squared_distances
+from gyrodrift.learn.lssvr import RBFEigenSystem, rbf_batch_errors
+from gyrodrift.learn.tuning import tune_lssvr
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_predict import synthetic_runs
@@ -127,8 +127,8 @@ def tuning_runs(sizes: list[int], exact_max: int) -> None:
 
 def _tune_default_threads(X, y, max_iter: int):
     """The tuning run as before the one-thread limit: the same objective and swarm, the BLAS's own threads."""
-    from gyrodrift.cpso import minimize_cpso
-    from gyrodrift.tuning import DEFAULT_BOUNDS, TuningResult, make_objective
+    from gyrodrift.learn.cpso import minimize_cpso
+    from gyrodrift.learn.tuning import DEFAULT_BOUNDS, TuningResult, make_objective
 
     fun = make_objective(X, y, "loo_mae")
     r = minimize_cpso(fun, DEFAULT_BOUNDS, max_iter=max_iter, chaos_steps=10, log_scale=True, vectorized=True, rng=0)
@@ -145,8 +145,8 @@ def wall(cmd: list[str], cwd: Path) -> float:
 
 
 def cli(sizes: list[int], model_runs: int) -> None:
-    from gyrodrift.datasets import load_paper
-    from gyrodrift.model_io import load_model
+    from gyrodrift.learn.model_io import load_model
+    from gyrodrift.runs.datasets import load_paper
 
     print("3. the CLI, wall time [s] (Python start-up and imports included)")
     with tempfile.TemporaryDirectory(prefix="bench_learning_scale_") as tmp:

@@ -4,7 +4,7 @@
 
 `DriftModel.predict` computes each kernel value with the operations of the exported C/Rust (distances summed over
 the features in order, the C library's ``exp`` through ``math.exp``) and sums ``b + sum_i alpha_i K_i + physics``
-with TwoSum in support-vector order (`gyrodrift.lssvr`, "prediction arithmetic"). The reference, in the same run:
+with TwoSum in support-vector order (`gyrodrift.learn.lssvr`, "prediction arithmetic"). The reference, in the same run:
 the same pipeline with numpy's kernel (scipy's distances, numpy's SIMD ``exp``) summed by BLAS, ``K @ alpha + b +
 physics``, which is what predict did before. Models: hybrids with encoding ``physics`` and the default
 ``physics_column="auto"`` (it resolves to the fleet-prior smoother on these runs: they carry the smoother's end
@@ -20,9 +20,9 @@ import time
 
 import numpy as np
 
-from gyrodrift.kernels import kernel_matrix
-from gyrodrift.model import fit_drift_model, physics_estimate
-from gyrodrift.runs import RunTable
+from gyrodrift.learn.kernels import kernel_matrix
+from gyrodrift.learn.model import fit_drift_model, physics_estimate
+from gyrodrift.runs.table import RunTable
 
 
 def synthetic_runs(n: int, rng: np.random.Generator) -> RunTable:

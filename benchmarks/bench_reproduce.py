@@ -3,7 +3,7 @@
 Run: ``python benchmarks/bench_reproduce.py [--repeat 1]``. Prints, with the references measured in the same run:
 
 1. the command ``gyrodrift reproduce --out <tmp> --quiet`` (Python start-up and imports included), wall and CPU
-   of the child, beside ``python -c pass`` and ``python -c "import gyrodrift.reproduce"``;
+   of the child, beside ``python -c pass`` and ``python -c "import gyrodrift.paper.reproduce"``;
 2. in this process: ``run_reproduction(seed=0)`` (24 drift models, 15 tunings, the 72 h navigations) as it is and
    with the interval GP's hyperparameters searched as before issue 20's speed-up (scikit-learn's
    ``GaussianProcessRegressor`` L-BFGS-B search, OpenBLAS's default threads), its ratio, and the largest relative
@@ -78,7 +78,7 @@ def gp_search_as_before():
     from sklearn.exceptions import ConvergenceWarning
     from sklearn.gaussian_process import GaussianProcessRegressor
 
-    import gyrodrift.spread as spread
+    import gyrodrift.learn.spread as spread
 
     def search(Z, y, noise, n_restarts, seed):
         kernel = spread._kernel(Z.shape[1])
@@ -108,12 +108,12 @@ def main() -> None:
         runs = [child(["gyrodrift", "reproduce", "--out", f"out{i}", "--quiet"], d) for i in range(rep)]
         wall, cpu = min(runs)
         print(f"   gyrodrift reproduce --out DIR --quiet      : {wall:6.2f} / {cpu:6.2f}  (target <= 5 s wall)")
-        wall, cpu = min(child([sys.executable, "-c", "import gyrodrift.reproduce"], d) for _ in range(rep))
-        print(f"   python -c 'import gyrodrift.reproduce'     : {wall:6.2f} / {cpu:6.2f}")
+        wall, cpu = min(child([sys.executable, "-c", "import gyrodrift.paper.reproduce"], d) for _ in range(rep))
+        print(f"   python -c 'import gyrodrift.paper.reproduce'     : {wall:6.2f} / {cpu:6.2f}")
         wall, cpu = min(child([sys.executable, "-c", "pass"], d) for _ in range(rep))
         print(f"   python -c pass                             : {wall:6.2f} / {cpu:6.2f}")
 
-    from gyrodrift.reproduce import run_reproduction
+    from gyrodrift.paper.reproduce import run_reproduction
 
     print("2. in this process, wall / CPU [s]")
     run_reproduction(seed=0, quiet=True)  # warm: imports, caches
@@ -127,7 +127,7 @@ def main() -> None:
     )
     worst, where, n = worst_relative_difference(now[0], old[0])
     print(f"   largest relative difference of {n} numbers: {worst:.1e} ({where})")
-    from gyrodrift.report import make_figures
+    from gyrodrift.paper.report import make_figures
 
     make_figures(now[0])  # warm: matplotlib's import and font cache
     _, wall, cpu = min((timed(lambda: make_figures(now[0])) for _ in range(rep)), key=lambda r: r[1])
@@ -135,9 +135,9 @@ def main() -> None:
 
     from sklearn.preprocessing import StandardScaler
 
-    from gyrodrift.datasets import load_paper
-    from gyrodrift.encodings import encode
-    from gyrodrift.tuning import tune_lssvr
+    from gyrodrift.learn.encodings import encode
+    from gyrodrift.learn.tuning import tune_lssvr
+    from gyrodrift.runs.datasets import load_paper
 
     data = load_paper()
     X = StandardScaler().fit_transform(encode(data.train, "temp_range"))

@@ -2,7 +2,7 @@
 
 Run: ``python benchmarks/bench_tuning.py``. Prints evaluations per second of
 
-- the batched closed-form LOO objective (``gyrodrift.tuning.make_objective``: one squared-distance matrix,
+- the batched closed-form LOO objective (``gyrodrift.learn.tuning.make_objective``: one squared-distance matrix,
   one Cholesky factor per candidate, LOO residuals in closed form), and
 - a naive reference measured in the same run: per particle, per left-out run, a bordered
   ``np.linalg.solve`` of the (n) x (n) LSSVM system on the remaining runs (brute-force LOO),
@@ -18,9 +18,9 @@ import time
 import numpy as np
 from sklearn.preprocessing import StandardScaler
 
-from gyrodrift.datasets import load_paper
-from gyrodrift.encodings import encode
-from gyrodrift.tuning import make_objective, tune_lssvr
+from gyrodrift.learn.encodings import encode
+from gyrodrift.learn.tuning import make_objective, tune_lssvr
+from gyrodrift.runs.datasets import load_paper
 
 
 def naive_loo_mae(X, y, params):

@@ -22,7 +22,7 @@ drift (one read, one navigator per method). Methods:
 
 * paper-encoding LSSVM: CPSO-LSSVM (LOO MAE) on the paper's inputs (raw 12 h latitude error in arcsec, temp range);
 * physics-encoding LSSVM: the same on the drift equivalent of the latitude error;
-* 12 h physics inversion; 12 h curve fit (`gyrodrift.curve_fit`);
+* 12 h physics inversion; 12 h curve fit (`gyrodrift.learn.curve_fit`);
 * default: what ``gyrodrift fit`` does with no options (`fit_default`: the hybrid target with its default
   encoding, the temperature range; the ``auto`` physics base, which on these tables is
   ``drift_smoother_fleet_deg_h``: the 16 h smoother's end drift re-weighted with the training runs' pooled k_z,
@@ -58,17 +58,17 @@ from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
-from gyrodrift.baselines import physics_inversion
 from gyrodrift.choices import default_encoding
-from gyrodrift.curve_fit import fit_error_curves
 from gyrodrift.ins.scenario import Scenario
+from gyrodrift.learn.baselines import physics_inversion
+from gyrodrift.learn.curve_fit import fit_error_curves
+from gyrodrift.learn.model import DEFAULT_MAX_LABEL_STD_DEG_H, DriftModel, fit_drift_model
+from gyrodrift.learn.tuning import SearchBoundWarning
 from gyrodrift.logs import ImuLog
-from gyrodrift.model import DEFAULT_MAX_LABEL_STD_DEG_H, DriftModel, fit_drift_model
 from gyrodrift.procedure import align_log, extract_features, find_true_drift, navigate_after_alignment, smooth_log
 from gyrodrift.procedure.results import SMOOTHER_THERMAL_COLUMNS
 from gyrodrift.procedure.smoother import SmootherEstimate, fleet_coefficient_prior
-from gyrodrift.runs import RunTable
-from gyrodrift.tuning import SearchBoundWarning
+from gyrodrift.runs.table import RunTable
 
 K1_DEG_H_PER_C = 0.0002
 """The fleet's temperature law [deg/h/degC] above T0_C."""

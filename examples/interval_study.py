@@ -18,7 +18,7 @@ be seen by ``gyrodrift features`` and ``truth``:
 * the 16 h smoother: the exact linear-Gaussian posterior of (drift at hour 16, k) from a correlated measurement
   of both (1-sigmas 3e-4 cos(20 deg) / cos(lat) deg/h and 2e-4 deg/h/degC, correlation 0.8) and the smoother's
   own prior N(0, 0.01^2) on k: the columns ``drift_smoother_deg_h``, its 1-sigma and the four thermal ones, so
-  ``physics_column="auto"`` takes the fleet base (as in tests/test_fleet_base.py).
+  ``physics_column="auto"`` takes the fleet base (as in tests/procedure/test_fleet_base.py).
 
 Training runs at 20-60 deg; held-out runs (``--held-out`` per fleet): three quarters drawn as the training runs,
 one quarter outside their range (half at 14.5-20 or 60-64 deg, half ending 4-10 degC hotter than any training
@@ -39,9 +39,9 @@ import warnings
 
 import numpy as np
 
-from gyrodrift.baselines import latitude_error_at
-from gyrodrift.model import THERMAL_COLUMNS, fit_drift_model, jackknife_half_width
-from gyrodrift.runs import RunTable
+from gyrodrift.learn.baselines import latitude_error_at
+from gyrodrift.learn.model import THERMAL_COLUMNS, fit_drift_model, jackknife_half_width
+from gyrodrift.runs.table import RunTable
 from gyrodrift.units import HOUR
 
 K_PRIOR_STD = 0.01

@@ -17,11 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
-from gyrodrift.baselines import physics_inversion
 from gyrodrift.ins.synthetic_fleet import simulate_fleet
-from gyrodrift.model import fit_drift_model
+from gyrodrift.learn.baselines import physics_inversion
+from gyrodrift.learn.model import fit_drift_model
 from gyrodrift.procedure import features_run_table, features_table
-from gyrodrift.runs import RunTable
+from gyrodrift.runs.table import RunTable
 
 
 def main():

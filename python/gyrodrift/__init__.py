@@ -16,17 +16,17 @@ except PackageNotFoundError:  # pragma: no cover - running from an unbuilt sourc
 # The public names are imported on first use (PEP 562), so that `import gyrodrift` and the CLI start
 # without loading scikit-learn and scipy when the command does not need them.
 _PUBLIC = {
-    "LSSVR": "gyrodrift.lssvr",
-    "minimize_cpso": "gyrodrift.cpso",
-    "tune_lssvr": "gyrodrift.tuning",
-    "TuningResult": "gyrodrift.tuning",
-    "load_paper": "gyrodrift.datasets",
-    "RunTable": "gyrodrift.runs",
-    "read_runs_csv": "gyrodrift.runs",
-    "DriftModel": "gyrodrift.model",
-    "fit_drift_model": "gyrodrift.model",
-    "save_model": "gyrodrift.model_io",
-    "load_model": "gyrodrift.model_io",
+    "LSSVR": "gyrodrift.learn.lssvr",
+    "minimize_cpso": "gyrodrift.learn.cpso",
+    "tune_lssvr": "gyrodrift.learn.tuning",
+    "TuningResult": "gyrodrift.learn.tuning",
+    "load_paper": "gyrodrift.runs.datasets",
+    "RunTable": "gyrodrift.runs.table",
+    "read_runs_csv": "gyrodrift.runs.table",
+    "DriftModel": "gyrodrift.learn.model",
+    "fit_drift_model": "gyrodrift.learn.model",
+    "save_model": "gyrodrift.learn.model_io",
+    "load_model": "gyrodrift.learn.model_io",
 }
 
 

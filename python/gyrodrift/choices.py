@@ -1,7 +1,7 @@
 """The names of the options the API and the CLI accept, in one light module (no heavy imports).
 
 The CLI builds its choices from here at start-up without importing scikit-learn; the modules that implement
-the options (`gyrodrift.model`, `gyrodrift.tuning`) import the same tuples.
+the options (`gyrodrift.learn.model`, `gyrodrift.learn.tuning`) import the same tuples.
 """
 
 import sys
@@ -34,7 +34,7 @@ ENCODINGS: dict[str, tuple[str, ...]] = {
     "temp_span": ("lat_err_arcsec", "temp_span_c"),
     "lat_only": ("lat_err_arcsec",),
 }
-"""Run encodings: name -> feature names (units in the names); implemented in `gyrodrift.encodings`."""
+"""Run encodings: name -> feature names (units in the names); implemented in `gyrodrift.learn.encodings`."""
 
 PAPER_ENCODINGS = ("temp_range", "temp_mean", "temp_span", "lat_only")
 """The readings of the paper's inputs (raw 12 h latitude error in arcsec): kept for `reproduce`."""
@@ -69,13 +69,13 @@ PHYSICS_COLUMNS = (
 """Physics estimates a hybrid model can start from: the 12 h inversion (computed from ``lat_deg`` and
 ``lat0_deg``), a run-table column (the 12 h curve fit; the 16 h smoother's end drift), or the smoother's end
 drift re-weighted by the training fleet's pooled prior of its thermal coefficient k_z (computed by the model
-from the smoother's columns, `gyrodrift.fleet_prior`)."""
+from the smoother's columns, `gyrodrift.learn.fleet_prior`)."""
 
 PHYSICS_CHOICES = ("auto", *PHYSICS_COLUMNS)
 """What ``physics_column`` (``fit --physics-column``) accepts: a physics estimate, or ``auto`` (the default):
 resolved when the model is fitted, to the fleet-prior smoother when every training run has the smoother's
 columns and at least `MIN_THERMAL_RUNS` have its thermal k_z, else the smoother's drift when every run has
-it, else the 12 h inversion (`gyrodrift.model.resolve_physics_column`)."""
+it, else the 12 h inversion (`gyrodrift.learn.model.resolve_physics_column`)."""
 
 MIN_THERMAL_RUNS = 3
 """Training runs with the smoother's thermal k_z that the fleet-prior base needs: each training run's own base

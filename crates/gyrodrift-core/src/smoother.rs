@@ -1111,7 +1111,7 @@ pub struct LabelSigma {
 /// spread it has at the start: variance rrw^2 `rrw_start_s`), and by the attitude and velocity errors left by
 /// the alignment (`att_sigma`, `vel_sigma`, independent of the drift: an approximation, since the alignment's
 /// heading error and its z-bias estimate are correlated). With white noise only, `final`, and T >> the Schuler
-/// period this is close to sqrt(1.5 T) N / |g(T)| (N the ARW; tests/test_label_flags_and_noise.py derives it).
+/// period this is close to sqrt(1.5 T) N / |g(T)| (N the ARW; tests/procedure/test_label_flags_and_noise.py derives it).
 pub fn label_sigma(cfg: &LabelConfig) -> Result<LabelSigma, CoreError> {
     use crate::error::{in_range, Unit};
     check_free_navigation(&FreeNavigation {

@@ -347,7 +347,7 @@ fn the_constant_model_is_the_thermal_state_conditioned_on_zero() {
 
 #[test]
 fn thermal_z_scores_of_the_end_drift_have_unit_rms() {
-    // 8 seeds, 8 h at 5 Hz (the 30-seed runs are in tests/test_smoother.py's benchmark and the docs).
+    // 8 seeds, 8 h at 5 Hz (the 30-seed runs are in tests/procedure/test_smoother.py's benchmark and the docs).
     let n = 8;
     let mut z2 = 0.0;
     for seed in 0..n {

@@ -64,8 +64,8 @@ def campaign_command(source, out, workers, scheduler, connect_timeout_s, limit, 
     130); twice: abort at once. A campaign whose every run would be too short is refused before any work; exit 1
     when every run failed.
     """
-    from gyrodrift.campaign import CampaignStore, load_campaign, read_runs, run_campaign, write_run_table
     from gyrodrift.errors import OptionError
+    from gyrodrift.fleet.campaign import CampaignStore, load_campaign, read_runs, run_campaign, write_run_table
 
     if source.is_dir():
         store = CampaignStore(source)
@@ -74,7 +74,7 @@ def campaign_command(source, out, workers, scheduler, connect_timeout_s, limit, 
         if run_table is not None:
             runs = read_runs(source, curves=False)
             if not runs.ok.any():  # a header-only table `fit` would refuse: say why here, write nothing
-                from gyrodrift.campaign import CampaignFailedError
+                from gyrodrift.fleet.campaign import CampaignFailedError
 
                 why = f"every one of its {len(runs)} committed run(s) failed" if len(runs) else "no run is committed"
                 raise CampaignFailedError(f"{source}: no successful run to write to {run_table}: {why}")
@@ -132,7 +132,7 @@ def campaign_command(source, out, workers, scheduler, connect_timeout_s, limit, 
 def _check_failures(summary, out) -> None:
     """Every run of the store failed (or was lost): `CampaignFailedError` (one line, exit 1); some runs failed
     now: one line on stderr saying how many and the first error."""
-    from gyrodrift.campaign import CampaignFailedError
+    from gyrodrift.fleet.campaign import CampaignFailedError
 
     tried = summary.skipped + summary.done + summary.lost
     first = f"; first error: {summary.first_error}" if summary.first_error else ""
@@ -148,8 +148,8 @@ def _check_failures(summary, out) -> None:
 
 
 def _export(campaign, index: int, out, quiet: bool, as_json: bool) -> None:
-    from gyrodrift.atomic import OutputFolder
     from gyrodrift.errors import OptionError
+    from gyrodrift.files.atomic import OutputFolder
     from gyrodrift.ins.simulate import simulate
 
     if out is None:
@@ -183,10 +183,10 @@ def _export(campaign, index: int, out, quiet: bool, as_json: bool) -> None:
 @quiet_option
 def study_command(folder, out, test_fraction, seed, max_iter, as_json, quiet):
     """Compare every identification method on the same held-out runs of a campaign FOLDER."""
-    from gyrodrift.atomic import OutputFolder
-    from gyrodrift.campaign import read_runs
-    from gyrodrift.study import run_study
-    from gyrodrift.study_report import STUDY_FILES, summary_lines, write_study_report
+    from gyrodrift.files.atomic import OutputFolder
+    from gyrodrift.fleet.campaign import read_runs
+    from gyrodrift.fleet.study import run_study
+    from gyrodrift.fleet.study_report import STUDY_FILES, summary_lines, write_study_report
 
     target = OutputFolder(out, "study", STUDY_FILES, inputs=[folder])
     runs = read_runs(folder)

@@ -44,9 +44,9 @@ def export_command(model_file: Path, lang: str, out_dir: Path, as_json: bool, qu
     """
     import hashlib
 
-    from gyrodrift.atomic import OutputFolder
-    from gyrodrift.export import export_model, output_names, physics_column
-    from gyrodrift.model_io import load_model
+    from gyrodrift.export.generate import export_model, output_names, physics_column
+    from gyrodrift.files.atomic import OutputFolder
+    from gyrodrift.learn.model_io import load_model
 
     names = output_names(lang)
     out = OutputFolder(out_dir, f"export --lang {lang}", names, inputs=[model_file])

@@ -30,7 +30,7 @@ PREDICTIONS_HEADERS = ("run,drift_identified_deg_h", '{"run": ')
 
 def _read_runs(path, lat0_deg, require_truth, split=None):
     from gyrodrift.errors import OptionError
-    from gyrodrift.runs import read_runs_csv
+    from gyrodrift.runs.table import read_runs_csv
 
     runs = read_runs_csv(path, lat0_deg=lat0_deg, require_truth=require_truth)
     if split:
@@ -200,11 +200,11 @@ def fit(
     model file's "warnings". Runs left out for their label 1-sigma, the weighting, and the hybrid's physics
     base (which one --physics-column auto took, and why) are said on stderr and kept in the file.
     """
-    from gyrodrift.atomic import check_output_file
     from gyrodrift.errors import OptionError
-    from gyrodrift.lssvr import IllConditionedError, NotPositiveDefiniteError
-    from gyrodrift.model import DEFAULT_MAX_LABEL_STD_DEG_H, fit_drift_model
-    from gyrodrift.model_io import MODEL_FILE_RECOGNISER, save_model
+    from gyrodrift.files.atomic import check_output_file
+    from gyrodrift.learn.lssvr import IllConditionedError, NotPositiveDefiniteError
+    from gyrodrift.learn.model import DEFAULT_MAX_LABEL_STD_DEG_H, fit_drift_model
+    from gyrodrift.learn.model_io import MODEL_FILE_RECOGNISER, save_model
 
     if (gamma is None) != (sigma is None):
         raise OptionError("give both --gamma and --sigma, or neither (then both are tuned)")
@@ -313,7 +313,7 @@ def fit(
 def _warn_labels_beyond_rlg(data, runs) -> None:
     """A 'warning:' line naming the runs whose drift_deg_h label is beyond a navigation-grade RLG (fit goes on:
     such a fleet may be real, and every drift its model then predicts that far is flagged too)."""
-    from gyrodrift.runs import NAVIGATION_GRADE_DRIFT_DEG_H, drift_range_problems
+    from gyrodrift.runs.table import NAVIGATION_GRADE_DRIFT_DEG_H, drift_range_problems
 
     bad = [i for i, why in enumerate(drift_range_problems(runs.drift_deg_h)) if why]
     if bad:
@@ -372,10 +372,10 @@ def predict(data, model_file, out, coverage, lat0_deg, split, as_json, fmt, quie
     """
     import numpy as np
 
-    from gyrodrift.atomic import atomic_write, check_output_file, recognise_header
     from gyrodrift.errors import OptionError
-    from gyrodrift.model import min_runs_for_coverage
-    from gyrodrift.model_io import load_model
+    from gyrodrift.files.atomic import atomic_write, check_output_file, recognise_header
+    from gyrodrift.learn.model import min_runs_for_coverage
+    from gyrodrift.learn.model_io import load_model
 
     if fmt is not None:
         click.echo("warning: --format is deprecated; CSV is the default and --json gives JSON lines", err=True)
@@ -402,7 +402,7 @@ def predict(data, model_file, out, coverage, lat0_deg, split, as_json, fmt, quie
     check = model.check_inputs(runs)
     for line in check.messages(runs):
         click.echo(f"warning: {line}", err=True)
-    from gyrodrift.runs import drift_range_problems
+    from gyrodrift.runs.table import drift_range_problems
 
     implausible = drift_range_problems(pred, model.training_["runs"].drift_deg_h)
     for name, why in zip(runs.run, implausible, strict=True):
@@ -460,8 +460,8 @@ def reproduce(out_dir, seed, as_json, quiet):
     """Reproduce the paper's experiment on its embedded data, with baselines and a report."""
     import time
 
-    from gyrodrift.report import summary_lines
-    from gyrodrift.reproduce import reproduce as run
+    from gyrodrift.paper.report import summary_lines
+    from gyrodrift.paper.reproduce import reproduce as run
 
     started = time.monotonic()  # wall time of the whole command: tuning, the 72 h simulation, figures, writing
     results = run(out_dir, seed=seed, quiet=quiet)  # checks out_dir before the work

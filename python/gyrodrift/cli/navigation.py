@@ -67,7 +67,7 @@ def simulate_command(
     --duration-h, --seed and --rate-hz replace the scenario's [run] values; they are checked as the file's keys
     are and recorded in scenario.resolved.toml.
     """
-    from gyrodrift.atomic import OutputFolder
+    from gyrodrift.files.atomic import OutputFolder
     from gyrodrift.ins.scenario import Scenario, ScenarioError, load_scenario
     from gyrodrift.ins.simulate import SIMULATION_FILES, rotation_summary, simulate
 

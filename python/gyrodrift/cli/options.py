@@ -59,7 +59,7 @@ def site_from_options(lat0_deg: float | None, lon0_deg: float | None, height_m: 
 
 
 def log_format_option(f):
-    """Add ``--format FILE``: the log format description of a log with its own columns (`gyrodrift.log_format`)."""
+    """Add ``--format FILE``: the log format description of a log with its own columns (`gyrodrift.logs.log_format`)."""
     from pathlib import Path
 
     return click.option(

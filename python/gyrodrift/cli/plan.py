@@ -123,12 +123,12 @@ def plan_command(
     """
     import dataclasses
 
-    from gyrodrift.atomic import OutputFolder
     from gyrodrift.cli.options import noise_from_options
+    from gyrodrift.files.atomic import OutputFolder
     from gyrodrift.ins.scenario import Rotation, Scenario, load_scenario
-    from gyrodrift.plan_output import PLAN_FILES, plan_files
     from gyrodrift.procedure.noise import SensorNoise
     from gyrodrift.procedure.plan import MissionBudget, plan_identification
+    from gyrodrift.procedure.plan_output import PLAN_FILES, plan_files
 
     if scenario_path is None and lat0_deg is None:
         raise click.UsageError("give --lat0-deg or --scenario FILE (the site)")

@@ -194,7 +194,7 @@ def truth_command(
     quiet,
 ):
     """Find the z-gyro drift [deg/h] minimising the position error of the navigation after alignment."""
-    from gyrodrift.atomic import OutputFolder
+    from gyrodrift.files.atomic import OutputFolder
     from gyrodrift.procedure.truth import find_true_drift
     from gyrodrift.procedure.writers import ALIGNMENT_FILES, TRUTH_FILES, write_alignment, write_truth
 
@@ -281,7 +281,7 @@ def evaluate_command(
     log, drift_deg_h, model_path, out_dir, hours, reference, lat0_deg, lon0_deg, height_m, log_format, as_json, quiet
 ):
     """Navigate LOG 72 h after alignment without and with compensating the axial drift; plot both errors."""
-    from gyrodrift.atomic import OutputFolder
+    from gyrodrift.files.atomic import OutputFolder
     from gyrodrift.ins.track import route_of
     from gyrodrift.procedure.evaluate import evaluate_compensation
     from gyrodrift.procedure.identify import identify
@@ -351,7 +351,7 @@ def identify_command(
     quiet,
 ):
     """Align LOG, navigate 12 h and identify its axial drift with the model."""
-    from gyrodrift.atomic import OutputFolder
+    from gyrodrift.files.atomic import OutputFolder
     from gyrodrift.procedure.identify import identify
     from gyrodrift.procedure.writers import (
         ALIGNMENT_FILES,

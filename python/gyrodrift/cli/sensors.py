@@ -50,10 +50,10 @@ def allan_command(
     block for scenario files that says which axes it averages. Constant channels are named and left out; a log
     whose channels are all constant is refused. --json prints allan.json without its curves.
     """
-    from gyrodrift.allan import allan_deviation
-    from gyrodrift.allan_output import ALLAN_FILES, allan_files, noise_summary
-    from gyrodrift.atomic import OutputFolder
+    from gyrodrift.files.atomic import OutputFolder
     from gyrodrift.logs import open_log
+    from gyrodrift.sensors.allan import allan_deviation
+    from gyrodrift.sensors.allan_output import ALLAN_FILES, allan_files, noise_summary
 
     out = OutputFolder(out_dir, "allan", ALLAN_FILES, inputs=[log])
     imu = open_log(log, site=site_from_options(lat0_deg, lon0_deg, height_m), format=log_format)

@@ -9,7 +9,7 @@ import stat
 import click
 
 from gyrodrift.choices import MAX_DRIFT_DEG_H
-from gyrodrift.input_files import non_regular_reason
+from gyrodrift.files.input_files import non_regular_reason
 
 __all__ = ["DRIFT_DEG_H", "FiniteFloat", "InputPath", "MAX_DRIFT_DEG_H", "MAX_SEED", "Seed"]
 
@@ -83,7 +83,7 @@ class InputPath(click.Path):
     it must be a regular file, or a folder where `dir_okay`. A device (``/dev/zero``, which never ends), a FIFO
     (which blocks until written), a socket, or a folder where a file is expected is click's usage error naming
     the argument, before any work (``Invalid value for 'LOG': /dev/zero is a device, not a regular file ...``),
-    exit status 2. A missing path passes: the reader says so in its own words (`gyrodrift.input_files`).
+    exit status 2. A missing path passes: the reader says so in its own words (`gyrodrift.files.input_files`).
 
     ``InputPath()`` a file; ``InputPath(dir_okay=True)`` a file or a folder; ``InputPath(dir_okay=True,
     file_okay=False)`` a folder; `exists` and `path_type` are click's.

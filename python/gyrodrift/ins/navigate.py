@@ -14,9 +14,9 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from gyrodrift.atomic import OutputFolder, Stage, output_folder, staged, write_json
 from gyrodrift.choices import MAX_DRIFT_DEG_H
 from gyrodrift.errors import OptionError
+from gyrodrift.files.atomic import OutputFolder, Stage, output_folder, staged, write_json
 from gyrodrift.ins.nav_errors import attitude_errors_arcsec, position_errors
 from gyrodrift.ins.scenario import Scenario
 from gyrodrift.ins.simulate import PARQUET_OPTIONS, ImuData
@@ -281,7 +281,7 @@ def navigate(
         height_m`` and optionally ``vel_{e,n,u}_m_s``, times on the log's time base). Default: the simulated route
         when the source is a moving-base scenario or its imu.parquet (``[trajectory]``), else the static site.
         A track that does not cover the navigated span is a `gyrodrift.ins.track.TrackError`.
-    out_dir : path-like or gyrodrift.atomic.OutputFolder, optional
+    out_dir : path-like or gyrodrift.files.atomic.OutputFolder, optional
         If given, write ``nav.parquet`` and ``summary.json`` there, published together (`write_navigation`);
         the folder is checked before navigating (docs/outputs.md): an input file is never replaced.
     plot : bool
@@ -643,7 +643,7 @@ def write_navigation(
 ) -> Path:
     """Write ``nav.parquet`` (the columns, float64, metadata ``gyrodrift.format = gyrodrift-nav/1``) and
     ``summary.json`` (and with `plot` ``navigation.png``, `gyrodrift.procedure.figures.navigation_figure`) into
-    `out` as one set (`gyrodrift.atomic.staged`); return the folder."""
+    `out` as one set (`gyrodrift.files.atomic.staged`); return the folder."""
     table = pa.Table.from_pydict(
         {k: pa.array(v, pa.float64()) for k, v in columns.items()},
     ).replace_schema_metadata({"gyrodrift.format": "gyrodrift-nav/1", "gyrodrift.imu": str(summary.get("imu"))})

@@ -23,8 +23,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar, cast
 
 from gyrodrift.errors import InputError
+from gyrodrift.files.toml_input import read_toml
 from gyrodrift.site import Site
-from gyrodrift.toml_input import read_toml
 from gyrodrift.units import ARCSEC, DEG, DEG_PER_H, DEG_PER_SQRT_H, HOUR, MICRO_G
 
 if TYPE_CHECKING:
@@ -365,7 +365,7 @@ class Scenario:
 def write_scenario_toml(scenario: Scenario, path: str | os.PathLike[str], header: str | None = None) -> None:
     """Write the resolved scenario (`Scenario.to_toml_dict`) as TOML, atomically; it reloads to an equal
     `Scenario` with `load_scenario`."""
-    from gyrodrift.ins.toml_writer import write_toml
+    from gyrodrift.files.toml_writer import write_toml
 
     write_toml(scenario.to_toml_dict(), path, header=header)
 

@@ -11,10 +11,10 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from gyrodrift.atomic import OutputFolder, output_folder
+from gyrodrift.files.atomic import OutputFolder, output_folder
+from gyrodrift.files.toml_writer import dumps_toml
 from gyrodrift.ins.imu_file import core_chunk_to_table, imu_schema
 from gyrodrift.ins.scenario import Scenario
-from gyrodrift.ins.toml_writer import dumps_toml
 from gyrodrift.progress import progress
 
 __all__ = ["ImuData", "simulate", "iter_core_chunks", "rotation_summary", "DEFAULT_CHUNK_SAMPLES", "SIMULATION_FILES"]
@@ -104,7 +104,7 @@ def simulate(
         100 bytes per sample, i.e. 35 MB per hour at 100 Hz, 2.5 GB for 72 h). Otherwise the folder (created if needed)
         receives ``imu.parquet`` (written chunk by chunk, one row group per chunk, never the whole run in
         memory) and ``scenario.resolved.toml`` (every default written out), published together when the run
-        is complete (`gyrodrift.atomic.OutputFolder`; the folder is checked before simulating, docs/outputs.md).
+        is complete (`gyrodrift.files.atomic.OutputFolder`; the folder is checked before simulating, docs/outputs.md).
     chunk_samples : int
         Samples asked from the core at a time (and rows per Parquet row group).
     quiet : bool

@@ -4,14 +4,14 @@ After alignment (``Timeline.align_h``, 4 h), the log is navigated ``Timeline.fea
 alignment's x/y gyro and accelerometer biases compensated and the z gyro NOT compensated. The features are
 the latitude at navigation hour 12 (exact state after the sample at 12 h), the hourly latitude error curve
 (hours 0-12, computed minus true, arcsec), and the system temperature over the same 12 h: at the first and
-the last navigation sample, the lowest and the highest. The 12 h curve fit (`gyrodrift.curve_fit`) of the
+the last navigation sample, the lowest and the highest. The 12 h curve fit (`gyrodrift.learn.curve_fit`) of the
 same navigation's latitude and longitude error curves (every 60 s) gives ``drift_curvefit_deg_h`` and its
 1-sigma ``drift_curvefit_std_deg_h``. The 16 h smoother (`gyrodrift.procedure.smoother`, one more read of the
 same 16 h) gives ``drift_smoother_deg_h`` and its 1-sigma ``drift_smoother_std_deg_h`` and, under its thermal
 model, its thermal coefficient k_z, the k_z 1-sigma, cov(end drift, k_z) and its prior 1-sigma of k_z
-(``SMOOTHER_THERMAL_COLUMNS``, what a fleet prior on k_z needs: `gyrodrift.fleet_prior`).
+(``SMOOTHER_THERMAL_COLUMNS``, what a fleet prior on k_z needs: `gyrodrift.learn.fleet_prior`).
 
-A row of the run table (``gyrodrift.runs``): ``run`` (the log's stem), ``lat_deg``, ``lat0_deg`` (the true
+A row of the run table (``gyrodrift.runs.table``): ``run`` (the log's stem), ``lat_deg``, ``lat0_deg`` (the true
 site latitude), ``temp_min_c``, ``temp_max_c``, ``temp_start_c``, ``temp_end_c``, ``drift_curvefit_deg_h``,
 ``drift_curvefit_std_deg_h``, ``drift_smoother_deg_h``, ``drift_smoother_std_deg_h``,
 ``smoother_coeff_deg_h_per_c``, ``smoother_coeff_std_deg_h_per_c`` [deg/h/degC], ``smoother_end_coeff_cov``
@@ -29,8 +29,8 @@ from typing import Any
 
 import numpy as np
 
-from gyrodrift.curve_fit import fit_error_curves
 from gyrodrift.errors import OptionError
+from gyrodrift.learn.curve_fit import fit_error_curves
 from gyrodrift.logs import ImuLog
 from gyrodrift.procedure.align import align_log
 from gyrodrift.procedure.noise import SensorNoise
@@ -47,7 +47,7 @@ from gyrodrift.procedure.results import (
 from gyrodrift.procedure.smoother import smooth_log
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 from gyrodrift.procedure.truth import find_true_drift
-from gyrodrift.runs import RunTable
+from gyrodrift.runs.table import RunTable
 from gyrodrift.units import HOUR
 
 __all__ = ["extract_features", "features_run_table"]
@@ -172,7 +172,7 @@ def extract_features(
 
 
 def features_run_table(features: list[RunFeatures], source: str = "<features>") -> RunTable:
-    """The features as a `gyrodrift.runs.RunTable` (what `DriftModel.predict` and `fit_drift_model` take)."""
+    """The features as a `gyrodrift.runs.table.RunTable` (what `DriftModel.predict` and `fit_drift_model` take)."""
     return RunTable(
         run=np.array([f.run for f in features], dtype=object),
         lat_deg=np.array([f.lat_deg for f in features], dtype=float),

@@ -55,7 +55,7 @@ def _figure(nrows: int = 1):
 
 
 def save_png(fig, path: str | os.PathLike[str]) -> None:
-    """Save `fig` as PNG (110 dpi) to `path` as it is; callers publish it (`gyrodrift.atomic`)."""
+    """Save `fig` as PNG (110 dpi) to `path` as it is; callers publish it (`gyrodrift.files.atomic`)."""
     fig.tight_layout()
     fig.savefig(path, format="png", dpi=110)
 

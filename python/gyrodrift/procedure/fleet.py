@@ -14,14 +14,15 @@ import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-from gyrodrift.cluster import DEFAULT_CONNECT_TIMEOUT_S, DaskMissingError, SchedulerUnreachableError, dask_client
-from gyrodrift.log_format import LogFormat, load_log_format
-from gyrodrift.logs import LogError, Site, open_log
+from gyrodrift.fleet.cluster import DEFAULT_CONNECT_TIMEOUT_S, DaskMissingError, SchedulerUnreachableError, dask_client
+from gyrodrift.logs import LogError, open_log
+from gyrodrift.logs.log_format import LogFormat, load_log_format
 from gyrodrift.procedure.features import extract_features
 from gyrodrift.procedure.noise import SensorNoise
 from gyrodrift.procedure.results import RunFeatures
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 from gyrodrift.progress import progress
+from gyrodrift.site import Site
 
 __all__ = [
     "features_table",
@@ -84,7 +85,7 @@ def features_table(
         Static site (see `open_log`): a mapping such as ``{"lat_deg": 28.222}`` fills or overrides only the
         keys it gives; logs that carry no site (CSV) need at least the latitude.
     log_format : path-like or LogFormat, optional
-        The log format description of every log (`gyrodrift.log_format`, CLI ``--format``); None: native columns.
+        The log format description of every log (`gyrodrift.logs.log_format`, CLI ``--format``); None: native columns.
     lat0_deg : float, optional
         True latitude for the table (default: each log's site latitude).
     timeline, with_truth, criterion, chunk_samples, smoother, noise

@@ -1,20 +1,21 @@
 """Identification of the axial drift of one run: alignment + 12 h navigation + the drift model.
 
-The model (`gyrodrift.model.DriftModel`: an LSSVR, or a hybrid of a physics estimate and an LSSVR correction)
+The model (`gyrodrift.learn.model.DriftModel`: an LSSVR, or a hybrid of a physics estimate and an LSSVR correction)
 maps the run's features (latitude at 12 h, temperature over the 12 h) to the axial drift [deg/h], the total
 constant to subtract from the z gyro. Beside it the result carries the physics inversion of the same latitude
-error (`gyrodrift.baselines.physics_inversion`), the 12 h curve fit of the latitude and longitude error curves
-with its 1-sigma (`gyrodrift.curve_fit`), the 16 h smoother's drift with its 1-sigma (`gyrodrift.procedure.smoother`:
-the Cramer-Rao line of these 16 h) and the alignment's own z-drift estimate with its 1-sigma. The model's
-interval is a normalised cross-validation interval for the run's label (``DriftModel.predict_interval``, default
-coverage 90 %; conservative for the drift itself): the physics 1-sigmas and the spread of a Gaussian process
-with fitted length scales (`gyrodrift.spread`; wider where the run's inputs are far from the training runs'),
-scaled by the out-of-sample scores of its training runs; its note says on how many runs it rests and how much
-wider it is than the physics alone (``DriftModel.interval_note``). A run outside the training runs' range (per
-input or jointly, ``DriftModel.check_inputs``) is flagged (``outside_training_range``, ``range_warnings``): its
-drift is an extrapolation. A drift beyond a navigation-grade RLG's `gyrodrift.runs.NAVIGATION_GRADE_DRIFT_DEG_H`, or far
-outside the training labels' range (`gyrodrift.runs.drift_range_problems`), is flagged too (``outside_drift_range``,
-one more ``range_warnings`` line). ``model_std_deg_h`` stays None: the interval is empirical, not a Gaussian 1-sigma.
+error (`gyrodrift.learn.baselines.physics_inversion`), the 12 h curve fit of the latitude and longitude error curves
+with its 1-sigma (`gyrodrift.learn.curve_fit`), the 16 h smoother's drift with its 1-sigma
+(`gyrodrift.procedure.smoother`: the Cramer-Rao line of these 16 h) and the alignment's own z-drift estimate with its
+1-sigma. The model's interval is a normalised cross-validation interval for the run's label
+(``DriftModel.predict_interval``, default coverage 90 %; conservative for the drift itself): the physics 1-sigmas and
+the spread of a Gaussian process with fitted length scales (`gyrodrift.learn.spread`; wider where the run's inputs are
+far from the training runs'), scaled by the out-of-sample scores of its training runs; its note says on how many runs
+it rests and how much wider it is than the physics alone (``DriftModel.interval_note``). A run outside the training
+runs' range (per input or jointly, ``DriftModel.check_inputs``) is flagged (``outside_training_range``,
+``range_warnings``): its drift is an extrapolation. A drift beyond a navigation-grade RLG's
+`gyrodrift.runs.table.NAVIGATION_GRADE_DRIFT_DEG_H`, or far outside the training labels' range
+(`gyrodrift.runs.table.drift_range_problems`), is flagged too (``outside_drift_range``, one more ``range_warnings``
+line). ``model_std_deg_h`` stays None: the interval is empirical, not a Gaussian 1-sigma.
 
 A hybrid whose physics base is the fleet-prior smoother (``DriftModel.physics_column_ ==
 "drift_smoother_fleet_deg_h"``) gets the run's smoother columns, its thermal ones included (``features_run_table``),
@@ -29,16 +30,16 @@ import os
 
 import numpy as np
 
-from gyrodrift.baselines import physics_inversion
-from gyrodrift.fleet_prior import drift_with_coefficient_prior
+from gyrodrift.learn.baselines import physics_inversion
+from gyrodrift.learn.fleet_prior import drift_with_coefficient_prior
+from gyrodrift.learn.model import DriftModel, min_runs_for_coverage
 from gyrodrift.logs import ImuLog
-from gyrodrift.model import DriftModel, min_runs_for_coverage
 from gyrodrift.procedure.features import extract_features, features_run_table
 from gyrodrift.procedure.noise import SensorNoise
 from gyrodrift.procedure.plan import mission_outlook
 from gyrodrift.procedure.results import Identification, RunFeatures
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
-from gyrodrift.runs import drift_range_problems
+from gyrodrift.runs.table import drift_range_problems
 
 __all__ = ["identify", "fleet_base", "model_physics_column", "FLEET_BASE", "NO_UNCERTAINTY_NOTE", "INTERVAL_NOTE"]
 
@@ -73,7 +74,7 @@ def model_physics_column(model: DriftModel) -> str | None:
 
 def fleet_base(features: RunFeatures, prior: tuple[float, float]) -> tuple[float, float]:
     """The run's smoother end drift and 1-sigma [deg/h] with the k_z prior ``(mean, std)`` [deg/h/degC] in place
-    of the smoother's own (`gyrodrift.fleet_prior.drift_with_coefficient_prior` of the run-table columns: what
+    of the smoother's own (`gyrodrift.learn.fleet_prior.drift_with_coefficient_prior` of the run-table columns: what
     the model's fleet base computes); unchanged under the smoother's constant model."""
     mean, std = (float(v) for v in prior)
     return drift_with_coefficient_prior(
@@ -107,7 +108,7 @@ def identify(
     log : ImuLog
         Opened log with a known site, at least ``align_h + features_h`` (16 h) long.
     model : DriftModel or path
-        A fitted model or its JSON file (`gyrodrift.model_io.load_model`).
+        A fitted model or its JSON file (`gyrodrift.learn.model_io.load_model`).
     timeline, lat0_deg, chunk_samples, quiet
         As in `extract_features`.
     features : RunFeatures, optional
@@ -122,7 +123,7 @@ def identify(
     Identification
     """
     if not isinstance(model, DriftModel):
-        from gyrodrift.model_io import load_model
+        from gyrodrift.learn.model_io import load_model
 
         model = load_model(model)
     if features is None:

@@ -25,8 +25,8 @@ from typing import Any
 import numpy as np
 
 from gyrodrift.errors import InputError
+from gyrodrift.files.toml_input import read_toml
 from gyrodrift.logs import ImuLog
-from gyrodrift.toml_input import read_toml
 from gyrodrift.units import DEG, DEG_PER_H, DEG_PER_SQRT_H, HOUR, MICRO_G
 
 __all__ = ["SensorNoise", "estimate_white_noise", "load_noise_file", "NOISE_FLOOR"]

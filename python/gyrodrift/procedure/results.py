@@ -20,8 +20,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from gyrodrift.earth import NMI_M
-from gyrodrift.fleet_prior import drift_with_coefficient_prior
-from gyrodrift.runs import SMOOTHER_THERMAL_COLUMNS
+from gyrodrift.learn.fleet_prior import drift_with_coefficient_prior
+from gyrodrift.runs.table import SMOOTHER_THERMAL_COLUMNS
 from gyrodrift.site import Site
 from gyrodrift.units import DEG, DEG_PER_H, MICRO_G
 
@@ -337,7 +337,7 @@ RUN_TABLE_COLUMNS = (
 """Columns written by `gyrodrift features` (plus ``drift_deg_h``, ``drift_std_deg_h`` and ``label_flagged`` with the
 truth). The last four are the smoother's thermal coefficient k_z [deg/h/degC], its 1-sigma, cov(end drift, k_z)
 [(deg/h)^2/degC] and the filter's prior 1-sigma of k_z [deg/h/degC] (`SmootherEstimate`): what a fleet prior on
-k_z needs (`gyrodrift.fleet_prior`); empty (NaN) under the smoother's constant model or without the smoother."""
+k_z needs (`gyrodrift.learn.fleet_prior`); empty (NaN) under the smoother's constant model or without the smoother."""
 
 SMOOTHER_THERMAL_FIELDS = (
     "thermal_coeff_deg_h_per_c",
@@ -345,7 +345,7 @@ SMOOTHER_THERMAL_FIELDS = (
     "end_coeff_cov",
     "thermal_prior_std_deg_h_per_c",
 )
-"""The `SmootherEstimate` attributes the columns `SMOOTHER_THERMAL_COLUMNS` (`gyrodrift.runs`) hold, in order."""
+"""The `SmootherEstimate` attributes the columns `SMOOTHER_THERMAL_COLUMNS` (`gyrodrift.runs.table`) hold, in order."""
 
 
 @dataclass(frozen=True)
@@ -368,7 +368,7 @@ class RunFeatures:
         The true drift when asked (`with_truth`), else NaN [deg/h].
     drift_curvefit_deg_h, drift_curvefit_std_deg_h : float
         The drift from the 12 h curve fit of the latitude and longitude error curves and its 1-sigma [deg/h]
-        (`gyrodrift.curve_fit`).
+        (`gyrodrift.learn.curve_fit`).
     drift_smoother_deg_h, drift_smoother_std_deg_h : float
         The 16 h smoother's drift carried into navigation and its 1-sigma [deg/h]
         (`SmootherEstimate.navigation_drift_deg_h`: the end-of-span drift under its thermal model; NaN when not
@@ -519,7 +519,7 @@ class Identification:
         ``"loo_mae"``, or the tuning objective (``"loo_mae"``, ``"train_mae"``, ``"kfold_mae"``).
     features : RunFeatures
     curvefit_drift_deg_h, curvefit_drift_std_deg_h : float
-        The 12 h curve fit's drift and 1-sigma [deg/h] (`gyrodrift.curve_fit`).
+        The 12 h curve fit's drift and 1-sigma [deg/h] (`gyrodrift.learn.curve_fit`).
     smoother_drift_deg_h, smoother_drift_std_deg_h : float
         The 16 h smoother's drift carried into navigation and its 1-sigma [deg/h] (`gyrodrift.procedure.smoother`;
         the end-of-span drift under its thermal model, `smoother_model`; NaN when not run).
@@ -529,13 +529,13 @@ class Identification:
         What lies outside, one line each.
     outside_drift_range : bool
         The identified drift is beyond a navigation-grade RLG or far outside the training labels' range
-        (`gyrodrift.runs.drift_range_problems`; its line is in ``range_warnings``).
+        (`gyrodrift.runs.table.drift_range_problems`; its line is in ``range_warnings``).
     model_physics_column : str or None
         The physics base of a hybrid model (``DriftModel.physics_column_``, e.g. ``"drift_smoother_fleet_deg_h"``);
         None for a model fitted on the drift itself.
     smoother_fleet_drift_deg_h, smoother_fleet_drift_std_deg_h : float
         With the fleet base: the 16 h smoother's end drift with the training fleet's k_z prior and its 1-sigma
-        [deg/h] (`gyrodrift.fleet_prior.drift_with_coefficient_prior`), the base the model adds its learned
+        [deg/h] (`gyrodrift.learn.fleet_prior.drift_with_coefficient_prior`), the base the model adds its learned
         correction to (``drift_deg_h`` minus it is that correction); NaN with any other base.
     coefficient_prior_deg_h_per_c : tuple of 2 floats or None
         With the fleet base: the model's pooled k_z prior (mean, 1-sigma) [deg/h/degC]

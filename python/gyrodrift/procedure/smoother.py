@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from gyrodrift.fleet_prior import pooled_coefficient_prior
+from gyrodrift.learn.fleet_prior import pooled_coefficient_prior
 from gyrodrift.logs import ImuLog, LogError
 from gyrodrift.procedure.noise import SensorNoise, estimate_white_noise
 from gyrodrift.procedure.results import SmootherEstimate

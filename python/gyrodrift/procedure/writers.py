@@ -1,10 +1,10 @@
 """The procedure's output files: each writer takes results and writes them, nothing else.
 
 Writers of a folder take ``out``: a folder path (the files are then published as one set with
-`gyrodrift.atomic.OutputFolder`) or a `gyrodrift.atomic.Stage` of a larger set (the CLI's ``truth --out`` writes
-the true drift and the alignment together). Writers of one file write it with `gyrodrift.atomic.atomic_write`,
-which replaces only a file gyrodrift wrote (recognised by its header). Figures come from
-`gyrodrift.procedure.figures`; the rules for outputs are in docs/outputs.md.
+`gyrodrift.files.atomic.OutputFolder`) or a `gyrodrift.files.atomic.Stage` of a larger set (the CLI's ``truth --out``
+writes the true drift and the alignment together). Writers of one file write it with
+`gyrodrift.files.atomic.atomic_write`, which replaces only a file gyrodrift wrote (recognised by its header). Figures
+come from `gyrodrift.procedure.figures`; the rules for outputs are in docs/outputs.md.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
-from gyrodrift.atomic import Stage, atomic_files, check_output_files, recognise_header, staged, write_json
+from gyrodrift.files.atomic import Stage, atomic_files, check_output_files, recognise_header, staged, write_json
 from gyrodrift.procedure.figures import (
     alignment_sigma_figure,
     criterion_figure,
@@ -191,7 +191,7 @@ def features_csv_text(features: Sequence[RunFeatures]) -> str:
     ``label_flagged`` (``true``/``false``: `truth` flagged the label) when every run has a truth).
 
     Floats are written with ``repr`` (shortest exact round trip), so a latitude keeps its 1e-12 deg digits.
-    Readable by `gyrodrift.runs.read_runs_csv`.
+    Readable by `gyrodrift.runs.table.read_runs_csv`.
     """
     with_truth = bool(features) and all(math.isfinite(f.drift_deg_h) for f in features)
     cols = list(RUN_TABLE_COLUMNS) + (["drift_deg_h", "drift_std_deg_h", "label_flagged"] if with_truth else [])
@@ -242,7 +242,7 @@ def write_features_csv(
     inputs: Iterable[str | os.PathLike[str]] = (),
 ) -> None:
     """Write the run table (`features_csv_text`) to `path` and, if given, the curves (`curves_csv_text`) to
-    `curves`, together (`gyrodrift.atomic.atomic_files`: neither is replaced unless both are written).
+    `curves`, together (`gyrodrift.files.atomic.atomic_files`: neither is replaced unless both are written).
 
     An existing file is replaced only if it is a table of the same kind written by gyrodrift (or empty); no
     output may be one of `inputs` or the other output (docs/outputs.md).

@@ -4,8 +4,8 @@
 the Rust navigator (and the reference of benchmarks/bench_navigation.py).
 
 Standard optimisation test functions (global minimum 0), for checking and benchmarking optimisers such as
-:func:`gyrodrift.cpso.minimize_cpso`. Each takes a 1-D point ``x`` and returns a float. Minima: sphere,
-rastrigin, ackley, griewank at 0; rosenbrock at (1, ..., 1). Used by tests/test_cpso.py and by
+:func:`gyrodrift.learn.cpso.minimize_cpso`. Each takes a 1-D point ``x`` and returns a float. Minima: sphere,
+rastrigin, ackley, griewank at 0; rosenbrock at (1, ..., 1). Used by tests/learn/test_cpso.py and by
 benchmarks/bench_cpso_chaos_vs_plain.py.
 """
 

@@ -1,0 +1,236 @@
+"""The accuracy study's report: figures (PNG), ``study.json`` and a self-contained ``report.html``.
+
+Every number shown comes from `gyrodrift.fleet.study.StudyResult.to_dict` (the JSON written beside it). The report
+leads with the summary (best method, the physical limit, the hybrid default against it), then the method
+table, then the curves (accuracy vs training-set size, vs noise grade, vs latitude).
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import math
+from typing import Any
+
+from gyrodrift.files.atomic import Stage, write_json
+from gyrodrift.fleet.study import FLEET_ROW
+
+__all__ = ["FIGURES", "STUDY_FILES", "summary_lines", "write_study_report"]
+
+FIGURES = ("methods.png", "train_size.png", "noise_grade.png", "latitude.png")
+STUDY_FILES = ("study.json", "report.html", *FIGURES)
+"""The files `write_study_report` publishes together."""
+
+
+def _f(x: Any, unit: str = "") -> str:
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
+        return "-"
+    return f"{x:.2e}{unit}" if abs(x) < 1e-2 and x != 0 else f"{x:.3g}{unit}"
+
+
+def _pct(x: Any) -> str:
+    return "-" if x is None else f"{100 * x:.0f} %"
+
+
+def summary_lines(doc: dict) -> list[str]:
+    """The report's opening lines (also printed by ``gyrodrift study``)."""
+    methods = doc["methods"]
+    ranked = sorted(methods, key=lambda n: methods[n]["metrics"]["rms_eff"] or math.inf)
+    best = ranked[0]
+    lines = [
+        f"{doc['n_runs']} runs ({doc['n_failed']} failed), {doc['n_train']} for training, {doc['n_test']} held out "
+        f"(seed {doc['seed']}); labels (72 h truth) vs simulated effective drift: RMS "
+        f"{_f(doc['label_error_rms_deg_h'])} deg/h.",
+        f"Best on the held-out runs: {best}, RMS {_f(methods[best]['metrics']['rms_eff'])} deg/h against the "
+        f"effective drift, {_pct(methods[best]['metrics']['under_1nmi_final'])} of runs under 1 nmi at hour 72.",
+    ]
+    limit = doc["physical_limit_deg_h"]
+    if limit is not None:
+        hyb = methods["hybrid default"]["metrics"]
+        lines.append(
+            f"Physical limit (16 h smoother's 1-sigma, RMS over the held-out runs): {_f(limit)} deg/h; the hybrid "
+            f"default is at {_f(hyb['ratio_to_limit'])}x it, the 12 h inversion at "
+            f"{_f(methods['12 h physics inversion']['metrics']['ratio_to_limit'])}x."
+        )
+        fleet = methods.get(FLEET_ROW)
+        if fleet is not None:
+            m = fleet["metrics"]
+            lines.append(
+                f"16 h smoother with the training fleet's k_z prior: {_f(m['ratio_to_limit'])}x the physical limit, "
+                f"{_f(m.get('ratio_to_own_sigma'))}x its own (tighter) 1-sigma, 90 % coverage "
+                f"{_pct(m.get('coverage_eff'))}."
+            )
+        else:
+            lines.append("No fleet-prior smoother row (see the notes).")
+    else:
+        lines.append("No smoother estimates in this campaign: no physical-limit line.")
+    for name, m in methods.items():
+        if m.get("note"):
+            lines.append(f"{name}: {m['note']}.")
+    return lines
+
+
+def _png(fig) -> bytes:
+    buf = io.BytesIO()
+    fig.tight_layout()
+    fig.savefig(buf, format="png", dpi=110)
+    return buf.getvalue()
+
+
+def _subplots(figsize):
+    from matplotlib.figure import Figure  # no pyplot: no global figure state, any backend
+
+    fig = Figure(figsize=figsize)
+    return fig, fig.subplots()
+
+
+def make_figures(doc: dict) -> dict[str, bytes]:
+    """The four figures as PNG bytes."""
+    import matplotlib.ticker
+    import numpy as np
+
+    out: dict[str, bytes] = {}
+    methods = doc["methods"]
+    names = sorted(methods, key=lambda n: methods[n]["metrics"]["rms_eff"] or math.inf)
+    fig, ax = _subplots((8, 0.38 * len(names) + 1.6))
+    y = np.arange(len(names))
+    ax.barh(y - 0.2, [methods[n]["metrics"]["rms_eff"] for n in names], 0.4, label="RMS vs effective drift")
+    ax.barh(y + 0.2, [methods[n]["metrics"]["max_eff"] for n in names], 0.4, label="max vs effective drift", alpha=0.5)
+    if doc["physical_limit_deg_h"] is not None:
+        ax.axvline(doc["physical_limit_deg_h"], color="C3", ls="--", label="smoother 1-sigma (physical limit)")
+    ax.set_yticks(y, names)
+    ax.invert_yaxis()
+    ax.set_xscale("log")
+    ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+    ax.set_xlabel("identification error on held-out runs [deg/h]")
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2)
+    ax.grid(True, axis="x", which="both", alpha=0.3)
+    out["methods.png"] = _png(fig)
+
+    def curve_figure(x, series: dict, xlabel: str, limit=None, xlog=False):
+        fig, ax = _subplots((7, 4))
+        for k, (name, vals) in enumerate(series.items()):
+            ax.plot(x, vals, marker="o", ms=4, label=name, color=f"C{k % 10}")
+        if limit is not None and any(v is not None for v in limit):
+            ax.plot(x, [math.nan if v is None else v for v in limit], "k--", label="smoother 1-sigma")
+        ax.set_yscale("log")
+        if xlog:
+            ax.set_xscale("log")
+            ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+            ax.set_xticks(list(x), [f"{v:g}" for v in x])
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel("RMS error vs effective drift [deg/h]")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7)
+        return _png(fig)
+
+    ts = doc["train_size"]
+    out["train_size.png"] = curve_figure(
+        ts["sizes"],
+        {k: [math.nan if v is None else v for v in vals] for k, vals in ts["rms_eff"].items()},
+        "training runs",
+        xlog=True,
+    )
+    shown = [
+        n
+        for n in (
+            "hybrid default",
+            "GP regression",
+            "12 h physics inversion",
+            "12 h curve fit",
+            "CPSO-LSSVM (LOO)",
+            "16 h smoother",
+            FLEET_ROW,
+        )
+        if n in methods
+    ]
+    bg = doc["by_grade"]
+    out["noise_grade.png"] = curve_figure(
+        bg["arw_deg_rth"],
+        {n: [math.nan if v is None else v for v in bg["rms_eff"][n]] for n in shown},
+        "gyro ARW of the grade [deg/sqrt(h)]",
+        limit=bg["limit_deg_h"],
+        xlog=True,
+    )
+    bl = doc["by_latitude"]
+    out["latitude.png"] = curve_figure(
+        bl["center_deg"],
+        {n: [math.nan if v is None else v for v in bl["rms_eff"][n]] for n in shown},
+        "site latitude (held-out runs, mean of the bin) [deg]",
+        limit=bl.get("limit_deg_h"),
+    )
+    return out
+
+
+def _table(head: list[str], rows: list[list[str]]) -> str:
+    h = "".join(f"<th>{html.escape(c)}</th>" for c in head)
+    body = "".join("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in r) + "</tr>" for r in rows)
+    return f"<table><tr>{h}</tr>{body}</table>"
+
+
+def render_html(doc: dict, images: dict[str, bytes]) -> str:
+    """The self-contained report (figures inlined as base64 PNG)."""
+    methods = doc["methods"]
+    rows = []
+    for n in sorted(methods, key=lambda n: methods[n]["metrics"]["rms_eff"] or math.inf):
+        m = methods[n]["metrics"]
+        rows.append(
+            [
+                n,
+                _f(m["rms_eff"]),
+                _f(m["max_eff"]),
+                _f(m["rms_truth"]),
+                _f(m["max_truth"]),
+                _pct(m["under_1nmi_final"]),
+                _pct(m["under_1nmi_72h"]),
+                _pct(m.get("coverage_eff")),
+                _f(m["ratio_to_limit"]),
+            ]
+        )
+    head = [
+        "method",
+        "RMS eff",
+        "max eff",
+        "RMS truth",
+        "max truth",
+        "<1 nmi @72 h",
+        "<1 nmi over 72 h",
+        "90 % cov.",
+        "RMS / limit",
+    ]
+    parts = [
+        "<!DOCTYPE html><html><head><meta charset='utf-8'><title>gyrodrift accuracy study</title>",
+        "<style>body{font-family:sans-serif;max-width:60em;margin:2em auto}table{border-collapse:collapse}"
+        "td,th{border:1px solid #bbb;padding:2px 6px;text-align:right}td:first-child{text-align:left}</style>",
+        "</head><body><h1>Accuracy study</h1><h2>Summary</h2>",
+        *(f"<p>{html.escape(line)}</p>" for line in summary_lines(doc)),
+        "<h2>Methods on the held-out runs</h2>",
+        "<p>Errors in deg/h: against the simulated effective drift (truth of the noise-free twin) and against the "
+        "72 h truth of the noisy run. Runs under 1 nmi after compensating the estimate, from the stored linear "
+        "error curves. Coverage of nominal 90 % intervals against the effective drift.</p>",
+        _table(head, rows),
+    ]
+    captions = {
+        "methods.png": "RMS and max error per method; dashed: the smoother's 1-sigma.",
+        "train_size.png": "RMS error vs training-set size (learned methods refitted on nested subsets).",
+        "noise_grade.png": "RMS error per noise grade (held-out runs grouped).",
+        "latitude.png": "RMS error vs site latitude (held-out runs in latitude quantiles).",
+    }
+    for name in FIGURES:
+        b64 = base64.b64encode(images[name]).decode()
+        parts.append(f"<h3>{html.escape(captions[name])}</h3><img src='data:image/png;base64,{b64}' alt='{name}'>")
+    if doc["notes"]:
+        parts.append("<h2>Notes</h2>" + "".join(f"<p>{html.escape(n)}</p>" for n in doc["notes"]))
+    parts.append("</body></html>\n")
+    return "".join(parts)
+
+
+def write_study_report(doc: dict, stage: Stage) -> None:
+    """Write ``STUDY_FILES`` into `stage` (published together by the caller's `OutputFolder`)."""
+    images = make_figures(doc)
+    write_json(doc, stage.file("study.json"))
+    for name in FIGURES:
+        stage.file(name).write_bytes(images[name])
+    with open(stage.file("report.html"), "w", encoding="utf-8") as fh:
+        fh.write(render_html(doc, images))

@@ -1,0 +1,208 @@
+"""gyrodrift reproduce on the embedded data: schema, internal consistency, figures, determinism, atomicity."""
+
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from gyrodrift.cli import main
+from gyrodrift.paper.reproduce import reproduce
+
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+FAMILIES = {
+    "physics_encoding",
+    "cpso_paper",
+    "cpso_loo",
+    "pso_loo",
+    "grid_loo",
+    "physics_inversion",
+    "latitude_line",
+    "paper_params",
+}
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("repro") / "out"
+    results = reproduce(out, seed=3, quiet=True)
+    return out, results
+
+
+def test_files_and_figures(run):
+    out, _ = run
+    for name in (
+        "results.json",
+        "report.md",
+        "report.html",
+        "fitness_curve.png",
+        "pred_vs_true.png",
+        "error_per_run.png",
+        "position_error_72h.png",
+    ):
+        assert (out / name).is_file(), name
+    for png in out.glob("*.png"):
+        data = png.read_bytes()
+        assert data.startswith(PNG_MAGIC) and len(data) > 5000
+    html = (out / "report.html").read_text()
+    assert html.count("data:image/png;base64,") == 4
+    md = (out / "report.md").read_text()
+    assert "Table 3" in md and "![" in md
+
+
+def test_report_leads_with_the_result_and_marks_the_selected_model(run):
+    out, results = run
+    md = (out / "report.md").read_text()
+    html = (out / "report.html").read_text()
+    chosen = results["selected_by_loo"]["name"]
+    first_table = md.index("> |")
+    assert first_table < md.index("## ")  # the summary box comes before every section
+    box = md[first_table : md.index("\n\n", first_table)]
+    for what in ("test MAE", "max abs error", "gamma", "sigma", "convergence", "72 h position error"):
+        assert what in box, what
+    chosen_entry = next(m for m in results["methods"] if m["name"] == chosen)
+    assert f"| test MAE [deg/h] | 0.000073 (Table 3) | {chosen_entry['test_mae_deg_h']:.6f} |" in box
+    assert f"**{chosen} (selected)**" in md  # its row of the method table
+    assert html.count("class='sel'") > 20 and "class='box'" in html
+    # one number format per column: every cell of a drift column has 6 decimals
+    rows = [line for line in md.splitlines() if line.startswith("| 2") or line.startswith("| 3")]
+    for line in rows:
+        for cell in line.strip("|").split("|")[1:]:
+            assert len(cell.strip("* ").split(".")[1]) == 6, line
+
+
+def test_implied_72h_errors_and_the_fig45_run_agree_with_the_closed_form(run):
+    _, results = run
+    from gyrodrift.learn.baselines import position_error_of_drift_nmi
+
+    # the closed form of method.md: 0.003 deg/h at 28.222 deg -> 5.40 nmi at 72 h, 0.001 deg/h -> 1.80 nmi
+    assert position_error_of_drift_nmi(72 * 3600.0, 0.003, 28.222) == pytest.approx(5.40, abs=0.005)
+    assert position_error_of_drift_nmi(72 * 3600.0, -0.001, 28.222) == pytest.approx(1.80, abs=0.005)
+    for m in results["methods"]:
+        implied = position_error_of_drift_nmi(72 * 3600.0, np.array(m["test_err_deg_h"]), 28.222)
+        assert m["implied_72h_pos_err_nmi_max"] == pytest.approx(implied.max())
+        assert m["implied_72h_pos_err_nmi_mean"] == pytest.approx(implied.mean())
+    f = results["position_error_72h"]
+    chosen = next(m for m in results["methods"] if m["name"] == results["selected_by_loo"]["name"])
+    k = results["data"]["test_runs"].index(f["run"])
+    err = np.abs(chosen["test_err_deg_h"])
+    assert np.sum(err < err[k]) == (len(err) - 1) // 2  # the (lower) median run
+    assert f["true_drift_deg_h"] == results["data"]["test_true_deg_h"][k]
+    for name in ("uncompensated", "selected", "paper"):
+        # the simulated navigation (core, reciprocating table) against the closed form of the residual drift
+        assert f[f"{name}_final_pos_err_nmi"] == pytest.approx(f[f"{name}_closed_form_72h_nmi"], abs=0.01)
+        assert f[f"{name}_max_pos_err_nmi"] >= f[f"{name}_final_pos_err_nmi"]
+        assert len(f["curves"][f"{name}_pos_err_nmi"]) == len(f["curves"]["t_h"])
+    assert f["curves"]["t_h"][-1] == pytest.approx(72.0)
+    for m in results["methods"]:  # convergence: the first iteration within 1 % of the final fitness, swarms only
+        if m["family"] in ("cpso_paper", "cpso_loo", "pso_loo"):
+            h = np.array(m["fitness_history"])
+            k = m["converged_iteration"]
+            assert h[k - 1] <= h[-1] * 1.01 and (k == 1 or h[k - 2] > h[-1] * 1.01)
+        elif m["family"] == "grid_loo":
+            assert m["converged_iteration"] is None
+
+
+def test_schema_and_internal_consistency(run):
+    out, results = run
+    doc = json.loads((out / "results.json").read_text())
+    assert doc["seed"] == 3
+    true = np.array(doc["data"]["test_true_deg_h"])
+    assert len(true) == 10
+    assert {m["family"] for m in doc["methods"]} == FAMILIES
+    for m in doc["methods"]:
+        for key in (
+            "name",
+            "test_pred_deg_h",
+            "test_err_deg_h",
+            "test_mae_deg_h",
+            "test_max_abs_err_deg_h",
+            "train_mae_deg_h",
+        ):
+            assert key in m, (m["name"], key)
+        pred, err = np.array(m["test_pred_deg_h"]), np.array(m["test_err_deg_h"])
+        np.testing.assert_allclose(err, true - pred, atol=1e-15)
+        assert m["test_mae_deg_h"] == pytest.approx(np.mean(np.abs(err)))
+        assert m["test_max_abs_err_deg_h"] == pytest.approx(np.max(np.abs(err)))
+        if m["family"] in ("cpso_paper", "cpso_loo", "pso_loo"):
+            hist = np.array(m["fitness_history"])
+            assert np.all(np.diff(hist) <= 0) and hist[-1] == pytest.approx(m["fitness"])
+            assert m["settings"]["n_particles"] == 30
+        if "on_search_bound" in m:  # recomputed from the tuned values and the box: 1e-3 of its log10 width
+            (glo, ghi), (slo, shi) = m["search_bounds"]
+            want = [
+                n
+                for n, v, lo, hi in (("gamma", m["gamma"], glo, ghi), ("sigma", m["sigma"], slo, shi))
+                if min(np.log10(v / lo), np.log10(hi / v)) <= 1e-3 * np.log10(hi / lo)
+            ]
+            assert m["on_search_bound"] == want
+        if m["family"] in ("cpso_loo", "grid_loo"):
+            half = np.array(m["interval_90_half_widths_deg_h"])  # one per test run: the interval depends on it
+            assert m["interval_90_half_width_deg_h"] == pytest.approx(np.mean(half))
+            assert np.all(half > 0) and np.all(half < m["test_max_abs_err_deg_h"] * 10)
+            covered = int(np.sum(np.abs(err) <= half))
+            assert covered == m["test_covered_by_interval_90"]
+        if m["family"] == "cpso_loo":
+            assert m["loo_mae_deg_h"] == pytest.approx(m["fitness"], rel=1e-9)
+            assert m["settings"]["chaos_steps"] == 10 and m["settings"]["max_iter"] == 100
+    # Equal budget: plain PSO used at least as many evaluations as the chaos run it is compared with.
+    for enc in ("temp_range", "temp_mean", "temp_span"):
+        c = next(m for m in doc["methods"] if m["family"] == "cpso_loo" and m["encoding"] == enc)
+        p = next(m for m in doc["methods"] if m["family"] == "pso_loo" and m["encoding"] == enc)
+        assert c["nfev"] <= p["nfev"] < c["nfev"] + 30
+    claims = doc["paper_claims"]
+    assert claims["gamma"] == 102.124 and claims["sigma"] == 0.0221 and claims["fitness"] == 5.661e-5
+    assert len(claims["test_pred_deg_h"]) == 10
+    # The paper's numbers are claims beside ours, never returned as a method's output.
+    for m in doc["methods"]:
+        assert m["test_pred_deg_h"] != claims["test_pred_deg_h"]
+
+
+def test_physics_baseline_is_the_closed_form(run):
+    _, results = run
+    from gyrodrift.learn.baselines import physics_inversion
+    from gyrodrift.runs.datasets import load_paper
+
+    m = next(m for m in results["methods"] if m["family"] == "physics_inversion")
+    np.testing.assert_array_equal(m["test_pred_deg_h"], physics_inversion(load_paper().test))
+
+
+def test_deterministic_for_a_seed(run, tmp_path):
+    _, first = run
+    again = reproduce(tmp_path / "again", seed=3, quiet=True)
+    strip = lambda r: [{k: v for k, v in m.items()} for m in r["methods"]]  # noqa: E731
+    assert strip(again) == strip(first)
+
+
+def test_failed_run_leaves_previous_results(run, tmp_path, monkeypatch):
+    out, _ = run
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+
+    def boom(results, stage):
+        stage.file("report.md").write_text("half")
+        raise RuntimeError("disk full")
+
+    monkeypatch.setattr("gyrodrift.paper.report.write_report", boom)
+    with pytest.raises(RuntimeError, match="disk full"):
+        reproduce(out, seed=0, quiet=True)
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before  # no temporary, nothing replaced
+
+
+def test_a_folder_with_the_users_files_is_refused_before_the_work(tmp_path, monkeypatch):
+    out = tmp_path / "d"
+    out.mkdir()
+    (out / "notes.txt").write_text("x")
+    monkeypatch.setattr("gyrodrift.paper.reproduce.run_reproduction", lambda **kw: pytest.fail("work started"))
+    r = CliRunner().invoke(main, ["reproduce", "--out", str(out), "--quiet"])
+    assert r.exit_code == 1 and "holds files gyrodrift did not write (notes.txt)" in r.output.replace(
+        " or that changed since", ""
+    )
+    assert [p.name for p in out.iterdir()] == ["notes.txt"]
+
+
+def test_cli_prints_a_summary(tmp_path):
+    r = CliRunner().invoke(main, ["reproduce", "--out", str(tmp_path / "r"), "--seed", "1"])
+    assert r.exit_code == 0, r.output
+    assert "physics inversion" in r.output and "selected by LOO" in r.output
+    assert "wall time" in r.output and "simulated 72 h" in r.output
+    assert (tmp_path / "r" / "results.json").exists()
