@@ -1,2 +1,2 @@
-"""Safe file input and output: atomic outputs under a manifest, bounded reads of user files, TOML reading and
-writing."""
+"""Safe file input and output: atomic outputs under a manifest, bounded reads of user files, TOML reading,
+validation and writing."""
