@@ -1,37 +1,8 @@
 """Tables of alignment runs: the identification inputs and, when known, the true axial drift.
 
-A run is one initial alignment on a static base. Columns, with their units in the names:
-
-=================  ======  ==========================================================================
-``run``            text    run identifier (number or name), unique within a table
-``lat_deg``        deg     latitude computed by the free navigation at the 12th hour
-``lat0_deg``       deg     true (initial) latitude of the site; optional, else given by the caller
-``temp_min_c``     deg C   lowest system temperature over the 12 h
-``temp_max_c``     deg C   highest system temperature over the 12 h
-``temp_range_c``   text    alternative to the two above: a "min~max" cell such as ``37.1~39.5``
-``drift_deg_h``    deg/h   true axial gyro drift (the training target); optional for prediction
-``split``          text    optional ``train``/``test`` marker
-=================  ======  ==========================================================================
-
-Optional numeric columns (``OPTIONAL_COLUMNS``; empty cell or absent = unknown, NaN):
-
-========================================  ==========  ==================================================
-``drift_std_deg_h``                       deg/h       1-sigma of the label ``drift_deg_h`` (weights the
-                                                      training runs)
-``drift_curvefit_deg_h``                  deg/h       drift from the 12 h curve fit (`gyrodrift.learn.curve_fit`)
-``drift_curvefit_std_deg_h``              deg/h       its least-squares 1-sigma
-``drift_smoother_deg_h``                  deg/h       drift from the 16 h smoother (a physics base)
-``drift_smoother_std_deg_h``              deg/h       its 1-sigma
-``smoother_coeff_deg_h_per_c``            deg/h/degC  the smoother's thermal coefficient k_z (empty under
-                                                      its constant model)
-``smoother_coeff_std_deg_h_per_c``        deg/h/degC  its 1-sigma
-``smoother_end_coeff_cov``                (deg/h)^2   cov(drift_smoother_deg_h, k_z) (the joint
-                                          /degC       posterior's off-diagonal term)
-``smoother_coeff_prior_std_deg_h_per_c``  deg/h/degC  the smoother's own prior 1-sigma of k_z
-``label_flagged``                         bool        ``true`` when `truth` flagged the label (its 1-sigma
-                                                      beyond the 1 nmi / 72 h budget): ``fit`` leaves
-                                                      such runs out by default
-========================================  ==========  ==================================================
+A run is one initial alignment on a static base. The columns (name, unit, type, when needed, meaning) are declared
+in `gyrodrift.runs.columns.RUN_TABLE` and listed in docs/outputs.md; `read_runs_csv` reads them and
+`write_run_table` is the one writer of a run table (``features``, ``campaign --run-table``, `RunTable.to_csv`).
 
 ``label_flagged`` cells are ``true``/``false`` (or ``1``/``0``, any case; empty = unknown); a table keeps
 the flag in ``extra`` as 1.0/0.0 (NaN unknown), written back as ``true``/``false``.
@@ -44,13 +15,23 @@ from __future__ import annotations
 import csv
 import io
 import math
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from gyrodrift.errors import InputError
+from gyrodrift.files.atomic import atomic_write
 from gyrodrift.files.input_files import read_limited
+from gyrodrift.runs.columns import (
+    ATTRIBUTE_COLUMNS,
+    COLUMNS,
+    FLAG_COLUMNS,
+    KNOWN_COLUMNS,
+    OPTIONAL_COLUMNS,
+    SMOOTHER_THERMAL_COLUMNS,
+)
 
 PAPER_LAT0_DEG = 28.222
 """Site latitude of the paper's experiments [deg] (Yu et al. 2013, section 3)."""
@@ -69,31 +50,6 @@ NAVIGATION_GRADE_DRIFT_DEG_H = 0.1
 navigation-grade gyro (a tactical one drifts 1-10 deg/h). A table written in mdeg/h (0.2-3.5 for the paper's
 runs) lies beyond it in every row. Drifts beyond 10 deg/h are refused outright as no RLG at all."""
 
-SMOOTHER_THERMAL_COLUMNS = (
-    "smoother_coeff_deg_h_per_c",
-    "smoother_coeff_std_deg_h_per_c",
-    "smoother_end_coeff_cov",
-    "smoother_coeff_prior_std_deg_h_per_c",
-)
-"""The 16 h smoother's thermal estimate of a run (empty under its constant model): k_z [deg/h/degC], its 1-sigma,
-cov(end drift, k_z) [(deg/h)^2/degC] and the smoother's own prior 1-sigma of k_z [deg/h/degC]; what the fleet
-prior on k_z needs (`gyrodrift.learn.fleet_prior`). The one definition of these names."""
-
-OPTIONAL_COLUMNS = (
-    "drift_std_deg_h",
-    "drift_curvefit_deg_h",
-    "drift_curvefit_std_deg_h",
-    "drift_smoother_deg_h",
-    "drift_smoother_std_deg_h",
-    *SMOOTHER_THERMAL_COLUMNS,
-    "label_flagged",
-)
-"""Optional per-run values a table may carry (NaN where unknown): numbers (units in the names) and the flag
-``label_flagged`` (``FLAG_COLUMNS``); see the module docstring."""
-
-FLAG_COLUMNS = ("label_flagged",)
-"""Optional columns holding a yes/no flag (1.0/0.0 in ``RunTable.extra``, ``true``/``false`` in a CSV)."""
-
 _FLAG_TEXT = {"true": 1.0, "false": 0.0, "1": 1.0, "0": 0.0}
 
 
@@ -105,21 +61,6 @@ def _parse_flag(text: str, where: str, column: str) -> float:
     if value is None:
         raise RunTableError(f"{where}, column {column}: expected true or false, got {text!r}")
     return value
-
-
-KNOWN_COLUMNS: tuple[str, ...] = (
-    "run",
-    "split",
-    "lat_deg",
-    "lat0_deg",
-    "temp_min_c",
-    "temp_max_c",
-    "temp_range_c",
-    "drift_deg_h",
-    "temp_start_c",
-    "temp_end_c",
-    *OPTIONAL_COLUMNS,
-)
 
 
 class RunTableError(InputError):
@@ -202,11 +143,11 @@ class RunTable:
         return self.select(key)
 
     def to_structured(self) -> np.ndarray:
-        """The table as a 1-D numpy structured array (fields ``STRUCTURED_FIELDS``, then the optional columns
+        """The table as a 1-D numpy structured array (fields ``ATTRIBUTE_COLUMNS``, then the optional columns
         the table has); see :func:`as_run_table`."""
         dtype = np.dtype(STRUCTURED_DTYPE.descr + [(name, float) for name in self.extra])
         out = np.empty(len(self), dtype=dtype)
-        for name in STRUCTURED_FIELDS:
+        for name in ATTRIBUTE_COLUMNS:
             out[name] = getattr(self, name)
         for name, values in self.extra.items():
             out[name] = values
@@ -227,7 +168,7 @@ class RunTable:
 
     def replace(self, **changes) -> RunTable:
         """A copy with some columns replaced (keyword = attribute name, e.g. ``drift_deg_h=...``)."""
-        values = {name: getattr(self, name) for name in (*STRUCTURED_FIELDS, "source", "extra")}
+        values = {name: getattr(self, name) for name in (*ATTRIBUTE_COLUMNS, "source", "extra")}
         values.update(changes)
         return RunTable(**values)
 
@@ -241,20 +182,20 @@ class RunTable:
         """
         if not isinstance(records, list) or not records:
             raise RunTableError(f"{source}: expected a non-empty list of runs")
-        cols: dict[str, list] = {name: [] for name in STRUCTURED_FIELDS}
+        cols: dict[str, list] = {name: [] for name in ATTRIBUTE_COLUMNS}
         extra: dict[str, list] = {}
         for i, rec in enumerate(records, start=1):
             where = f"{source}, run {i}"
             if not isinstance(rec, dict):
                 raise RunTableError(f"{where}: expected an object with the run's values, got {type(rec).__name__}")
-            unknown = sorted(set(rec) - set(STRUCTURED_FIELDS) - set(OPTIONAL_COLUMNS))
+            unknown = sorted(set(rec) - set(ATTRIBUTE_COLUMNS) - set(OPTIONAL_COLUMNS))
             if unknown:
                 raise RunTableError(f"{where}: unknown key {unknown[0]!r}")
             run = rec.get("run", str(i))
             if not isinstance(run, str):
                 raise RunTableError(f"{where}, key run: expected text, got {type(run).__name__}")
             values = {}
-            for key in ("lat_deg", "lat0_deg", "temp_min_c", "temp_max_c", "drift_deg_h"):
+            for key in _RECORD_NUMBERS:
                 if key not in rec:
                     if key == "drift_deg_h":
                         values[key] = math.nan
@@ -345,43 +286,24 @@ class RunTable:
 
     def to_csv(self, path) -> None:
         """Write the table as a run-table CSV that `read_runs_csv` (and ``gyrodrift fit``/``predict``) reads back
-        to an equal table: ``run, split, lat_deg, lat0_deg, temp_min_c, temp_max_c, drift_deg_h`` and the optional
-        columns the table has (empty cells where unknown; floats written in full precision).
-
-        The file is written atomically and replaces only a run table (a file starting ``run,``).
+        to an equal table (`write_run_table`): ``run, split, lat_deg, lat0_deg, temp_min_c, temp_max_c``, the
+        optional columns the table has and ``drift_deg_h``, in the order of `gyrodrift.runs.columns.RUN_TABLE`.
 
         >>> import gyrodrift as gd
         >>> gd.load_paper().runs.to_csv("paper.csv")
         >>> read_runs_csv("paper.csv").select(gd.load_paper().runs.split == "test").run.tolist()[:3]
         ['23', '24', '25']
         """
-        from gyrodrift.files.atomic import atomic_write, recognise_header
-
-        columns = ["run", "split", "lat_deg", "lat0_deg", "temp_min_c", "temp_max_c", "drift_deg_h", *self.extra]
-        buf = io.StringIO()
-        writer = csv.writer(buf, lineterminator="\n")
-        writer.writerow(columns)
-        for rec in self.records():
-            writer.writerow(
-                [
-                    ""
-                    if rec.get(c) is None
-                    else str(rec[c]).lower()
-                    if isinstance(rec[c], bool)
-                    else repr(rec[c])
-                    if isinstance(rec[c], float)
-                    else rec[c]
-                    for c in columns
-                ]
-            )
-        with atomic_write(path, recognise=recognise_header("run,"), what="run table") as handle:
-            handle.write(buf.getvalue())
+        write_run_table(path, self.records(), (*ATTRIBUTE_COLUMNS, *self.extra))
 
 
-STRUCTURED_FIELDS = ("run", "lat_deg", "lat0_deg", "temp_min_c", "temp_max_c", "drift_deg_h", "split")
-"""Fields of a run table as a structured array (:meth:`RunTable.to_structured`); units as the columns."""
+STRUCTURED_DTYPE = np.dtype(  # the structured array of `RunTable.to_structured`
+    [(name, float if COLUMNS[name].dtype == "float" else object) for name in ATTRIBUTE_COLUMNS]
+)
 
-STRUCTURED_DTYPE = np.dtype([("run", object), *((name, float) for name in STRUCTURED_FIELDS[1:-1]), ("split", object)])
+_RECORD_NUMBERS = tuple(name for name in ATTRIBUTE_COLUMNS if COLUMNS[name].dtype == "float")
+"""The numbers of a record (`RunTable.from_records`): each required but the last, the label ``drift_deg_h`` (NaN
+when absent)."""
 
 
 def as_run_table(X, *, source: str = "<array>") -> RunTable:
@@ -394,7 +316,7 @@ def as_run_table(X, *, source: str = "<array>") -> RunTable:
     names = getattr(getattr(X, "dtype", None), "names", None)
     if not isinstance(X, np.ndarray) or names is None or X.ndim != 1:
         raise RunTableError(
-            f"expected a RunTable or a 1-D structured array with fields {', '.join(STRUCTURED_FIELDS[1:5])}, "
+            f"expected a RunTable or a 1-D structured array with fields {', '.join(_RECORD_NUMBERS[:-1])}, "
             f"got {type(X).__name__}"
         )
     records = []
@@ -447,27 +369,18 @@ def _check_run_values(
         raise RunTableError(f"{where}, key split: expected 'train', 'test' or '', got {split!r}")
 
 
-def _column_unit(key: str) -> str:
-    """The unit of an optional numeric column, from its name (``OPTIONAL_COLUMNS``)."""
-    if key == "smoother_end_coeff_cov":
-        return "(deg/h)^2/degC"
-    if key.endswith("_deg_h_per_c"):
-        return "deg/h/degC"
-    return "deg/h"
-
-
 def _check_optional(where: str, key: str, value: float) -> None:
     """An optional column's value: NaN (unknown) or a drift-sized number (|value| <= 10 in its unit); a 1-sigma
-    must be > 0."""
+    (`gyrodrift.runs.columns.Column.sigma`) must be > 0."""
     if math.isnan(value):
         return
-    unit = _column_unit(key)
+    unit = COLUMNS[key].unit
     if abs(value) > 10.0:
         raise RunTableError(
             f"{where}, column {key}: |{value}| {unit} is not an RLG {'drift' if unit == 'deg/h' else 'value'} "
             f"(expected |value| <= 10 {unit})"
         )
-    if ("_std_" in key) and not value > 0:
+    if COLUMNS[key].sigma and not value > 0:
         raise RunTableError(f"{where}, column {key}: expected a 1-sigma > 0 {unit}, got {value}")
 
 
@@ -667,7 +580,7 @@ def read_runs_csv(path, *, lat0_deg: float | None = None, require_truth: bool = 
                 if h in FLAG_COLUMNS:
                     extra[h].append(_parse_flag(cell[h], where, h))
                     continue
-                v = math.nan if cell[h] == "" else _parse_float(cell[h], where, h, f"a number in {_column_unit(h)}")
+                v = math.nan if cell[h] == "" else _parse_float(cell[h], where, h, f"a number in {COLUMNS[h].unit}")
                 _check_optional(where, h, v)
                 extra[h].append(v)
     if not runs:
@@ -706,3 +619,55 @@ def check_smoother_thermal(runs: RunTable, what: str) -> None:
             f"{runs.source}: run(s) {'; '.join(shown)}{' ...' if partial.size > 5 else ''} have some but not all of "
             f"the smoother's thermal columns ({what}): give all four (its thermal model) or none (its constant model)"
         )
+
+
+def recognise_run_table(head: bytes) -> bool:
+    """True when `head` (a file's first bytes) starts with a run table's header: ``run`` and then only run-table
+    columns (`gyrodrift.runs.columns.KNOWN_COLUMNS`). The only kind of file `write_run_table` replaces; a table
+    written before a column was added is still recognised."""
+    line, newline, _ = head.lstrip(b"\xef\xbb\xbf").partition(b"\n")
+    names = line.rstrip(b"\r").decode("utf-8", "replace").split(",")
+    return bool(newline) and names[0] == "run" and all(name in KNOWN_COLUMNS for name in names)
+
+
+def run_table_target(path, inputs: Iterable = ()) -> dict:
+    """`path` as a run-table output of `gyrodrift.files.atomic` (``check_output_files``, ``atomic_files``): it may
+    replace only a run table (`recognise_run_table`) and none of `inputs`."""
+    return {"path": path, "inputs": tuple(inputs), "recognise": recognise_run_table, "what": "run table"}
+
+
+def _cell(value) -> str:
+    """A run-table cell: text as is, a flag ``true``/``false``, a number by ``repr`` of its float (the shortest
+    exact round trip), an unknown value (None, NaN) empty."""
+    if value is None or isinstance(value, str):
+        return value or ""
+    if isinstance(value, (bool, np.bool_)):
+        return "true" if value else "false"
+    number = float(value)
+    return repr(number) if math.isfinite(number) else ""
+
+
+def run_table_text(rows: Iterable[Mapping[str, object]], columns: Iterable[str]) -> str:
+    """The CSV text of a run table: a header of `columns`, in the order of `gyrodrift.runs.columns.RUN_TABLE`, and
+    one line per row (a mapping of column name -> value; a missing name is an empty cell). Raises ValueError for a
+    column that is not a run-table column."""
+    wanted = set(columns)
+    unknown = sorted(wanted - set(KNOWN_COLUMNS))
+    if unknown:
+        raise ValueError(f"not run-table columns: {', '.join(unknown)}")
+    header = [name for name in KNOWN_COLUMNS if name in wanted]
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(header)
+    for row in rows:
+        writer.writerow([_cell(row.get(name)) for name in header])
+    return buf.getvalue()
+
+
+def write_run_table(
+    path, rows: Iterable[Mapping[str, object]], columns: Iterable[str], *, inputs: Iterable = ()
+) -> None:
+    """Write a run table (`run_table_text`) to `path`, atomically; an existing file is replaced only if it is a
+    run table (`recognise_run_table`) and is none of `inputs` (docs/outputs.md). The one writer of a run table."""
+    with atomic_write(path, **{k: v for k, v in run_table_target(path, inputs).items() if k != "path"}) as handle:
+        handle.write(run_table_text(rows, columns))
