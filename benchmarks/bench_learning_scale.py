@@ -40,7 +40,7 @@ from threadpoolctl import threadpool_limits
 
 from gyrodrift.learn.encodings import encode
 from gyrodrift.learn.kernels import squared_distances
-from gyrodrift.learn.lssvr import RBFEigenSystem, rbf_batch_errors
+from gyrodrift.learn.lssvm_batch import RBFEigenSystem, rbf_batch_errors
 from gyrodrift.learn.tuning import tune_lssvr
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))

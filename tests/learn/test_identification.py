@@ -12,7 +12,8 @@ from click.testing import CliRunner
 from gyrodrift.cli import main
 from gyrodrift.learn.baselines import latitude_error_at, physics_inversion
 from gyrodrift.learn.kernels import squared_distances
-from gyrodrift.learn.lssvr import LSSVR, rbf_batch_errors
+from gyrodrift.learn.lssvm_batch import rbf_batch_errors
+from gyrodrift.learn.lssvr import LSSVR
 from gyrodrift.learn.model import fit_drift_model, label_weights, select_labelled_runs
 from gyrodrift.learn.model_io import load_model, model_from_dict, model_to_dict, save_model
 from gyrodrift.runs.table import RunTable, read_runs_csv

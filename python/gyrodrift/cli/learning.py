@@ -202,7 +202,7 @@ def fit(
     """
     from gyrodrift.errors import OptionError
     from gyrodrift.files.atomic import check_output_file
-    from gyrodrift.learn.lssvr import IllConditionedError, NotPositiveDefiniteError
+    from gyrodrift.learn.lssvm_system import IllConditionedError
     from gyrodrift.learn.model import DEFAULT_MAX_LABEL_STD_DEG_H, fit_drift_model
     from gyrodrift.learn.model_io import MODEL_FILE_RECOGNISER, save_model
 
@@ -236,7 +236,7 @@ def fit(
                 max_label_std_deg_h=DEFAULT_MAX_LABEL_STD_DEG_H if max_label_std_deg_h is None else max_label_std_deg_h,
                 flagged_labels=flagged_labels,
             )
-    except (IllConditionedError, NotPositiveDefiniteError) as exc:
+    except IllConditionedError as exc:
         if gamma is None:
             raise
         raise OptionError(f"--gamma {gamma:g} --sigma {sigma:g}: {exc}") from None

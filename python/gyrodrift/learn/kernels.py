@@ -5,7 +5,7 @@ the inputs. Conventions (docs/conventions.md, "Kernel and hyperparameters"):
 
 * RBF ``K(x, z) = exp(-|x - z|^2 / sigma^2)`` - ``sigma^2`` in the denominator, no factor 2
   (Yu et al. 2013, after Suykens). The kernel width is ``sigma``, never ``gamma``: in this project
-  ``gamma`` is the LSSVM regularisation (see :mod:`gyrodrift.learn.lssvr`).
+  ``gamma`` is the LSSVM regularisation (see :mod:`gyrodrift.learn.lssvm_system`).
 * linear ``K(x, z) = x . z``.
 * polynomial ``K(x, z) = (x . z / sigma^2 + coef0)^degree``.
 
@@ -173,7 +173,7 @@ def polynomial_kernel(X, Z=None, sigma: float = 1.0, degree: int = 3, coef0: flo
     """Polynomial kernel ``K[i, j] = (X[i] . Z[j] / sigma^2 + coef0)^degree``.
 
     ``degree`` is an integer >= 1. The kernel is positive semi-definite for ``coef0 >= 0``; with
-    ``coef0 < 0`` it may be indefinite and an LSSVM fit may fail (see :mod:`gyrodrift.learn.lssvr`).
+    ``coef0 < 0`` it may be indefinite and an LSSVM fit may fail (see :mod:`gyrodrift.learn.lssvm_system`).
     scikit-learn equivalent: ``polynomial_kernel(gamma=1/sigma^2, coef0=coef0, degree=degree)``.
     """
     sigma = check_sigma(sigma)

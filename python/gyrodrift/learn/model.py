@@ -84,13 +84,8 @@ from gyrodrift.errors import InputError, OptionError
 from gyrodrift.learn.baselines import physics_inversion
 from gyrodrift.learn.encodings import encode, feature_names
 from gyrodrift.learn.fleet_prior import drift_with_coefficient_prior, pooled_coefficient_prior
-from gyrodrift.learn.lssvr import (
-    LSSVR,
-    IllConditionedWarning,
-    _validate_data,
-    check_sample_weight,
-    condition_warning_message,
-)
+from gyrodrift.learn.lssvm_system import IllConditionedWarning, check_sample_weight, condition_warning_message
+from gyrodrift.learn.lssvr import LSSVR, _validate_data
 from gyrodrift.learn.spread import CalibrationScale, SpreadGP, calibration_scale
 from gyrodrift.learn.tuning import (
     DEFAULT_BOUNDS,
@@ -507,7 +502,7 @@ class TunedLSSVR(RegressorMixin, BaseEstimator):
 
         ``tuning``, a :class:`~gyrodrift.learn.tuning.TuningResult` of an earlier fit on the same data (a model
         file's record), skips the search and uses its gamma and sigma: how a saved model is rebuilt.
-        ``sample_weight`` (> 0 per sample) weights the LS-SVM and the tuning fitness (``gyrodrift.learn.lssvr``).
+        ``sample_weight`` (> 0 per sample) weights the LS-SVM and the tuning fitness (``gyrodrift.learn.lssvm_system``).
         ``solution``, a model file's stored LSSVR solution (``alpha``, ``intercept``, ``loo_residuals``,
         ``condition_number``), is used as given after `LSSVR.from_solution`'s O(32 n) check (with every sample
         weight > 0): how a saved model is rebuilt without solving the n x n system.

@@ -72,7 +72,7 @@ from gyrodrift.choices import (
 from gyrodrift.errors import GyrodriftError, InputError
 from gyrodrift.files.atomic import atomic_write_json, recognise_json_format
 from gyrodrift.files.input_files import read_limited
-from gyrodrift.learn.lssvr import IllConditionedWarning
+from gyrodrift.learn.lssvm_system import IllConditionedWarning
 from gyrodrift.learn.model import DriftModel, make_drift_model, training_digest
 from gyrodrift.learn.tuning import SearchBoundWarning, TuningResult
 from gyrodrift.runs.table import RunTable, RunTableError

@@ -10,8 +10,8 @@ Objectives (all mean absolute errors in the target's unit, deg/h for drift model
 The search runs in log10 space over both parameters. Every objective evaluation handles the whole swarm at
 once and reuses one squared-distance matrix of the (already scaled) inputs; candidates that share one sigma (a
 grid's column, particles clipped onto a sigma bound) share one eigendecomposition, kept for the next calls
-(``gyrodrift.learn.lssvr.rbf_batch_errors``, ``EigenCache``): a swarm pressing on a sigma bound evaluates the particles
-there in O(n^2) each. Their values agree with the per-candidate Cholesky path to about cond(H) eps (1e-12 to
+(``gyrodrift.learn.lssvm_batch.rbf_batch_errors``, ``EigenCache``): a swarm pressing on a sigma bound evaluates the
+particles there in O(n^2) each. Their values agree with the per-candidate Cholesky path to about cond(H) eps (1e-12 to
 1e-9 relative), so a swarm's trajectory may differ from before only where two candidates tie to that precision.
 
 BLAS threads: :func:`tune_lssvr` runs its thousands of small factorisations with one BLAS thread
@@ -55,7 +55,8 @@ from gyrodrift.choices import METHODS, OBJECTIVES
 from gyrodrift.errors import OptionError
 from gyrodrift.learn.cpso import minimize_cpso
 from gyrodrift.learn.kernels import SIGMA_MAX, SIGMA_MIN, available_memory_bytes, check_matrix_memory, squared_distances
-from gyrodrift.learn.lssvr import _STACKED_MAX_N, EigenCache, check_sample_weight, lssvr_solve, rbf_batch_errors
+from gyrodrift.learn.lssvm_batch import STACKED_MAX_N, EigenCache, rbf_batch_errors
+from gyrodrift.learn.lssvm_system import check_sample_weight, lssvr_solve
 
 DEFAULT_BOUNDS = ((1e-2, 1e5), (1e-3, 1e2))
 """Default search box ((gamma_lo, gamma_hi), (sigma_lo, sigma_hi)); sigma in the scaled input units."""
@@ -177,8 +178,8 @@ def _kfold_errors(sqdist: np.ndarray, y: np.ndarray, gammas, sigmas, n_folds: in
 
 
 EIGEN_CACHE_BYTES = 512 * 2**20
-"""Most memory the tuner's cached eigendecompositions may hold (``gyrodrift.learn.lssvr.EigenCache``, 16 n^2 bytes per
-sigma: 32 sigmas at n = 1000), and never more than half of the memory left beside the candidates."""
+"""Most memory the tuner's cached eigendecompositions may hold (``gyrodrift.learn.lssvm_batch.EigenCache``, 16 n^2
+bytes per sigma: 32 sigmas at n = 1000), and never more than half of the memory left beside the candidates."""
 
 SIGMA_STEP_DECADES = 0.01
 """Grid step, in decades, onto which the swarm's sigmas are snapped for ``SNAP_MIN_N`` < n <= 200 samples (a
@@ -188,7 +189,7 @@ module docstring ("Snapped sigmas")."""
 SIGMA_STEP_MAX = 0.1
 """Coarsest snapping step, in decades (a factor 1.26 in sigma), from n = 1000 samples on."""
 
-SNAP_MIN_N = _STACKED_MAX_N
+SNAP_MIN_N = STACKED_MAX_N
 """Sigmas are snapped only for more training samples than this (the paper's 22 runs keep the swarm of before)."""
 
 
@@ -237,11 +238,11 @@ def make_objective(
     """A vectorised objective ``f(params) -> fitness`` for (gamma, sigma) rows of ``params`` (shape (m, 2)).
 
     ``X`` is the scaled input matrix (n, d), ``y`` the targets (n,). Failed factorisations give +inf. With
-    ``sample_weight`` (w_i > 0) the LSSVMs are weighted (``gyrodrift.learn.lssvr``) and the fitness is the weighted
-    mean absolute error ``sum w_i |e_i| / sum w_i``. ``threads``: the candidates of one call are shared among that
-    many threads (``gyrodrift.learn.lssvr.rbf_batch_errors``; the values do not depend on it). ``sigma_snap`` =
-    ``(step_decades, low, high)``: every sigma is first moved onto that grid (:func:`snap_sigmas`), so the value
-    is the objective at the snapped sigma.
+    ``sample_weight`` (w_i > 0) the LSSVMs are weighted (``gyrodrift.learn.lssvm_system``) and the fitness is the
+    weighted mean absolute error ``sum w_i |e_i| / sum w_i``. ``threads``: the candidates of one call are shared among
+    that many threads (``gyrodrift.learn.lssvm_batch.rbf_batch_errors``; the values do not depend on it).
+    ``sigma_snap`` = ``(step_decades, low, high)``: every sigma is first moved onto that grid (:func:`snap_sigmas`),
+    so the value is the objective at the snapped sigma.
     """
     if objective not in OBJECTIVES:
         raise OptionError(f"unknown objective {objective!r}; expected one of {', '.join(OBJECTIVES)}")
