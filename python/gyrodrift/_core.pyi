@@ -1,7 +1,8 @@
 """Type stubs of the Rust extension `gyrodrift._core` (crates/gyrodrift-py; docs/ins-binding-contract.md and
-docs/alignment-contract.md). SI units everywhere. Every refusal is `gyrodrift.errors.CoreError` (its `key`
-attribute names the setting or input). Keyword defaults of None take the core's default (documented in the
-contracts; each config shows it resolved as an attribute)."""
+docs/alignment-contract.md). SI units everywhere. Every refusal is a `gyrodrift.errors.CoreError`, the subclass of
+the core's error kind (`CoreSettingError`, `CoreShapeError`, `CoreSampleError`, `CoreDivergedError`,
+`CoreIncompleteError`; its `key` attribute names the setting or input). Keyword defaults of None take the core's
+default (documented in the contracts; each config shows it resolved as an attribute)."""
 
 from collections.abc import Sequence
 from typing import Any, ClassVar, Final

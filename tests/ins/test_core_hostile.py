@@ -1,7 +1,8 @@
 """Hostile arrays and configs into the Rust core give `gyrodrift.errors.CoreError`, never a PanicException or a hang.
 
-Each case asserts the exact package class (a PanicException derives from BaseException, not Exception, so
-``pytest.raises(CoreError)`` would let it through as a failure) and that the message names the input.
+Each case asserts the exact package class of the core's error kind (`CoreSettingError`, `CoreShapeError`,
+`CoreSampleError`, `CoreDivergedError`, `CoreIncompleteError`; a PanicException derives from BaseException, not
+Exception, so ``pytest.raises(CoreError)`` would let it through as a failure) and that the message names the input.
 """
 
 from __future__ import annotations
@@ -12,7 +13,16 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from gyrodrift import _core
-from gyrodrift.errors import CoreError
+from gyrodrift.errors import (
+    CoreDivergedError,
+    CoreError,
+    CoreIncompleteError,
+    CoreSampleError,
+    CoreSettingError,
+    CoreShapeError,
+    InputError,
+    OptionError,
+)
 
 G = 9.80665
 RATE_HZ = 10.0
@@ -43,14 +53,15 @@ def test_five_g_horizontal_alignment_is_a_core_error():
     dth, dv = _static(6200, (5 * G, 0.0, G))
     with pytest.raises(CoreError, match="static base") as info:
         al.process(dth, dv)
-    assert type(info.value) is CoreError
+    assert type(info.value) is CoreDivergedError
     assert info.value.key == "accel_bias_m_s2"
-    with pytest.raises(CoreError, match="static base"):
+    assert f"at t = {info.value.t_s:g} s" in str(info.value) and 300.0 < info.value.t_s <= 620.0
+    with pytest.raises(CoreDivergedError, match="static base"):
         al.result()
 
 
 def _bad_arrays():
-    """(label, dtheta, dv, expected key): arrays the core must refuse."""
+    """(label, dtheta, dv, expected key, expected class): arrays the core must refuse."""
     dth, dv = _static(50)
     nan = dth.copy()
     nan[7, 1] = np.nan
@@ -59,30 +70,33 @@ def _bad_arrays():
     huge = dv.copy()
     huge[0, 2] = 1e300
     return [
-        ("nan", nan, dv, "dtheta_rad"),
-        ("inf", dth, inf, "dv_m_s"),
-        ("1e300", dth, huge, "dv_m_s"),
-        ("wrong columns", np.zeros((50, 4)), dv, "dtheta_rad"),
-        ("one-dimensional", np.zeros(150), dv, "dtheta_rad"),
-        ("three-dimensional", np.zeros((50, 3, 1)), dv, "dtheta_rad"),
-        ("rows differ", dth, dv[:-1], "dv_m_s"),
-        ("complex", dth.astype(complex), dv, "dtheta_rad"),
-        ("strings", np.full((50, 3), "x"), dv, "dtheta_rad"),
-        ("boolean", np.zeros((50, 3), dtype=bool), dv, "dtheta_rad"),
-        ("not an array", "abc", dv, "dtheta_rad"),
-        ("None", None, dv, "dtheta_rad"),
-        ("ragged list", [[0.0, 0.0], [0.0]], dv, "dtheta_rad"),
+        ("nan", nan, dv, "dtheta_rad", CoreSampleError),
+        ("inf", dth, inf, "dv_m_s", CoreSampleError),
+        ("1e300", dth, huge, "dv_m_s", CoreSampleError),
+        ("wrong columns", np.zeros((50, 4)), dv, "dtheta_rad", CoreShapeError),
+        ("one-dimensional", np.zeros(150), dv, "dtheta_rad", CoreShapeError),
+        ("three-dimensional", np.zeros((50, 3, 1)), dv, "dtheta_rad", CoreShapeError),
+        ("rows differ", dth, dv[:-1], "dv_m_s", CoreShapeError),
+        ("complex", dth.astype(complex), dv, "dtheta_rad", CoreShapeError),
+        ("strings", np.full((50, 3), "x"), dv, "dtheta_rad", CoreShapeError),
+        ("boolean", np.zeros((50, 3), dtype=bool), dv, "dtheta_rad", CoreShapeError),
+        ("not an array", "abc", dv, "dtheta_rad", CoreShapeError),
+        ("None", None, dv, "dtheta_rad", CoreShapeError),
+        ("ragged list", [[0.0, 0.0], [0.0]], dv, "dtheta_rad", CoreShapeError),
     ]
 
 
-@pytest.mark.parametrize("label,dth,dv,key", _bad_arrays(), ids=[c[0] for c in _bad_arrays()])
+@pytest.mark.parametrize("label,dth,dv,key,kind", _bad_arrays(), ids=[c[0] for c in _bad_arrays()])
 @pytest.mark.parametrize("make", [_aligner, _navigator], ids=["aligner", "navigator"])
-def test_bad_arrays_are_core_errors(make, label, dth, dv, key):
+def test_bad_arrays_are_core_errors(make, label, dth, dv, key, kind):
     obj = make()
     with pytest.raises(CoreError) as info:
         obj.process(dth, dv)
-    assert type(info.value) is CoreError
+    assert type(info.value) is kind
     assert info.value.key == key, str(info.value)
+    if kind is CoreSampleError:
+        assert info.value.index == {"nan": 7, "inf": 3, "1e300": 0}[label]
+        assert f"sample {info.value.index}:" in str(info.value)
     assert key in str(info.value)
     assert obj.samples_done == 0
 
@@ -122,17 +136,17 @@ def test_zero_rows_are_no_samples():
 def test_navigator_divergence_and_arguments():
     nav = _navigator()
     dth, dv = _static(36_000, (0.0, 90 * G, G))
-    with pytest.raises(CoreError, match="left the Earth"):
+    with pytest.raises(CoreDivergedError, match="left the Earth"):
         nav.process(dth, dv, 1000)
     nav = _navigator()
     for bad in (0, -3):
-        with pytest.raises(CoreError, match="decimation"):
+        with pytest.raises(CoreShapeError, match="decimation"):
             nav.process(*_static(3), bad)
-    with pytest.raises(CoreError, match="b_rad_s"):
+    with pytest.raises(CoreShapeError, match="b_rad_s"):
         nav.set_gyro_bias([0.0, 0.0])
-    with pytest.raises(CoreError, match="gyro bias"):
+    with pytest.raises(CoreSettingError, match="gyro bias"):
         nav.set_gyro_bias([np.nan, 0.0, 0.0])
-    with pytest.raises(CoreError, match="b_m_s2"):
+    with pytest.raises(CoreShapeError, match="b_m_s2"):
         nav.set_accel_bias("abc")
 
 
@@ -162,36 +176,61 @@ def _sim_config(**kw) -> _core.SimulatorConfig:
 def test_hostile_simulator_configs(kw, key):
     with pytest.raises(CoreError) as info:
         _core.ImuSimulator(_sim_config(**kw))
-    assert type(info.value) is CoreError
+    assert type(info.value) is CoreSettingError
     assert info.value.key == key, str(info.value)
 
 
 def test_simulator_chunk_sizes():
     sim = _core.ImuSimulator(_sim_config())
     for bad in (0, -1, 2**40):
-        with pytest.raises(CoreError, match="chunk"):
+        with pytest.raises(CoreSettingError, match="chunk"):
             sim.next_chunk(bad)
     assert len(sim.next_chunk(10**9 // 100)["t_s"]) == 1000
     assert sim.next_chunk(5) is None
 
 
 def test_huge_aligner_and_navigator_configs():
-    with pytest.raises(CoreError, match="coarse_s"):
+    with pytest.raises(CoreSettingError, match="coarse_s"):
         _core.AlignerConfig(lat_rad=0.5, lon_rad=0.0, height_m=0.0, rate_hz=RATE_HZ, coarse_s=1e300)
-    with pytest.raises(CoreError, match="latitude"):
+    with pytest.raises(CoreSettingError, match="latitude"):
         _core.NavigatorConfig(
             lat_rad=1.6, lon_rad=0.0, height_m=0.0, pitch_rad=0.0, roll_rad=0.0, yaw_rad=0.0, rate_hz=RATE_HZ
         )
-    with pytest.raises(CoreError, match="rate_hz"):
+    with pytest.raises(CoreSettingError, match="rate_hz"):
         _core.NavigatorConfig(
             lat_rad=0.5, lon_rad=0.0, height_m=0.0, pitch_rad=0.0, roll_rad=0.0, yaw_rad=0.0, rate_hz=1e308
         )
-    with pytest.raises(CoreError, match="vertical"):
+    with pytest.raises(CoreSettingError, match="vertical"):
         _core.NavigatorConfig(
             lat_rad=0.5, lon_rad=0.0, height_m=0.0, pitch_rad=0.0, roll_rad=0.0, yaw_rad=0.0, rate_hz=10, vertical="x"
         )
-    with pytest.raises(CoreError, match="rotation_scheme"):
+    with pytest.raises(CoreSettingError, match="rotation_scheme"):
         _sim_config(rotation_scheme="wobble")
+
+
+def test_each_core_error_kind_is_its_own_class():
+    # gyrodrift_core::error::CoreError's five kinds, each mapped once in the binding to its class; all stay a
+    # CoreError (an InputError, a ValueError), and a bad setting is also an OptionError.
+    for kind in (CoreSettingError, CoreShapeError, CoreSampleError, CoreDivergedError, CoreIncompleteError):
+        assert issubclass(kind, CoreError) and issubclass(kind, InputError) and issubclass(kind, ValueError)
+    assert issubclass(CoreSettingError, OptionError)
+    assert not issubclass(CoreShapeError, OptionError)
+    with pytest.raises(CoreSettingError) as setting:
+        _core.SmootherConfig(lat_rad=0.5, lon_rad=0.0, height_m=0.0, rate_hz=RATE_HZ, update_s=-1.0)
+    assert setting.value.key == "update_s" and str(setting.value).startswith("update_s: ")
+    al = _aligner()
+    al.process(*_static(40))
+    with pytest.raises(CoreIncompleteError) as incomplete:
+        al.result()
+    assert (incomplete.value.key, incomplete.value.done, incomplete.value.needed) == ("samples", 40, al.n_samples)
+    assert str(incomplete.value) == f"alignment not complete: 40 of {al.n_samples} samples processed"
+    sm = _core.Smoother(
+        _core.SmootherConfig(lat_rad=0.5, lon_rad=0.0, height_m=0.0, rate_hz=RATE_HZ, span_s=900.0, thermal=True)
+    )
+    with pytest.raises(CoreShapeError, match="temp_c"):
+        sm.process(*_static(5), np.zeros(4))
+    with pytest.raises(CoreIncompleteError):
+        sm.result()
 
 
 def test_configs_resolve_the_core_defaults():
@@ -233,7 +272,7 @@ def test_fill_into_matches_next_chunk_and_refuses_bad_buffers():
     for key, arrays in bad:
         with pytest.raises(CoreError) as info:
             sim.fill_into(arrays)
-        assert type(info.value) is CoreError and info.value.key == key, str(info.value)
+        assert type(info.value) is CoreShapeError and info.value.key == key, str(info.value)
     assert sim.samples_done == 0
 
 

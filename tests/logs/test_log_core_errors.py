@@ -13,7 +13,7 @@ import pytest
 from click.testing import CliRunner
 
 from gyrodrift.cli import main
-from gyrodrift.errors import CoreError
+from gyrodrift.errors import CoreDivergedError, CoreError
 from gyrodrift.ins.stream import run_navigators
 from gyrodrift.logs import ImuLog, open_log
 
@@ -53,15 +53,16 @@ def test_a_core_refusal_of_the_log_names_the_file_in_one_line(five_g_log, tmp_pa
     assert not out.exists()
 
 
-def test_the_key_is_kept_and_a_named_error_is_not_named_twice(five_g_log):
+def test_the_kind_and_its_attributes_are_kept_and_a_named_error_is_not_named_twice(five_g_log):
     log = open_log(five_g_log, site={"lat_deg": 30.0})
     with pytest.raises(CoreError) as info, log.core_errors(), log.core_errors():
-        err = CoreError("accel_bias_m_s2: at t = 3 s: no static base")
-        err.key = "accel_bias_m_s2"  # type: ignore[attr-defined]
+        err = CoreDivergedError("accel_bias_m_s2: at t = 3 s: no static base")
+        err.key, err.t_s = "accel_bias_m_s2", 3.0
         raise err
     assert str(info.value) == f"{five_g_log}: accel_bias_m_s2: at t = 3 s: no static base"
-    assert info.value.key == "accel_bias_m_s2"  # type: ignore[attr-defined]
-    assert isinstance(info.value.__cause__, CoreError)
+    assert type(info.value) is CoreDivergedError
+    assert (info.value.key, info.value.t_s) == ("accel_bias_m_s2", 3.0)
+    assert type(info.value.__cause__) is CoreDivergedError
 
 
 class _Refusing:

@@ -4,13 +4,14 @@
 
 mod alignment;
 mod config;
+mod errors;
 mod plan;
 mod smoother;
 
 use config::{AlignerConfig, NavigatorConfig, SimulatorConfig};
+use errors::{arg_err, core_err};
 
 use gyrodrift_core::earth;
-use gyrodrift_core::error::CoreError as CoreFailure;
 use gyrodrift_core::simulator::{ImuChunk, ImuChunkSlices, ImuSimulator as CoreSimulator, TruthSlices};
 use gyrodrift_core::strapdown::{NavState, Navigator as CoreNavigator};
 use gyrodrift_core::turntable::{balanced_reciprocating_span, RotationScheme};
@@ -77,29 +78,6 @@ fn meridian_radius<'py>(py: Python<'py>, lat_rad: PyReadonlyArray1<'py, f64>) ->
 #[pyfunction]
 fn transverse_radius<'py>(py: Python<'py>, lat_rad: PyReadonlyArray1<'py, f64>) -> PyResult<Bound<'py, PyArray1<f64>>> {
     lat_map(py, &lat_rad, earth::transverse_radius)
-}
-
-pyo3::import_exception!(gyrodrift.errors, CoreError);
-
-/// The one mapping of the core's error to Python: `gyrodrift.errors.CoreError` with the message, and the
-/// offending setting or input in its `key` attribute (e.g. "lat_rad", "dtheta_rad").
-fn core_err(e: CoreFailure) -> PyErr {
-    let key = e.key();
-    let err = CoreError::new_err(e.to_string());
-    Python::attach(|py| {
-        // Setting an attribute on a fresh exception instance cannot fail short of memory exhaustion; the
-        // message alone is still a complete error then.
-        let _ = err.value(py).setattr("key", key);
-    });
-    err
-}
-
-/// A binding-side refusal (wrong argument type or shape) as a `gyrodrift.errors.CoreError` naming `key`.
-fn arg_err(key: &'static str, message: impl std::fmt::Display) -> PyErr {
-    core_err(CoreFailure::Shape {
-        key,
-        message: message.to_string(),
-    })
 }
 
 /// Static-base IMU simulator with a single-axis turntable (see gyrodrift-core `simulator`).

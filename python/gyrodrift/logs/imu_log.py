@@ -528,7 +528,8 @@ class ImuLog:
 
         The core's message is kept (the quantity, and the time ``t`` [s] counted from the first sample it was
         given when it says one); `first` is that sample's 0-based index in the log, named as a row when it is not
-        the log's first. The ``key`` attribute is kept too. An error that already names the log passes unchanged.
+        the log's first. The class (the core's kind) and its attributes (``key``, ``t_s``, ...) are kept too. An
+        error that already names the log passes unchanged.
         """
         try:
             yield
@@ -537,8 +538,8 @@ class ImuLog:
             if text.startswith(f"{self.label}: "):
                 raise
             since = "" if first == 0 else f" (t counted from {_where(self, first).removeprefix(self.label + ', ')})"
-            err = CoreError(f"{self.label}: {text}{since}")
-            err.key = getattr(exc, "key", None)  # type: ignore[attr-defined]
+            err = type(exc)(f"{self.label}: {text}{since}")
+            err.__dict__.update(exc.__dict__)  # the kind's attributes (key, index, t_s, ...)
             raise err from exc
 
     # ------------------------------------------------------------------------------------------
