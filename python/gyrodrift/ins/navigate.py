@@ -511,7 +511,7 @@ def _truth_at(ref: ReferenceTrack | None, site: Site | None) -> TruthAt | None:
         return along
     if site is None:
         return None
-    lat0, lon0 = site.lat_deg * DEG, site.lon_deg * DEG
+    lat0, lon0 = site.lat_rad, site.lon_rad
     return lambda t: (np.full(np.shape(t), lat0), np.full(np.shape(t), lon0))
 
 

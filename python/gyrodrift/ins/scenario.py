@@ -312,9 +312,7 @@ class Scenario:
         # "balanced": the core replaces the one-turn span by the balanced span near it.
         span_rad = 2.0 * math.pi if isinstance(rot.span_deg, str) else rot.span_deg * DEG
         return _core.SimulatorConfig(
-            lat_rad=s.lat_deg * DEG,
-            lon_rad=s.lon_deg * DEG,
-            height_m=float(s.height_m),
+            **s.core_position(),
             rate_hz=float(r.rate_hz),
             duration_s=r.duration_h * HOUR,
             seed=int(r.seed),

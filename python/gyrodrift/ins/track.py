@@ -20,7 +20,6 @@ dlon/dt = v_E / ((R_N + h) cos lat)), linear otherwise. Sources:
 from __future__ import annotations
 
 import json
-import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -97,8 +96,8 @@ class ReferenceTrack:
         t = np.concatenate([[0.0], *parts["t_s"]])
         return cls(
             t_s=t,
-            lat_rad=np.concatenate([[math.radians(s.lat_deg)], *parts["lat_rad"]]),
-            lon_rad=np.concatenate([[math.radians(s.lon_deg)], *parts["lon_rad"]]),
+            lat_rad=np.concatenate([[s.lat_rad], *parts["lat_rad"]]),
+            lon_rad=np.concatenate([[s.lon_rad], *parts["lon_rad"]]),
             height_m=np.concatenate([[float(s.height_m)], *parts["height_m"]]),
             vel_enu_m_s=np.concatenate([np.zeros((1, 3)), *parts["vel_enu_m_s"]]),
             label="<route>",

@@ -21,7 +21,7 @@ from gyrodrift.logs import ImuLog, LogError
 from gyrodrift.procedure.results import Alignment
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 from gyrodrift.progress import progress
-from gyrodrift.units import ARCSEC, DEG, DEG_PER_H, HOUR, MICRO_G
+from gyrodrift.units import ARCSEC, DEG_PER_H, HOUR, MICRO_G
 
 __all__ = ["align_log", "GYRO_BIAS_Z_STATE"]
 
@@ -78,9 +78,7 @@ def align_log(
     align_s = timeline.align_h * HOUR
     log.require_duration(align_s, "the alignment")
     config: dict[str, Any] = {
-        "lat_rad": site.lat_deg * DEG,
-        "lon_rad": site.lon_deg * DEG,
-        "height_m": float(site.height_m),
+        **site.core_position(),
         "rate_hz": log.rate_hz,
         "coarse_s": float(timeline.coarse_s),
         "fine_s": align_s - float(timeline.coarse_s),

@@ -158,8 +158,7 @@ def navigate_after_alignment(
         t_h = np.append(t_h, n_nav / rate / HOUR)
     hours_done = np.arange(0, len(tracks[0].hourly) + 1, dtype=float) if tracks else np.zeros(1)
     if reference is None:
-        lat0 = alignment.site.lat_deg * DEG
-        lon0 = alignment.site.lon_deg * DEG
+        lat0, lon0 = alignment.site.lat_rad, alignment.site.lon_rad
         hourly_true = np.full(len(hours_done), lat0)
     else:
         lat0, lon0, _ = reference.at(start / rate + t_h * HOUR)

@@ -291,9 +291,7 @@ def identification_curve(
         raise InputError(f"span_h: {spans[-1]:g} h outlasts the mission (ends at {timeline.align_h + mission:g} h)")
     site = scn.site
     keywords: dict[str, Any] = {
-        "lat_rad": site.lat_deg * DEG,
-        "lon_rad": site.lon_deg * DEG,
-        "height_m": float(site.height_m),
+        **site.core_position(),
         "rate_hz": float(scn.run.rate_hz),
         "coarse_s": float(timeline.coarse_s),
         "span_s": float(spans[-1]) * HOUR,

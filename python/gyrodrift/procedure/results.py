@@ -7,7 +7,7 @@ neither, nor matplotlib, nor the file system: the dependency runs one way, algor
 - `Alignment` (`align_log`): attitude, biases and their 1-sigma at the end of alignment.
 - `NavCurve`, `TemperatureStats`, `PassResult` (`navigate_after_alignment`): the error curves of one read.
 - `SmootherEstimate` (`smooth_log`): the 16 h smoother's drift, its 1-sigma and history.
-- `TrueDrift` (`find_true_drift`), `RunFeatures` (`extract_features`; `RUN_TABLE_COLUMNS` is its run-table row),
+- `TrueDrift` (`find_true_drift`), `RunFeatures` (`extract_features`; `RunFeatures.row` is its run-table row),
   `Evaluation` (`evaluate_compensation`), `Identification` (`identify`).
 """
 
@@ -21,7 +21,7 @@ import numpy as np
 
 from gyrodrift.earth import NMI_M
 from gyrodrift.learn.fleet_prior import drift_with_coefficient_prior
-from gyrodrift.runs.table import SMOOTHER_THERMAL_COLUMNS
+from gyrodrift.runs.columns import FEATURES_COLUMNS, LABEL_COLUMNS, SMOOTHER_THERMAL_COLUMNS
 from gyrodrift.site import Site
 from gyrodrift.units import DEG, DEG_PER_H, MICRO_G
 
@@ -34,8 +34,6 @@ __all__ = [
     "TemperatureStats",
     "PassResult",
     "TrueDrift",
-    "RUN_TABLE_COLUMNS",
-    "SMOOTHER_THERMAL_COLUMNS",
     "RunFeatures",
     "Evaluation",
     "Identification",
@@ -111,9 +109,7 @@ class Alignment:
         from gyrodrift import _core
 
         return _core.NavigatorConfig(
-            lat_rad=self.site.lat_deg * DEG,
-            lon_rad=self.site.lon_deg * DEG,
-            height_m=float(self.site.height_m),
+            **self.site.core_position(),
             vel_enu_m_s=[float(v) for v in self.vel_enu_m_s],
             pitch_rad=self.pitch_deg * DEG,
             roll_rad=self.roll_deg * DEG,
@@ -320,32 +316,14 @@ class TrueDrift:
         }
 
 
-RUN_TABLE_COLUMNS = (
-    "run",
-    "lat_deg",
-    "lat0_deg",
-    "temp_min_c",
-    "temp_max_c",
-    "temp_start_c",
-    "temp_end_c",
-    "drift_curvefit_deg_h",
-    "drift_curvefit_std_deg_h",
-    "drift_smoother_deg_h",
-    "drift_smoother_std_deg_h",
-    *SMOOTHER_THERMAL_COLUMNS,
-)
-"""Columns written by `gyrodrift features` (plus ``drift_deg_h``, ``drift_std_deg_h`` and ``label_flagged`` with the
-truth). The last four are the smoother's thermal coefficient k_z [deg/h/degC], its 1-sigma, cov(end drift, k_z)
-[(deg/h)^2/degC] and the filter's prior 1-sigma of k_z [deg/h/degC] (`SmootherEstimate`): what a fleet prior on
-k_z needs (`gyrodrift.learn.fleet_prior`); empty (NaN) under the smoother's constant model or without the smoother."""
-
 SMOOTHER_THERMAL_FIELDS = (
     "thermal_coeff_deg_h_per_c",
     "thermal_coeff_std_deg_h_per_c",
     "end_coeff_cov",
     "thermal_prior_std_deg_h_per_c",
 )
-"""The `SmootherEstimate` attributes the columns `SMOOTHER_THERMAL_COLUMNS` (`gyrodrift.runs.table`) hold, in order."""
+"""The `SmootherEstimate` attributes the columns `SMOOTHER_THERMAL_COLUMNS` (`gyrodrift.runs.columns`) hold, in
+order."""
 
 
 @dataclass(frozen=True)
@@ -421,14 +399,10 @@ class RunFeatures:
         return (self.lat_deg - self.lat0_deg) * 3600.0
 
     def row(self) -> dict[str, Any]:
-        """The run-table row (``RUN_TABLE_COLUMNS``, plus ``drift_deg_h``, ``drift_std_deg_h`` and
-        ``label_flagged`` when known)."""
-        r = {column: getattr(self, column) for column in RUN_TABLE_COLUMNS}
-        if math.isfinite(self.drift_deg_h):
-            r["drift_deg_h"] = self.drift_deg_h
-            r["drift_std_deg_h"] = self.drift_std_deg_h
-            r["label_flagged"] = bool(self.label_flagged)
-        return r
+        """The run-table row (`gyrodrift.runs.columns.FEATURES_COLUMNS`, plus the ``LABEL_COLUMNS``
+        ``drift_deg_h``, ``drift_std_deg_h`` and ``label_flagged`` when the truth is known)."""
+        known = math.isfinite(self.drift_deg_h)
+        return {column: getattr(self, column) for column in FEATURES_COLUMNS + (LABEL_COLUMNS if known else ())}
 
 
 @dataclass(frozen=True)

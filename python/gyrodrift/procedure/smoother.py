@@ -34,7 +34,7 @@ from gyrodrift.procedure.noise import SensorNoise, estimate_white_noise
 from gyrodrift.procedure.results import SmootherEstimate
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 from gyrodrift.progress import progress
-from gyrodrift.units import ARCSEC, DEG, DEG_PER_H, HOUR, MICRO_G
+from gyrodrift.units import ARCSEC, DEG_PER_H, HOUR, MICRO_G
 
 __all__ = ["smooth_log", "fleet_coefficient_prior"]
 
@@ -96,9 +96,7 @@ def smooth_log(
         log.require_temperature("the smoother's thermal model")
     site = log.site
     config: dict[str, Any] = {
-        "lat_rad": site.lat_deg * DEG,
-        "lon_rad": site.lon_deg * DEG,
-        "height_m": float(site.height_m),
+        **site.core_position(),
         "rate_hz": log.rate_hz,
         "coarse_s": float(timeline.coarse_s),
         "span_s": span_h * HOUR,
