@@ -66,8 +66,8 @@ from gyrodrift.learn.model import DEFAULT_MAX_LABEL_STD_DEG_H, DriftModel, fit_d
 from gyrodrift.learn.tuning import SearchBoundWarning
 from gyrodrift.logs import ImuLog
 from gyrodrift.procedure import align_log, extract_features, find_true_drift, navigate_after_alignment, smooth_log
-from gyrodrift.procedure.results import SMOOTHER_THERMAL_COLUMNS
 from gyrodrift.procedure.smoother import SmootherEstimate, fleet_coefficient_prior
+from gyrodrift.runs.columns import SMOOTHER_THERMAL_COLUMNS
 from gyrodrift.runs.table import RunTable
 
 K1_DEG_H_PER_C = 0.0002

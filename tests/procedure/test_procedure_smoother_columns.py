@@ -14,10 +14,10 @@ from gyrodrift.cli import main
 from gyrodrift.ins import Scenario, simulate
 from gyrodrift.logs import open_log
 from gyrodrift.procedure.features import extract_features, features_run_table
-from gyrodrift.procedure.results import SMOOTHER_THERMAL_COLUMNS
 from gyrodrift.procedure.timeline import Timeline
-from gyrodrift.procedure.writers import RUN_TABLE_RECOGNISER, features_csv_text
-from gyrodrift.runs.table import OPTIONAL_COLUMNS, read_runs_csv
+from gyrodrift.procedure.writers import features_csv_text
+from gyrodrift.runs.columns import OPTIONAL_COLUMNS, SMOOTHER_THERMAL_COLUMNS
+from gyrodrift.runs.table import read_runs_csv, recognise_run_table
 
 SHORT = Timeline(align_h=1.0, features_h=3.0, truth_h=3.0, coarse_s=60.0)
 FIELDS = (
@@ -96,7 +96,7 @@ def test_features_command_writes_them_and_replaces_a_table_written_before_them(t
     old = "run,lat_deg,lat0_deg,temp_min_c,temp_max_c,temp_start_c,temp_end_c,drift_curvefit_deg_h,"
     old += "drift_curvefit_std_deg_h,drift_smoother_deg_h,drift_smoother_std_deg_h\nx,1,1,1,1,1,1,,,,\n"
     out.write_text(old)
-    assert RUN_TABLE_RECOGNISER(out.read_bytes())
+    assert recognise_run_table(out.read_bytes())
     r = CliRunner().invoke(main, ["features", str(log), "--out", str(out), "--quiet"])
     assert r.exit_code == 0, r.output
     f = extract_features(open_log(log))

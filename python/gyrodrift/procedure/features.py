@@ -11,14 +11,11 @@ same 16 h) gives ``drift_smoother_deg_h`` and its 1-sigma ``drift_smoother_std_d
 model, its thermal coefficient k_z, the k_z 1-sigma, cov(end drift, k_z) and its prior 1-sigma of k_z
 (``SMOOTHER_THERMAL_COLUMNS``, what a fleet prior on k_z needs: `gyrodrift.learn.fleet_prior`).
 
-A row of the run table (``gyrodrift.runs.table``): ``run`` (the log's stem), ``lat_deg``, ``lat0_deg`` (the true
-site latitude), ``temp_min_c``, ``temp_max_c``, ``temp_start_c``, ``temp_end_c``, ``drift_curvefit_deg_h``,
-``drift_curvefit_std_deg_h``, ``drift_smoother_deg_h``, ``drift_smoother_std_deg_h``,
-``smoother_coeff_deg_h_per_c``, ``smoother_coeff_std_deg_h_per_c`` [deg/h/degC], ``smoother_end_coeff_cov``
-[(deg/h)^2/degC], ``smoother_coeff_prior_std_deg_h_per_c`` [deg/h/degC] (empty under the smoother's constant
-model or without it) and, when the truth is
-asked, ``drift_deg_h`` and its 1-sigma ``drift_std_deg_h`` (`gyrodrift.procedure.truth`, found over 72 h in the
-same first read; ``RunFeatures.label_flagged`` when the label is beyond the 1 nmi / 72 h budget).
+A row of the run table (`RunFeatures.row`): the columns ``gyrodrift features`` writes
+(`gyrodrift.runs.columns.FEATURES_COLUMNS`; the smoother's thermal ones empty under its constant model or without
+it) and, when the truth is asked, the ``LABEL_COLUMNS``: ``drift_deg_h``, its 1-sigma ``drift_std_deg_h``
+(`gyrodrift.procedure.truth`, found over 72 h in the same first read) and ``label_flagged`` (the label is beyond
+the 1 nmi / 72 h budget).
 """
 
 from __future__ import annotations
@@ -36,7 +33,6 @@ from gyrodrift.procedure.align import align_log
 from gyrodrift.procedure.noise import SensorNoise
 from gyrodrift.procedure.passes import navigate_after_alignment
 from gyrodrift.procedure.results import (
-    SMOOTHER_THERMAL_COLUMNS,
     Alignment,
     NavCurve,
     RunFeatures,
@@ -47,6 +43,7 @@ from gyrodrift.procedure.results import (
 from gyrodrift.procedure.smoother import smooth_log
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 from gyrodrift.procedure.truth import find_true_drift
+from gyrodrift.runs.columns import FLAG_COLUMNS, OPTIONAL_COLUMNS
 from gyrodrift.runs.table import RunTable
 from gyrodrift.units import HOUR
 
@@ -181,20 +178,9 @@ def features_run_table(features: list[RunFeatures], source: str = "<features>") 
         temp_max_c=np.array([f.temp_max_c for f in features], dtype=float),
         drift_deg_h=np.array([f.drift_deg_h for f in features], dtype=float),
         source=source,
-        extra={
-            name: np.array([getattr(f, name) for f in features], dtype=float)
-            for name in (
-                "drift_curvefit_deg_h",
-                "drift_curvefit_std_deg_h",
-                "drift_smoother_deg_h",
-                "drift_smoother_std_deg_h",
-                *SMOOTHER_THERMAL_COLUMNS,
-                "drift_std_deg_h",
-            )
-        }
-        | (
-            {"label_flagged": np.array([float(f.label_flagged) for f in features])}
-            if all(f.truth is not None for f in features)
-            else {}
-        ),
+        extra={  # a flag is known only with the truth
+            name: np.array([float(getattr(f, name)) for f in features])
+            for name in OPTIONAL_COLUMNS
+            if name not in FLAG_COLUMNS or all(f.truth is not None for f in features)
+        },
     )

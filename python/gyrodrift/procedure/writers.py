@@ -25,7 +25,9 @@ from gyrodrift.procedure.figures import (
     route_map_figure,
     save_png,
 )
-from gyrodrift.procedure.results import RUN_TABLE_COLUMNS, Alignment, Evaluation, Identification, RunFeatures, TrueDrift
+from gyrodrift.procedure.results import Alignment, Evaluation, Identification, RunFeatures, TrueDrift
+from gyrodrift.runs.columns import CURVES_TABLE, EVALUATION_CURVES_TABLE, FEATURES_COLUMNS, LABEL_COLUMNS
+from gyrodrift.runs.table import recognise_run_table, run_table_target, run_table_text
 
 __all__ = [
     "ALIGNMENT_FILES",
@@ -34,7 +36,6 @@ __all__ = [
     "evaluation_curves_table",
     "IDENTIFICATION_FILES",
     "TRUTH_FILES",
-    "RUN_TABLE_RECOGNISER",
     "CURVES_RECOGNISER",
     "write_alignment",
     "write_evaluation",
@@ -58,24 +59,12 @@ def evaluation_files(moving: bool) -> tuple[str, ...]:
     return EVALUATION_FILES + ((ROUTE_MAP_FILE,) if moving else ())
 
 
-EVALUATION_CURVE_COLUMNS = (
-    "pass",
-    "drift_deg_h",
-    "t_h",
-    "north_m",
-    "east_m",
-    "lat_err_arcsec",
-    "lon_err_arcsec",
-    "pos_err_nmi",
-)
-"""Columns of ``position_error.parquet``: one row per kept time of each pass (``before`` then ``after``)."""
+EVALUATION_CURVE_COLUMNS = tuple(c.name for c in EVALUATION_CURVES_TABLE)
+"""Columns of ``position_error.parquet`` (`gyrodrift.runs.columns.EVALUATION_CURVES_TABLE`)."""
 IDENTIFICATION_FILES = ("identification.json",)
-CURVES_COLUMNS = ("run", "t_h", "lat_err_arcsec")
-_RUN_TABLE_HEAD = ",".join(RUN_TABLE_COLUMNS[: RUN_TABLE_COLUMNS.index("drift_smoother_std_deg_h") + 1])
-RUN_TABLE_RECOGNISER = recognise_header(_RUN_TABLE_HEAD + ",", _RUN_TABLE_HEAD + "\n")
-"""Recognises a run table written by `write_features_csv` (the only kind of file it replaces): its header starts
-with the columns up to ``drift_smoother_std_deg_h``, so a table written before the smoother's thermal columns
-(``SMOOTHER_THERMAL_COLUMNS``) is still gyrodrift's."""
+CURVES_COLUMNS = tuple(c.name for c in CURVES_TABLE)
+"""Columns of the curves table of ``features --curves`` (`gyrodrift.runs.columns.CURVES_TABLE`)."""
+RUN_TABLE_RECOGNISER = recognise_run_table  # TEMPORARY for fleet.run_table until it calls runs.table.write_run_table
 CURVES_RECOGNISER = recognise_header(",".join(CURVES_COLUMNS) + "\n")
 """Recognises a curves table written by `write_features_csv` (``curves=``)."""
 
@@ -130,9 +119,8 @@ def evaluation_curves_table(ev: Evaluation):
             }
         )
     cols = {k: np.concatenate([p[k] for p in parts]) for k in EVALUATION_CURVE_COLUMNS}
-    table = pa.table(
-        {k: pa.array(v, pa.string() if k == "pass" else pa.float64()) for k, v in cols.items()},
-    )
+    types = {c.name: pa.string() if c.dtype == "text" else pa.float64() for c in EVALUATION_CURVES_TABLE}
+    table = pa.table({k: pa.array(v, types[k]) for k, v in cols.items()})
     return table.replace_schema_metadata({"gyrodrift.format": "gyrodrift-evaluation-curves/1", "gyrodrift.run": ev.run})
 
 
@@ -177,32 +165,14 @@ def write_identification(res: Identification, out: str | os.PathLike[str] | Stag
     return {"json": stage.folder / "identification.json"}
 
 
-def _cell(value) -> str:
-    """A run-table cell: text as is, a flag ``true``/``false``, a float by ``repr``, NaN (unknown) empty."""
-    if isinstance(value, str):
-        return value
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    return repr(float(value)) if math.isfinite(value) else ""
-
-
 def features_csv_text(features: Sequence[RunFeatures]) -> str:
-    """The run table of `features`: ``RUN_TABLE_COLUMNS`` (+ ``drift_deg_h``, its 1-sigma ``drift_std_deg_h`` and
-    ``label_flagged`` (``true``/``false``: `truth` flagged the label) when every run has a truth).
-
-    Floats are written with ``repr`` (shortest exact round trip), so a latitude keeps its 1e-12 deg digits.
-    Readable by `gyrodrift.runs.table.read_runs_csv`.
+    """The run table of `features` (`gyrodrift.runs.table.run_table_text` of their `RunFeatures.row`):
+    ``FEATURES_COLUMNS``, plus the ``LABEL_COLUMNS`` (``drift_deg_h``, its 1-sigma ``drift_std_deg_h`` and
+    ``label_flagged``: `truth` flagged the label) when every run has a truth. An unknown value (NaN: e.g. no curve
+    fit) is an empty cell, which `gyrodrift.runs.table.read_runs_csv` reads as unknown.
     """
     with_truth = bool(features) and all(math.isfinite(f.drift_deg_h) for f in features)
-    cols = list(RUN_TABLE_COLUMNS) + (["drift_deg_h", "drift_std_deg_h", "label_flagged"] if with_truth else [])
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(cols)
-    for f in features:
-        r = f.row()
-        # an unknown value (NaN: e.g. no curve fit) is an empty cell, which read_runs_csv reads as unknown
-        w.writerow([_cell(r[c]) for c in cols])
-    return buf.getvalue()
+    return run_table_text((f.row() for f in features), FEATURES_COLUMNS + (LABEL_COLUMNS if with_truth else ()))
 
 
 def curves_csv_text(features: Sequence[RunFeatures]) -> str:
@@ -219,7 +189,7 @@ def curves_csv_text(features: Sequence[RunFeatures]) -> str:
 
 def _features_targets(path, curves, inputs) -> list[dict[str, Any]]:
     inputs = tuple(inputs)
-    targets = [{"path": path, "inputs": inputs, "recognise": RUN_TABLE_RECOGNISER, "what": "run table"}]
+    targets = [run_table_target(path, inputs)]
     if curves is not None:
         targets.append({"path": curves, "inputs": inputs, "recognise": CURVES_RECOGNISER, "what": "curves table"})
     return targets
