@@ -79,7 +79,7 @@ _SMOOTHER_THERMAL = ("smoother", "thermal")
 RUN_TABLE: tuple[Column, ...] = (
     Column("run", "", "text", "", "features", "attribute",
            "run identifier (the log's name), unique within a table; a blank cell is numbered by its row"),
-    Column("split", "", "text", "", "", "attribute", "``train``, ``test`` or empty (``fit --split``)"),
+    Column("split", "", "text", "", "", "attribute", "`train`, `test` or empty (`fit --split`)"),
     Column("lat_deg", "deg", "float", "always", "features", "attribute",
            "latitude computed by the free navigation at navigation hour 12"),
     Column("lat0_deg", "deg", "float", "unless --lat0-deg", "features", "attribute",
@@ -91,14 +91,14 @@ RUN_TABLE: tuple[Column, ...] = (
     Column("temp_start_c", "degC", "float", "", "features", "read", "system temperature at navigation hour 0"),
     Column("temp_end_c", "degC", "float", "", "features", "read", "system temperature at navigation hour 12"),
     Column("temp_range_c", "degC", "text", "", "", "read",
-           "instead of temp_min_c and temp_max_c: a ``min~max`` cell such as ``37.1~39.5``"),
+           "instead of temp_min_c and temp_max_c: a `min~max` cell such as `37.1~39.5`"),
     Column("drift_curvefit_deg_h", "deg/h", "float", "", "features", "extra",
            "drift from the 12 h curve fit of the latitude and longitude errors (`gyrodrift.learn.curve_fit`)",
            tags=("physics base",), std="drift_curvefit_std_deg_h"),
     Column("drift_curvefit_std_deg_h", "deg/h", "float", "", "features", "extra",
            "its least-squares 1-sigma", sigma=True),
     Column("drift_smoother_deg_h", "deg/h", "float", "", "features", "extra",
-           "drift of the 16 h smoother carried into navigation (empty with ``--no-smoother``)",
+           "drift of the 16 h smoother carried into navigation (empty with `--no-smoother`)",
            tags=("smoother", "physics base"), std="drift_smoother_std_deg_h"),
     Column("drift_smoother_std_deg_h", "deg/h", "float", "", "features", "extra", "its 1-sigma",
            tags=("smoother",), sigma=True),
@@ -116,7 +116,7 @@ RUN_TABLE: tuple[Column, ...] = (
     Column("drift_std_deg_h", "deg/h", "float", "", "features --with-truth", "extra",
            "1-sigma of the label drift_deg_h (weights the training runs)", sigma=True),
     Column("label_flagged", "", "bool", "", "features --with-truth", "extra",
-           "``true`` when `truth` flagged the label (1-sigma beyond the 1 nmi / 72 h budget): ``fit`` leaves it out"),
+           "`true` when `truth` flagged the label (1-sigma beyond the 1 nmi / 72 h budget): `fit` leaves the run out"),
 )  # fmt: skip
 """The run table's columns, in the order every writer writes them."""
 
@@ -172,7 +172,7 @@ adds those a model computes)."""
 # --- the curves table of ``features --curves`` -------------------------------------------------------------
 
 CURVES_TABLE: tuple[Column, ...] = (
-    Column("run", "", "text", "always", "features", "attribute", "the run (the run table's ``run``)"),
+    Column("run", "", "text", "always", "features", "attribute", "the run (the run table's `run`)"),
     Column("t_h", "h", "float", "always", "features", "attribute", "navigation hour since the end of alignment, 0..12"),
     Column("lat_err_arcsec", "arcsec", "float", "always", "features", "attribute",
            "latitude error at that hour, computed minus true"),
@@ -184,7 +184,7 @@ CURVES_TABLE: tuple[Column, ...] = (
 
 EVALUATION_CURVES_TABLE: tuple[Column, ...] = (
     Column("pass", "", "text", "always", "evaluate", "attribute",
-           "``before`` (nothing compensated) or ``after`` (drift_deg_h subtracted)"),
+           "`before` (nothing compensated) or `after` (drift_deg_h subtracted)"),
     Column("drift_deg_h", "deg/h", "float", "always", "evaluate", "attribute", "the z drift subtracted in the pass"),
     Column("t_h", "h", "float", "always", "evaluate", "attribute", "time since the end of alignment"),
     Column("north_m", "m", "float", "always", "evaluate", "attribute", "north position error, computed minus true"),
