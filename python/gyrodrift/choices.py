@@ -67,9 +67,10 @@ PHYSICS_COLUMNS = (
     "drift_smoother_fleet_deg_h",
 )
 """Physics estimates a hybrid model can start from: the 12 h inversion (computed from ``lat_deg`` and
-``lat0_deg``), a run-table column (the 12 h curve fit; the 16 h smoother's end drift), or the smoother's end
-drift re-weighted by the training fleet's pooled prior of its thermal coefficient k_z (computed by the model
-from the smoother's columns, `gyrodrift.learn.fleet_prior`)."""
+``lat0_deg``), a run-table column (the 12 h curve fit; the 16 h smoother's end drift: the run table's
+``PHYSICS_BASE_COLUMNS``, `gyrodrift.runs.columns`, which tests/runs/test_columns.py holds equal to these two), or
+the smoother's end drift re-weighted by the training fleet's pooled prior of its thermal coefficient k_z (computed
+by the model from the smoother's columns, `gyrodrift.learn.fleet_prior`)."""
 
 PHYSICS_CHOICES = ("auto", *PHYSICS_COLUMNS)
 """What ``physics_column`` (``fit --physics-column``) accepts: a physics estimate, or ``auto`` (the default):
