@@ -113,7 +113,7 @@ class RunTable:
             if extra[name].shape != (n,):
                 raise RunTableError(f"{self.source}: column {name} has {extra[name].size} values, run has {n}")
         object.__setattr__(self, "extra", {k: extra[k] for k in OPTIONAL_COLUMNS if k in extra})
-        for name in ("lat_deg", "lat0_deg", "temp_min_c", "temp_max_c", "drift_deg_h", "split"):
+        for name in ATTRIBUTE_COLUMNS:
             if len(getattr(self, name)) != n:
                 raise RunTableError(f"{self.source}: column {name} has {len(getattr(self, name))} values, run has {n}")
 
@@ -251,17 +251,8 @@ class RunTable:
 
     def select(self, mask) -> RunTable:
         """The runs where ``mask`` is true (boolean array or indices)."""
-        return RunTable(
-            run=self.run[mask],
-            lat_deg=self.lat_deg[mask],
-            lat0_deg=self.lat0_deg[mask],
-            temp_min_c=self.temp_min_c[mask],
-            temp_max_c=self.temp_max_c[mask],
-            drift_deg_h=self.drift_deg_h[mask],
-            split=self.split[mask],
-            source=self.source,
-            extra={k: v[mask] for k, v in self.extra.items()},
-        )
+        columns = {name: getattr(self, name)[mask] for name in ATTRIBUTE_COLUMNS}
+        return RunTable(**columns, source=self.source, extra={k: v[mask] for k, v in self.extra.items()})
 
     def records(self) -> list[dict]:
         """One dict per run with unit-carrying keys (for JSON and CSV output)."""
