@@ -9,9 +9,10 @@ import pyarrow.csv as pacsv
 import pyarrow.parquet as pq
 import pytest
 
-from gyrodrift.ins import Scenario, navigate, simulate
+from gyrodrift.ins import Scenario, simulate
 from gyrodrift.ins.scenario import ScenarioError
 from gyrodrift.logs import LogError, open_log
+from gyrodrift.procedure import navigate
 
 HILLS = [
     {"kind": "accelerate", "accel_m_s2": 2.0, "to_speed_m_s": 20.0},
@@ -58,7 +59,10 @@ def test_climbs_resolve_round_trip_and_give_the_truth_its_height():
             {"kind": "straight", "duration_s": 10.0, "climb_m": 500.0},
             "hills.toml: [trajectory] segments[1].climb_m: a climb of 500 m in 10 s needs a vertical speed of 78.5",
         ),
-        ({"kind": "straight", "duration_s": 10.0, "climb_m": "up"}, "[trajectory] climb_m: expected a number"),
+        (
+            {"kind": "straight", "duration_s": 10.0, "climb_m": "up"},
+            "[trajectory] segments[1].climb_m: expected a number",
+        ),
         ({"kind": "stop", "duration_s": 10.0, "climb_m": 1.0}, "segments[1].climb_m: unknown key for a stop"),
         (
             {"kind": "straight", "duration_s": 9000.0, "climb_m": -1500.0},
@@ -184,7 +188,7 @@ def test_evaluate_damps_the_vertical_channel_on_a_moving_base(tmp_path):
     the scenario simulated on the fly (whose route is also the reference track: before, such a log was compared
     with the static site, 6.8 nmi off), towards the log's ``ref_height_m`` column for a file that has one. Both
     stay on the route to metres, and agree with each other."""
-    from gyrodrift.logs import ImuLog
+    from gyrodrift.ins.simulate import scenario_log
     from gyrodrift.procedure.evaluate import evaluate_compensation
     from gyrodrift.procedure.timeline import Timeline
 
@@ -199,7 +203,7 @@ def test_evaluate_damps_the_vertical_channel_on_a_moving_base(tmp_path):
         source="hills.toml",
     )
     timeline = Timeline(align_h=0.1, features_h=0.1, truth_h=0.25, coarse_s=60.0)
-    on_the_fly = evaluate_compensation(ImuLog.from_scenario(s), 0.0, timeline=timeline, decimation_s=10.0).to_dict()
+    on_the_fly = evaluate_compensation(scenario_log(s), 0.0, timeline=timeline, decimation_s=10.0).to_dict()
     assert on_the_fly["reference"] == "<route>"
     assert on_the_fly["vertical"] == "damped"
     assert on_the_fly["vertical_reference"] == "height of the reference track <route>"

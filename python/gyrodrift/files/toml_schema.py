@@ -3,10 +3,11 @@
 A validator declares each table's fields once and reads them through a `Scope`, which knows the file and the
 place in it, so that every refusal is one line ``<file>: [table] key: what was expected, got what``::
 
-    SITE = {"lat_deg": Number.between(-89.0, 89.0), "height_m": Number.non_negative()}
+    SITE = {"lat_deg": Number.in_range(-89.0, 89.0), "height_m": Number.non_negative()}
     root = Scope("s.toml", ScenarioError)
     table = root.table(data, "site", allowed=SITE)           # {} when absent; unknown keys refused
     values = root.section("site").fields(table, SITE, Site())  # absent keys take Site()'s defaults
+    seed = root.section("run").value(run_table, "seed", Integer(ge=0), 0)   # one key
 
 Nested places are scopes too: ``root.section("trajectory").item("segments[0]")`` names its keys
 ``[trajectory] segments[0].kind``, and `Scope.tables` walks an array of tables that way. The specs:
@@ -127,28 +128,32 @@ class Scope:
             if key not in t:
                 raise self.fail(None, f"missing {key}")
 
-    def one_of(self, t: Mapping[str, Any], a: str, b: str, what: str) -> None:
-        """Refuse `t` unless it has exactly one of the keys `a` and `b` (``<what> takes exactly one of a and b``)."""
+    def one_of(self, t: Mapping[str, Any], a: str, b: str) -> None:
+        """Refuse `t` unless it has exactly one of the keys `a` and `b` (``give exactly one of a and b``)."""
         if (a in t) == (b in t):
-            raise self.fail(None, f"{what} takes exactly one of {a} and {b}")
+            raise self.fail(None, f"give exactly one of {a} and {b}")
+
+    def value(self, t: Mapping[str, Any], key: str, spec: Field, default: Any) -> Any:
+        """The value of `key` in `t` checked by `spec`, or `default` (converted by the spec; None stays None)
+        when absent."""
+        if key in t:
+            return spec.read(self, key, t[key])
+        return None if default is None else spec.default(default)
 
     def fields(self, t: Mapping[str, Any], specs: Mapping[str, Field], defaults: object = None) -> dict[str, Any]:
-        """Every key of `specs`, in their order: the value of `t` checked by its spec, or when absent the
-        attribute of `defaults` (a dataclass of defaults; None: absent keys are None)."""
-        out: dict[str, Any] = {}
-        for key, spec in specs.items():
-            if key in t:
-                out[key] = spec.read(self, key, t[key])
-            else:
-                out[key] = None if defaults is None else spec.default(getattr(defaults, key))
-        return out
+        """`value` of every key of `specs`, in their order; an absent key takes the attribute of `defaults` (a
+        dataclass of defaults; None: absent keys are None)."""
+        return {key: self.value(t, key, spec, getattr(defaults, key, None)) for key, spec in specs.items()}
 
     def tables(self, key: str, value: Any, *, non_empty: bool = False) -> Iterator[tuple[Scope, Mapping[str, Any]]]:
-        """The tables of the array of tables `value` at `key`, each with its scope (``key[i]``), one at a time
-        (an element is refused when it is reached)."""
+        """The tables of the array of tables `value` at `key`, each with its scope (``key[i]``): the array is
+        checked now, each element when it is reached."""
         if not isinstance(value, (list, tuple)) or (non_empty and not value):
             want = "a non-empty array of tables" if non_empty else "an array of tables"
             raise self.fail(key, f"expected {want}, got {type_name(value)} {show(value)}")
+        return self._elements(key, value)
+
+    def _elements(self, key: str, value: list[Any] | tuple[Any, ...]) -> Iterator[tuple[Scope, Mapping[str, Any]]]:
         for i, element in enumerate(value):
             scope = self.item(f"{key}[{i}]")
             if not isinstance(element, Mapping):
