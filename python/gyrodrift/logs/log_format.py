@@ -43,6 +43,7 @@ import numpy as np
 
 from gyrodrift.errors import InputError
 from gyrodrift.files.toml_input import read_toml
+from gyrodrift.files.toml_schema import Number, Scope, show, type_name
 
 __all__ = ["LogFormatError", "LogFormat", "ColumnSpec", "load_log_format", "QUANTITIES", "UNITS"]
 
@@ -95,10 +96,12 @@ QUANTITIES = {
 }
 """Quantities a column can hold (gyro_/accel_ x y z are the file's axes) and the dimensions their unit may have."""
 
+_SECTIONS = ("csv", "axes", "columns")
 _COLUMN_KEYS = ("quantity", "unit", "scale", "offset", "pulse_weight", "pulse_unit")
 _CSV_KEYS = ("delimiter", "header_row", "comment")
 _BODY = ("right", "forward", "up")
 MAX_FORMAT_BYTES = 1_000_000
+_NUMBER = Number()
 
 
 class LogFormatError(InputError):
@@ -214,83 +217,57 @@ def load_log_format(path: str | os.PathLike[str] | LogFormat) -> LogFormat:
     return LogFormat.from_dict(data, source)
 
 
-def _type_name(v: Any) -> str:
-    if isinstance(v, bool):
-        return "boolean"
-    if isinstance(v, str):
-        return "string"
-    if isinstance(v, list):
-        return "array"
-    if isinstance(v, Mapping):
-        return "table"
-    return "number" if isinstance(v, (int, float)) else type(v).__name__
-
-
 class _Validator:
+    """Turns a TOML-shaped mapping into a `LogFormat`, naming the file and key in every error."""
+
     def __init__(self, source: str):
         self.source = source
-
-    def fail(self, where: str | None, msg: str) -> LogFormatError:
-        return LogFormatError(f"{self.source}: {where}: {msg}" if where else f"{self.source}: {msg}")
-
-    def table(self, data: Mapping[str, Any], name: str, allowed: tuple[str, ...]) -> Mapping[str, Any]:
-        t = data.get(name, {})
-        if not isinstance(t, Mapping):
-            raise self.fail(f"[{name}]", f"expected a table, got {_type_name(t)}")
-        for k in t:
-            if k not in allowed:
-                raise self.fail(f"[{name}] {k}", f"unknown key (expected one of: {', '.join(allowed)})")
-        return t
-
-    def number(self, where: str, v: Any, *, positive: bool = False) -> float:
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
-            raise self.fail(where, f"expected a finite number, got {_type_name(v)} {v!r}")
-        if positive and not float(v) > 0.0:
-            raise self.fail(where, f"must be > 0, got {v!r}")
-        return float(v)
+        self.root = Scope(source, LogFormatError)
 
     def format(self, data: Mapping[str, Any]) -> LogFormat:
+        root = self.root
         if not isinstance(data, Mapping):
-            raise self.fail(None, f"expected a table, got {_type_name(data)}")
+            raise root.fail(None, f"expected a table, got {type_name(data)}")
         for k in data:
-            if k not in ("csv", "axes", "columns"):
-                raise self.fail(f"[{k}]", "unknown section (expected one of: csv, axes, columns)")
-        csv = self.table(data, "csv", _CSV_KEYS)
+            if k not in _SECTIONS:
+                raise root.section(k).fail(None, f"unknown section (expected one of: {', '.join(_SECTIONS)})")
+        csv = root.table(data, "csv", _CSV_KEYS)
+        where = root.section("csv")
         delimiter = csv.get("delimiter", ",")
         if not isinstance(delimiter, str) or len(delimiter) != 1 or delimiter in '\r\n"':
-            raise self.fail("[csv] delimiter", f"expected one character (not a quote or newline), got {delimiter!r}")
+            raise where.fail("delimiter", f"expected one character (not a quote or newline), got {delimiter!r}")
         header_row = csv.get("header_row", 1)
         if isinstance(header_row, bool) or not isinstance(header_row, int) or not 1 <= header_row <= 1000:
-            raise self.fail("[csv] header_row", f"expected an integer line number in [1, 1000], got {header_row!r}")
+            raise where.fail("header_row", f"expected an integer line number in [1, 1000], got {show(header_row)}")
         comment = csv.get("comment")
         if comment is not None and (not isinstance(comment, str) or not comment.strip() or "\n" in comment):
-            raise self.fail("[csv] comment", f'expected a non-empty prefix such as "#", got {comment!r}')
-        axes = self.axes(self.table(data, "axes", _BODY))
+            raise where.fail("comment", f'expected a non-empty prefix such as "#", got {comment!r}')
+        axes = self.axes(root.table(data, "axes", _BODY))
         cols = data.get("columns")
+        where = root.section("columns")
         if not isinstance(cols, Mapping) or not cols:
-            raise self.fail("[columns]", "missing: give one [columns.NAME] table per column of the file used")
+            raise where.fail(None, "missing: give one [columns.NAME] table per column of the file used")
         specs = [self.column(str(name), spec) for name, spec in cols.items()]
         seen: dict[str, str] = {}
         for s in specs:
             if s.quantity in seen:
-                raise self.fail(
-                    f"[columns.{s.name}] quantity",
-                    f"{s.quantity!r} is already given by column {seen[s.quantity]!r}; each quantity once",
+                raise root.section(f"columns.{s.name}").fail(
+                    "quantity", f"{s.quantity!r} is already given by column {seen[s.quantity]!r}; each quantity once"
                 )
             seen[s.quantity] = s.name
         missing = [q for q in ("time", *(f"{s}_{a}" for s in ("gyro", "accel") for a in "xyz")) if q not in seen]
         if missing:
-            raise self.fail("[columns]", f"no column for {', '.join(missing)} (a log needs time and six sensor axes)")
+            raise where.fail(None, f"no column for {', '.join(missing)} (a log needs time and six sensor axes)")
         truth = [q for q in ("true_pitch", "true_roll", "true_yaw") if q in seen]
         if truth and len(truth) != 3:
-            raise self.fail("[columns]", "give all three of true_pitch, true_roll, true_yaw or none")
+            raise where.fail(None, "give all three of true_pitch, true_roll, true_yaw or none")
         kinds = {s.name: ("increments" if s.dimension in ("angle", "velocity") else "rates") for s in specs}
         sensor = [s for s in specs if s.quantity.startswith(("gyro_", "accel_"))]
         if len({kinds[s.name] for s in sensor}) != 1:
             inc = [s.name for s in sensor if kinds[s.name] == "increments"]
             rat = [s.name for s in sensor if kinds[s.name] == "rates"]
-            raise self.fail(
-                "[columns]",
+            raise where.fail(
+                None,
                 f"mixed increments ({', '.join(inc)}) and rates ({', '.join(rat)}); all six sensor columns must "
                 "hold increments (angle, velocity, pulse units) or all rates (deg/s, g, ... units)",
             )
@@ -305,6 +282,7 @@ class _Validator:
         )
 
     def axes(self, t: Mapping[str, Any]) -> tuple[tuple[int, float], ...]:
+        where = self.root.section("axes")
         out = []
         default = {"right": "x", "forward": "y", "up": "z"}
         for body in _BODY:
@@ -313,57 +291,53 @@ class _Validator:
             sign = -1.0 if text.startswith("-") else 1.0
             axis = text.lstrip("+-")
             if axis not in ("x", "y", "z"):
-                raise self.fail(f"[axes] {body}", f"expected a file axis with an optional sign (x, -y, +z), got {v!r}")
+                raise where.fail(body, f"expected a file axis with an optional sign (x, -y, +z), got {v!r}")
             out.append(("xyz".index(axis), sign))
         if len({a for a, _ in out}) != 3:
-            raise self.fail(
-                "[axes]", f"each file axis once: right, forward, up = {[t.get(b, default[b]) for b in _BODY]}"
-            )
+            raise where.fail(None, f"each file axis once: right, forward, up = {[t.get(b, default[b]) for b in _BODY]}")
         # A proper rotation keeps right-forward-up right-handed; a mirror would flip the turntable's sense.
         m = np.zeros((3, 3))
         for j, (a, s) in enumerate(out):
             m[j, a] = s
         if np.linalg.det(m) < 0:
-            raise self.fail(
-                "[axes]", "the mapping is a mirror (determinant -1): the file's axes must form a right-handed triad"
+            raise where.fail(
+                None, "the mapping is a mirror (determinant -1): the file's axes must form a right-handed triad"
             )
         return tuple(out)
 
     def column(self, name: str, spec: Any) -> ColumnSpec:
-        where = f"[columns.{name}]"
+        where = self.root.section(f"columns.{name}")
         if not isinstance(spec, Mapping):
-            raise self.fail(where, f"expected a table with quantity and unit, got {_type_name(spec)}")
-        for k in spec:
-            if k not in _COLUMN_KEYS:
-                raise self.fail(f"{where} {k}", f"unknown key (expected one of: {', '.join(_COLUMN_KEYS)})")
+            raise where.fail(None, f"expected a table with quantity and unit, got {type_name(spec)}")
+        where.keys(spec, _COLUMN_KEYS)
         q = spec.get("quantity")
-        if q not in QUANTITIES:
-            raise self.fail(f"{where} quantity", f"expected one of {', '.join(QUANTITIES)}, got {q!r}")
+        if not isinstance(q, str) or q not in QUANTITIES:
+            raise where.fail("quantity", f"expected one of {', '.join(QUANTITIES)}, got {show(q)}")
         unit = spec.get("unit")
         dims = QUANTITIES[q]
         allowed = [u for d in dims for u in UNITS[d]] + (["pulse"] if q.startswith(("gyro_", "accel_")) else [])
         if unit not in allowed:
-            raise self.fail(f"{where} unit", f"expected one of {', '.join(allowed)} for {q}, got {unit!r}")
-        scale = self.number(f"{where} scale", spec.get("scale", 1.0))
+            raise where.fail("unit", f"expected one of {', '.join(allowed)} for {q}, got {show(unit)}")
+        scale = where.value(spec, "scale", _NUMBER, 1.0)
         if scale == 0.0:
-            raise self.fail(f"{where} scale", "must not be 0")
-        offset = self.number(f"{where} offset", spec.get("offset", 0.0))
+            raise where.fail("scale", "must not be 0")
+        offset = where.value(spec, "offset", _NUMBER, 0.0)
         pulse = [k for k in ("pulse_weight", "pulse_unit") if k in spec]
         if unit == "pulse":
             if len(pulse) != 2:
-                raise self.fail(where, "a pulse column needs pulse_weight (a number > 0) and pulse_unit")
-            weight = self.number(f"{where} pulse_weight", spec["pulse_weight"], positive=True)
+                raise where.fail(None, "a pulse column needs pulse_weight (a number > 0) and pulse_unit")
+            weight = where.value(spec, "pulse_weight", Number.positive(), None)
             dim = "angle" if q.startswith("gyro_") else "velocity"
             punit = spec["pulse_unit"]
-            if punit not in UNITS[dim]:
-                raise self.fail(f"{where} pulse_unit", f"expected one of {', '.join(UNITS[dim])}, got {punit!r}")
+            if not isinstance(punit, str) or punit not in UNITS[dim]:
+                raise where.fail("pulse_unit", f"expected one of {', '.join(UNITS[dim])}, got {show(punit)}")
             factor, shift = UNITS[dim][punit]
             factor *= weight
         else:
             if pulse:
-                raise self.fail(f"{where} {pulse[0]}", 'only for unit = "pulse"')
+                raise where.fail(pulse[0], 'only for unit = "pulse"')
             dim = next(d for d in dims if unit in UNITS[d])
             factor, shift = UNITS[dim][unit]
             if unit == "iso" and (scale != 1.0 or offset != 0.0):
-                raise self.fail(where, "ISO date-times take no scale or offset")
+                raise where.fail(None, "ISO date-times take no scale or offset")
         return ColumnSpec(name, q, unit, dim, scale, offset, factor, shift)
