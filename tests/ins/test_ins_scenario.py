@@ -97,6 +97,14 @@ BAD = [
         "[temperature] series_t_h: times must be strictly increasing",
     ),
     ("[temperature]\nseries_csv = 3\n", "[temperature] series_csv: expected a file name, got number 3"),
+    (
+        "[trajectory]\nsegments = [{kind = [1]}]\n",
+        "[trajectory] segments[0].kind: expected one of 'straight', 'turn', 'accelerate', 'stop', got [1]",
+    ),
+    (
+        '[trajectory]\nsegments = [{kind = "straight", duration_s = "5"}]\n',
+        "[trajectory] segments[0].duration_s: expected a number, got string '5'",
+    ),
 ]
 
 
