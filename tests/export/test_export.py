@@ -37,24 +37,37 @@ import pytest
 from click.testing import CliRunner
 
 import gyrodrift
-from gyrodrift.export import generate as export
 from gyrodrift.choices import ENCODINGS, PHYSICS_COLUMNS, SCALINGS, default_encoding
 from gyrodrift.cli import main
 from gyrodrift.errors import InputError, OptionError
+from gyrodrift.export.languages import LANGUAGES, export_model, output_names
+from gyrodrift.export.render import literal
+from gyrodrift.export.spec import (
+    COEFFICIENT_INPUTS,
+    FEATURE_EXPRESSIONS,
+    INPUTS,
+    PHYSICS_EXPRESSIONS,
+    PHYSICS_INPUTS,
+    RAW_INPUTS,
+    FeatureExpression,
+    export_spec,
+    physics_column,
+)
+from gyrodrift.learn.drift_model import fit_drift_model
 from gyrodrift.learn.encodings import encode
 from gyrodrift.learn.fleet_prior import drift_with_coefficient_prior
 from gyrodrift.learn.kernels import kernel_matrix
 from gyrodrift.learn.lssvr import LSSVR
-from gyrodrift.learn.model import fit_drift_model, physics_estimate
 from gyrodrift.learn.model_io import load_model, save_model
+from gyrodrift.learn.physics_base import FLEET_PHYSICS, physics_estimate
 from gyrodrift.runs.table import RunTable
 
 TOL = 1e-12
 N_ROWS = 1000
 RAW = ("lat_deg", "lat0_deg", "temp_min_c", "temp_max_c")
-ALL = tuple(export.INPUTS)  # the raw inputs, then the physics columns the navigation computer computes
-FLEET = export.FLEET_PHYSICS
-KZ = export.COEFFICIENT_INPUTS
+ALL = tuple(INPUTS)  # the raw inputs, then the physics columns the navigation computer computes
+FLEET = FLEET_PHYSICS
+KZ = COEFFICIENT_INPUTS
 PHYSICS_INPUTS_READ = {
     "drift_inversion_deg_h": (),
     "drift_curvefit_deg_h": ("drift_curvefit_deg_h",),
@@ -120,22 +133,22 @@ def _hybrid_runs(rng: np.random.Generator) -> RunTable:
 
 def _thermal(runs: RunTable) -> np.ndarray:
     """Rows with the smoother's thermal k_z (the test of `drift_with_coefficient_prior`; the others: NaN)."""
-    k, sk, c, s0 = (runs.column(name) for name in export.COEFFICIENT_INPUTS)
+    k, sk, c, s0 = (runs.column(name) for name in COEFFICIENT_INPUTS)
     return np.isfinite(k) & np.isfinite(sk * sk) & (sk * sk > 0) & np.isfinite(c) & np.isfinite(s0) & (s0 > 0)
 
 
 def _physics(model, rows: RunTable) -> np.ndarray:
     """A hybrid's physics estimate of each row [deg/h]: `physics_estimate`, or for the fleet-prior smoother
     `drift_with_coefficient_prior` with the model's fleet prior."""
-    column = export.physics_column(model)
-    if column != export.FLEET_PHYSICS:
+    column = physics_column(model)
+    if column != FLEET_PHYSICS:
         return physics_estimate(rows, column)
-    names = ("drift_smoother_deg_h", "drift_smoother_std_deg_h", *export.COEFFICIENT_INPUTS)
+    names = ("drift_smoother_deg_h", "drift_smoother_std_deg_h", *COEFFICIENT_INPUTS)
     return drift_with_coefficient_prior(*(rows.column(n) for n in names), *model.coefficient_prior_)[0]
 
 
 def _value(runs: RunTable, name: str) -> np.ndarray:
-    """Input ``name`` (`export.INPUTS`) of each run: a column, or a physics column (NaN where absent)."""
+    """Input ``name`` (`INPUTS`) of each run: a column, or a physics column (NaN where absent)."""
     return getattr(runs, name) if name in RAW else runs.column(name)
 
 
@@ -145,11 +158,11 @@ def _probe_rows(train: RunTable, rng: np.random.Generator) -> RunTable:
     n = N_ROWS - len(train)
     cols = {}
     # and the smoother's 1-sigma: Python's fleet base wants it (its drift does not depend on it; not exported)
-    physics = [*export.PHYSICS_INPUTS, "drift_smoother_std_deg_h"]
+    physics = [*PHYSICS_INPUTS, "drift_smoother_std_deg_h"]
     for name in [*RAW, *(c for c in physics if np.isfinite(train.column(c)).any())]:
         v = _value(train, name)
         lo, hi = float(np.nanmin(v)), float(np.nanmax(v))
-        span = hi - lo or (0.5 * abs(hi) if name in export.COEFFICIENT_INPUTS else 0.5)  # a k_z 1-sigma stays > 0
+        span = hi - lo or (0.5 * abs(hi) if name in COEFFICIENT_INPUTS else 0.5)  # a k_z 1-sigma stays > 0
         cols[name] = rng.uniform(lo - 0.1 * span, hi + 0.1 * span, n)
     on_site = rng.random(n) < 0.8  # mostly at a training site, so that the other inputs decide the range check
     cols["lat0_deg"][on_site] = rng.choice(train.lat0_deg, int(on_site.sum()))
@@ -162,7 +175,7 @@ def _probe_rows(train: RunTable, rng: np.random.Generator) -> RunTable:
         usual = rng.random(n) < 0.8
         s0[usual] = rng.choice(train.column("smoother_coeff_prior_std_deg_h_per_c")[_thermal(train)], int(usual.sum()))
     constant = rng.random(n) < 1 / 3  # a third of the rows without k_z: the smoother's constant model
-    for name in export.COEFFICIENT_INPUTS:
+    for name in COEFFICIENT_INPUTS:
         if name in cols:
             cols[name][constant] = np.nan
     return RunTable(
@@ -179,15 +192,15 @@ def _model(train: RunTable, encoding: str, scaling: str, kernel: str, physics: s
     model = fit_drift_model(train, encoding=encoding, scaling=scaling, gamma=100.0, sigma=sigma, **hybrid)
     if kernel != "rbf":  # `fit` tunes RBF only; the LSSVR has the other kernels, and the export supports them
         est = LSSVR(gamma=100.0, sigma=sigma, kernel=kernel, degree=3, coef0=1.0)
-        model.named_steps["lssvr"].lssvr_ = est.fit(model[:-1].transform(train), train.drift_deg_h)
+        model.learner_.named_steps["lssvr"].lssvr_ = est.fit(model.learner_[:-1].transform(train), train.drift_deg_h)
     return model
 
 
 def _used_inputs(model) -> list[str]:
     """The inputs a model reads: those of its features and, for a hybrid, of its physics estimate."""
-    exprs = [export.FEATURE_EXPRESSIONS[f] for f in model.feature_names]
+    exprs = [FEATURE_EXPRESSIONS[f] for f in model.feature_names]
     if model.target == "residual":
-        exprs.append(export.PHYSICS_EXPRESSIONS[export.physics_column(model)])
+        exprs.append(PHYSICS_EXPRESSIONS[physics_column(model)])
     return [n for n in ALL if any(n in e.inputs for e in exprs)]
 
 
@@ -213,16 +226,16 @@ def _kernel_terms(est, X: np.ndarray) -> np.ndarray:
 
 
 def _expected(model, rows: RunTable) -> dict:
-    """What the generated code must give, computed in Python independently of gyrodrift.export.generate."""
+    """What the generated code must give, computed in Python independently of gyrodrift.export."""
     train = model.training_["runs"]  # the runs the model was fitted on (without any left out)
     est = model.lssvr
-    X = model[:-1].transform(rows)
+    X = model.learner_[:-1].transform(rows)
     K = _kernel_terms(est, X)
     inside = np.ones(len(rows), bool)
     thermal = _thermal(rows)
     for name in _used_inputs(model):
         v, t = _value(rows, name), _value(train, name)
-        if name in export.COEFFICIENT_INPUTS:  # over the training runs with k_z; NaN on a row without
+        if name in COEFFICIENT_INPUTS:  # over the training runs with k_z; NaN on a row without
             t = t[_thermal(train)]
             inside &= np.where(thermal, (v >= t.min()) & (v <= t.max()), ~np.isfinite(v))
         else:
@@ -279,7 +292,7 @@ COS_SUFFIX = "+cos"
 """A case exported with the latitude error written as ``(lat - lat0) * 3600 * cos(0 * lat0)`` (the same bits):
 the path a feature needing a math function (say, a physics-normalised encoding with cos(lat0)) will take."""
 COS_CASE = CASE_IDS[0] + COS_SUFFIX
-_COS_EXPRESSION = export.FeatureExpression(
+_COS_EXPRESSION = FeatureExpression(
     ("lat_deg", "lat0_deg"),
     "({lat_deg} - {lat0_deg}) * 3600.0 * {cos}(0.0 * {lat0_deg})",
     "({lat_deg} - {lat0_deg}) * 3600.0 * {cos}(0.0 * {lat0_deg})",
@@ -295,8 +308,8 @@ def _export(case_id: str, model, lang: str) -> dict[str, str]:
         return _CLI_EXPORTS[lang]
     with pytest.MonkeyPatch.context() as patch:
         if case_id.endswith(COS_SUFFIX):
-            patch.setitem(export.FEATURE_EXPRESSIONS, "lat_err_arcsec", _COS_EXPRESSION)
-        return export.export_model(model, lang)
+            patch.setitem(FEATURE_EXPRESSIONS, "lat_err_arcsec", _COS_EXPRESSION)
+        return export_model(model, lang)
 
 
 @pytest.fixture(scope="module")
@@ -326,12 +339,12 @@ def fitted(default_fit_file, tmp_path_factory):
     assert model.training["weighted"] and model.training_["left_out"]
     rows = _probe_rows(model.training_["runs"], rng)
     out[DEFAULT_CASE] = (model, rows, _expected(model, rows))
-    for lang in export.LANGUAGES:
+    for lang in LANGUAGES:
         folder = tmp_path_factory.mktemp(f"default_export_{lang}")
         args = ["export", "--model", str(default_fit_file), "--lang", lang, "--out", str(folder), "--quiet"]
         r = CliRunner().invoke(main, args)
         assert r.exit_code == 0, r.output
-        _CLI_EXPORTS[lang] = {name: (folder / name).read_text() for name in export.LANGUAGES[lang]}
+        _CLI_EXPORTS[lang] = {name: (folder / name).read_text() for name in LANGUAGES[lang]}
     return out
 
 
@@ -374,9 +387,9 @@ def test_python_prediction_is_its_terms_summed_exactly_then_rounded(fitted):
 @pytest.mark.parametrize("encoding", list(ENCODINGS))
 def test_every_feature_of_every_encoding_has_a_c_and_a_rust_expression(encoding):
     for name in ENCODINGS[encoding]:
-        assert name in export.FEATURE_EXPRESSIONS, f"encoding {encoding}: add {name} to FEATURE_EXPRESSIONS"
-        expr = export.FEATURE_EXPRESSIONS[name]
-        assert set(expr.inputs) <= set(export.RAW_INPUTS)
+        assert name in FEATURE_EXPRESSIONS, f"encoding {encoding}: add {name} to FEATURE_EXPRESSIONS"
+        expr = FEATURE_EXPRESSIONS[name]
+        assert set(expr.inputs) <= set(RAW_INPUTS)
         for template in (expr.c, expr.rust):
             declared = {n: f"<{n}>" for n in (*expr.inputs, *expr.functions)}
             text = template.format(**declared)  # a KeyError here: the template reads an undeclared input
@@ -385,14 +398,14 @@ def test_every_feature_of_every_encoding_has_a_c_and_a_rust_expression(encoding)
 
 @pytest.mark.parametrize("physics", PHYSICS_COLUMNS)
 def test_every_physics_column_has_a_c_and_a_rust_expression(physics):
-    expr = export.PHYSICS_EXPRESSIONS[physics]
-    assert set(expr.inputs) <= set(export.INPUTS) and expr.unit == "deg/h"
+    expr = PHYSICS_EXPRESSIONS[physics]
+    assert set(expr.inputs) <= set(INPUTS) and expr.unit == "deg/h"
     if physics == "drift_inversion_deg_h":  # computed from the latitudes, as the physics feature is
-        assert expr == dataclasses.replace(export.FEATURE_EXPRESSIONS["drift_equiv_deg_h"], unit="deg/h")
+        assert expr == dataclasses.replace(FEATURE_EXPRESSIONS["drift_equiv_deg_h"], unit="deg/h")
     elif physics == FLEET:  # computed from the smoother's end drift and k_z, which the navigation computer passes
-        assert expr.inputs == ("drift_smoother_deg_h", *KZ) and set(expr.inputs) <= set(export.PHYSICS_INPUTS)
+        assert expr.inputs == ("drift_smoother_deg_h", *KZ) and set(expr.inputs) <= set(PHYSICS_INPUTS)
     else:  # the navigation computer computes it: an input, read as it is
-        assert expr.inputs == (physics,) and physics in export.PHYSICS_INPUTS and "deg/h" in export.INPUTS[physics]
+        assert expr.inputs == (physics,) and physics in PHYSICS_INPUTS and "deg/h" in INPUTS[physics]
 
 
 @pytest.mark.parametrize(
@@ -407,10 +420,10 @@ def test_every_physics_column_has_a_c_and_a_rust_expression(physics):
 )
 def test_a_hybrid_reads_its_physics_inputs_and_checks_their_range(physics, encoding, fields, functions):
     model = _model(_hybrid_runs(np.random.default_rng(5)), encoding, "standard", "rbf", physics)
-    spec = export.export_spec(model)
+    spec = export_spec(model)
     assert spec.inputs == fields and spec.functions == functions and spec.physics == physics
-    header = export.export_model(model, "c")["gyrodrift_model.h"]
-    rust = export.export_model(model, "rust")["gyrodrift_model.rs"]
+    header = export_model(model, "c")["gyrodrift_model.h"]
+    rust = export_model(model, "rust")["gyrodrift_model.rs"]
     assert re.findall(r"    double (\w+); /\*", header) == list(fields)
     assert re.findall(r"    pub (\w+): f64,", rust.split("pub struct Inputs")[1].split("}")[0]) == list(fields)
     assert "double gyrodrift_model_physics_deg_h(const gyrodrift_model_inputs *inputs);" in header
@@ -423,12 +436,12 @@ def test_a_hybrid_reads_its_physics_inputs_and_checks_their_range(physics, encod
     for name in fields[-len(PHYSICS_INPUTS_READ[physics]) :] if PHYSICS_INPUTS_READ[physics] else ():
         train = runs.column(name)  # the extra inputs' training ranges are in the range check
         train = train[_thermal(runs)] if name in KZ else train  # k_z: over the runs with one
-        lo, hi = export._lit(train.min()), export._lit(train.max())
-        assert f'{{"{name}", {lo}, {hi}}}' in export.export_model(model, "c")["gyrodrift_model.c"]
+        lo, hi = literal(train.min()), literal(train.max())
+        assert f'{{"{name}", {lo}, {hi}}}' in export_model(model, "c")["gyrodrift_model.c"]
         assert f'Range {{ name: "{name}", min: {lo}, max: {hi} }}' in rust
         assert f"{name}: [{lo}, {hi}]" in header  # provenance
     if physics == FLEET:  # the fleet prior: constants
-        mean, std = (export._lit(v) for v in model.coefficient_prior_)
+        mean, std = (literal(v) for v in model.coefficient_prior_)
         assert f"#define GYRODRIFT_MODEL_COEFF_PRIOR_MEAN_DEG_H_PER_C {mean}" in header
         assert f"pub const COEFF_PRIOR_STD_DEG_H_PER_C: f64 = {std};" in rust
 
@@ -450,43 +463,43 @@ def test_label_weights_change_the_model_but_need_nothing_at_prediction(fitted):
         _export(DEFAULT_CASE, weighted, "rust")["gyrodrift_model.rs"],
     ]
     assert all("drift_std" not in re.sub(r"Label weighting[^\n]*", "", text) for text in files)
-    raw = tuple(n for n in RAW if any(n in export.FEATURE_EXPRESSIONS[f].inputs for f in ENCODINGS[encoding]))
+    raw = tuple(n for n in RAW if any(n in FEATURE_EXPRESSIONS[f].inputs for f in ENCODINGS[encoding]))
     fleet_fields = (*raw, "drift_smoother_deg_h", *KZ)  # the encoding's, then the fleet-prior smoother's
-    assert export.export_spec(unweighted).inputs == export.export_spec(weighted).inputs == fleet_fields
+    assert export_spec(unweighted).inputs == export_spec(weighted).inputs == fleet_fields
 
 
 def test_a_feature_without_expression_cannot_be_exported(monkeypatch):
     model = _model(gyrodrift.load_paper().train, "temp_mean", "standard", "rbf")
-    monkeypatch.delitem(export.FEATURE_EXPRESSIONS, "temp_mean_c")
+    monkeypatch.delitem(FEATURE_EXPRESSIONS, "temp_mean_c")
     with pytest.raises(InputError, match="temp_mean_c has no C/Rust expression"):
-        export.export_model(model, "c")
+        export_model(model, "c")
 
 
 def test_literals_round_trip_and_are_floats_in_c_and_rust():
     for x in (0.0, -0.0, 1.0, -3.0, 1e300, -2.5e-310, 0.1, 28.222, 2.0**60, np.nextafter(1.0, 2.0)):
-        text = export._lit(x)
+        text = literal(x)
         assert float(text) == x and np.signbit(float(text)) == np.signbit(x)
         assert "." in text or "e" in text
 
 
 def test_unknown_language_is_an_option_error():
     with pytest.raises(OptionError, match="--lang"):
-        export.output_names("fortran")
+        output_names("fortran")
 
 
 def test_export_is_deterministic_and_carries_provenance(fitted):
     model, _, _ = fitted[CASE_IDS[0]]
-    first, second = export.export_model(model, "c", model_sha256="ab" * 32), export.export_model(model, "c")
+    first, second = export_model(model, "c", model_sha256="ab" * 32), export_model(model, "c")
     assert (
         first["gyrodrift_model.c"].replace(f" * Model file SHA-256: {'ab' * 32}\n", "") == second["gyrodrift_model.c"]
     )
     header = first["gyrodrift_model.h"]
-    rust = export.export_model(model, "rust")["gyrodrift_model.rs"]
+    rust = export_model(model, "rust")["gyrodrift_model.rs"]
     for text in (header, rust):
         assert model.training["sha256"] in text and f"gyrodrift {gyrodrift.__version__}" in text
-        assert f"gamma = {export._lit(model.lssvr.gamma)}" in text
+        assert f"gamma = {literal(model.lssvr.gamma)}" in text
     lo = float(model.training_["runs"].temp_min_c.min())
-    assert f"temp_min_c: [{export._lit(lo)}," in header
+    assert f"temp_min_c: [{literal(lo)}," in header
 
 
 @pytest.mark.skipif(CC is None, reason="no C compiler (cc) on PATH")
@@ -496,11 +509,11 @@ def test_provenance_text_cannot_break_the_generated_code(tmp_path):
     train = RunTable(**{**{f: getattr(paper, f) for f in (*RAW, "run", "drift_deg_h")}, "source": hostile})
     model = fit_drift_model(train, encoding="lat_only", scaling="standard", gamma=100.0, sigma=0.7)
     assert model.training["source"] == hostile
-    files = export.export_model(model, "c")
+    files = export_model(model, "c")
     for name, text in files.items():
         (tmp_path / name).write_text(text)
     subprocess.run([CC, *CFLAGS, "-c", "gyrodrift_model.c"], cwd=tmp_path, check=True, timeout=120)
-    rust = export.export_model(model, "rust")["gyrodrift_model.rs"]
+    rust = export_model(model, "rust")["gyrodrift_model.rs"]
     line = next(ln for ln in rust.splitlines() if ln.startswith("//! Training runs:"))
     assert line.endswith('#error \\"y\\" \\u00e9.csv')  # one comment line, escaped
 
@@ -510,7 +523,7 @@ def test_a_hybrids_physics_estimate_is_a_term_of_the_sum_also_with_metadata_rout
 
     paper = gyrodrift.load_paper()
     model = fit_drift_model(paper.train, encoding="physics", target="residual", gamma=100.0, sigma=0.7)
-    X = model[:-1].transform(paper.test)
+    X = model.learner_[:-1].transform(paper.test)
     physics = physics_estimate(paper.test, "drift_inversion_deg_h")
     pred = model.predict(paper.test)
     np.testing.assert_array_equal(pred, model.lssvr.predict(X, offset=physics))
@@ -524,7 +537,7 @@ def test_a_hybrids_physics_estimate_is_a_term_of_the_sum_also_with_metadata_rout
 def test_the_c_source_refuses_x87_extended_precision(tmp_path):
     """Double rounding in 80-bit registers would break the compensated sum's exact error terms: no silent build."""
     model = _model(gyrodrift.load_paper().train, "lat_only", "standard", "rbf")
-    for name, text in export.export_model(model, "c").items():
+    for name, text in export_model(model, "c").items():
         (tmp_path / name).write_text(text)
     x87 = subprocess.run(
         [CC, *CFLAGS, "-m32", "-mfpmath=387", "-fsyntax-only", "gyrodrift_model.c"],
@@ -613,11 +626,9 @@ def c_driver(fitted, tmp_path_factory):
         model = fitted[case_id][0]
         name = f"m{k:03d}"
         files = _export(case_id, model, "c")
-        needs_math = model.lssvr.kernel == "rbf" or any(
-            export.FEATURE_EXPRESSIONS[f].functions for f in model.feature_names
-        )
+        needs_math = model.lssvr.kernel == "rbf" or any(FEATURE_EXPRESSIONS[f].functions for f in model.feature_names)
         needs_math |= case_id == COS_CASE or (
-            export.physics_column(model) in ("drift_inversion_deg_h", FLEET)  # cos; isfinite
+            physics_column(model) in ("drift_inversion_deg_h", FLEET)  # cos; isfinite
         )
         assert ("#include <math.h>" in files["gyrodrift_model.c"]) == needs_math, case_id
         (folder / name).mkdir()
@@ -659,7 +670,7 @@ def test_c_export_reproduces_python(case_id, fitted, c_driver):
     np.testing.assert_array_equal(table[:, 1].astype(bool), exp["inside"])
     assert exp["inside"][: model.training["n_runs"]].all()  # the training runs come first
     assert 50 < exp["inside"].sum() < N_ROWS - 50  # rows on both sides of the range check
-    if export.physics_column(model) == FLEET:  # in range with a thermal k_z and without one
+    if physics_column(model) == FLEET:  # in range with a thermal k_z and without one
         thermal = _thermal(rows)
         assert (exp["inside"] & thermal).sum() > 20 and (exp["inside"] & ~thermal).sum() > 20
     rel, same = _check(case_id, table[:, 0], exp)

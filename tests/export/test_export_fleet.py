@@ -18,19 +18,22 @@ import subprocess
 import numpy as np
 import pytest
 
-from gyrodrift.export import generate as export
 from gyrodrift.errors import InputError
+from gyrodrift.export.languages import LANGUAGES, export_model
+from gyrodrift.export.render import literal
+from gyrodrift.export.spec import COEFFICIENT_INPUTS, PHYSICS_INPUTS, export_spec
+from gyrodrift.learn.drift_model import fit_drift_model
 from gyrodrift.learn.encodings import encode
 from gyrodrift.learn.fleet_prior import drift_with_coefficient_prior, pooled_coefficient_prior
-from gyrodrift.learn.model import fit_drift_model
 from gyrodrift.learn.model_io import load_model, save_model
+from gyrodrift.learn.physics_base import FLEET_PHYSICS
 from gyrodrift.runs.table import RunTable, RunTableError
 
 CC = shutil.which("cc")
 CARGO = shutil.which("cargo")
 CFLAGS = ["-std=c99", "-pedantic", "-Wall", "-Wextra", "-Wconversion", "-Wshadow", "-Wdouble-promotion", "-Werror"]
-FLEET = export.FLEET_PHYSICS
-KZ = export.COEFFICIENT_INPUTS
+FLEET = FLEET_PHYSICS
+KZ = COEFFICIENT_INPUTS
 FIELDS = ("lat_deg", "lat0_deg", "temp_min_c", "temp_max_c", "drift_smoother_deg_h", *KZ)
 """The fields of the generated struct of a fleet hybrid with encoding ``physics`` (it reads all four raw inputs and
 `cos`), in order."""
@@ -116,7 +119,7 @@ def _probe_rows(train: RunTable, rng: np.random.Generator) -> RunTable:
     n = N_RANDOM
     cols = {}
     for name in FIELDS:
-        v = train.column(name) if name in export.PHYSICS_INPUTS else getattr(train, name)
+        v = train.column(name) if name in PHYSICS_INPUTS else getattr(train, name)
         v = v[np.isfinite(v)]
         lo, hi = float(v.min()), float(v.max())
         span = hi - lo or 0.5 * abs(hi)
@@ -160,11 +163,11 @@ def _probe_rows(train: RunTable, rng: np.random.Generator) -> RunTable:
 def _expected(model, rows: RunTable) -> dict:
     train = model.training_["runs"]
     base = _base(model, rows)
-    pred = model.lssvr.predict(model[:-1].transform(rows), offset=base)
+    pred = model.lssvr.predict(model.learner_[:-1].transform(rows), offset=base)
     inside = np.ones(len(rows), bool)
     thermal, thermal_train = _thermal(rows), _thermal(train)
     for name in FIELDS:
-        get = (lambda r, n=name: r.column(n)) if name in export.PHYSICS_INPUTS else (lambda r, n=name: getattr(r, n))
+        get = (lambda r, n=name: r.column(n)) if name in PHYSICS_INPUTS else (lambda r, n=name: getattr(r, n))
         t = get(train)[thermal_train] if name in KZ else get(train)
         ok = (get(rows) >= t.min()) & (get(rows) <= t.max())
         # without a thermal k_z, every k_z input NaN (the constant model; some but not all: neither)
@@ -215,8 +218,8 @@ def test_auto_exports_the_base_it_resolved_to_and_the_model_file_keeps_it(fleet,
     path = tmp_path / "model.json"
     save_model(model, path)
     loaded = load_model(path)
-    for lang in export.LANGUAGES:
-        assert export.export_model(loaded, lang) == export.export_model(model, lang)
+    for lang in LANGUAGES:
+        assert export_model(loaded, lang) == export_model(model, lang)
     train = model.training_["runs"]
     no_kz = train.replace(extra={k: v for k, v in train.extra.items() if k not in KZ})
     no_smoother = train.replace(extra={"drift_std_deg_h": train.column("drift_std_deg_h")})
@@ -225,14 +228,14 @@ def test_auto_exports_the_base_it_resolved_to_and_the_model_file_keeps_it(fleet,
         (no_smoother, "drift_inversion_deg_h", FIELDS[:4]),
     ):
         resolved = _fit(runs)
-        spec = export.export_spec(resolved)
+        spec = export_spec(resolved)
         assert (resolved.physics_column_, spec.physics, spec.inputs) == (column, column, fields)
         assert spec.coefficient_prior is None
-        assert f'#define GYRODRIFT_MODEL_PHYSICS "{column}"' in export.export_model(resolved, "c")["gyrodrift_model.h"]
+        assert f'#define GYRODRIFT_MODEL_PHYSICS "{column}"' in export_model(resolved, "c")["gyrodrift_model.h"]
 
 
 def _rows_text(rows: RunTable) -> str:
-    cols = [rows.column(n) if n in export.PHYSICS_INPUTS else getattr(rows, n) for n in FIELDS]
+    cols = [rows.column(n) if n in PHYSICS_INPUTS else getattr(rows, n) for n in FIELDS]
     return "".join(" ".join(repr(float(v)) for v in row) + "\n" for row in np.column_stack(cols))
 
 
@@ -242,19 +245,19 @@ def _bits(values) -> np.ndarray:
 
 def test_the_spec_reads_the_smoother_and_its_k_z_and_holds_the_prior(fleet):
     model, _, _ = fleet
-    spec = export.export_spec(model)
+    spec = export_spec(model)
     assert spec.physics == FLEET and spec.inputs == FIELDS and spec.functions == ("cos", "exp")
     assert spec.coefficient_prior == tuple(model.coefficient_prior_)
     train = model.training_["runs"]
     thermal = _thermal(train)
     assert 0 < thermal.sum() < len(train)
     for name, (lo, hi) in zip(spec.inputs, spec.input_ranges, strict=True):
-        v = train.column(name) if name in export.PHYSICS_INPUTS else getattr(train, name)
+        v = train.column(name) if name in PHYSICS_INPUTS else getattr(train, name)
         v = v[thermal] if name in KZ else v
         assert (lo, hi) == (v.min(), v.max()), name
-    c = export.export_model(model, "c")
-    rust = export.export_model(model, "rust")["gyrodrift_model.rs"]
-    mean, std = (export._lit(x) for x in model.coefficient_prior_)
+    c = export_model(model, "c")
+    rust = export_model(model, "rust")["gyrodrift_model.rs"]
+    mean, std = (literal(x) for x in model.coefficient_prior_)
     assert f"#define GYRODRIFT_MODEL_COEFF_PRIOR_MEAN_DEG_H_PER_C {mean}" in c["gyrodrift_model.h"]
     assert f"#define GYRODRIFT_MODEL_COEFF_PRIOR_STD_DEG_H_PER_C {std}" in c["gyrodrift_model.h"]
     assert f"pub const COEFF_PRIOR_MEAN_DEG_H_PER_C: f64 = {mean};" in rust
@@ -266,9 +269,9 @@ def test_a_fleet_model_without_a_usable_prior_is_refused(fleet):
     model, _, _ = fleet
     for prior in (None, (0.0, 0.0), (math.nan, 1e-4), (2e-4, math.inf)):
         broken = _fleet_model(model.training_["runs"])
-        broken.coefficient_prior_ = prior
+        broken.base_.coefficient_prior_ = prior  # the model's prior is its physics base's
         with pytest.raises(InputError, match="prior"):
-            export.export_model(broken, "c")
+            export_model(broken, "c")
 
 
 _C_DRIVER = """#include <stdio.h>
@@ -307,7 +310,7 @@ def _check(got: np.ndarray, exp: dict, what: str) -> None:
 @pytest.mark.skipif(CC is None, reason="no C compiler (cc) on PATH")
 def test_c_gives_the_bits_of_drift_with_coefficient_prior_and_of_the_prediction(fleet, tmp_path):
     model, rows, exp = fleet
-    for name, text in export.export_model(model, "c").items():
+    for name, text in export_model(model, "c").items():
         (tmp_path / name).write_text(text)
     n = len(FIELDS)
     (tmp_path / "driver.c").write_text(
@@ -359,7 +362,7 @@ def test_rust_gives_the_bits_of_drift_with_coefficient_prior_and_of_the_predicti
     project = tmp_path_factory.mktemp("rust_fleet")
     (project / "src").mkdir()
     (project / "Cargo.toml").write_text(_CARGO_TOML)
-    (project / "src" / "gyrodrift_model.rs").write_text(export.export_model(model, "rust")["gyrodrift_model.rs"])
+    (project / "src" / "gyrodrift_model.rs").write_text(export_model(model, "rust")["gyrodrift_model.rs"])
     fields = ", ".join(f"{name}: u[{k}]" for k, name in enumerate(FIELDS))
     (project / "src" / "main.rs").write_text(_RUST_MAIN.replace("FIELDS", fields))
     env = {**os.environ, "CARGO_TARGET_DIR": str(tmp_path_factory.getbasetemp() / "cargo-target-fleet")}

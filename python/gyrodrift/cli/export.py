@@ -44,7 +44,8 @@ def export_command(model_file: Path, lang: str, out_dir: Path, as_json: bool, qu
     """
     import hashlib
 
-    from gyrodrift.export.generate import export_model, output_names, physics_column
+    from gyrodrift.export.languages import export_model, output_names
+    from gyrodrift.export.spec import physics_column
     from gyrodrift.files.atomic import OutputFolder
     from gyrodrift.learn.model_io import load_model
 
