@@ -15,7 +15,7 @@ and the leave-one-out predictive variance of training sample ``i`` is ``1 / ((H^
 denominator of its LOO residual. ``LSSVR.predictive_scale`` returns ``v``; ``loo_scale_`` the LOO one. Far
 from the training inputs ``k -> 0`` and ``v`` grows to its prior value: the interval widens there.
 
-Prediction arithmetic (`LSSVR.predict`, and the generated C and Rust of `gyrodrift.export.generate`, operation for
+Prediction arithmetic (`LSSVR.predict`, and the generated C and Rust of `gyrodrift.export`, operation for
 operation): the kernel of each support vector from the coordinate differences summed over the features in
 order (RBF ``exp(-d2 / (sigma * sigma))`` with the C library's ``exp`` through ``math.exp``; linear and
 polynomial: the dot product in feature order, an integer power by repeated multiplication), then
@@ -415,7 +415,7 @@ def _compensated_expansion(KT: np.ndarray, alpha: np.ndarray, intercept, offset=
     """``intercept + sum_i alpha[i] * KT[i] (+ offset)``, the terms added in that order with Knuth's TwoSum
     (``t = s + p``, ``z = t - s``, error ``(s - (t - z)) + (p - z)``, exact in binary floating point) and the
     errors summed apart and added at the end ("Sum2", Ogita, Rump & Oishi 2005): as accurate as summing in twice
-    the working precision, then rounding. The generated C and Rust (`gyrodrift.export.generate`) do the same operations.
+    the working precision, then rounding. The generated C and Rust (`gyrodrift.export`) do the same operations.
 
     ``KT`` is (n_train, n_samples); ``alpha`` (n_train,) or (n_train, n_targets); ``offset`` broadcasts against the
     result, shape (n_samples,) or (n_samples, n_targets).
