@@ -21,7 +21,7 @@ from click.testing import CliRunner
 
 import gyrodrift
 from gyrodrift.cli import main
-from gyrodrift.files.atomic import MANIFEST_NAME
+from gyrodrift.files.manifest import MANIFEST_NAME
 from gyrodrift.ins.scenario import Scenario
 from gyrodrift.ins.simulate import simulate
 from gyrodrift.ins.synthetic_fleet import simulate_fleet
@@ -362,7 +362,7 @@ def test_a_log_whose_simulation_was_interrupted_is_refused_until_simulate_runs_a
 
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(atomic.os, "replace", replace)
-        mp.setattr(atomic, "_recover", lambda folder, manifest: manifest)
+        mp.setattr(atomic, "finish_publication", lambda folder, manifest: manifest)
         mp.setattr(atomic.Stage, "_discard", lambda self: None)
         seeded = inputs.scenario.read_text().replace("[run]\n", "[run]\nseed = 7\n")
         (tmp_path / "s7.toml").write_text(seeded)

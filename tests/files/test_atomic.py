@@ -1,4 +1,5 @@
-"""gyrodrift.files.atomic: nothing a command did not write is ever lost, and outputs are whole or absent.
+"""gyrodrift.files.atomic (with manifest, temporaries, recovery): nothing a command did not write is ever lost,
+and outputs are whole or absent.
 
 Single files (atomic_write), output folders published as one set (OutputFolder), what may be written
 (inputs, devices, FIFOs, symlinks, foreign files and folders), temporaries (removed on failure, stale ones
@@ -20,19 +21,20 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
-from gyrodrift.files import atomic
 from gyrodrift.errors import OutputError
+from gyrodrift.files import atomic
 from gyrodrift.files.atomic import (
-    MANIFEST_NAME,
     OutputFolder,
     atomic_write,
     atomic_write_json,
     check_complete,
     check_output_file,
-    clean_stale_temporaries,
     recognise_header,
     write_json,
 )
+from gyrodrift.files.manifest import MANIFEST_NAME
+from gyrodrift.files.recovery import clean_stale_temporaries
+from gyrodrift.files.temporaries import HOST, STALE_AFTER_S
 
 
 def _leftovers(folder):
@@ -392,7 +394,7 @@ def _dead_pid():
 def test_stale_temporaries_are_cleaned_and_nothing_else(tmp_path):
     folder = tmp_path / "d"
     folder.mkdir()
-    host = atomic._HOST
+    host = HOST
     other = "0" * 8 if host != "0" * 8 else "1" * 8
     dead = folder / f".nav.parquet.gyrodrift-tmp-{host}-{_dead_pid()}-{'a' * 12}"
     live = folder / f".nav.parquet.gyrodrift-tmp-{host}-{os.getppid()}-{'b' * 12}"
@@ -401,7 +403,7 @@ def test_stale_temporaries_are_cleaned_and_nothing_else(tmp_path):
     users = [folder / ".nav.parquet.gyrodrift-tmp-mine", folder / ".hidden"]
     for p in (dead, live, old, young, *users):
         p.write_text("x" * 1000)
-    os.utime(old, (time.time() - atomic.STALE_AFTER_S - 60,) * 2)
+    os.utime(old, (time.time() - STALE_AFTER_S - 60,) * 2)
     atomic_write_json({"a": 1}, folder / "m.json")  # the next run into the folder cleans up
     assert not dead.exists() and not old.exists()
     assert live.exists() and young.exists() and all(p.exists() for p in users)
@@ -411,7 +413,7 @@ def test_stale_temporaries_are_cleaned_and_nothing_else(tmp_path):
 def test_a_killed_runs_temporaries_go_when_the_next_publication_starts(tmp_path):
     folder = tmp_path / "sim"
     _publish(folder, "simulate", {"imu.parquet": "1"})
-    stale = folder / f".imu.parquet.gyrodrift-tmp-{atomic._HOST}-{_dead_pid()}-{'e' * 12}"
+    stale = folder / f".imu.parquet.gyrodrift-tmp-{HOST}-{_dead_pid()}-{'e' * 12}"
     stale.write_bytes(b"x" * 10000)  # what a SIGKILLed 72 h simulate leaves (1 GB in real life)
     OutputFolder(folder, "simulate", ["imu.parquet"])  # a stale temporary is no foreign file
     with OutputFolder(folder, "simulate", ["imu.parquet"]).publish() as stage:
@@ -434,7 +436,7 @@ def _torn(folder, monkeypatch):
         real_replace(src, dst)
 
     monkeypatch.setattr(atomic.os, "replace", replace)
-    monkeypatch.setattr(atomic, "_recover", lambda folder, manifest: manifest)
+    monkeypatch.setattr(atomic, "finish_publication", lambda folder, manifest: manifest)
     monkeypatch.setattr(atomic.Stage, "_discard", lambda self: None)
     with pytest.raises(Killed):
         _publish(folder, "navigate", {"nav.parquet": "n2", "summary.json": "s2"})

@@ -13,10 +13,12 @@ import os
 import pytest
 from click.testing import CliRunner
 
-from gyrodrift.files import atomic
 from gyrodrift.cli import main
 from gyrodrift.errors import OutputError
-from gyrodrift.files.atomic import MANIFEST_NAME, OutputFolder, UntrustedManifestError, check_complete
+from gyrodrift.files.atomic import OutputFolder, check_complete
+from gyrodrift.files.manifest import MANIFEST_NAME, UntrustedManifestError, read_manifest
+from gyrodrift.files.recovery import finish_publication
+from gyrodrift.files.temporaries import HOST, create_temporary
 
 TOML = "[run]\nduration_h = 0.01\nrate_hz = 10.0\n"
 
@@ -81,7 +83,7 @@ def test_a_journal_mapping_a_name_outside_to_a_temporary_is_refused_and_the_vict
     out, _ = sim
     victim2 = tmp_path / "victim2.txt"
     victim2.write_text("precious too\n")
-    tmp = out / f".imu.parquet.gyrodrift-tmp-{atomic._HOST}-1-{'a' * 12}"
+    tmp = out / f".imu.parquet.gyrodrift-tmp-{HOST}-1-{'a' * 12}"
     tmp.write_bytes(b"attacker's bytes")
     entry = {**_describe(tmp), "tmp": tmp.name}
 
@@ -97,7 +99,7 @@ def test_a_journal_mapping_a_name_outside_to_a_temporary_is_refused_and_the_vict
 
 def test_a_journal_whose_temporary_names_another_file_or_leads_out_is_refused(tmp_path, sim):
     out, victim = sim
-    for tmp in ("../victim.txt", f".other.gyrodrift-tmp-{atomic._HOST}-1-{'a' * 12}", "imu.parquet"):
+    for tmp in ("../victim.txt", f".other.gyrodrift-tmp-{HOST}-1-{'a' * 12}", "imu.parquet"):
         entry = {**_describe(out / "imu.parquet"), "tmp": tmp}
 
         def add_journal(doc, entry=entry):
@@ -172,7 +174,7 @@ def test_a_manifest_of_the_wrong_shape_is_one_output_error(tmp_path, doc, why):
     for reader in (
         lambda: OutputFolder(folder, "truth", ["a.json"]),
         lambda: check_complete(folder / "a.json"),
-        lambda: atomic._recover(folder, atomic._read_manifest(folder)),
+        lambda: finish_publication(folder, read_manifest(folder)),
     ):
         with pytest.raises(UntrustedManifestError) as info:
             reader()
@@ -197,7 +199,7 @@ def test_a_valid_manifest_with_a_journal_still_recovers(tmp_path):
     folder = tmp_path / "d"
     with OutputFolder(folder, "truth", ["a.json"]).publish() as stage:
         stage.file("a.json").write_text("1")
-    tmp = atomic._create_temporary(folder, "a.json")
+    tmp = create_temporary(folder, "a.json")
     tmp.write_text("2")
     _edit(
         folder,
@@ -205,7 +207,7 @@ def test_a_valid_manifest_with_a_journal_still_recovers(tmp_path):
             {"pending": {"command": "truth", "meta": {}, "files": {"a.json": {**_describe(tmp), "tmp": tmp.name}}}}
         ),
     )
-    atomic._recover(folder, atomic._read_manifest(folder))
+    finish_publication(folder, read_manifest(folder))
     assert (folder / "a.json").read_text() == "2" and not tmp.exists()
     check_complete(folder / "a.json")
 

@@ -22,7 +22,7 @@ def one_line_message(exc: BaseException) -> str:
     A `GyrodriftError` already carries its message (file, row, column, option). An `OSError` is described
     by its path(s) and a plain reason, e.g. ``out/model.json: read-only file system``.
     """
-    from gyrodrift.files.atomic import os_error_reason
+    from gyrodrift.files.output_errors import os_error_reason
 
     if isinstance(exc, OSError) and not _has_own_message(exc) and (exc.errno is not None or exc.filename):
         reason = os_error_reason(exc)
