@@ -1,3 +1,4 @@
+# Over 800 lines: the C, Rust, spec and CLI checks share the 114 fitted cases (fixture `fitted`) and their reference.
 """`gyrodrift export`: the generated C and Rust reproduce `DriftModel.predict`, its features and the range check.
 
 Every encoding x scaling is fitted (RBF, the kernel `fit` tunes) on the paper's runs and on a random synthetic
