@@ -20,8 +20,9 @@ import time
 
 import numpy as np
 
+from gyrodrift.learn.drift_model import fit_drift_model
 from gyrodrift.learn.kernels import kernel_matrix
-from gyrodrift.learn.model import fit_drift_model, physics_estimate
+from gyrodrift.learn.physics_base import physics_estimate
 from gyrodrift.runs.table import RunTable
 
 
@@ -60,7 +61,7 @@ def synthetic_runs(n: int, rng: np.random.Generator) -> RunTable:
 def numpy_predict(model, runs: RunTable) -> np.ndarray:
     """The reference: numpy's kernel summed by BLAS, plus the physics estimate (the resolved base)."""
     est = model.lssvr
-    K = kernel_matrix(model[:-1].transform(runs), est.X_fit_, kernel=est.kernel, sigma=est.sigma)
+    K = kernel_matrix(model.learner_[:-1].transform(runs), est.X_fit_, kernel=est.kernel, sigma=est.sigma)
     base = physics_estimate(runs, model.physics_column_, prior=model.coefficient_prior_)
     return K @ est.alpha_ + est.intercept_ + base
 

@@ -62,7 +62,7 @@ from gyrodrift.choices import default_encoding
 from gyrodrift.ins.scenario import Scenario
 from gyrodrift.learn.baselines import physics_inversion
 from gyrodrift.learn.curve_fit import fit_error_curves
-from gyrodrift.learn.model import DEFAULT_MAX_LABEL_STD_DEG_H, DriftModel, fit_drift_model
+from gyrodrift.learn.drift_model import DEFAULT_MAX_LABEL_STD_DEG_H, DriftModel, fit_drift_model
 from gyrodrift.learn.tuning import SearchBoundWarning
 from gyrodrift.logs import ImuLog
 from gyrodrift.procedure import align_log, extract_features, find_true_drift, navigate_after_alignment, smooth_log

@@ -40,7 +40,9 @@ import warnings
 import numpy as np
 
 from gyrodrift.learn.baselines import latitude_error_at
-from gyrodrift.learn.model import THERMAL_COLUMNS, fit_drift_model, jackknife_half_width
+from gyrodrift.learn.drift_model import fit_drift_model
+from gyrodrift.learn.interval import jackknife_half_width
+from gyrodrift.learn.physics_base import THERMAL_COLUMNS
 from gyrodrift.runs.table import RunTable
 from gyrodrift.units import HOUR
 
@@ -122,8 +124,8 @@ def before(train: RunTable, test: RunTable, coverage: float = 0.9) -> tuple[np.n
         warnings.simplefilter("ignore")
         model = fit_drift_model(train, encoding="temperature", target="residual", rng=0, calibration_folds=10)
     q = jackknife_half_width(model.interval_scores(), coverage)
-    _, base_std = model._base(test, with_std=True)
-    half = q * np.sqrt(model.predict_spread(test) ** 2 + model.label_std_rms_**2 + base_std**2)
+    _, base_std = model.base_.predict(test, with_std=True)
+    half = q * np.sqrt(model.predict_spread(test) ** 2 + model.interval_.label_std_rms_**2 + base_std**2)
     return model.predict(test), half
 
 
@@ -144,8 +146,8 @@ def one_fleet(n_train: int, seed: int, n_held: int, coverage: float = 0.9, with_
     summary = model.interval_summary(coverage)
     # the held-out runs' scores, normalised as the training runs' (their own label 1-sigma): their rms against the
     # scale of the training runs' leave-one-out scores measures the optimism of tuning on those (`tuning_inflation`)
-    learned = np.minimum(model.predict_spread(test), model.learned_cap_deg_h_)
-    _, base_std = model._base(test, with_std=True)
+    learned = np.minimum(model.predict_spread(test), model.interval_.learned_cap_deg_h_)
+    _, base_std = model.base_.predict(test, with_std=True)
     z = (test.drift_deg_h - pred) / np.sqrt(learned**2 + test.column("drift_std_deg_h") ** 2 + base_std**2)
     return {
         "n_train": n_train,
@@ -159,7 +161,7 @@ def one_fleet(n_train: int, seed: int, n_held: int, coverage: float = 0.9, with_
         "half_outside_ratio": float(np.median(half[outside]) / np.median(half[~outside])),
         "seconds": seconds,
         "z_heldout_rms": float(np.sqrt(np.mean(z[~outside] ** 2))),
-        "z_loo_scale": model.interval_scale_.scale / model.interval_scale_.inflation,
+        "z_loo_scale": model.interval_.scale_.scale / model.interval_.scale_.inflation,
         "summary": summary,
         "warnings": [str(w.message) for w in caught if "interval" in str(w.message)],
     } | (_before_numbers(train, test, effective, coverage) if with_before else {})

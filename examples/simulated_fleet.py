@@ -19,7 +19,7 @@ import numpy as np
 
 from gyrodrift.ins.synthetic_fleet import simulate_fleet
 from gyrodrift.learn.baselines import physics_inversion
-from gyrodrift.learn.model import fit_drift_model
+from gyrodrift.learn.drift_model import fit_drift_model
 from gyrodrift.procedure import features_run_table, features_table
 from gyrodrift.runs.table import RunTable
 

@@ -23,8 +23,8 @@ _PUBLIC = {
     "load_paper": "gyrodrift.runs.datasets",
     "RunTable": "gyrodrift.runs.table",
     "read_runs_csv": "gyrodrift.runs.table",
-    "DriftModel": "gyrodrift.learn.model",
-    "fit_drift_model": "gyrodrift.learn.model",
+    "DriftModel": "gyrodrift.learn.drift_model",
+    "fit_drift_model": "gyrodrift.learn.drift_model",
     "save_model": "gyrodrift.learn.model_io",
     "load_model": "gyrodrift.learn.model_io",
 }

@@ -1,7 +1,7 @@
 """The names of the options the API and the CLI accept, in one light module (no heavy imports).
 
 The CLI builds its choices from here at start-up without importing scikit-learn; the modules that implement
-the options (`gyrodrift.learn.model`, `gyrodrift.learn.tuning`) import the same tuples.
+the options (`gyrodrift.learn.physics_base`, `gyrodrift.learn.tuning`) import the same tuples.
 """
 
 import sys
@@ -76,7 +76,7 @@ PHYSICS_CHOICES = ("auto", *PHYSICS_COLUMNS)
 """What ``physics_column`` (``fit --physics-column``) accepts: a physics estimate, or ``auto`` (the default):
 resolved when the model is fitted, to the fleet-prior smoother when every training run has the smoother's
 columns and at least `MIN_THERMAL_RUNS` have its thermal k_z, else the smoother's drift when every run has
-it, else the 12 h inversion (`gyrodrift.learn.model.resolve_physics_column`)."""
+it, else the 12 h inversion (`gyrodrift.learn.physics_base.resolve_physics_column`)."""
 
 MIN_THERMAL_RUNS = 3
 """Training runs with the smoother's thermal k_z that the fleet-prior base needs: each training run's own base

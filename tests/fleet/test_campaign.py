@@ -150,7 +150,7 @@ def test_store_rows_resume_and_refusals(store, tmp_path):
 
 
 def test_run_table_is_read_by_fit(store, tmp_path):
-    from gyrodrift.learn.model import fit_drift_model
+    from gyrodrift.learn.drift_model import fit_drift_model
     from gyrodrift.runs.table import read_runs_csv
 
     out, _ = store

@@ -7,7 +7,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from gyrodrift.learn.model import DriftModel, fit_drift_model
+from gyrodrift.learn.drift_model import DriftModel, fit_drift_model
 from gyrodrift.learn.model_io import ModelFileError, load_model, model_to_dict
 from gyrodrift.runs.datasets import load_paper, paper_csv_path
 from gyrodrift.runs.table import RunTable, RunTableError, read_runs_csv

@@ -11,11 +11,12 @@ from click.testing import CliRunner
 
 from gyrodrift.cli import main
 from gyrodrift.learn.baselines import latitude_error_at, physics_inversion
+from gyrodrift.learn.drift_model import fit_drift_model, select_labelled_runs
 from gyrodrift.learn.kernels import squared_distances
 from gyrodrift.learn.lssvm_batch import rbf_batch_errors
 from gyrodrift.learn.lssvr import LSSVR
-from gyrodrift.learn.model import fit_drift_model, label_weights, select_labelled_runs
 from gyrodrift.learn.model_io import load_model, model_from_dict, model_to_dict, save_model
+from gyrodrift.learn.physics_base import label_weights
 from gyrodrift.runs.table import RunTable, read_runs_csv
 from gyrodrift.units import HOUR
 
@@ -129,9 +130,11 @@ def _synthetic_runs(n, seed=0, lat_range=(20.0, 60.0), temp_shift=0.0):
 def test_hybrid_learns_only_the_correction_and_round_trips(tmp_path):
     train, test = _synthetic_runs(40, seed=1), _synthetic_runs(15, seed=2)
     hybrid = fit_drift_model(train, encoding="physics", target="residual", method="grid", rng=0)
-    lssvr_part = hybrid[:-1].transform(test)
+    lssvr_part = hybrid.learner_[:-1].transform(test)
     np.testing.assert_allclose(
-        hybrid.predict(test), physics_inversion(test) + hybrid.named_steps["lssvr"].predict(lssvr_part), rtol=1e-12
+        hybrid.predict(test),
+        physics_inversion(test) + hybrid.learner_.named_steps["lssvr"].predict(lssvr_part),
+        rtol=1e-12,
     )
     err_h = test.drift_deg_h - hybrid.predict(test)
     err_p = test.drift_deg_h - physics_inversion(test)

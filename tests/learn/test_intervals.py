@@ -9,7 +9,8 @@ import pytest
 from click.testing import CliRunner
 
 from gyrodrift.cli import main
-from gyrodrift.learn.model import fit_drift_model, jackknife_half_width, make_drift_model
+from gyrodrift.learn.drift_model import fit_drift_model, make_drift_model
+from gyrodrift.learn.interval import jackknife_half_width
 from gyrodrift.learn.model_io import load_model, save_model
 from gyrodrift.runs.datasets import load_paper, paper_csv_path
 from gyrodrift.runs.table import RunTable
@@ -110,12 +111,12 @@ def test_a_small_fleet_gets_a_finite_wider_interval_and_the_fit_says_on_what_it_
     """The Student-t calibration needs no minimum fleet for the coverage (the jackknife's order statistic needed
     9 runs for 90 %): 5 runs give a finite interval, wider than 22 runs' by the t quantile with 4 degrees of
     freedom; ``fit`` says how many runs it rests on and how it compares with the physics alone."""
-    from gyrodrift.learn.model import min_runs_for_coverage
+    from gyrodrift.learn.interval import min_runs_for_coverage
 
     assert [min_runs_for_coverage(c) for c in (0.5, 0.8, 0.9, 0.95)] == [1, 4, 9, 19]  # the jackknife's, kept
     paper = load_paper()
     small = fit_drift_model(paper.train.select(np.arange(5)), gamma=30.0, sigma=1.5)
-    assert small.interval_scale_.multiplier(0.9) == pytest.approx(2.132 * small.interval_scale_.scale, rel=1e-3)
+    assert small.interval_.scale_.multiplier(0.9) == pytest.approx(2.132 * small.interval_.scale_.scale, rel=1e-3)
     save_model(small, tmp_path / "small.json")
     csv_path = tmp_path / "paper.csv"
     csv_path.write_bytes(paper_csv_path().read_bytes())
@@ -228,7 +229,7 @@ def test_far_outside_the_training_range_the_interval_widens_markedly_and_is_flag
     # the training runs, about 3 of their temperature standard deviations, is far on that scale
     assert np.min(hi_far - lo_far) > 3.0 * np.median(hi_in - lo_in)
     assert model.check_inputs(far).outside.all()
-    assert np.all(model.spread_.length_scales() < 1e3)
+    assert np.all(model.interval_.spread_.length_scales() < 1e3)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -273,7 +274,7 @@ def test_one_wild_score_is_named_and_barely_moves_the_scale():
 
 
 def test_a_wild_training_run_is_named_in_a_warning_and_does_not_set_the_width():
-    from gyrodrift.learn.model import IntervalOutlierWarning
+    from gyrodrift.learn.interval import IntervalOutlierWarning
 
     rng = np.random.default_rng(31)
     train, _ = _heteroscedastic_runs(rng, 40)
@@ -302,8 +303,8 @@ def test_the_interval_is_capped_far_outside_the_training_range():
     train, _ = _heteroscedastic_runs(rng, 40)
     inside, _ = _heteroscedastic_runs(rng, 50)
     model = fit_drift_model(train, encoding="physics", target="residual", gamma=20.0, sigma=1.5)
-    mult, cap = model.interval_scale_.multiplier(0.9), model.learned_cap_deg_h_
-    physics = model.label_std_rms_  # the inversion base has no 1-sigma
+    mult, cap = model.interval_.scale_.multiplier(0.9), model.interval_.learned_cap_deg_h_
+    physics = model.interval_.label_std_rms_  # the inversion base has no 1-sigma
     widths = []
     for shift in (0.0, 30.0, 300.0, 3000.0):
         far = inside.replace(temp_min_c=inside.temp_min_c + shift, temp_max_c=inside.temp_max_c + shift)

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gyrodrift.learn.model import fit_drift_model, training_digest
+from gyrodrift.learn.drift_model import fit_drift_model, training_digest
 from gyrodrift.learn.model_io import ModelFileError, load_model, model_to_dict, save_model
 from gyrodrift.runs.datasets import load_paper
 
@@ -61,7 +61,7 @@ def test_load_takes_the_stored_solution_without_solving_and_older_files_are_solv
     loaded = model_from_dict(json.loads(json.dumps(good_doc)))
     np.testing.assert_array_equal(loaded.predict(paper.test), model.predict(paper.test))
     np.testing.assert_array_equal(loaded.loo_residuals(), model.loo_residuals())
-    assert good_doc["fitted"]["interval_disagreement_deg_h"] == model.disagreement_deg_h_
+    assert good_doc["fitted"]["interval_disagreement_deg_h"] == model.interval_.disagreement_deg_h_
     for got, want in zip(loaded.predict_interval(paper.test), model.predict_interval(paper.test), strict=True):
         np.testing.assert_array_equal(got, want)
 

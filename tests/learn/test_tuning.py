@@ -96,8 +96,8 @@ def paper():
 def test_tuning_inside_fit_is_the_tuner_then_an_lssvr(paper):
     from sklearn.preprocessing import StandardScaler
 
+    from gyrodrift.learn.drift_model import fit_drift_model
     from gyrodrift.learn.encodings import encode
-    from gyrodrift.learn.model import fit_drift_model
 
     model = fit_drift_model(paper.train, method="cpso", max_iter=8, n_particles=6, rng=4)
     Xs = StandardScaler().fit_transform(encode(paper.train, "temp_range"))
@@ -112,12 +112,12 @@ def test_clone_gives_an_unfitted_twin_that_refits_to_the_same_bits(paper):
     from sklearn.base import clone
     from sklearn.exceptions import NotFittedError
 
-    from gyrodrift.learn.model import DriftModel, make_drift_model
+    from gyrodrift.learn.drift_model import DriftModel, make_drift_model
 
     model = make_drift_model(encoding="temp_span", method="pso", max_iter=6, n_particles=6, random_state=2)
     model.fit(paper.train)
     twin = clone(model)
-    assert isinstance(twin, DriftModel) and twin.get_params()["lssvr__random_state"] == 2
+    assert isinstance(twin, DriftModel) and twin.get_params()["learner__lssvr__random_state"] == 2
     with pytest.raises(NotFittedError):
         twin.predict(paper.test)
     twin.fit(paper.train)
@@ -127,7 +127,7 @@ def test_clone_gives_an_unfitted_twin_that_refits_to_the_same_bits(paper):
 def test_cross_val_score_on_the_whole_model_equals_manual_folds(paper):
     from sklearn.model_selection import KFold, cross_val_score
 
-    from gyrodrift.learn.model import fit_drift_model, make_drift_model
+    from gyrodrift.learn.drift_model import fit_drift_model, make_drift_model
 
     runs, y = paper.train, paper.train.drift_deg_h
     cv = KFold(4)
@@ -149,23 +149,23 @@ def test_grid_search_over_encoding_scaling_and_objective(paper):
     from sklearn.model_selection import GridSearchCV
     from sklearn.preprocessing import StandardScaler
 
-    from gyrodrift.learn.model import DriftModel, make_drift_model
+    from gyrodrift.learn.drift_model import DriftModel, make_drift_model
 
     grid = {
-        "encode__encoding": ["temp_range", "lat_only"],
-        "scale": [StandardScaler(), "passthrough"],
-        "lssvr__objective": ["loo_mae", "train_mae"],
+        "learner__encode__encoding": ["temp_range", "lat_only"],
+        "learner__scale": [StandardScaler(), "passthrough"],
+        "learner__lssvr__objective": ["loo_mae", "train_mae"],
     }
     search = GridSearchCV(make_drift_model(method="grid", grid_size=6), grid, cv=3, scoring="neg_mean_absolute_error")
     search.fit(paper.train, paper.train.drift_deg_h)
     assert len(search.cv_results_["params"]) == 8
     best = search.best_estimator_
-    assert isinstance(best, DriftModel) and best.encoding == search.best_params_["encode__encoding"]
+    assert isinstance(best, DriftModel) and best.encoding == search.best_params_["learner__encode__encoding"]
     assert best.training["n_runs"] == 22 and np.all(np.isfinite(best.predict(paper.test)))
 
 
 def test_estimator_parameters_are_keyword_only():
-    from gyrodrift.learn.model import RunEncoder, TunedLSSVR
+    from gyrodrift.learn.learner import RunEncoder, TunedLSSVR
 
     for cls in (LSSVR, TunedLSSVR, RunEncoder):
         with pytest.raises(TypeError):
@@ -173,16 +173,16 @@ def test_estimator_parameters_are_keyword_only():
 
 
 def test_edge_of_the_search_box_is_warned_and_recorded(paper):
-    from gyrodrift.learn.model import make_drift_model
+    from gyrodrift.learn.drift_model import make_drift_model
     from gyrodrift.learn.tuning import SearchBoundWarning, on_search_bound
 
     model = make_drift_model(method="grid", grid_size=5, bounds=((1.0, 2.0), (0.5, 0.6)))
     with pytest.warns(SearchBoundWarning, match=r"gamma = 2 in \[1, 2\]"):
         model.fit(paper.train)
-    assert model.named_steps["lssvr"].on_search_bound_ == on_search_bound(
+    assert model.learner_.named_steps["lssvr"].on_search_bound_ == on_search_bound(
         model.lssvr.gamma, model.lssvr.sigma, ((1.0, 2.0), (0.5, 0.6))
     )
-    assert "gamma" in model.named_steps["lssvr"].on_search_bound_
+    assert "gamma" in model.learner_.named_steps["lssvr"].on_search_bound_
     assert model.fit_warnings()[0].startswith("tuned value on the edge of its search box")
     assert on_search_bound(1.5, 0.55, ((1.0, 2.0), (0.5, 0.6))) == []
     assert on_search_bound(1.0 + 1e-7, 0.6, ((1.0, 2.0), (0.5, 0.6))) == ["gamma", "sigma"]
@@ -215,7 +215,7 @@ def test_edge_is_measured_in_the_searched_log_space_relative_to_the_box_width():
 def test_tuned_lssvr_passes_scikit_learns_estimator_checks():
     from sklearn.utils.estimator_checks import check_estimator
 
-    from gyrodrift.learn.model import TunedLSSVR
+    from gyrodrift.learn.learner import TunedLSSVR
 
     for est in (TunedLSSVR(gamma=1.0, sigma=1.0), TunedLSSVR(method="grid", grid_size=3)):
         results = check_estimator(est, on_fail=None)

@@ -24,17 +24,11 @@ from sklearn.model_selection import GridSearchCV, KFold, cross_val_score
 from gyrodrift.cli import main
 from gyrodrift.errors import InputError
 from gyrodrift.learn.baselines import latitude_error_at
+from gyrodrift.learn.drift_model import fit_drift_model, make_drift_model
 from gyrodrift.learn.fleet_prior import drift_with_coefficient_prior, pooled_coefficient_prior
 from gyrodrift.learn.lssvr import LSSVR
-from gyrodrift.learn.model import (
-    FLEET_PHYSICS,
-    THERMAL_COLUMNS,
-    fit_drift_model,
-    make_drift_model,
-    physics_estimate,
-    resolve_physics_column,
-)
 from gyrodrift.learn.model_io import ModelFileError, load_model, model_from_dict, model_to_dict, save_model
+from gyrodrift.learn.physics_base import FLEET_PHYSICS, THERMAL_COLUMNS, physics_estimate, resolve_physics_column
 from gyrodrift.runs.table import RunTable, read_runs_csv
 from gyrodrift.units import HOUR
 
@@ -114,14 +108,14 @@ def test_the_fleet_base_is_fleet_prior_leave_one_out_for_training_runs(fleet):
     full = _direct_base(train, [model.coefficient_prior_] * len(train))
     thermal = np.isfinite(k)
     assert np.all(base[thermal] != full[thermal]) and np.array_equal(base[~thermal], full[~thermal])
-    Z = model[:-1].transform(train)
+    Z = model.learner_[:-1].transform(train)
     reference = LSSVR(gamma=20.0, sigma=1.5).fit(Z, train.drift_deg_h - base)
     np.testing.assert_array_equal(model.lssvr.alpha_, reference.alpha_)
     # a new run's base: the prior of all training runs
     new, _ = synthetic_fleet(6, np.random.default_rng(4), constant=(1,))
     new_base = _direct_base(new, [model.coefficient_prior_] * 6)
     np.testing.assert_array_equal(physics_estimate(new, FLEET_PHYSICS, prior=model.coefficient_prior_), new_base)
-    expected = new_base + reference.predict(model[:-1].transform(new))
+    expected = new_base + reference.predict(model.learner_[:-1].transform(new))
     np.testing.assert_allclose(model.predict(new), expected, rtol=0, atol=1e-15)
 
 
@@ -254,7 +248,7 @@ def test_model_files_keep_the_resolved_base_and_the_prior_to_the_bit(fleet, tmp_
     for key in ("physics_column", "coefficient_prior"):
         del doc3["fitted"][key]
     loaded = model_from_dict(doc3, "old.json")
-    assert loaded.base_uncertainty == "none" and not loaded.base_std_used_
+    assert loaded.base_uncertainty == "none" and not loaded.base_.std_used_
     for a, b in zip(loaded.predict_interval(new), old.predict_interval(new), strict=True):
         np.testing.assert_array_equal(a, b)
     doc3["physics_column"] = "auto"

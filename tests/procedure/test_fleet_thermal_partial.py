@@ -9,7 +9,8 @@ from click.testing import CliRunner
 
 from gyrodrift.cli import main
 from gyrodrift.errors import InputError
-from gyrodrift.learn.model import FLEET_PHYSICS, fit_drift_model
+from gyrodrift.learn.drift_model import fit_drift_model
+from gyrodrift.learn.physics_base import FLEET_PHYSICS
 from gyrodrift.runs.table import SMOOTHER_THERMAL_COLUMNS, check_smoother_thermal
 from test_fleet_base import synthetic_fleet
 

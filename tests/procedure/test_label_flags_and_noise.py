@@ -11,7 +11,7 @@ from click.testing import CliRunner
 from gyrodrift.cli import main
 from gyrodrift.errors import InputError
 from gyrodrift.ins import Scenario, simulate
-from gyrodrift.learn.model import fit_drift_model
+from gyrodrift.learn.drift_model import fit_drift_model
 from gyrodrift.learn.model_io import load_model
 from gyrodrift.procedure import features_table
 from gyrodrift.procedure.features import features_run_table

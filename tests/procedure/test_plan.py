@@ -203,7 +203,7 @@ def test_a_shorter_coarse_span_is_the_smoothers_too():
 def test_identify_says_what_its_drift_sigma_means_for_the_mission():
     # A short time line (1 h alignment + 2 h) keeps the run cheap; the outlook is the planner's function of the
     # smoother's 1-sigma and the run's latitude, to the digit.
-    from gyrodrift.learn.model import fit_drift_model
+    from gyrodrift.learn.drift_model import fit_drift_model
     from gyrodrift.procedure.identify import identify
     from gyrodrift.runs.table import RunTable
 

@@ -27,7 +27,7 @@ from gyrodrift.cli import main
 from gyrodrift.ins import Scenario, simulate
 from gyrodrift.ins.synthetic_fleet import simulate_fleet
 from gyrodrift.learn.baselines import physics_inversion
-from gyrodrift.learn.model import fit_drift_model
+from gyrodrift.learn.drift_model import fit_drift_model
 from gyrodrift.learn.model_io import save_model
 from gyrodrift.logs import LogError, open_log
 from gyrodrift.procedure import (
@@ -329,7 +329,7 @@ def test_identification_on_held_out_runs(fleet, fleet_features, model):
     assert "% interval rests on" in h.uncertainty_note and "training runs" in h.uncertainty_note  # how many
     # the interval is centred on the prediction; its half-width is the calibration (Student-t quantile times the
     # scores' robust scale) times the run's 1-sigma (docs/identification.md, "Intervals and extrapolation")
-    q = m.interval_scale_.multiplier(0.9)
+    q = m.interval_.scale_.multiplier(0.9)
     for x, v in zip(held, np.hypot(*m._interval_sigmas(test)), strict=True):
         lo, hi = x.interval_deg_h
         assert lo < x.drift_deg_h < hi and (hi - lo) / 2 == pytest.approx(q * v, rel=1e-12)

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from gyrodrift.choices import PHYSICS_COLUMNS
+from gyrodrift.learn.drift_model import fit_drift_model
 from gyrodrift.learn.fleet_prior import drift_with_coefficient_prior
-from gyrodrift.learn.model import fit_drift_model
 from gyrodrift.procedure.identify import FLEET_BASE, identify
 from gyrodrift.procedure.results import RunFeatures
 from gyrodrift.procedure.writers import identification_document
@@ -107,7 +107,7 @@ def test_identify_reports_the_fleet_base_and_the_model_is_base_plus_correction(t
     from gyrodrift.procedure.features import features_run_table
 
     table = features_run_table([f])
-    correction = float(model.named_steps["lssvr"].predict(model[:-1].transform(table))[0])
+    correction = float(model.learner_.named_steps["lssvr"].predict(model.learner_[:-1].transform(table))[0])
     assert res.drift_deg_h == pytest.approx(base + correction, rel=0, abs=1e-12)
     assert abs(correction) > 1e-7  # a correction is learned, not zero
     doc = json.loads(json.dumps(identification_document(res), allow_nan=False))

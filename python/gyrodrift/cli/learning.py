@@ -202,8 +202,8 @@ def fit(
     """
     from gyrodrift.errors import OptionError
     from gyrodrift.files.atomic import check_output_file
+    from gyrodrift.learn.drift_model import DEFAULT_MAX_LABEL_STD_DEG_H, fit_drift_model
     from gyrodrift.learn.lssvm_system import IllConditionedError
-    from gyrodrift.learn.model import DEFAULT_MAX_LABEL_STD_DEG_H, fit_drift_model
     from gyrodrift.learn.model_io import MODEL_FILE_RECOGNISER, save_model
 
     if (gamma is None) != (sigma is None):
@@ -265,7 +265,7 @@ def fit(
     if training["weighted"]:
         how = (
             "their label 1-sigma drift_std_deg_h combined with the physics base's 1-sigma"
-            if model.base_std_used_
+            if model.base_.std_used_
             else "their label 1-sigma drift_std_deg_h"
         )
         click.echo(f"note: runs weighted by {how} (weighted LS-SVM)", err=True)
@@ -302,7 +302,7 @@ def fit(
     )
     # after the model and the summary are written: a failed write stays the command's one line
     if model.target == "residual":
-        why = "--physics-column" if physics_column != "auto" else model.physics_reason_
+        why = "--physics-column" if physics_column != "auto" else model.base_.reason_
         prior = model.coefficient_prior_
         if prior is not None:
             why += f"; pooled k_z prior {prior[0]:.3e} +- {prior[1]:.3e} deg/h/degC"
@@ -374,7 +374,7 @@ def predict(data, model_file, out, coverage, lat0_deg, split, as_json, fmt, quie
 
     from gyrodrift.errors import OptionError
     from gyrodrift.files.atomic import atomic_write, check_output_file, recognise_header
-    from gyrodrift.learn.model import min_runs_for_coverage
+    from gyrodrift.learn.interval import min_runs_for_coverage
     from gyrodrift.learn.model_io import load_model
 
     if fmt is not None:

@@ -191,8 +191,8 @@ def _fit_learned(name: str, train, *, seed: int, max_iter: int):
     from sklearn.preprocessing import StandardScaler
 
     from gyrodrift.choices import default_encoding
+    from gyrodrift.learn.drift_model import DEFAULT_MAX_LABEL_STD_DEG_H, fit_drift_model
     from gyrodrift.learn.encodings import encode
-    from gyrodrift.learn.model import DEFAULT_MAX_LABEL_STD_DEG_H, fit_drift_model
 
     common: dict[str, Any] = dict(encoding="physics", rng=seed, quiet=True, max_iter=max_iter)
     specs: dict[str, dict[str, Any]] = {

@@ -31,7 +31,7 @@ is ``min 1/2 |w|^2 + gamma/2 sum_i w_i e_i^2``, i.e. ``C_i = gamma w_i``; elimin
 gives the same bordered system with ``H = K + diag(1 / (gamma w_i))``. Everything above holds with that ``H``:
 removing sample ``i`` still removes row and column ``i`` of the bordered matrix, so the closed-form LOO
 residuals keep their form (tests compare both with brute-force weighted solves and refits). For drift labels
-with 1-sigma ``s_i``, ``w_i = mean(s^2) / s_i^2`` (``gyrodrift.learn.model.label_weights``).
+with 1-sigma ``s_i``, ``w_i = mean(s^2) / s_i^2`` (``gyrodrift.learn.physics_base.label_weights``).
 
 If the Cholesky factorisation fails (``H`` not numerically positive definite, e.g. an enormous gamma with
 a singular kernel matrix - duplicated training points - or an indefinite polynomial kernel with

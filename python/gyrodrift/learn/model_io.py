@@ -28,8 +28,8 @@ and refuses a file whose record differs (to the bit). Schema 3 files (a concrete
 ``auto`` and ``base_uncertainty``) load with ``base_uncertainty = "none"``, as they were fitted; schema 2 files
 (before the hybrid model and weighted labels) as ``target = "drift"`` models with unweighted labels.
 
-Loading rebuilds the model with :func:`gyrodrift.learn.model.make_drift_model` from the parameters and fits it on the
-training runs with the recorded tuning (no search is repeated) and the stored LSSVR solution: ``dual_coef_deg_h``
+Loading rebuilds the model with :func:`gyrodrift.learn.drift_model.make_drift_model` from the parameters and fits it on
+the training runs with the recorded tuning (no search is repeated) and the stored LSSVR solution: ``dual_coef_deg_h``
 (the dual coefficients alpha, deg/h, one per training run), ``intercept_deg_h``, ``loo_residuals_deg_h`` and
 ``condition_number`` are taken as given (`gyrodrift.learn.lssvr.LSSVR.from_solution`, no n x n system is solved) after
 a check that costs O(32 n): the coefficients sum to 0 and solve 32 rows of the LSSVM system for the recorded gamma,
@@ -40,7 +40,7 @@ saved model's predictions to the bit (tested). Three more entries are taken as g
 hyperparameters of the interval's Gaussian process, `gyrodrift.learn.spread.SpreadGP`: no likelihood is maximised
 again), ``interval_residuals_deg_h`` and ``interval_spreads_deg_h`` (the interval's calibration: nothing is
 recomputed, and the Gaussian process skips its leave-one-out inverse) and ``interval_disagreement_deg_h`` (the
-largest LSSVR/GP disagreement over the training runs, ``DriftModel.disagreement_deg_h_``: no prediction on the
+largest LSSVR/GP disagreement over the training runs, ``DriftModel.interval_.disagreement_deg_h_``: no prediction on the
 training runs). Files without them (written before) get them recomputed, the calibration with leave-one-out scores
 (``calibration_folds`` 0). Floats are written with ``repr`` precision.
 
@@ -72,8 +72,8 @@ from gyrodrift.choices import (
 from gyrodrift.errors import GyrodriftError, InputError
 from gyrodrift.files.atomic import atomic_write_json, recognise_json_format
 from gyrodrift.files.input_files import read_limited
+from gyrodrift.learn.drift_model import DriftModel, make_drift_model, training_digest
 from gyrodrift.learn.lssvm_system import IllConditionedWarning
-from gyrodrift.learn.model import DriftModel, make_drift_model, training_digest
 from gyrodrift.learn.tuning import SearchBoundWarning, TuningResult
 from gyrodrift.runs.table import RunTable, RunTableError
 
@@ -137,7 +137,7 @@ def _refuse_huge_ints(doc: Any, where: str) -> None:
 
 def model_to_dict(model: DriftModel) -> dict:
     """The JSON-ready dict of a fitted model."""
-    est = model.named_steps["lssvr"]
+    est = model.learner_.named_steps["lssvr"]
     params = {k: v for k, v in est.get_params().items() if k in _PARAMS}
     if not (params["random_state"] is None or isinstance(params["random_state"], int)):
         params["random_state"] = None  # a Generator's state is not kept: the recorded tuning stands for it
@@ -167,10 +167,10 @@ def model_to_dict(model: DriftModel) -> dict:
             "condition_number": float(lssvr.condition_number_),
             "on_search_bound": list(est.on_search_bound_),
             "loo_residuals_deg_h": np.asarray(model.loo_residuals_deg_h, float).tolist(),
-            "spread_theta": np.asarray(model.spread_.theta_, float).tolist(),
-            "interval_residuals_deg_h": np.asarray(model.interval_residuals_, float).tolist(),
-            "interval_spreads_deg_h": np.asarray(model.interval_spreads_, float).tolist(),
-            "interval_disagreement_deg_h": float(model.disagreement_deg_h_),
+            "spread_theta": np.asarray(model.interval_.spread_.theta_, float).tolist(),
+            "interval_residuals_deg_h": np.asarray(model.interval_.residuals_, float).tolist(),
+            "interval_spreads_deg_h": np.asarray(model.interval_.spreads_, float).tolist(),
+            "interval_disagreement_deg_h": float(model.interval_.disagreement_deg_h_),
             "physics_column": model.physics_column_,
             "coefficient_prior": None if model.coefficient_prior_ is None else list(model.coefficient_prior_),
         },

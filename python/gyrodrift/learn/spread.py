@@ -1,6 +1,6 @@
 """The predictive spread of a drift model: a Gaussian process whose length scales are fitted to the runs.
 
-The drift model's point estimate is the LSSVR's (`gyrodrift.learn.model`); its interval needs, for every run, how
+The drift model's point estimate is the LSSVR's (`gyrodrift.learn.drift_model`); its interval needs, for every run, how
 far that estimate may be from the run's drift. `SpreadGP` models the LSSVR's target (the drift, or a hybrid's
 label minus physics) over the model's scaled inputs as a Gaussian process (the likelihood, its search and the
 prediction computed here as scikit-learn's ``GaussianProcessRegressor`` computes them for ``_kernel``'s kernel)::
@@ -29,7 +29,7 @@ What it gives (unit of y, deg/h):
 * ``prior_std()``: the 1-sigma of the learned term before any run, anywhere in the training runs' range
   (``sqrt(c0 + c1 + tau^2 + max_i |z_i|^2)``, the trend's prior at the training input farthest from their
   mean): what the learned term may be when nothing is known about it, the cap of the learner's share of the
-  interval far from the runs (`gyrodrift.learn.model.DriftModel.predict_interval`);
+  interval far from the runs (`gyrodrift.learn.interval.DriftInterval`);
 * ``predict_mean(Z)``: the predictive mean (the model compares it with the LSSVR's prediction).
 
 The calibration of the interval (`calibration_scale`, used by the model): the scores ``z_i`` (each training run's

@@ -42,8 +42,9 @@ import numpy as np
 from gyrodrift import __version__
 from gyrodrift.learn.baselines import fit_latitude_line, physics_inversion, position_error_of_drift_nmi
 from gyrodrift.learn.cpso import check_seed
+from gyrodrift.learn.drift_model import DriftModel, fit_drift_model
 from gyrodrift.learn.encodings import ENCODING_DESCRIPTIONS
-from gyrodrift.learn.model import DriftModel, IntervalOutlierWarning, fit_drift_model
+from gyrodrift.learn.interval import IntervalOutlierWarning
 from gyrodrift.learn.tuning import SearchBoundWarning, on_search_bound
 from gyrodrift.progress import progress
 from gyrodrift.runs.datasets import load_paper
@@ -375,8 +376,8 @@ def reproduce(out_dir="gyrodrift-reproduce", seed: int = 0, quiet: bool = False)
     or hold only gyrodrift's outputs (docs/outputs.md). The files are published together at the end, so a
     failed or killed run leaves the previous results intact.
     """
-    from gyrodrift.paper import report
     from gyrodrift.files.atomic import output_folder, write_json
+    from gyrodrift.paper import report
 
     seed = check_seed(seed, "seed")
     out = output_folder(out_dir, "reproduce", report.REPORT_FILES)

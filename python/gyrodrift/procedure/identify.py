@@ -1,7 +1,7 @@
 """Identification of the axial drift of one run: alignment + 12 h navigation + the drift model.
 
-The model (`gyrodrift.learn.model.DriftModel`: an LSSVR, or a hybrid of a physics estimate and an LSSVR correction)
-maps the run's features (latitude at 12 h, temperature over the 12 h) to the axial drift [deg/h], the total
+The model (`gyrodrift.learn.drift_model.DriftModel`: an LSSVR, or a hybrid of a physics estimate and an LSSVR
+correction) maps the run's features (latitude at 12 h, temperature over the 12 h) to the axial drift [deg/h], the total
 constant to subtract from the z gyro. Beside it the result carries the physics inversion of the same latitude
 error (`gyrodrift.learn.baselines.physics_inversion`), the 12 h curve fit of the latitude and longitude error curves
 with its 1-sigma (`gyrodrift.learn.curve_fit`), the 16 h smoother's drift with its 1-sigma
@@ -31,8 +31,9 @@ import os
 import numpy as np
 
 from gyrodrift.learn.baselines import physics_inversion
+from gyrodrift.learn.drift_model import DriftModel
 from gyrodrift.learn.fleet_prior import drift_with_coefficient_prior
-from gyrodrift.learn.model import DriftModel, min_runs_for_coverage
+from gyrodrift.learn.interval import min_runs_for_coverage
 from gyrodrift.logs import ImuLog
 from gyrodrift.procedure.features import extract_features, features_run_table
 from gyrodrift.procedure.noise import SensorNoise
