@@ -265,7 +265,7 @@ def test_drift_deg_h_is_checked_with_its_option_name_and_a_stated_bound(tmp_path
 
 
 def test_the_library_refuses_a_drift_beyond_the_bound_by_the_options_name(tmp_path):
-    from gyrodrift.ins import navigate
+    from gyrodrift.procedure import navigate
 
     scenario = tmp_path / "t.toml"
     scenario.write_text("[run]\nduration_h = 0.01\nrate_hz = 10.0\n")

@@ -6,8 +6,9 @@ import pytest
 from click.testing import CliRunner
 
 from gyrodrift.cli import main
-from gyrodrift.ins import Scenario, navigate, simulate
+from gyrodrift.ins import Scenario, simulate
 from gyrodrift.logs import LogError
+from gyrodrift.procedure import navigate
 
 
 @pytest.fixture(scope="module")

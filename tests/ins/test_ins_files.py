@@ -11,9 +11,10 @@ import pytest
 from click.testing import CliRunner
 
 from gyrodrift.cli import main
-from gyrodrift.ins import ImuData, LogError, Scenario, load_scenario, navigate, simulate
+from gyrodrift.ins import ImuData, LogError, Scenario, load_scenario, simulate
 from gyrodrift.ins.imu_file import IMU_COLUMNS, IMU_FORMAT
-from gyrodrift.ins.navigate import NAV_COLUMNS, NAV_ERROR_COLUMNS
+from gyrodrift.ins.nav_columns import NAV_COLUMNS, NAV_ERROR_COLUMNS
+from gyrodrift.procedure import navigate
 
 SMALL = """
 [site]

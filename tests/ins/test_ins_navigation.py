@@ -20,8 +20,9 @@ import numpy as np
 import pytest
 
 from gyrodrift.earth import NMI_M, OMEGA_IE_RAD_S
-from gyrodrift.ins import Scenario, navigate, simulate
+from gyrodrift.ins import Scenario, simulate
 from gyrodrift.ins.nav_errors import radii_of_curvature
+from gyrodrift.procedure import navigate
 from gyrodrift.units import ARCSEC, DEG, DEG_PER_H, DEG_PER_SQRT_H, HOUR
 
 LAT_DEG = 28.222

@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 
 from gyrodrift.earth import OMEGA_IE_RAD_S, normal_gravity
-from gyrodrift.ins import Scenario, navigate, simulate
+from gyrodrift.ins import Scenario, simulate
 from gyrodrift.ins.nav_errors import position_errors, radii_of_curvature
+from gyrodrift.procedure import navigate
 from gyrodrift.testing.reference_nav import ReferenceNavigator, euler_to_quat, quat_to_euler
 from gyrodrift.units import ARCSEC, DEG, DEG_PER_H
 

@@ -17,8 +17,9 @@ import numpy as np
 import pytest
 
 from gyrodrift import _core
-from gyrodrift.ins import Scenario, ScenarioError, navigate
+from gyrodrift.ins import Scenario, ScenarioError
 from gyrodrift.ins.simulate import rotation_summary
+from gyrodrift.procedure import navigate
 from gyrodrift.units import DEG
 
 ERRORS = {"gyro": {"bias_deg_h": [0.01, 0.01, 0.0]}, "accel": {"bias_ug": [50.0, 50.0, 0.0]}}

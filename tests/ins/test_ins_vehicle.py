@@ -160,8 +160,8 @@ def test_error_free_imu_navigates_the_route():
 def test_navigate_reports_errors_against_the_route(tmp_path):
     """navigate of a moving-base scenario, its in-memory run and its imu.parquet: errors against the route (an
     error-free IMU: metres), not against the static site the vehicle has left (kilometres)."""
-    from gyrodrift.ins import navigate
     from gyrodrift.ins.track import ReferenceTrack
+    from gyrodrift.procedure import navigate
 
     s = vehicle(duration_h=0.5)
     on_the_fly = navigate(s)
@@ -184,8 +184,8 @@ def test_navigate_reports_errors_against_the_route(tmp_path):
 
 
 def test_gnss_track_file_is_interpolated_and_must_cover_the_drive(tmp_path):
-    from gyrodrift.ins import navigate
     from gyrodrift.ins.track import ReferenceTrack, TrackError, load_track
+    from gyrodrift.procedure import navigate
 
     s = vehicle(duration_h=0.3)
     route = ReferenceTrack.from_scenario(s)
@@ -227,10 +227,10 @@ def test_vehicle_test_example_compensation_and_modulation():
     import dataclasses
     from pathlib import Path
 
-    from gyrodrift.ins import navigate
     from gyrodrift.ins.scenario import Rotation
     from gyrodrift.ins.track import ReferenceTrack
     from gyrodrift.logs import ImuLog
+    from gyrodrift.procedure import navigate
     from gyrodrift.procedure.evaluate import evaluate_compensation
 
     path = Path(__file__).resolve().parents[2] / "examples" / "scenarios" / "vehicle_test.toml"
@@ -324,8 +324,8 @@ def test_vehicle_attitude_columns_remove_the_table_turn(tmp_path):
     """nav.parquet of a moving-base run carries the vehicle's attitude: the navigated IMU attitude with the table
     angle removed, equal to the route's heading (error-free IMU, tilted mounting), from memory, from the file and
     from a scenario navigated on the fly."""
-    from gyrodrift.ins import navigate
     from gyrodrift.ins.vehicle import vehicle_attitude_rad
+    from gyrodrift.procedure import navigate
 
     d = vehicle(duration_h=0.2).to_toml_dict()
     d["attitude"].update(pitch_deg=0.5, roll_deg=-0.8)

@@ -13,9 +13,10 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
-from gyrodrift.ins import Scenario, navigate, simulate
+from gyrodrift.ins import Scenario, simulate
 from gyrodrift.logs import LogError, open_log
 from gyrodrift.logs.log_format import LogFormat, LogFormatError, load_log_format
+from gyrodrift.procedure import navigate
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = ROOT / "examples" / "logs"

@@ -191,14 +191,13 @@ def navigate_command(
     summary line and summary.json (initial_source) say which.
     """
     from gyrodrift.errors import OptionError
-    from gyrodrift.ins.navigate import navigate
+    from gyrodrift.procedure.navigate import nav_files, navigate
 
     if old_drift_deg_h is not None:
         if drift_deg_h is not None:
             raise OptionError("give --drift-deg-h only (--compensate-drift-deg-h is its deprecated name)")
         click.echo("warning: --compensate-drift-deg-h is deprecated; use --drift-deg-h", err=True)
         drift_deg_h = old_drift_deg_h
-    from gyrodrift.ins.navigate import nav_files
     from gyrodrift.logs import ImuLog, open_log
 
     site = site_from_options(lat0_deg, lon0_deg, height_m)

@@ -1,4 +1,4 @@
-"""gyrodrift.ins: scenarios, IMU simulation and free navigation of a static-base rotation INS.
+"""gyrodrift.ins: scenarios, IMU simulation and free navigation of a rotation INS from a given initial state.
 
 The per-sample work runs in the Rust core (`gyrodrift._core.ImuSimulator`, `gyrodrift._core.Navigator`);
 this package validates scenario files into typed objects, converts user units to SI at the boundary
@@ -8,14 +8,16 @@ Public API
 ----------
 load_scenario(path) -> Scenario
 simulate(scenario, *, out_dir=None, chunk_samples=100_000, quiet=True) -> ImuData | Path
-navigate(imu, *, hours=None, compensate_drift_deg_h=0.0, gyro_bias_deg_h=None, accel_bias_ug=None,
-         initial="auto", site=None, decimation_s=1.0, out_dir=None, quiet=True) -> NavResult
+navigate_from(log, initial: InitialState, settings: NavSettings, *, source=None, reference=None) -> NavResult
+
+The ``navigate`` job (the initial state from the log's truth or its alignment, files written) is
+`gyrodrift.procedure.navigate`.
 
 IMU logs (files, in-memory arrays, scenarios simulated on the fly) are read by `gyrodrift.logs`; a bad one
 raises `LogError`.
 """
 
-from gyrodrift.ins.navigate import NavResult, navigate
+from gyrodrift.ins.navigate import InitialState, NavResult, NavSettings, navigate_from
 from gyrodrift.ins.scenario import (
     Accel,
     Attitude,
@@ -37,8 +39,10 @@ __all__ = [
     "Attitude",
     "Gyro",
     "ImuData",
+    "InitialState",
     "LogError",
     "NavResult",
+    "NavSettings",
     "Rotation",
     "Run",
     "Scenario",
@@ -46,7 +50,7 @@ __all__ = [
     "Site",
     "Temperature",
     "load_scenario",
-    "navigate",
+    "navigate_from",
     "simulate",
     "write_scenario_toml",
 ]

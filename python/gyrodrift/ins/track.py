@@ -10,7 +10,8 @@ dlon/dt = v_E / ((R_N + h) cos lat)), linear otherwise. Sources:
   the route's position is integrated by 4th-order Runge-Kutta split at segment boundaries, so 1 s steps are
   exact to far below a millimetre);
 * `load_track(path)`: a GNSS (or any reference) CSV or Parquet file with columns ``t_s``, ``lat_deg``,
-  ``lon_deg``, ``height_m`` and optionally ``vel_e_m_s``, ``vel_n_m_s``, ``vel_u_m_s``;
+  ``lon_deg``, ``height_m`` and optionally ``vel_e_m_s``, ``vel_n_m_s``, ``vel_u_m_s``
+  (`gyrodrift.ins.nav_columns.TRACK_REQUIRED`, `TRACK_VELOCITY`);
 * `route_of(imu)`: the scenario of a simulated moving-base source (a Scenario, an ImuData, or an imu.parquet
   whose ``gyrodrift.scenario`` metadata has a ``[trajectory]``), or None.
 
@@ -19,6 +20,7 @@ dlon/dt = v_E / ((R_N + h) cos lat)), linear otherwise. Sources:
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 from dataclasses import dataclass
@@ -27,16 +29,13 @@ from typing import Any
 
 import numpy as np
 
+from gyrodrift import _core
 from gyrodrift.earth import radii_of_curvature
 from gyrodrift.errors import InputError
+from gyrodrift.ins.nav_columns import TRACK_COLUMNS, TRACK_VELOCITY_COLUMNS
+from gyrodrift.ins.scenario import Accel, Gyro, Rotation, Scenario, Temperature
 
-__all__ = ["ReferenceTrack", "TrackError", "load_track", "route_of", "TRACK_COLUMNS", "TRACK_VELOCITY_COLUMNS"]
-
-TRACK_COLUMNS = ("t_s", "lat_deg", "lon_deg", "height_m")
-"""Required columns of a reference-track file (time on the IMU log's time base [s], position [deg, m])."""
-
-TRACK_VELOCITY_COLUMNS = ("vel_e_m_s", "vel_n_m_s", "vel_u_m_s")
-"""Optional velocity columns of a reference-track file [m/s, ENU] (all three or none)."""
+__all__ = ["ReferenceTrack", "TrackError", "load_track", "route_of"]
 
 TRUTH_RATE_HZ = 1.0
 """Rate of the truth track computed from a scenario's route [Hz]."""
@@ -70,13 +69,8 @@ class ReferenceTrack:
     label: str = "<track>"
 
     @classmethod
-    def from_scenario(cls, scenario: Any) -> ReferenceTrack:
+    def from_scenario(cls, scenario: Scenario) -> ReferenceTrack:
         """The true route of a moving-base `scenario` (``[trajectory]``) at 1 Hz, including t = 0."""
-        import dataclasses
-
-        from gyrodrift import _core
-        from gyrodrift.ins.scenario import Accel, Gyro, Rotation, Temperature
-
         if scenario.trajectory is None:
             raise TrackError("the scenario has no [trajectory]: its truth is the static site")
         truth_run = dataclasses.replace(
@@ -205,8 +199,6 @@ def load_track(path: str | os.PathLike[str]) -> ReferenceTrack:
 
 def route_of(imu: Any) -> Any:
     """The moving-base `Scenario` behind an IMU source (Scenario, ImuData, ImuLog or path), or None."""
-    from gyrodrift.ins.scenario import Scenario
-
     scenario = imu if isinstance(imu, Scenario) else getattr(imu, "scenario", None)
     if scenario is None:
         path = imu if isinstance(imu, (str, os.PathLike)) else getattr(imu, "path", None)

@@ -326,8 +326,8 @@ def position_error_72h(data, chosen: dict, claims: dict) -> dict:
     run's true axial drift: nothing compensated, the selected model's identified drift compensated, the paper's
     Table 3 drift compensated. Errors computed minus true; position error in nmi (1852 m).
     """
-    from gyrodrift.ins.navigate import navigate
     from gyrodrift.ins.scenario import Scenario
+    from gyrodrift.procedure.navigate import navigate
 
     err = np.abs(np.asarray(chosen["test_err_deg_h"]))
     order = np.argsort(err, kind="stable")

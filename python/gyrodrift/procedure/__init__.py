@@ -7,6 +7,8 @@ Public API (plain functions returning dataclasses; the CLI in `gyrodrift.cli.pro
 --------------------------------------------------------------------------------------------------------
 align_log(log, ...) -> Alignment; write_alignment(alignment, out_dir)
 navigate_after_alignment(log, alignment, drifts_deg_h, hours, ...) -> PassResult
+navigate(imu, *, hours=None, compensate_drift_deg_h=0.0, initial="auto", ..., out_dir=None, plot=False) -> NavResult
+    (the ``navigate`` command: from the log's truth or its alignment; nav.parquet, summary.json)
 extract_features(log, ..., with_truth=False) -> RunFeatures
 features_table(paths, ..., workers=None, scheduler=None) -> list[RunFeatures]
 write_features_csv(rows, path, curves=None)
@@ -27,6 +29,7 @@ from gyrodrift.procedure.evaluate import evaluate_compensation
 from gyrodrift.procedure.features import extract_features, features_run_table
 from gyrodrift.procedure.fleet import DaskMissingError, features_table
 from gyrodrift.procedure.identify import identify
+from gyrodrift.procedure.navigate import navigate
 from gyrodrift.procedure.noise import SensorNoise, estimate_white_noise
 from gyrodrift.procedure.passes import navigate_after_alignment
 from gyrodrift.procedure.results import (
@@ -74,6 +77,7 @@ __all__ = [
     "features_table",
     "find_true_drift",
     "identify",
+    "navigate",
     "navigate_after_alignment",
     "smooth_log",
     "write_evaluation",

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from gyrodrift import _core
 from gyrodrift.logs import ImuLog, LogError
 from gyrodrift.procedure.results import Alignment
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
@@ -70,8 +71,6 @@ def align_log(
         The core's aligner refuses the log (e.g. no static base: an estimate leaves its range); the message names
         the log, the quantity and the time (`ImuLog.core_errors`).
     """
-    from gyrodrift import _core
-
     if log.site is None:
         raise LogError(f"{log.label}: the log carries no site; give its latitude (--lat0-deg / site=)")
     site = log.site

@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from gyrodrift.earth import radii_of_curvature
 from gyrodrift.procedure.results import Alignment, Evaluation, TrueDrift
 
 __all__ = [
@@ -136,8 +137,6 @@ def route_map_figure(ev: Evaluation):
     t = np.concatenate([[0.0], ev.before.t_h])
     lat, lon, _ = ref.at(ev.start_s + t * 3600.0)
     lat0, lon0 = lat[0], lon[0]
-    from gyrodrift.earth import radii_of_curvature
-
     r_m, r_n = radii_of_curvature(np.array([lat0]))
     north = (lat - lat0) * r_m[0] / 1000.0
     east = (lon - lon0) * r_n[0] * np.cos(lat0) / 1000.0
@@ -168,7 +167,7 @@ def _short_source(source: str) -> str:
 
 
 def navigation_figure(columns: Mapping[str, np.ndarray], summary: Mapping[str, Any]):
-    """The errors of one navigation (`gyrodrift.ins.navigate`, ``navigate --plot``) vs time [h] since its start:
+    """The errors of one navigation (`gyrodrift.procedure.navigate`, ``navigate --plot``) vs time [h] since its start:
     position error [nmi] with the 1 nmi line, latitude/longitude errors [arcsec], and pitch/roll/yaw errors
     [arcsec] when the log carries the true attitude (computed minus true). Without a known site the panels say
     so instead of plotting."""

@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from gyrodrift import _core
 from gyrodrift.errors import OptionError
 from gyrodrift.ins.nav_errors import position_errors
 from gyrodrift.ins.navigate import vertical_reference
@@ -92,8 +93,6 @@ def navigate_after_alignment(
     -------
     PassResult
     """
-    from gyrodrift import _core
-
     rate = log.rate_hz
     start = alignment.samples_used
     hours = check_navigation_hours(hours, decimation_s)
