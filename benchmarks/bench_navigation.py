@@ -104,9 +104,7 @@ CHUNK_KEYS = ("t_s", "dtheta_rad", "dv_m_s", "temp_c", "table_angle_rad", "pitch
 
 def _nav_config(s: Scenario) -> dict:
     return {
-        "lat_rad": s.site.lat_deg * DEG,
-        "lon_rad": s.site.lon_deg * DEG,
-        "height_m": s.site.height_m,
+        **s.site.core_position(),
         "pitch_rad": s.attitude.pitch_deg * DEG,
         "roll_rad": s.attitude.roll_deg * DEG,
         "yaw_rad": s.attitude.yaw_deg * DEG,
