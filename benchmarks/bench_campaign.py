@@ -155,7 +155,7 @@ def core_rates(campaign, meter: CoreMeter) -> dict[str, float]:
     """Samples per CPU second inside the core per kind (the smoother's backward pass: CPU seconds per call),
     best of 3 on the campaign's first scenario (8 h of navigation)."""
     from gyrodrift.fleet.campaign import _noise_model, _timeline
-    from gyrodrift.logs import ImuLog
+    from gyrodrift.ins.simulate import scenario_log
     from gyrodrift.procedure import align_log, navigate_after_alignment
     from gyrodrift.procedure.smoother import smooth_log
 
@@ -164,11 +164,11 @@ def core_rates(campaign, meter: CoreMeter) -> dict[str, float]:
     for _ in range(3):
         meter.reset()
         scn = campaign.scenario(0)
-        log = ImuLog.from_scenario(scn)
+        log = scenario_log(scn)
         alignment = align_log(log, timeline=timeline)
         smooth_log(log, timeline=timeline, noise=_noise_model(scn))
         navigate_after_alignment(log, alignment, [0.0], 8.0, threads=1)
-        twin = ImuLog.from_scenario(campaign.scenario(0, noise=False))
+        twin = scenario_log(campaign.scenario(0, noise=False))
         for _chunk in twin.chunks(100_000, stop=twin.samples_for(8 * 3600.0)):
             pass
         for k in KINDS:

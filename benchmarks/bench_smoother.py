@@ -25,7 +25,7 @@ import time
 import numpy as np
 
 from gyrodrift.ins.scenario import Scenario
-from gyrodrift.logs import ImuLog
+from gyrodrift.ins.simulate import scenario_log
 from gyrodrift.procedure import SensorNoise, find_true_drift, smooth_log
 from gyrodrift.procedure.truth import label_budget_deg_h, label_sigma_deg_h
 
@@ -57,7 +57,7 @@ def noise_free(rate: float) -> None:
         for lat in (20.0, 40.0, 60.0):
             errs, att, pos = [], 0.0, 0.0
             for drift in (0.003, 0.05):
-                e = smooth_log(ImuLog.from_scenario(scenario(lat, drift, scheme=scheme, rate=rate)))
+                e = smooth_log(scenario_log(scenario(lat, drift, scheme=scheme, rate=rate)))
                 errs.append(e.drift_deg_h - drift)
                 att, pos = max(att, e.max_attitude_correction_arcsec), max(pos, e.max_position_error_m)
             print(
@@ -76,7 +76,7 @@ def consistency(n: int, rate: float) -> None:
         est, sig = [], []
         for seed in range(n):
             e = smooth_log(
-                ImuLog.from_scenario(scenario(40.0, noise=RLG, seed=100 + seed, gyro=gyro, rate=rate)), noise=told
+                scenario_log(scenario(40.0, noise=RLG, seed=100 + seed, gyro=gyro, rate=rate)), noise=told
             )
             est.append(e.drift_deg_h - 0.003)
             sig.append(e.drift_std_deg_h)
@@ -90,10 +90,10 @@ def consistency(n: int, rate: float) -> None:
 def labels(n: int) -> None:
     print(f"3. labels: truth over {n} noisy 76 h logs at 40 deg (2 Hz) around the noise-free twin's truth")
     for criterion in ("final", "rms"):
-        twin = find_true_drift(ImuLog.from_scenario(scenario(40.0, hours=76.0, rate=2.0)), criterion=criterion)
+        twin = find_true_drift(scenario_log(scenario(40.0, hours=76.0, rate=2.0)), criterion=criterion)
         dev, sig = [], []
         for seed in range(n):
-            log = ImuLog.from_scenario(scenario(40.0, noise=RLG, seed=seed, hours=76.0, rate=2.0))
+            log = scenario_log(scenario(40.0, noise=RLG, seed=seed, hours=76.0, rate=2.0))
             t = find_true_drift(log, criterion=criterion)
             dev.append(t.drift_deg_h - twin.drift_deg_h)
             sig.append(t.drift_std_deg_h)
@@ -114,7 +114,7 @@ def labels(n: int) -> None:
 def runtime(rate: float) -> None:
     print("4. runtime per 16 h log (best of 3)")
     for r in (rate, 100.0):
-        log = ImuLog.from_scenario(scenario(40.0, noise=RLG, rate=r))
+        log = scenario_log(scenario(40.0, noise=RLG, rate=r))
         read, smooth = math.inf, math.inf
         for _ in range(3):
             t = time.perf_counter()

@@ -31,7 +31,7 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 
 from gyrodrift.ins.scenario import Scenario
-from gyrodrift.logs import ImuLog
+from gyrodrift.ins.simulate import scenario_log
 from gyrodrift.procedure import find_true_drift, smooth_log
 from gyrodrift.procedure.smoother import fleet_coefficient_prior
 
@@ -83,9 +83,9 @@ def one(args: tuple[int, float]) -> dict:
     """Smoother on the noisy 16 h, the simulated end drift, the twin's 72 h effective drift."""
     seed, rate_hz = args
     spec = draw(seed, rate_hz)
-    est = smooth_log(ImuLog.from_scenario(scenario(spec, noise=True, hours=SPAN_H)))
+    est = smooth_log(scenario_log(scenario(spec, noise=True, hours=SPAN_H)))
     temp_end = spec["end_c"] + (spec["start_c"] - spec["end_c"]) * math.exp(-SPAN_H / spec["tau_h"])
-    effective = find_true_drift(ImuLog.from_scenario(scenario(spec, noise=False, hours=76.0))).drift_deg_h
+    effective = find_true_drift(scenario_log(scenario(spec, noise=False, hours=76.0))).drift_deg_h
     return {
         "model": est.model,
         "nav": est.navigation_drift_deg_h,

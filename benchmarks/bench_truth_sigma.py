@@ -41,7 +41,7 @@ import numpy as np
 from scipy.stats import chi2
 
 from gyrodrift.ins.scenario import Scenario
-from gyrodrift.logs import ImuLog
+from gyrodrift.ins.simulate import scenario_log
 from gyrodrift.procedure import SensorNoise, find_true_drift
 from gyrodrift.procedure.align import align_log
 from gyrodrift.procedure.truth import label_sigma_deg_h
@@ -111,10 +111,10 @@ def mean_simulated_drift(seed: int, hours: float) -> float:
 def one(task: tuple) -> tuple:
     """``(key, drift [deg/h], reported sigma [deg/h])`` of one truth."""
     lat, seed, rate, hours, noise, thermal, noise_mode, gm_rrw, twin_alignment = task
-    log = ImuLog.from_scenario(scenario(lat, seed, rate, hours, noise=noise, thermal=thermal, gm_rrw=gm_rrw))
+    log = scenario_log(scenario(lat, seed, rate, hours, noise=noise, thermal=thermal, gm_rrw=gm_rrw))
     alignment = None
     if twin_alignment and noise:
-        alignment = align_log(ImuLog.from_scenario(scenario(lat, seed, rate, hours, noise=False, thermal=thermal)))
+        alignment = align_log(scenario_log(scenario(lat, seed, rate, hours, noise=False, thermal=thermal)))
     trial = thermal_spec(seed, hours)["constant"] if thermal else 0.003
     told = SensorNoise(**RLG, **(GM_RRW if gm_rrw else {}))
     t = find_true_drift(

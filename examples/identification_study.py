@@ -8,7 +8,7 @@ mean +- sd.
 
 The fleet: a reciprocating RLG INS (ARW 0.0005 deg/sqrt(h), VRW 5 ug/sqrt(Hz), random x/y gyro and accelerometer
 biases and heading) at sites drawn uniformly in 20-60 deg, each run a 76 h static log at 10 Hz simulated on the
-fly (`gyrodrift.logs.ImuLog.from_scenario`: no log files). The system warms up from 15-25 degC to 28-40 degC
+fly (`gyrodrift.ins.simulate.scenario_log`: no log files). The system warms up from 15-25 degC to 28-40 degC
 (time constant 1-6 h); the axial drift is a per-run constant N(0.002, 0.0008) deg/h plus a temperature law
 0.0002 deg/h/degC (T - 28 degC) (`[temperature] k1_deg_h_per_c`). The 12 h features therefore see the drift
 while the system is still warming, the 72 h after them the drift at the final temperature: what physics alone
@@ -60,11 +60,11 @@ import numpy as np
 
 from gyrodrift.choices import default_encoding
 from gyrodrift.ins.scenario import Scenario
+from gyrodrift.ins.simulate import scenario_log
 from gyrodrift.learn.baselines import physics_inversion
 from gyrodrift.learn.curve_fit import fit_error_curves
 from gyrodrift.learn.drift_model import DEFAULT_MAX_LABEL_STD_DEG_H, DriftModel, fit_drift_model
 from gyrodrift.learn.tuning import SearchBoundWarning
-from gyrodrift.logs import ImuLog
 from gyrodrift.procedure import align_log, extract_features, find_true_drift, navigate_after_alignment, smooth_log
 from gyrodrift.procedure.smoother import SmootherEstimate, fleet_coefficient_prior
 from gyrodrift.runs.columns import SMOOTHER_THERMAL_COLUMNS
@@ -177,7 +177,7 @@ def fit_default(train: RunTable, **kwargs) -> DriftModel:
 def measure_run(spec: dict, smoother: bool = True) -> dict:
     """Features, label and curve fit of the noisy run (and the 16 h smoother unless ``smoother=False``); the
     effective drift of its noise-free twin if held out."""
-    log = ImuLog.from_scenario(scenario(spec, noise=True, rate_hz=spec["rate_hz"], k1=spec["k1"]))
+    log = scenario_log(scenario(spec, noise=True, rate_hz=spec["rate_hz"], k1=spec["k1"]))
     f = extract_features(log, with_truth=True, smoother=smoother)
     base = f.truth.base
     cf = fit_error_curves(base.t_h * 3600.0, base.lat_err_arcsec, base.lon_err_arcsec, f.lat0_deg, hours=12.0)
@@ -198,13 +198,13 @@ def measure_run(spec: dict, smoother: bool = True) -> dict:
         out["smoother_estimate"] = f.smoother  # for the fleet k_z prior (not a run-table column)
     if spec["held_out"]:
         twin = scenario(spec, noise=False, rate_hz=spec["rate_hz"], k1=spec["k1"])
-        out["effective_deg_h"] = find_true_drift(ImuLog.from_scenario(twin)).drift_deg_h
+        out["effective_deg_h"] = find_true_drift(scenario_log(twin)).drift_deg_h
     return out
 
 
 def navigate_compensated(spec: dict, drifts: list[float]) -> list[float]:
     """Position error [nmi] at hour 72 of the noisy run compensated with each drift [deg/h] (one read)."""
-    log = ImuLog.from_scenario(scenario(spec, noise=True, rate_hz=spec["rate_hz"], k1=spec["k1"]))
+    log = scenario_log(scenario(spec, noise=True, rate_hz=spec["rate_hz"], k1=spec["k1"]))
     res = navigate_after_alignment(log, align_log(log), drifts, 72.0)
     return [float(c.final_nmi) for c in res.curves]
 
@@ -225,7 +225,7 @@ def four_latitude_features(rate_hz: float = 10.0) -> RunTable:
             "seed": 77 + k,
         }
         s = scenario(spec, noise=False, duration_h=16.0, rate_hz=rate_hz, k1=0.0)  # the drift stays 0.00368
-        log = ImuLog.from_scenario(s)
+        log = scenario_log(s)
         res = navigate_after_alignment(log, align_log(log), [0.0], 12.0, temperature_hours=12.0)
         c = res.curves[0]
         cf = fit_error_curves(c.t_h * 3600.0, c.lat_err_arcsec, c.lon_err_arcsec, lat, hours=12.0)

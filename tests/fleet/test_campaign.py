@@ -373,7 +373,7 @@ def test_cli_campaign_and_study(store, tmp_path):
 
 def test_runs_carry_the_smoothers_thermal_columns(store, tmp_path):
     from gyrodrift.fleet.campaign import _noise_model, _timeline
-    from gyrodrift.logs import ImuLog
+    from gyrodrift.ins.simulate import scenario_log
     from gyrodrift.procedure.results import SMOOTHER_THERMAL_COLUMNS
     from gyrodrift.procedure.smoother import smooth_log
     from gyrodrift.runs.table import read_runs_csv
@@ -384,7 +384,7 @@ def test_runs_carry_the_smoothers_thermal_columns(store, tmp_path):
         assert np.all(np.isfinite(runs.numbers(c))), c
     campaign = load_campaign(src)
     scn = campaign.scenario(3)
-    est = smooth_log(ImuLog.from_scenario(scn), timeline=_timeline(campaign.options), noise=_noise_model(scn))
+    est = smooth_log(scenario_log(scn), timeline=_timeline(campaign.options), noise=_noise_model(scn))
     assert est.model == "thermal"
     assert runs.numbers("drift_smoother_deg_h")[3] == est.navigation_drift_deg_h
     for c, v in est.thermal_columns().items():

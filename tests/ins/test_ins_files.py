@@ -12,8 +12,8 @@ from click.testing import CliRunner
 
 from gyrodrift.cli import main
 from gyrodrift.ins import ImuData, LogError, Scenario, load_scenario, simulate
-from gyrodrift.ins.imu_file import IMU_COLUMNS, IMU_FORMAT
 from gyrodrift.ins.nav_columns import NAV_COLUMNS, NAV_ERROR_COLUMNS
+from gyrodrift.logs.columns import IMU_COLUMNS, IMU_FORMAT
 from gyrodrift.procedure import navigate
 
 SMALL = """

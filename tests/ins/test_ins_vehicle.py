@@ -228,8 +228,8 @@ def test_vehicle_test_example_compensation_and_modulation():
     from pathlib import Path
 
     from gyrodrift.ins.scenario import Rotation
+    from gyrodrift.ins.simulate import scenario_log
     from gyrodrift.ins.track import ReferenceTrack
-    from gyrodrift.logs import ImuLog
     from gyrodrift.procedure import navigate
     from gyrodrift.procedure.evaluate import evaluate_compensation
 
@@ -241,7 +241,7 @@ def test_vehicle_test_example_compensation_and_modulation():
         run=dataclasses.replace(s.run, rate_hz=10.0, duration_h=76.5),
         trajectory=dataclasses.replace(s.trajectory, static_h=4.5),
     )
-    ev = evaluate_compensation(ImuLog.from_scenario(s), 0.003, reference=ReferenceTrack.from_scenario(s))
+    ev = evaluate_compensation(scenario_log(s), 0.003, reference=ReferenceTrack.from_scenario(s))
     assert ev.before.max_nmi > 3.0, ev.to_dict()
     assert ev.after.max_nmi < 1.0, ev.to_dict()
     horizontal = dataclasses.replace(

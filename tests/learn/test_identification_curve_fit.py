@@ -8,6 +8,7 @@ import pytest
 
 from gyrodrift.errors import InputError
 from gyrodrift.ins.scenario import Scenario
+from gyrodrift.ins.simulate import scenario_log
 from gyrodrift.learn.baselines import latitude_error_at
 from gyrodrift.learn.curve_fit import drift_response, error_responses, fit_error_curves
 from gyrodrift.logs import ImuLog
@@ -15,7 +16,7 @@ from gyrodrift.procedure import align_log, navigate_after_alignment
 
 
 def _log(lat_deg: float, drift: float, arw: float = 0.0) -> ImuLog:
-    return ImuLog.from_scenario(
+    return scenario_log(
         Scenario.from_dict(
             {
                 "site": {"lat_deg": lat_deg},

@@ -22,10 +22,10 @@ from click.testing import CliRunner
 import gyrodrift
 from gyrodrift.cli import main
 from gyrodrift.ins import Scenario, simulate
+from gyrodrift.ins.simulate import scenario_log
 from gyrodrift.logs import (
     STATIC_CHECK_SPAN_S,
     ImplausibleLogError,
-    ImuLog,
     LogError,
     open_log,
 )
@@ -140,7 +140,7 @@ def test_simulated_logs_pass_at_any_latitude_and_rotation_with_realistic_errors(
             "attitude": {"pitch_deg": 2.0, "roll_deg": -2.0, "yaw_deg": 10.0},
         }
     )
-    ImuLog.from_scenario(s).check_static_base()  # no error
+    scenario_log(s).check_static_base()  # no error
 
 
 def test_a_declared_upside_down_mounting_passes_and_an_undeclared_one_is_refused(tmp_path):
@@ -180,7 +180,7 @@ def test_a_moving_base_log_is_checked_over_its_static_part_only(tmp_path):
         log = open_log(native)
         assert log.static_s == pytest.approx(static_h * 3600.0)
         log.check_static_base()
-        ImuLog.from_scenario(s).check_static_base()
+        scenario_log(s).check_static_base()
 
 
 # ------------------------------------------------------------------------------------------------

@@ -12,6 +12,7 @@ import pytest
 
 from gyrodrift.errors import OptionError
 from gyrodrift.ins import Scenario, simulate
+from gyrodrift.ins.simulate import scenario_log
 from gyrodrift.logs import INCREMENT_COLUMNS, RATE_COLUMNS, ImuLog, LogError, open_log
 from gyrodrift.site import Site
 
@@ -425,7 +426,7 @@ def test_the_scenario_source_streams_what_the_simulator_writes(sim_parquet):
 
     meta = pq.ParquetFile(sim_parquet).schema_arrow.metadata
     scn = Scenario.from_dict(json.loads(meta[b"gyrodrift.scenario"]))
-    on_the_fly = ImuLog.from_scenario(scn)
+    on_the_fly = scenario_log(scn)
     assert (on_the_fly.rate_hz, on_the_fly.n_samples, on_the_fly.site) == (RATE, 7200, Site(30.0, 100.0, 40.0))
     a, b = whole(on_the_fly, 1000), whole(open_log(sim_parquet), 1000)
     for x, y in zip(a[:4], b[:4], strict=True):

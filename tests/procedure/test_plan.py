@@ -13,7 +13,7 @@ from gyrodrift.cli import main
 from gyrodrift.earth import NMI_M, OMEGA_IE_RAD_S, radii_of_curvature
 from gyrodrift.errors import InputError
 from gyrodrift.ins.scenario import Scenario
-from gyrodrift.logs import ImuLog
+from gyrodrift.ins.simulate import scenario_log
 from gyrodrift.procedure.noise import SensorNoise
 from gyrodrift.procedure.plan import (
     MissionBudget,
@@ -44,7 +44,7 @@ def test_the_planner_sigma_is_the_smoothers_reported_sigma_on_a_simulated_run():
             "accel": {"vrw_ug_rthz": 5.0},
         }
     )
-    est = smooth_log(ImuLog.from_scenario(scn), noise=RLG, hours=3.0, thermal=False)
+    est = smooth_log(scenario_log(scn), noise=RLG, hours=3.0, thermal=False)
     planned = drift_std_curve_deg_h(RLG, [3.0], scenario=scn)[0]
     assert planned == pytest.approx(est.drift_end_std_deg_h, rel=0.02)
     assert est.model == "constant"
@@ -226,7 +226,7 @@ def test_identify_says_what_its_drift_sigma_means_for_the_mission():
             "accel": {"vrw_ug_rthz": 5.0},
         }
     )
-    res = identify(ImuLog.from_scenario(scn), model, timeline=Timeline(align_h=1.0, features_h=2.0), noise=RLG)
+    res = identify(scenario_log(scn), model, timeline=Timeline(align_h=1.0, features_h=2.0), noise=RLG)
     m = res.mission
     assert m is not None and m["drift_std_deg_h"] == res.smoother_drift_std_deg_h
     want = mission_outlook(res.smoother_drift_std_deg_h, 40.0, res.features.smoother.noise, span_h=3.0)

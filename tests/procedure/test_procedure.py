@@ -245,11 +245,12 @@ def test_features_of_a_run(fleet, fleet_features):
 def test_the_same_features_from_the_file_from_memory_and_from_the_scenario_on_the_fly(fleet, fleet_features):
     """One engine, any source: the scenario simulated again chunk by chunk (nothing stored) and the file's
     columns in memory give the file's features exactly."""
+    from gyrodrift.ins.simulate import scenario_log
     from gyrodrift.logs import ImuLog
 
     table = pq.read_table(fleet[0][0])
     scn = Scenario.from_dict(json.loads(table.schema.metadata[b"gyrodrift.scenario"]))
-    on_the_fly = extract_features(ImuLog.from_scenario(scn))
+    on_the_fly = extract_features(scenario_log(scn))
     in_memory = extract_features(
         ImuLog.from_arrays(
             {c: table.column(c).to_numpy() for c in table.column_names}, rate_hz=scn.run.rate_hz, site=scn.site

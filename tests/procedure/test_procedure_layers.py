@@ -74,11 +74,11 @@ def test_an_algorithm_runs_without_matplotlib_and_without_files(tmp_path):
         import os, sys
         sys.modules["matplotlib"] = None  # any import of matplotlib fails
         from gyrodrift.ins.scenario import Scenario
-        from gyrodrift.logs import ImuLog
+        from gyrodrift.ins.simulate import scenario_log
         from gyrodrift.procedure import evaluate_compensation
         scenario = Scenario.from_dict({"run": {"duration_h": 4.25, "rate_hz": 2.0},
                                        "gyro": {"bias_deg_h": [0.0, 0.0, 0.003]}})
-        ev = evaluate_compensation(ImuLog.from_scenario(scenario), 0.003, hours=0.25)
+        ev = evaluate_compensation(scenario_log(scenario), 0.003, hours=0.25)
         assert ev.after.final_nmi < ev.before.final_nmi, (ev.before.final_nmi, ev.after.final_nmi)
         assert sys.modules["matplotlib"] is None and "matplotlib.figure" not in sys.modules
         assert os.listdir(".") == []

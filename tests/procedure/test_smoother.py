@@ -16,7 +16,7 @@ from scipy.linalg import expm
 
 from gyrodrift.errors import CoreError, InputError
 from gyrodrift.ins.scenario import Scenario
-from gyrodrift.logs import ImuLog
+from gyrodrift.ins.simulate import scenario_log
 from gyrodrift.procedure.noise import SensorNoise, estimate_white_noise
 from gyrodrift.procedure.smoother import smooth_log
 from gyrodrift.procedure.truth import find_true_drift, label_budget_deg_h, label_sigma_deg_h
@@ -46,7 +46,7 @@ def scenario(lat, drift=0.003, *, noise=None, seed=1, hours=16.0, rate=10.0, sch
 def test_noise_free_logs_give_the_simulated_drift_at_three_latitudes(scheme):
     for lat in (20.0, 40.0, 60.0):
         for drift in (0.003, 0.05):
-            est = smooth_log(ImuLog.from_scenario(scenario(lat, drift, scheme=scheme)))
+            est = smooth_log(scenario_log(scenario(lat, drift, scheme=scheme)))
             assert abs(est.drift_deg_h - drift) < 1e-5, (scheme, lat, drift, est.drift_deg_h)
             # Linear regime: feedback corrections of milli-arcseconds, centimetres of position error.
             assert est.max_attitude_correction_arcsec < 0.1 and est.max_position_error_m < 0.1
@@ -56,7 +56,7 @@ def test_noise_free_logs_give_the_simulated_drift_at_three_latitudes(scheme):
 def z_scores(n, noise, gyro=None, filter_noise=None):
     z, est, sig = [], [], []
     for seed in range(n):
-        log = ImuLog.from_scenario(scenario(40.0, noise=noise, seed=100 + seed, gyro=gyro))
+        log = scenario_log(scenario(40.0, noise=noise, seed=100 + seed, gyro=gyro))
         e = smooth_log(log, noise=filter_noise)
         z.append((e.drift_deg_h - 0.003) / e.drift_std_deg_h)
         est.append(e.drift_deg_h)
@@ -142,20 +142,20 @@ def independent_drift_sigma(lat_deg, noise, span_s=16 * 3600.0, coarse_s=300.0, 
 
 def test_sigma_agrees_with_an_independent_covariance_analysis():
     for lat in (20.0, 60.0):
-        log = ImuLog.from_scenario(scenario(lat, noise=RLG, scheme="continuous"))
+        log = scenario_log(scenario(lat, noise=RLG, scheme="continuous"))
         est = smooth_log(log, noise=SensorNoise(**RLG))
         ref = independent_drift_sigma(lat, SensorNoise(**RLG))
         assert est.drift_std_deg_h == pytest.approx(ref, rel=0.01), (lat, est.drift_std_deg_h, ref)
 
 
 def test_noise_is_measured_from_the_log_and_given_noise_is_checked():
-    n = estimate_white_noise(ImuLog.from_scenario(scenario(40.0, noise=RLG, hours=1.5)))
+    n = estimate_white_noise(scenario_log(scenario(40.0, noise=RLG, hours=1.5)))
     assert n.arw_deg_rth == pytest.approx(0.0005, rel=0.03) and n.vrw_ug_rthz == pytest.approx(5.0, rel=0.03)
     with pytest.raises(InputError, match="unknown key 'arw'"):
         SensorNoise.from_block({"arw": 1.0})
     with pytest.raises(InputError, match="arw_deg_rth"):
         SensorNoise(arw_deg_rth=-1.0)
-    log = ImuLog.from_scenario(scenario(40.0, hours=1.0))
+    log = scenario_log(scenario(40.0, hours=1.0))
     with pytest.raises(InputError, match="the smoother"):
         smooth_log(log)
     with pytest.raises(CoreError, match="update_s"):
@@ -164,10 +164,10 @@ def test_noise_is_measured_from_the_log_and_given_noise_is_checked():
 
 def test_truth_spread_matches_the_label_sigma_and_the_latitude_law():
     # 40 noisy seeds at 40 deg, 2 Hz: the spread of truth around the noise-free twin's truth.
-    twin = find_true_drift(ImuLog.from_scenario(scenario(40.0, hours=76.0, rate=2.0))).drift_deg_h
+    twin = find_true_drift(scenario_log(scenario(40.0, hours=76.0, rate=2.0))).drift_deg_h
     dev, sig = [], []
     for seed in range(40):
-        t = find_true_drift(ImuLog.from_scenario(scenario(40.0, noise=RLG, seed=seed, hours=76.0, rate=2.0)))
+        t = find_true_drift(scenario_log(scenario(40.0, noise=RLG, seed=seed, hours=76.0, rate=2.0)))
         dev.append(t.drift_deg_h - twin)
         sig.append(t.drift_std_deg_h)
         assert not t.flagged
@@ -188,7 +188,7 @@ def test_features_write_the_smoother_and_the_label_sigma_into_the_run_table(tmp_
     from gyrodrift.procedure import extract_features, write_features_csv
     from gyrodrift.runs.table import read_runs_csv
 
-    log = ImuLog.from_scenario(scenario(40.0, noise=RLG, seed=3, hours=76.0, rate=2.0))
+    log = scenario_log(scenario(40.0, noise=RLG, seed=3, hours=76.0, rate=2.0))
     f = extract_features(log, with_truth=True)
     assert abs(f.drift_smoother_deg_h - 0.003) < 4 * f.drift_smoother_std_deg_h
     assert f.drift_std_deg_h == f.truth.drift_std_deg_h and not f.label_flagged

@@ -15,6 +15,7 @@ import pytest
 
 from gyrodrift.errors import InputError
 from gyrodrift.ins.scenario import Scenario
+from gyrodrift.ins.simulate import scenario_log
 from gyrodrift.logs import ImuLog, LogError
 from gyrodrift.procedure.smoother import fleet_coefficient_prior, smooth_log
 
@@ -47,7 +48,7 @@ def end_drift(s: Scenario, hours: float) -> float:
 def test_noise_free_warm_up_gives_the_end_of_span_drift_and_the_coefficient():
     for k1, tau_h in ((K1, 1.5), (-0.0005, 3.0)):
         s = warm_up(k1=k1, tau_h=tau_h)
-        est = smooth_log(ImuLog.from_scenario(s), hours=8.0)
+        est = smooth_log(scenario_log(s), hours=8.0)
         assert est.model == "thermal" and est.temp_range_c > 10.0
         assert abs(est.navigation_drift_deg_h - end_drift(s, 8.0)) < 2e-5, (est.navigation_drift_deg_h, k1)
         assert est.navigation_drift_deg_h == est.drift_end_deg_h
@@ -61,7 +62,7 @@ def test_noise_free_warm_up_gives_the_end_of_span_drift_and_the_coefficient():
 
 def test_the_model_follows_the_temperature_column():
     s = warm_up(noise=RLG, seed=4)
-    log = ImuLog.from_scenario(s)
+    log = scenario_log(s)
     thermal = smooth_log(log, hours=8.0)
     constant = smooth_log(log, hours=8.0, thermal=False)
     assert thermal.model == "thermal" and constant.model == "constant"
@@ -71,7 +72,7 @@ def test_the_model_follows_the_temperature_column():
     assert thermal.drift_std_deg_h == pytest.approx(constant.drift_std_deg_h, rel=1e-3)
     assert constant.navigation_drift_deg_h == constant.drift_deg_h
     # A flat temperature: the thermal state is decoupled and the constant model is reported.
-    flat = smooth_log(ImuLog.from_scenario(warm_up(noise=RLG, seed=4, start_c=30.0, end_c=30.0)), hours=8.0)
+    flat = smooth_log(scenario_log(warm_up(noise=RLG, seed=4, start_c=30.0, end_c=30.0)), hours=8.0)
     assert flat.model == "constant" and flat.temp_range_c == 0.0
     # A threshold above the warm-up: the constant model is reported although the state ran.
     high = smooth_log(log, hours=8.0, options={"thermal_min_range_c": 50.0})
@@ -81,7 +82,7 @@ def test_the_model_follows_the_temperature_column():
 
 def test_a_log_without_temperature_uses_the_constant_model_and_thermal_true_is_refused():
     s = warm_up(noise=RLG, seed=5, hours=6.0, rate=2.0)
-    chunks = list(ImuLog.from_scenario(s).chunks(10_000_000))
+    chunks = list(scenario_log(s).chunks(10_000_000))
     c = chunks[0]
     cols = {"t_s": c.t_s}
     for i, axis in enumerate("xyz"):
@@ -100,7 +101,7 @@ def test_end_of_span_z_scores_over_a_few_seeds():
     z = []
     for seed in range(6):
         s = warm_up(noise=RLG, seed=300 + seed, rate=2.0, tau_h=2.5)
-        est = smooth_log(ImuLog.from_scenario(s), hours=8.0)
+        est = smooth_log(scenario_log(s), hours=8.0)
         assert est.model == "thermal"
         z.append((est.navigation_drift_deg_h - end_drift(s, 8.0)) / est.navigation_drift_std_deg_h)
     rms = float(np.sqrt(np.mean(np.square(z))))
@@ -108,7 +109,7 @@ def test_end_of_span_z_scores_over_a_few_seeds():
 
 
 def test_a_coefficient_prior_reweights_the_end_drift_exactly():
-    log = ImuLog.from_scenario(warm_up(noise=RLG, seed=6))
+    log = scenario_log(warm_up(noise=RLG, seed=6))
     est = smooth_log(log, hours=8.0)
     # The filter's own prior gives the end drift back; a prior pinning k_z to 0 gives the constant model.
     d, s = est.end_drift_with_coefficient_prior(0.0, est.thermal_prior_std_deg_h_per_c)
@@ -127,7 +128,7 @@ def test_a_coefficient_prior_reweights_the_end_drift_exactly():
 
 
 def test_fleet_coefficient_prior_is_the_random_effects_mean():
-    est = smooth_log(ImuLog.from_scenario(warm_up(seed=7, hours=6.0, rate=2.0)), hours=6.0)
+    est = smooth_log(scenario_log(warm_up(seed=7, hours=6.0, rate=2.0)), hours=6.0)
 
     def with_k(k, s):
         return replace(est, thermal_coeff_deg_h_per_c=k, thermal_coeff_std_deg_h_per_c=s)

@@ -15,7 +15,7 @@ spawn_key=(i,))`` (the i-th child of ``SeedSequence(seed).spawn``): any run is r
 count, the order of completion or the workers (`Campaign.scenario`).
 
 Per run (`process_run`, in the worker; nothing written there): the scenario is simulated on the fly
-(`gyrodrift.logs.ImuLog.from_scenario`), aligned, navigated for the 12 h features and the 72 h truth
+(`gyrodrift.ins.simulate.scenario_log`), aligned, navigated for the 12 h features and the 72 h truth
 (`extract_features` with the truth: one read for both), the 12 h curve fit; the linear 72 h error curves
 (north/east error of the uncompensated navigation and their sensitivity per deg/h of compensated drift, the
 secant between two navigated drifts), from which the position error after compensating any drift ``d`` is
@@ -579,7 +579,7 @@ def _stage(out: dict[str, Any], name: str) -> Iterator[None]:
 
 
 def _measure(campaign: Campaign, index: int, chunk_samples: int) -> dict[str, Any]:
-    from gyrodrift.logs import ImuLog
+    from gyrodrift.ins.simulate import scenario_log
     from gyrodrift.procedure import align_log, extract_features, find_true_drift, navigate_after_alignment
     from gyrodrift.procedure.truth import minimise_linear_criterion
 
@@ -588,7 +588,7 @@ def _measure(campaign: Campaign, index: int, chunk_samples: int) -> dict[str, An
     scn = campaign.scenario(index)
     out["arw_deg_rth"] = scn.gyro.arw_deg_rth
     out["vrw_ug_rthz"] = scn.accel.vrw_ug_rthz
-    log = ImuLog.from_scenario(scn)
+    log = scenario_log(scn)
     timeline = _timeline(campaign.options)
     with _stage(out, "align"):
         alignment = align_log(log, timeline=timeline, chunk_samples=chunk_samples)
@@ -662,7 +662,7 @@ def _measure(campaign: Campaign, index: int, chunk_samples: int) -> dict[str, An
     # --- the noise-free twin: aligned on its own, navigated once at d* ---
     with _stage(out, "twin"):
         twin_scn = campaign.scenario(index, noise=False)
-        twin_log = ImuLog.from_scenario(twin_scn)
+        twin_log = scenario_log(twin_scn)
         if verify:
             twin = find_true_drift(
                 twin_log, timeline=timeline, noise=_noise_model(twin_scn), threads=1, chunk_samples=chunk_samples

@@ -31,11 +31,11 @@ from gyrodrift.ins.nav_columns import (
 )
 from gyrodrift.ins.nav_errors import attitude_errors_arcsec, position_errors
 from gyrodrift.ins.scenario import Scenario
-from gyrodrift.ins.simulate import ImuData
+from gyrodrift.ins.simulate import ImuData, scenario_log
 from gyrodrift.ins.stream import Track, run_navigators
 from gyrodrift.ins.track import ReferenceTrack, load_track, route_of
 from gyrodrift.ins.vehicle import table_angles_deg, vehicle_attitude_rad
-from gyrodrift.logs import DEFAULT_CHUNK_SAMPLES, REF_HEIGHT_COLUMN, ImuLog, LogChunk, LogTruth, open_log
+from gyrodrift.logs import DEFAULT_CHUNK_SAMPLES, REF_HEIGHT_COLUMN, ImuLog, LogChunk, open_log
 from gyrodrift.site import Site
 from gyrodrift.units import DEG, DEG_PER_H, HOUR, MICRO_G
 
@@ -218,18 +218,9 @@ def as_log(
             raise OptionError("navigate: give the site to open_log, not with an opened log")
         return imu
     if isinstance(imu, Scenario):
-        return ImuLog.from_scenario(imu, site=site)
+        return scenario_log(imu, site=site)
     if isinstance(imu, ImuData):
-        s = imu.scenario
-        return ImuLog.from_arrays(
-            imu.columns,
-            rate_hz=s.run.rate_hz,
-            site=site,
-            source_site=s.site,
-            truth=LogTruth(s.attitude.pitch_deg, s.attitude.roll_deg, s.attitude.yaw_deg),
-            require_temperature=require_temperature,
-            static_s=None if s.trajectory is None else s.trajectory.static_h * 3600.0,
-        )
+        return imu.log(site=site, require_temperature=require_temperature)
     if isinstance(imu, (str, os.PathLike)):
         return open_log(imu, site=site, require_temperature=require_temperature)
     raise TypeError(

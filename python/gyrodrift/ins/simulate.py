@@ -1,11 +1,17 @@
-"""Simulate a static-base rotating IMU from a scenario, in memory or streamed to ``imu.parquet``."""
+"""Simulate a rotating IMU from a scenario: in memory, streamed to ``imu.parquet``, or read on the fly as a log.
+
+``imu.parquet``'s columns, schema and metadata are declared in `gyrodrift.logs.columns` (`imu_file_schema`), beside
+the columns every log reader takes; reading it back (with every other IMU log) is `gyrodrift.logs`. A scenario
+read as a log without storing it is `scenario_log`.
+"""
 
 from __future__ import annotations
 
 import os
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pyarrow as pa
@@ -13,11 +19,23 @@ import pyarrow.parquet as pq
 
 from gyrodrift.files.atomic import OutputFolder, output_folder
 from gyrodrift.files.toml_writer import dumps_toml
-from gyrodrift.ins.imu_file import core_chunk_to_table, imu_schema
 from gyrodrift.ins.scenario import Scenario
+from gyrodrift.logs import ImuLog, LogTruth
+from gyrodrift.logs.columns import ROUTE_COLUMNS, imu_file_schema
+from gyrodrift.logs.source import Layout, LogSource, RawBlock, check_rate
 from gyrodrift.progress import progress
+from gyrodrift.site import Site
 
-__all__ = ["ImuData", "simulate", "iter_core_chunks", "rotation_summary", "DEFAULT_CHUNK_SAMPLES", "SIMULATION_FILES"]
+__all__ = [
+    "ImuData",
+    "simulate",
+    "scenario_log",
+    "iter_core_chunks",
+    "rotation_summary",
+    "imu_schema",
+    "DEFAULT_CHUNK_SAMPLES",
+    "SIMULATION_FILES",
+]
 
 SIMULATION_FILES = ("imu.parquet", "scenario.resolved.toml")
 """The files of a simulation output, published together."""
@@ -35,7 +53,7 @@ speed); byte-stream-split + zstd halves the size (about 40 bytes per sample) at 
 class ImuData:
     """A simulated run held in memory: the imu.parquet columns as numpy arrays, and its scenario.
 
-    ``columns`` maps every name of `gyrodrift.ins.imu_file.imu_columns(scenario)` to a float64 array (units in the
+    ``columns`` maps every column of the scenario's imu.parquet (`imu_schema`) to a float64 array (units in the
     names). `navigate` accepts an ImuData just like an imu.parquet path.
     """
 
@@ -52,6 +70,69 @@ class ImuData:
     def table(self) -> pa.Table:
         """The run as a pyarrow Table with the imu.parquet schema and metadata."""
         return pa.Table.from_pydict(self.columns, schema=self.schema or imu_schema(self.scenario))
+
+    def log(self, *, site: Site | Mapping[str, float] | None = None, require_temperature: bool = True) -> ImuLog:
+        """The run as an IMU log (`gyrodrift.logs.ImuLog.from_arrays`, nothing copied): rate, site, true initial
+        attitude and static part from the scenario; `site` replaces or completes the scenario's as in
+        `gyrodrift.logs.open_log`."""
+        s = self.scenario
+        return ImuLog.from_arrays(
+            self.columns,
+            rate_hz=s.run.rate_hz,
+            site=site,
+            source_site=s.site,
+            truth=_truth(s),
+            require_temperature=require_temperature,
+            static_s=_static_s(s),
+        )
+
+
+def _truth(scenario: Scenario) -> LogTruth:
+    """The true initial attitude of `scenario` [deg]."""
+    a = scenario.attitude
+    return LogTruth(a.pitch_deg, a.roll_deg, a.yaw_deg)
+
+
+def _static_s(scenario: Scenario) -> float | None:
+    """The static part at the start of a moving-base `scenario` [s] (``[trajectory] static_h``), else None."""
+    return None if scenario.trajectory is None else scenario.trajectory.static_h * 3600.0
+
+
+def imu_schema(scenario: Scenario) -> pa.Schema:
+    """The Arrow schema of the imu.parquet of `scenario`: its columns (`gyrodrift.logs.columns.IMU_COLUMNS`, and
+    `ROUTE_COLUMNS` on a moving base) and the scenario, site and rate in its key-value metadata."""
+    return imu_file_schema(
+        scenario=scenario.to_toml_dict(),
+        site=scenario.site,
+        rate_hz=scenario.run.rate_hz,
+        moving=scenario.trajectory is not None,
+    )
+
+
+def _table(chunk: dict[str, Any], schema: pa.Schema) -> pa.Table:
+    """One `_core.ImuSimulator.next_chunk` dict (SI) as an imu.parquet table (unit-named columns)."""
+    dth = np.asarray(chunk["dtheta_rad"], dtype=np.float64)
+    dv = np.asarray(chunk["dv_m_s"], dtype=np.float64)
+    values = [
+        np.asarray(chunk["t_s"], dtype=np.float64),
+        *dth.T,
+        *dv.T,
+        np.asarray(chunk["temp_c"], dtype=np.float64),
+        *(np.rad2deg(np.asarray(chunk[k], dtype=np.float64)) for k in _ANGLES_RAD),
+    ]
+    if ROUTE_COLUMNS[0] in schema.names:
+        vel = np.asarray(chunk["vel_enu_m_s"], dtype=np.float64)
+        values += [
+            np.rad2deg(np.asarray(chunk["lat_rad"], dtype=np.float64)),
+            np.rad2deg(np.asarray(chunk["lon_rad"], dtype=np.float64)),
+            np.asarray(chunk["height_m"], dtype=np.float64),
+            *vel.T,
+        ]
+    return pa.Table.from_pydict(dict(zip(schema.names, values, strict=True)), schema=schema)
+
+
+_ANGLES_RAD = ("table_angle_rad", "pitch_rad", "roll_rad", "yaw_rad")
+"""The core chunk's angles [rad] behind imu.parquet's ``table_angle_deg`` and true attitude [deg], in file order."""
 
 
 def rotation_summary(scenario: Scenario) -> dict:
@@ -128,7 +209,7 @@ def simulate(
         if out_dir is None:
             parts: dict[str, list[np.ndarray]] = {c: [] for c in schema.names}
             for chunk in iter_core_chunks(scenario, chunk_samples):
-                table = core_chunk_to_table(chunk, schema)
+                table = _table(chunk, schema)
                 for c in schema.names:
                     parts[c].append(table.column(c).to_numpy())
                 bar.update(table.num_rows)
@@ -139,7 +220,7 @@ def simulate(
         with out.publish() as stage:
             with pq.ParquetWriter(stage.file("imu.parquet"), schema, **PARQUET_OPTIONS) as writer:
                 for chunk in iter_core_chunks(scenario, chunk_samples):
-                    table = core_chunk_to_table(chunk, schema)
+                    table = _table(chunk, schema)
                     writer.write_table(table, row_group_size=max(table.num_rows, 1))
                     bar.update(table.num_rows)
             resolved = dumps_toml(
@@ -150,3 +231,42 @@ def simulate(
             with open(stage.file("scenario.resolved.toml"), "w", encoding="utf-8", newline="") as fh:
                 fh.write(resolved)
         return out.path / "imu.parquet"
+
+
+@dataclass(frozen=True, kw_only=True)
+class _ScenarioSource(LogSource):
+    """The samples of a scenario simulated on the fly by the core, chunk by chunk (nothing stored)."""
+
+    def blocks(self, chunk_samples: int) -> Iterator[RawBlock]:
+        for c in iter_core_chunks(self.scenario, chunk_samples):
+            yield RawBlock(
+                np.asarray(c["t_s"], dtype=float),
+                (np.asarray(c["dtheta_rad"], dtype=float), np.asarray(c["dv_m_s"], dtype=float)),
+                np.asarray(c["temp_c"], dtype=float),
+                tuple(np.rad2deg(np.asarray(c[k], dtype=float)) for k in _ANGLES_RAD[1:]),
+                table_angle_deg=np.rad2deg(np.asarray(c["table_angle_rad"], dtype=float)),
+            )
+
+
+def scenario_log(scenario: Scenario, *, site: Site | Mapping[str, float] | None = None) -> ImuLog:
+    """A log simulated on the fly from `scenario`, chunk by chunk (nothing stored): every read re-simulates it.
+
+    Site, true initial attitude, true attitude columns and table angle come from the scenario (`site` replaces or
+    completes its site as in `gyrodrift.logs.open_log`); the log's ``scenario`` is `scenario` (its route).
+    """
+    label = "<scenario>"
+    source = _ScenarioSource(
+        label=label,
+        path=None,
+        format="scenario",
+        layout=Layout.of_kind("increments", has_temperature=True, has_truth_columns=True),
+        rate_hz=check_rate(scenario.run.rate_hz, label),
+        rate_source="scenario",
+        n_samples=scenario.n_samples,
+        site=scenario.site,
+        truth=_truth(scenario),
+        static_s=_static_s(scenario),
+        name="scenario",
+        scenario=scenario,
+    )
+    return ImuLog(source, site=site)
