@@ -6,9 +6,11 @@ docs/ins-binding-contract.md);
 `Scenario.to_toml_dict` / `write_scenario_toml` give back the fully resolved scenario (every default
 written out, a temperature series inlined) that reloads to an equal object.
 
-Sections and defaults are documented key by key in docs/scenarios.md. Any unknown section or key, wrong
-type, wrong vector length, non-finite number or out-of-range value raises `ScenarioError` whose message
-starts with the file and the key, e.g. ``scenario.toml: [gyro] bias_deg_h: expected 3 numbers, got 2``.
+Sections and defaults are documented key by key in docs/scenarios.md. Each section's keys are declared once
+(`SITE_FIELDS`, `RUN_FIELDS`, ... with the specs of `gyrodrift.files.toml_schema`; the moving base's
+``[trajectory]`` in `gyrodrift.ins.route`), with the core's limits. Any unknown section or key, wrong type,
+wrong vector length, non-finite number or out-of-range value raises `ScenarioError` whose message starts with
+the file and the key, e.g. ``scenario.toml: [gyro] bias_deg_h: expected 3 numbers, got 2``.
 """
 
 from __future__ import annotations
@@ -335,7 +337,7 @@ def load_scenario(path: str | os.PathLike[str]) -> Scenario:
 
 
 # --------------------------------------------------------------------------------------------------
-# Validation: each section's keys declared once (`gyrodrift.files.toml_schema`), the limits the core's
+# Validation: each section's keys declared once (`gyrodrift.files.toml_schema`) with the core's limits
 # --------------------------------------------------------------------------------------------------
 
 SECTIONS = ("site", "run", "rotation", "gyro", "accel", "temperature", "attitude", "trajectory")
@@ -351,7 +353,7 @@ class _Span:
     def read(self, scope: Scope, key: str, v: Any) -> float | str:
         if v == BALANCED and isinstance(v, str):
             return v
-        if isinstance(v, str) or isinstance(v, bool) or not isinstance(v, (int, float)):
+        if isinstance(v, (str, bool)) or not isinstance(v, (int, float)):
             got = show(v) if isinstance(v, str) else f"{type_name(v)} {show(v)}"
             raise scope.fail(key, f'expected a number > 0 or "{BALANCED}", got {got}')
         return self.number.read(scope, key, v)
@@ -442,13 +444,11 @@ def _read_scenario(data: Mapping[str, Any], source: str, base_dir: Path) -> Scen
     return scenario
 
 
-def _fields(
-    root: Scope, data: Mapping[str, Any], name: str, cls: type, specs: Mapping[str, Field], defaults: object = None
-) -> dict[str, Any]:
+def _fields(root: Scope, data: Mapping[str, Any], name: str, cls: type, specs: Mapping[str, Field]) -> dict[str, Any]:
     """The keys of `specs` in section `name` (whose keys are the fields of the dataclass `cls`), absent ones from
-    `defaults` (default: ``cls()``)."""
+    ``cls()``."""
     t = root.table(data, name, [f.name for f in dataclasses.fields(cls)])
-    return root.section(name).fields(t, specs, cls() if defaults is None else defaults)
+    return root.section(name).fields(t, specs, cls())
 
 
 def _run(root: Scope, data: Mapping[str, Any]) -> Run:
