@@ -174,6 +174,27 @@ def test_column_errors_name_the_column_and_key():
         LogFormat.from_dict(d, "<t>")
 
 
+@pytest.mark.parametrize(
+    ("column", "message"),
+    [
+        ({"quantity": ["gyro_x"], "unit": "deg/s"}, "<t>: [columns.GyroX_dps] quantity: expected one of time, gyro_x"),
+        ({"quantity": "gyro_x", "unit": {}}, "<t>: [columns.GyroX_dps] unit: expected one of rad, mrad"),
+        (
+            {"quantity": "gyro_x", "unit": "pulse", "pulse_weight": 1, "pulse_unit": []},
+            "<t>: [columns.GyroX_dps] pulse_unit: expected one of rad, mrad, urad, deg, arcsec, got []",
+        ),
+        ({"quantity": "gyro_x", "unit": "deg/s", "scale": "2"}, "<t>: [columns.GyroX_dps] scale: expected a number"),
+        ({"quantity": "gyro_x", "unit": "deg/s", "scale": 0}, "<t>: [columns.GyroX_dps] scale: must not be 0"),
+    ],
+)
+def test_a_column_of_the_wrong_shape_is_a_format_error_naming_the_key(column, message):
+    d = _fmt()
+    d["columns"]["GyroX_dps"] = column
+    with pytest.raises(LogFormatError) as err:
+        LogFormat.from_dict(d, "<t>")
+    assert str(err.value).startswith(message)
+
+
 def test_a_format_file_that_is_not_toml_names_the_file(tmp_path):
     bad = tmp_path / "f.toml"
     bad.write_text("[csv\n")
