@@ -6,13 +6,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from test_fleet_base import synthetic_fleet
 
 from gyrodrift.cli import main
 from gyrodrift.errors import InputError
 from gyrodrift.learn.drift_model import fit_drift_model
 from gyrodrift.learn.physics_base import FLEET_PHYSICS
-from gyrodrift.runs.table import SMOOTHER_THERMAL_COLUMNS, check_smoother_thermal
-from test_fleet_base import synthetic_fleet
+from gyrodrift.runs.columns import SMOOTHER_THERMAL_COLUMNS
+from gyrodrift.runs.table import check_smoother_thermal
 
 
 def _drop(runs, run_index: int, column: str):
