@@ -35,7 +35,7 @@ from gyrodrift.ins.simulate import ImuData, scenario_log
 from gyrodrift.ins.stream import Track, run_navigators
 from gyrodrift.ins.track import ReferenceTrack, load_track, route_of
 from gyrodrift.ins.vehicle import table_angles_deg, vehicle_attitude_rad
-from gyrodrift.logs import DEFAULT_CHUNK_SAMPLES, REF_HEIGHT_COLUMN, ImuLog, LogChunk, open_log
+from gyrodrift.logs import REF_HEIGHT_COLUMN, ImuLog, LogChunk, open_log
 from gyrodrift.site import Site
 from gyrodrift.units import DEG, DEG_PER_H, HOUR, MICRO_G
 
@@ -149,30 +149,31 @@ class NavSettings:
         True hides the progress bar.
     """
 
-    hours: float | None = None
-    decimation_s: float = 1.0
-    compensate_drift_deg_h: float = 0.0
-    gyro_bias_deg_h: list[float] = dataclasses.field(default_factory=lambda: [0.0, 0.0, 0.0])
-    accel_bias_ug: list[float] = dataclasses.field(default_factory=lambda: [0.0, 0.0, 0.0])
-    vertical: str | None = None
-    chunk_samples: int = DEFAULT_CHUNK_SAMPLES
-    quiet: bool = True
+    hours: float | None
+    decimation_s: float
+    compensate_drift_deg_h: float
+    gyro_bias_deg_h: list[float]
+    accel_bias_ug: list[float]
+    vertical: str | None
+    chunk_samples: int
+    quiet: bool
 
     @classmethod
     def checked(
         cls,
         *,
-        hours: float | None = None,
-        decimation_s: float = 1.0,
-        compensate_drift_deg_h: float = 0.0,
-        gyro_bias_deg_h: Sequence[float] | None = None,
-        accel_bias_ug: Sequence[float] | None = None,
-        vertical: str | None = None,
-        chunk_samples: int = DEFAULT_CHUNK_SAMPLES,
-        quiet: bool = True,
+        hours: float | None,
+        decimation_s: float,
+        compensate_drift_deg_h: float,
+        gyro_bias_deg_h: Sequence[float] | None,
+        accel_bias_ug: Sequence[float] | None,
+        vertical: str | None,
+        chunk_samples: int,
+        quiet: bool,
     ) -> NavSettings:
-        """The settings of `gyrodrift.procedure.navigate`'s keywords, each checked (`OptionError` naming it); the
-        axial drift estimate `compensate_drift_deg_h` is added to the z gyro bias estimate."""
+        """The settings of `gyrodrift.procedure.navigate`'s keywords (whose defaults they are), each checked
+        (`OptionError` naming it); a bias left None is zero, and the axial drift estimate `compensate_drift_deg_h` is
+        added to the z gyro bias estimate."""
         if not (isinstance(chunk_samples, int) and chunk_samples >= 1):
             raise OptionError(f"navigate: chunk_samples must be a positive integer, got {chunk_samples!r}")
         if not (decimation_s > 0 and math.isfinite(decimation_s)):

@@ -81,7 +81,7 @@ class StaticMeans:
         self.source = source
         self.site = site  # the log's true static site (the source's, or the one its caller gave)
         self.dt = 1.0 / source.rate_hz
-        lat = None if site is None else math.radians(site.lat_deg)
+        lat = None if site is None else site.lat_rad
         self.w_up = 0.0 if lat is None else OMEGA_IE_RAD_S * math.sin(lat)  # [rad/s]
         self.n = 0
         self.phi = 0.0  # table angle [rad]
@@ -117,7 +117,7 @@ class StaticMeans:
         f_up = self.f_up / span
         tol = SPECIFIC_FORCE_TOLERANCE_G * g0
         if site is not None:
-            g_lo = g_hi = float(normal_gravity(math.radians(site.lat_deg), site.height_m))
+            g_lo = g_hi = float(normal_gravity(site.lat_rad, site.height_m))
             where = f"normal gravity at {site.lat_deg:g} deg, {site.height_m:g} m"
         else:
             g_lo = float(normal_gravity(0.0, HEIGHT_LIMITS_M[1]))
