@@ -11,8 +11,8 @@
 //! - [`trajectory`]: the land-vehicle route of a moving base (closed-form kinematics per segment).
 //! - [`strapdown`]: the strapdown navigator (coning/sculling, velocity, position, attitude).
 //! - [`coarse_alignment`], [`kalman`], [`alignment`]: the static-base alignment (coarse, 12-state filter, driver).
-//! - [`smoother`]: forward filter + RTS smoother over a whole static log (the axial drift with its 1-sigma), and
-//!   the covariance analysis of the true-drift label.
+//! - [`smoother`]: forward filter + RTS smoother over a whole static log (the axial drift with its 1-sigma).
+//! - [`label`]: covariance analysis of the true-drift label (a free navigation with the smoother's error model).
 //! - [`plan`]: covariance analysis for planning an identification (the smoother's drift 1-sigma against the span,
 //!   the position error of a mission), with no IMU samples.
 //! - [`limits`]: the ranges of the shared quantities (site, rate, attitude, samples), checked in one place.
@@ -28,6 +28,7 @@ pub mod earth;
 pub mod error;
 pub mod imu_error;
 pub mod kalman;
+pub mod label;
 pub mod limits;
 pub mod plan;
 pub mod simulator;

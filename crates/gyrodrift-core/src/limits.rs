@@ -18,9 +18,11 @@
 //! - attitude: pitch in (-90, 90) deg (Euler singularity at +-90), roll within +-180 deg, yaw within +-360 deg.
 //! - samples: an angular rate above 1000 deg/s or a specific force above 100 g is outside every
 //!   navigation-grade sensor's range (these are also the log reader's limits); non-finite samples are refused.
+//! - the z gyro's slow bias terms of the filters' models (`check_slow_bias`): Gauss-Markov 1-sigma and rate random
+//!   walk up to 0.1 deg/h and 0.1 deg/h/sqrt(h), correlation time (0, 1e9] s.
 
 use crate::attitude::Euler;
-use crate::error::{check, in_range, CoreError, Unit, STANDARD_GRAVITY};
+use crate::error::{all_positive_at_most, check, in_range, CoreError, Unit, DEG_H_PER_RTH, STANDARD_GRAVITY};
 
 /// Largest |latitude| \[deg\] (module docs).
 pub const MAX_LAT_DEG: f64 = 89.0;
@@ -102,6 +104,27 @@ pub fn check_attitude(e: Euler) -> Result<(), CoreError> {
     in_range("roll_rad", "roll", e.roll, -r, r, Unit::Deg)?;
     let y = MAX_YAW_DEG.to_radians();
     in_range("yaw_rad", "yaw", e.yaw, -y, y, Unit::Deg)
+}
+
+/// The z gyro's slow bias terms (Gauss-Markov 1-sigma [rad/s] and correlation time \[s\], rate random walk
+/// [rad/s/sqrt(s)]): one set of limits for the smoother, the label's sigma and the planner.
+pub(crate) fn check_slow_bias(instability: f64, correlation: f64, rrw: f64) -> Result<(), CoreError> {
+    in_range(
+        "gyro_bias_instability_rad_s",
+        "bias instability",
+        instability,
+        0.0,
+        0.1,
+        Unit::DegPerH,
+    )?;
+    all_positive_at_most(
+        "gyro_correlation_s",
+        "correlation time",
+        &[correlation],
+        1e9,
+        Unit::Si("s"),
+    )?;
+    in_range("gyro_rrw_rad_s_rts", "rate random walk", rrw, 0.0, 0.1, DEG_H_PER_RTH)
 }
 
 /// Checks of streamed increments given as flat row-major (n x 3) slices (dtheta \[rad\], dv [m/s]) at sample

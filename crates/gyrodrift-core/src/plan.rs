@@ -28,9 +28,9 @@
 use crate::attitude::{euler_to_dcm, mat_mul, rot_z, Euler, Mat3};
 use crate::error::{check, CoreError};
 use crate::kalman::EPS;
-use crate::smoother::{
-    check_free_navigation, initial_sigma, measurement_model, symmetrise, FreeNavigation, Model, SmootherConfig, POS,
-};
+use crate::label::{check_free_navigation, FreeNavigation};
+use crate::smoother::model::{initial_sigma, measurement_model, symmetrise, Model};
+use crate::smoother::{SmootherConfig, POS};
 use crate::turntable::{RotationScheme, Turntable};
 use nalgebra::{DMatrix, DVector};
 

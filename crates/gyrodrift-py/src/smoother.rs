@@ -2,10 +2,8 @@
 //! (docs/identification.md, "The 16 h smoother"). It converts types and releases the GIL, nothing else.
 
 use super::{arg_err, core_err, flat, increments};
-use gyrodrift_core::smoother::{
-    label_sigma as core_label_sigma, state_names, LabelConfig, Smoother as CoreSmoother,
-    SmootherConfig as CoreSmootherConfig,
-};
+use gyrodrift_core::label::{label_sigma as core_label_sigma, LabelConfig};
+use gyrodrift_core::smoother::{state_names, Smoother as CoreSmoother, SmootherConfig as CoreSmootherConfig};
 use numpy::{PyArray1, PyReadonlyArray1};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -249,7 +247,7 @@ impl Smoother {
     }
 }
 
-/// 1-sigma of the true-drift label (gyrodrift-core `smoother::label_sigma`): returns a dict with
+/// 1-sigma of the true-drift label (gyrodrift-core `label::label_sigma`): returns a dict with
 /// `drift_std_rad_s`, `sensitivity_m_per_rad_s` and `pos_std_m` (north, east at the end). The z gyro's
 /// Gauss-Markov bias and rate random walk (`rrw_start_s`: how long it has walked when the navigation starts)
 /// default to none.

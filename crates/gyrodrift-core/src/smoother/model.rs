@@ -1,0 +1,159 @@
+//! The smoother's linear error model (module docs of [`super`]): the continuous system matrix, its discretisation
+//! over an update interval, the prior and the measurements. Shared with the covariance analyses (`plan`, `label`).
+
+use super::{SmootherConfig, POS};
+use crate::alignment::coarse_attitude_sigma;
+use crate::attitude::Mat3;
+use crate::earth;
+use crate::kalman::{ErrorModel, DV, EPS, NABLA, N_STATES as N_BASE, PHI};
+use nalgebra::{DMatrix, DVector};
+
+/// The error model of the smoother at a site (module docs).
+#[derive(Clone, Debug)]
+pub(crate) struct Model {
+    base: ErrorModel,
+    pub(crate) n: usize,
+    w_n: f64,
+    w_u: f64,
+    inv_rm_h: f64,
+    pub(crate) gm: Option<usize>,
+    pub(crate) rrw: Option<usize>,
+    pub(crate) thermal: Option<usize>,
+    tau: f64,
+    /// Continuous noise densities squared on the diagonal.
+    pub(crate) qc: DVector<f64>,
+}
+
+impl Model {
+    pub(crate) fn new(cfg: &SmootherConfig) -> Self {
+        let n = cfg.n_states();
+        let w = earth::earth_rate_enu(cfg.lat);
+        let mut qc = DVector::zeros(n);
+        for i in 0..3 {
+            qc[PHI + i] = cfg.gyro_arw * cfg.gyro_arw;
+        }
+        for i in 0..2 {
+            qc[DV + i] = cfg.accel_vrw * cfg.accel_vrw;
+        }
+        if let Some(g) = cfg.gm_index() {
+            for i in 0..3 {
+                qc[g + i] = 2.0 * cfg.gyro_bias_instability.powi(2) / cfg.gyro_correlation;
+            }
+        }
+        if let Some(r) = cfg.rrw_index() {
+            for i in 0..3 {
+                qc[r + i] = cfg.gyro_rrw * cfg.gyro_rrw;
+            }
+        }
+        Model {
+            base: ErrorModel::new(cfg.lat, cfg.height),
+            n,
+            w_n: w[1],
+            w_u: w[2],
+            inv_rm_h: 1.0 / (earth::meridian_radius(cfg.lat) + cfg.height),
+            gm: cfg.gm_index(),
+            rrw: cfg.rrw_index(),
+            thermal: cfg.thermal_index(),
+            tau: cfg.gyro_correlation,
+            qc,
+        }
+    }
+
+    /// Continuous system matrix for the mean body-to-nav DCM `c` and the mean T - T_ref `dtemp` \[deg C\] of the
+    /// interval.
+    fn system_matrix(&self, c: &Mat3, dtemp: f64) -> DMatrix<f64> {
+        let mut f = DMatrix::zeros(self.n, self.n);
+        let b = self.base.system_matrix(c);
+        for i in 0..N_BASE {
+            for j in 0..N_BASE {
+                f[(i, j)] = b[(i, j)];
+            }
+        }
+        f[(PHI + 1, POS)] = -self.w_u * self.inv_rm_h;
+        f[(PHI + 2, POS)] = self.w_n * self.inv_rm_h;
+        f[(POS, DV + 1)] = 1.0;
+        f[(POS + 1, DV)] = 1.0;
+        for first in [self.gm, self.rrw].into_iter().flatten() {
+            for i in 0..3 {
+                for j in 0..3 {
+                    f[(PHI + i, first + j)] = -c[i][j];
+                }
+            }
+        }
+        if let Some(g) = self.gm {
+            for i in 0..3 {
+                f[(g + i, g + i)] = -1.0 / self.tau;
+            }
+        }
+        if let Some(k) = self.thermal {
+            // The z drift's thermal part k_z (T - T_ref) on the body z axis.
+            for i in 0..3 {
+                f[(PHI + i, k)] = -c[i][2] * dtemp;
+            }
+        }
+        f
+    }
+
+    /// Phi = exp(F t) (Taylor to order 8) and Q (trapezoidal).
+    pub(crate) fn discretise(&self, c: &Mat3, dtemp: f64, t: f64) -> (DMatrix<f64>, DMatrix<f64>) {
+        let ft = self.system_matrix(c, dtemp) * t;
+        let mut phi = DMatrix::identity(self.n, self.n);
+        let mut term = DMatrix::identity(self.n, self.n);
+        for k in 1..=8 {
+            term = &term * &ft / k as f64;
+            phi += &term;
+        }
+        let qc = DMatrix::from_diagonal(&self.qc);
+        let q = (&phi * &qc * phi.transpose() + &qc) * (0.5 * t);
+        (phi, symmetrise(q))
+    }
+}
+
+pub(crate) fn symmetrise(m: DMatrix<f64>) -> DMatrix<f64> {
+    (&m + m.transpose()) * 0.5
+}
+
+/// Prior 1-sigma of every state when the forward filter starts at `t_s` [s] (the end of the coarse alignment),
+/// in the order of `state_names` (SI).
+pub(crate) fn initial_sigma(cfg: &SmootherConfig, t_s: f64) -> Vec<f64> {
+    let n = cfg.n_states();
+    let att = cfg
+        .att_sigma
+        .unwrap_or_else(|| coarse_attitude_sigma(&cfg.aligner_config()));
+    let mut sigma = vec![0.0; n];
+    sigma[PHI..PHI + 3].copy_from_slice(&att);
+    sigma[DV..DV + 3].copy_from_slice(&[cfg.zupt_sigma; 3]);
+    sigma[EPS..EPS + 3].copy_from_slice(&cfg.gyro_bias_sigma);
+    sigma[NABLA..NABLA + 3].copy_from_slice(&cfg.accel_bias_sigma);
+    sigma[POS] = cfg.position_sigma;
+    sigma[POS + 1] = cfg.position_sigma;
+    if let Some(g) = cfg.gm_index() {
+        sigma[g..g + 3].copy_from_slice(&[cfg.gyro_bias_instability; 3]);
+    }
+    if let Some(r) = cfg.rrw_index() {
+        // The random walk starts at zero with the log; by the end of the coarse span it has spread.
+        sigma[r..r + 3].copy_from_slice(&[cfg.gyro_rrw * t_s.sqrt(); 3]);
+    }
+    if let Some(k) = cfg.thermal_index() {
+        sigma[k] = cfg.thermal_sigma;
+    }
+    sigma
+}
+
+/// The measurement matrix and noise covariance of one update (velocity E N U [m/s], position north, east [m]).
+pub(crate) fn measurement_model(cfg: &SmootherConfig, n: usize) -> (DMatrix<f64>, DMatrix<f64>) {
+    let mut h = DMatrix::zeros(5, n);
+    for i in 0..3 {
+        h[(i, DV + i)] = 1.0;
+    }
+    h[(3, POS)] = 1.0;
+    h[(4, POS + 1)] = 1.0;
+    let mut r = DMatrix::zeros(5, 5);
+    for i in 0..3 {
+        r[(i, i)] = cfg.zupt_sigma * cfg.zupt_sigma;
+    }
+    for i in 3..5 {
+        r[(i, i)] = cfg.position_sigma * cfg.position_sigma;
+    }
+    (h, r)
+}
