@@ -43,7 +43,10 @@ from pathlib import Path
 
 import numpy as np
 
-from gyrodrift.fleet.campaign import STAGES, Campaign, parse_campaign, process_run, read_runs, run_campaign
+from gyrodrift.fleet.campaign import run_campaign
+from gyrodrift.fleet.science import process_run
+from gyrodrift.fleet.spec import Campaign, parse_campaign
+from gyrodrift.fleet.store import STAGES, read_runs
 
 VOLATILE = {"worker"} | {f"{k}_{s}_s" for k in ("t", "cpu") for s in (*STAGES, "total")}
 KINDS = ("sim_noisy", "sim_clean", "navigator", "aligner", "smoother", "smoother_backward")
@@ -154,19 +157,19 @@ class CoreMeter:
 def core_rates(campaign, meter: CoreMeter) -> dict[str, float]:
     """Samples per CPU second inside the core per kind (the smoother's backward pass: CPU seconds per call),
     best of 3 on the campaign's first scenario (8 h of navigation)."""
-    from gyrodrift.fleet.campaign import _noise_model, _timeline
+    from gyrodrift.fleet.science import noise_model
     from gyrodrift.ins.simulate import scenario_log
     from gyrodrift.procedure import align_log, navigate_after_alignment
     from gyrodrift.procedure.smoother import smooth_log
 
-    timeline = _timeline(campaign.options)
+    timeline = campaign.timeline
     best = dict.fromkeys(KINDS, 0.0)
     for _ in range(3):
         meter.reset()
         scn = campaign.scenario(0)
         log = scenario_log(scn)
         alignment = align_log(log, timeline=timeline)
-        smooth_log(log, timeline=timeline, noise=_noise_model(scn))
+        smooth_log(log, timeline=timeline, noise=noise_model(scn))
         navigate_after_alignment(log, alignment, [0.0], 8.0, threads=1)
         twin = scenario_log(campaign.scenario(0, noise=False))
         for _chunk in twin.chunks(100_000, stop=twin.samples_for(8 * 3600.0)):
@@ -217,7 +220,7 @@ def profile(campaign_path: str, n_runs: int, meter: CoreMeter) -> dict:
 def compare(a: list[dict], b: list[dict]) -> dict:
     """Largest differences between two paths' rows: drifts [deg/h], error curves [nmi] within 0.002 deg/h of
     the truth, and whether every other scalar is identical."""
-    from gyrodrift.fleet.campaign import CURVE_COLUMNS, CampaignRuns
+    from gyrodrift.fleet.store import CURVE_COLUMNS, CampaignRuns
 
     out = {"drift": 0.0, "effective": 0.0, "curves_nmi": 0.0}
     identical = True
@@ -276,7 +279,8 @@ def cluster(campaign, n_runs: int, warm) -> dict:
 _MEMORY_CHILD = """
 import json, sys, threading, time, tomllib
 import psutil
-from gyrodrift.fleet.campaign import parse_campaign, process_run
+from gyrodrift.fleet.science import process_run
+from gyrodrift.fleet.spec import parse_campaign
 data = tomllib.loads(open(sys.argv[1]).read())
 h = float(sys.argv[2])
 data.setdefault("options", {})["truth_h"] = h

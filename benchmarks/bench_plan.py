@@ -4,7 +4,7 @@
                                     [--workers 2] [--out DIR] [--json FILE]
 
 For each noise grade (ARW [deg/sqrt(h)]; VRW 2 ug/sqrt(Hz) at ARW <= 0.0003, else 5, the default campaign's
-grades) and each observation span T (from the first sample): a campaign (`gyrodrift.fleet.campaign`, the same seed for
+grades) and each observation span T (from the first sample): a campaign (`gyrodrift.fleet`, the same seed for
 every span, so the spans see the same simulated runs) of `--runs` 76 h static runs at `--lat-deg`, 10 Hz,
 reciprocating table, random heading, horizontal gyro biases and axial drift, constant temperature (the planner's
 thermal term is zero), options ``align_h = 4``, ``features_h = T - 4``, ``truth_h = 72``: each run's smoother
@@ -38,7 +38,9 @@ from pathlib import Path
 
 import numpy as np
 
-from gyrodrift.fleet.campaign import parse_campaign, read_runs, run_campaign
+from gyrodrift.fleet.campaign import run_campaign
+from gyrodrift.fleet.spec import parse_campaign
+from gyrodrift.fleet.store import read_runs
 from gyrodrift.procedure.noise import SensorNoise
 from gyrodrift.procedure.plan import MissionBudget, identification_curve, mission_error_model
 

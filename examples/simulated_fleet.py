@@ -17,10 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
+from gyrodrift.fleet.features import features_table
 from gyrodrift.ins.synthetic_fleet import simulate_fleet
 from gyrodrift.learn.baselines import physics_inversion
 from gyrodrift.learn.drift_model import fit_drift_model
-from gyrodrift.procedure import features_run_table, features_table
+from gyrodrift.procedure import features_run_table
 from gyrodrift.runs.table import RunTable
 
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from gyrodrift.errors import GyrodriftError
-from gyrodrift.fleet.campaign import CampaignError, load_campaign
+from gyrodrift.fleet.spec import CampaignError, load_campaign
 from gyrodrift.ins.scenario import ScenarioError, load_scenario
 from gyrodrift.logs.log_format import LogFormatError, load_log_format
 from gyrodrift.procedure.noise import load_noise_file

@@ -16,17 +16,11 @@ import numpy as np
 import pytest
 
 from gyrodrift.errors import InputError, OutputError
-from gyrodrift.fleet.campaign import (
-    CURVE_COLUMNS,
-    CampaignError,
-    CampaignStore,
-    load_campaign,
-    parse_campaign,
-    read_runs,
-    run_campaign,
-    trial_drift_deg_h,
-    write_run_table,
-)
+from gyrodrift.fleet.campaign import run_campaign
+from gyrodrift.fleet.run_table import write_run_table
+from gyrodrift.fleet.science import trial_drift_deg_h
+from gyrodrift.fleet.spec import CampaignError, load_campaign, parse_campaign
+from gyrodrift.fleet.store import CURVE_COLUMNS, CampaignStore, read_runs
 
 TINY = Path(__file__).resolve().parents[2] / "examples" / "campaigns" / "tiny.toml"
 VOLATILE = {"worker"} | {f"{k}_{s}_s" for k in ("t", "cpu") for s in ("align", "passes", "smoother", "twin", "total")}
@@ -372,10 +366,10 @@ def test_cli_campaign_and_study(store, tmp_path):
 
 
 def test_runs_carry_the_smoothers_thermal_columns(store, tmp_path):
-    from gyrodrift.fleet.campaign import _noise_model, _timeline
+    from gyrodrift.fleet.science import noise_model
     from gyrodrift.ins.simulate import scenario_log
-    from gyrodrift.procedure.results import SMOOTHER_THERMAL_COLUMNS
     from gyrodrift.procedure.smoother import smooth_log
+    from gyrodrift.runs.columns import SMOOTHER_THERMAL_COLUMNS
     from gyrodrift.runs.table import read_runs_csv
 
     out, src = store
@@ -384,7 +378,7 @@ def test_runs_carry_the_smoothers_thermal_columns(store, tmp_path):
         assert np.all(np.isfinite(runs.numbers(c))), c
     campaign = load_campaign(src)
     scn = campaign.scenario(3)
-    est = smooth_log(scenario_log(scn), timeline=_timeline(campaign.options), noise=_noise_model(scn))
+    est = smooth_log(scenario_log(scn), timeline=campaign.timeline, noise=noise_model(scn))
     assert est.model == "thermal"
     assert runs.numbers("drift_smoother_deg_h")[3] == est.navigation_drift_deg_h
     for c, v in est.thermal_columns().items():
@@ -403,7 +397,7 @@ def test_a_store_written_before_the_thermal_columns_reads_resumes_and_studies(st
     import pyarrow.parquet as pq
 
     from gyrodrift.fleet.study import FLEET_ROW, run_study
-    from gyrodrift.procedure.results import SMOOTHER_THERMAL_COLUMNS
+    from gyrodrift.runs.columns import SMOOTHER_THERMAL_COLUMNS
 
     out, src = store
     old = tmp_path / "old"
@@ -438,7 +432,8 @@ def test_one_read_path_matches_the_verified_path(tmp_path):
     previous one (`[options] verify = true`: verification reads, the twin's own truth) on the same runs: the
     drifts within 3e-7 deg/h (the verified truth's own tolerance is 1e-7 deg/h), every other scalar identical,
     the error curves within 1e-3 nmi for any drift within 0.002 deg/h of the truth."""
-    from gyrodrift.fleet.campaign import CampaignRuns, process_run
+    from gyrodrift.fleet.science import process_run
+    from gyrodrift.fleet.store import CampaignRuns
 
     fast = load_campaign(write_campaign(tmp_path, "fast", 3))
     slow_path = tmp_path / "slow.toml"

@@ -18,9 +18,9 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-
-from gyrodrift.fleet.campaign import read_runs
 from test_campaign_store_checks import FAST
+
+from gyrodrift.fleet.store import read_runs
 
 COUNT = 4
 CAMPAIGN = FAST.format(count=COUNT).replace("rate_hz = 1.0", "rate_hz = 4.0") + (

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from gyrodrift.fleet.campaign import read_runs
+from gyrodrift.fleet.store import read_runs
 
 TINY = Path(__file__).resolve().parents[2] / "examples" / "campaigns" / "tiny.toml"
 COUNT = 8

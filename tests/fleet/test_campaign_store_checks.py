@@ -15,15 +15,9 @@ from click.testing import CliRunner
 
 from gyrodrift.cli import main
 from gyrodrift.errors import InputError
-from gyrodrift.fleet.campaign import (
-    CampaignError,
-    CampaignStore,
-    check_feasible,
-    load_campaign,
-    parse_campaign,
-    read_runs,
-    run_campaign,
-)
+from gyrodrift.fleet.campaign import run_campaign
+from gyrodrift.fleet.spec import CampaignError, check_feasible, load_campaign, parse_campaign
+from gyrodrift.fleet.store import CampaignStore, read_runs
 
 COUNT = 3
 FAST = """

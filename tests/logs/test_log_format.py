@@ -296,7 +296,7 @@ def test_navigate_cli_reads_a_formatted_log_and_plots(simulated, tmp_path):
 def test_features_of_a_formatted_log_equal_the_native_logs(tmp_path):
     """The procedure reads through the same reader: features (alignment + navigation) of the ';' CSV export in
     deg/s and g equal those of the native log (the CLI's --format goes the same way)."""
-    from gyrodrift.procedure import features_table
+    from gyrodrift.fleet.features import features_table
     from gyrodrift.procedure.timeline import Timeline
 
     scn = Scenario.from_dict({**SCENARIO, "run": {"duration_h": 1.15, "rate_hz": 5.0, "seed": 4}})

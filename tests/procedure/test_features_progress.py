@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
+from gyrodrift.fleet.features import features_table
 from gyrodrift.ins import Scenario, simulate
-from gyrodrift.procedure import features_table
 from gyrodrift.procedure.timeline import Timeline
 
 SHORT = Timeline(align_h=0.1, features_h=1.0, truth_h=1.0, coarse_s=60.0)

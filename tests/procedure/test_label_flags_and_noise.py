@@ -10,10 +10,10 @@ from click.testing import CliRunner
 
 from gyrodrift.cli import main
 from gyrodrift.errors import InputError
+from gyrodrift.fleet.features import features_table
 from gyrodrift.ins import Scenario, simulate
 from gyrodrift.learn.drift_model import fit_drift_model
 from gyrodrift.learn.model_io import load_model
-from gyrodrift.procedure import features_table
 from gyrodrift.procedure.features import features_run_table
 from gyrodrift.procedure.noise import SensorNoise, load_noise_file
 from gyrodrift.procedure.timeline import Timeline

@@ -24,6 +24,8 @@ import pytest
 from click.testing import CliRunner
 
 from gyrodrift.cli import main
+from gyrodrift.fleet.cluster import DaskMissingError
+from gyrodrift.fleet.features import features_table
 from gyrodrift.ins import Scenario, simulate
 from gyrodrift.ins.synthetic_fleet import simulate_fleet
 from gyrodrift.learn.baselines import physics_inversion
@@ -35,14 +37,12 @@ from gyrodrift.procedure import (
     evaluate_compensation,
     extract_features,
     features_run_table,
-    features_table,
     find_true_drift,
     identify,
     navigate_after_alignment,
     write_alignment,
     write_evaluation,
 )
-from gyrodrift.procedure.fleet import DaskMissingError
 from gyrodrift.runs.table import RunTable, read_runs_csv
 
 LONG_DRIFT = 0.003
@@ -403,7 +403,7 @@ def test_unreachable_scheduler_is_a_clear_error_within_the_timeout(fleet, tmp_pa
     import time
 
     from gyrodrift.cli import main
-    from gyrodrift.procedure.fleet import SchedulerUnreachableError
+    from gyrodrift.fleet.cluster import SchedulerUnreachableError
 
     with socket.socket() as s:  # a port on loopback with nothing listening once the socket is closed
         s.bind(("127.0.0.1", 0))

@@ -13,7 +13,7 @@ from pathlib import Path
 import gyrodrift.procedure
 
 PACKAGE = Path(gyrodrift.procedure.__file__).parent
-ALGORITHMS = ("align", "passes", "truth", "features", "evaluate", "identify", "fleet")
+ALGORITHMS = ("align", "passes", "truth", "features", "evaluate", "identify")
 OUTPUTS = ("writers", "figures")
 
 

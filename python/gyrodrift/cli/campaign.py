@@ -65,7 +65,10 @@ def campaign_command(source, out, workers, scheduler, connect_timeout_s, limit, 
     when every run failed.
     """
     from gyrodrift.errors import OptionError
-    from gyrodrift.fleet.campaign import CampaignStore, load_campaign, read_runs, run_campaign, write_run_table
+    from gyrodrift.fleet.campaign import CampaignFailedError, run_campaign
+    from gyrodrift.fleet.run_table import write_run_table
+    from gyrodrift.fleet.spec import load_campaign
+    from gyrodrift.fleet.store import CampaignStore, read_runs
 
     if source.is_dir():
         store = CampaignStore(source)
@@ -74,8 +77,6 @@ def campaign_command(source, out, workers, scheduler, connect_timeout_s, limit, 
         if run_table is not None:
             runs = read_runs(source, curves=False)
             if not runs.ok.any():  # a header-only table `fit` would refuse: say why here, write nothing
-                from gyrodrift.fleet.campaign import CampaignFailedError
-
                 why = f"every one of its {len(runs)} committed run(s) failed" if len(runs) else "no run is committed"
                 raise CampaignFailedError(f"{source}: no successful run to write to {run_table}: {why}")
             n = write_run_table(runs, run_table)
@@ -184,7 +185,7 @@ def _export(campaign, index: int, out, quiet: bool, as_json: bool) -> None:
 def study_command(folder, out, test_fraction, seed, max_iter, as_json, quiet):
     """Compare every identification method on the same held-out runs of a campaign FOLDER."""
     from gyrodrift.files.atomic import OutputFolder
-    from gyrodrift.fleet.campaign import read_runs
+    from gyrodrift.fleet.store import read_runs
     from gyrodrift.fleet.study import run_study
     from gyrodrift.fleet.study_report import STUDY_FILES, summary_lines, write_study_report
 

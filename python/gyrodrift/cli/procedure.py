@@ -123,7 +123,7 @@ def features_command(
     smoother_coeff_prior_std_deg_h_per_c; empty under its constant model), and with --with-truth drift_deg_h, its
     1-sigma drift_std_deg_h and label_flagged.
     """
-    from gyrodrift.procedure.fleet import features_table
+    from gyrodrift.fleet.features import features_table
     from gyrodrift.procedure.writers import check_features_outputs, write_features_csv
 
     if workers is not None and scheduler is not None:

@@ -1,9 +1,10 @@
-"""A folder of logs becomes a training table: features of many runs, serially or on a dask cluster.
+"""A folder of logs becomes a training table: features of many runs, serially or on a dask cluster (`gyrodrift
+features`, ``--workers`` / ``--scheduler``).
 
-Each log is one independent task (open, align, navigate, optionally find the true drift); the table lists
-the runs in the order the logs were given, whatever order the tasks finish in, so the serial and the
-distributed results are identical. dask is an optional extra (``pip install gyrodrift[dask]``), imported
-only when a cluster is asked for.
+Each log is one independent task (open, align, navigate, optionally find the true drift) of
+`gyrodrift.fleet.executor`; the table lists the runs in the order the logs were given, whatever order the tasks
+finish in, so the serial and the distributed results are identical. dask is an optional extra (``pip install
+gyrodrift[dask]``), imported only when a cluster is asked for.
 """
 
 from __future__ import annotations
@@ -14,7 +15,8 @@ import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-from gyrodrift.fleet.cluster import DEFAULT_CONNECT_TIMEOUT_S, DaskMissingError, SchedulerUnreachableError, dask_client
+from gyrodrift.fleet.cluster import DEFAULT_CONNECT_TIMEOUT_S
+from gyrodrift.fleet.executor import Result, Workers, run_tasks
 from gyrodrift.logs import LogError, open_log
 from gyrodrift.logs.log_format import LogFormat, load_log_format
 from gyrodrift.procedure.features import extract_features
@@ -24,11 +26,7 @@ from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 from gyrodrift.progress import progress
 from gyrodrift.site import Site
 
-__all__ = [
-    "features_table",
-    "DaskMissingError",
-    "SchedulerUnreachableError",
-]
+__all__ = ["features_table"]
 
 
 def _features_task(
@@ -132,34 +130,28 @@ def features_table(
     if dup:
         raise LogError(f"run name(s) {', '.join(dup)} appear more than once (run = the log's file stem)")
     args = (site, fmt, timeline, with_truth, criterion, lat0_deg, chunk_samples, smoother, noise)
+    tasks = [(f"features-{i}-{Path(p).name}", (p, *args)) for i, p in enumerate(paths)]
+    serial = workers is None and scheduler is None
+    where = Workers(
+        dask_workers=workers, scheduler=scheduler, dask_processes=processes, connect_timeout_s=connect_timeout_s
+    )
     start = time.monotonic()
+    out: list[RunFeatures] = []
+    finished: dict[int, Result] = {}
+    with progress(len(paths), "features", quiet, unit="log") as bar:
 
-    def done(bar, i: int, res: RunFeatures) -> None:
-        bar.update(1)
-        if not quiet:
-            bar.write(
-                f"features: {res.run} done ({i + 1}/{len(paths)}, {time.monotonic() - start:.1f} s wall time so far)",
-                file=sys.stderr,
-            )
+        def on_done(i: int, result: Result) -> None:
+            finished[i] = result
+            while len(out) in finished:  # in the order of the logs: the first bad log's error is raised
+                out.append(finished.pop(len(out))())
+                bar.update(1)
+                if not quiet:
+                    bar.write(
+                        f"features: {out[-1].run} done ({len(out)}/{len(paths)}, "
+                        f"{time.monotonic() - start:.1f} s wall time so far)",
+                        file=sys.stderr,
+                    )
 
-    if workers is None and scheduler is None:
-        out = []
-        with progress(len(paths), "features", quiet, unit="log") as bar:
-            for i, p in enumerate(paths):
-                bar.set_postfix_str(names[i])
-                out.append(_features_task(str(p), *args))
-                done(bar, i, out[-1])
-        return out
-    with dask_client(
-        workers=workers, scheduler=scheduler, processes=processes, connect_timeout_s=connect_timeout_s
-    ) as client:
-        futures = [
-            client.submit(_features_task, p, *args, pure=False, key=f"features-{i}-{Path(p).name}")
-            for i, p in enumerate(paths)
-        ]
-        results: list[RunFeatures] = []
-        with progress(len(paths), "features", quiet, unit="log") as bar:
-            for i, f in enumerate(futures):
-                results.append(f.result())
-                done(bar, i, results[-1])
-        return results
+        show_log = (lambda i: bar.set_postfix_str(names[i])) if serial else None  # a log takes minutes
+        run_tasks(_features_task, tasks, on_done, where, on_start=show_log)
+    return out

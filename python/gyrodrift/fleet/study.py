@@ -1,6 +1,6 @@
 """The accuracy study of a campaign: every identification method on the same held-out runs.
 
-`run_study(df)` takes the runs of a campaign (`gyrodrift.fleet.campaign.read_runs`), splits them by run into
+`run_study(df)` takes the runs of a campaign (`gyrodrift.fleet.store.read_runs`), splits them by run into
 training and held-out runs (seeded), fits the learned methods on the training runs and evaluates every method
 on the held-out ones:
 
@@ -23,7 +23,7 @@ on the held-out ones:
 Metrics (deg/h): RMS and max identification error against the simulated effective drift (the truth of the
 run's noise-free twin) and against the 72 h truth of the noisy run; the share of held-out runs under 1 nmi at
 hour 72 after compensating each method's estimate, and under 1 nmi over the whole 72 h, from the run's
-stored linear error curves (`gyrodrift.fleet.campaign.linear_error_nmi`: no navigation); the coverage of nominal
+stored linear error curves (`gyrodrift.fleet.store.linear_error_nmi`: no navigation); the coverage of nominal
 90 % intervals (methods that give one). The physical-limit line is the smoother's 1-sigma over the same
 held-out runs (RMS of the per-run sigmas; each method's RMS is also given as a ratio to it); NaN when the
 campaign has no smoother column.
@@ -276,11 +276,11 @@ def run_study(
     train_sizes: list[int] | None = None,
     latitude_bins: int = 4,
 ) -> StudyResult:
-    """The study on a campaign's runs (`gyrodrift.fleet.campaign.read_runs`, curves included); see the module doc.
+    """The study on a campaign's runs (`gyrodrift.fleet.store.read_runs`, curves included); see the module doc.
 
     `max_iter`: tuning iterations of every CPSO/PSO fit; `train_sizes`: the training-set sizes of the curve
     (default 10, 20, 40, ... and all); `latitude_bins`: held-out runs grouped in this many latitude quantiles."""
-    from gyrodrift.fleet.campaign import run_table
+    from gyrodrift.fleet.run_table import run_table
     from gyrodrift.learn.baselines import physics_inversion
     from gyrodrift.learn.tuning import SearchBoundWarning
 

@@ -10,7 +10,6 @@ navigate_after_alignment(log, alignment, drifts_deg_h, hours, ...) -> PassResult
 navigate(imu, *, hours=None, compensate_drift_deg_h=0.0, initial="auto", ..., out_dir=None, plot=False) -> NavResult
     (the ``navigate`` command: from the log's truth or its alignment; nav.parquet, summary.json)
 extract_features(log, ..., with_truth=False) -> RunFeatures
-features_table(paths, ..., workers=None, scheduler=None) -> list[RunFeatures]
 write_features_csv(rows, path, curves=None)
 find_true_drift(log, criterion="final", hours=72, ...) -> TrueDrift; write_truth(truth, out_dir)
 evaluate_compensation(log, drift_deg_h, hours=72, ...) -> Evaluation; write_evaluation(ev, out_dir)
@@ -27,7 +26,6 @@ Logs are opened with `gyrodrift.logs.open_log` (Parquet or CSV, validated while 
 from gyrodrift.procedure.align import align_log
 from gyrodrift.procedure.evaluate import evaluate_compensation
 from gyrodrift.procedure.features import extract_features, features_run_table
-from gyrodrift.procedure.fleet import DaskMissingError, features_table
 from gyrodrift.procedure.identify import identify
 from gyrodrift.procedure.navigate import navigate
 from gyrodrift.procedure.noise import SensorNoise, estimate_white_noise
@@ -58,7 +56,6 @@ __all__ = [
     "Alignment",
     "CRITERIA",
     "DEFAULT_TIMELINE",
-    "DaskMissingError",
     "Evaluation",
     "Identification",
     "NavCurve",
@@ -74,7 +71,6 @@ __all__ = [
     "evaluate_compensation",
     "extract_features",
     "features_run_table",
-    "features_table",
     "find_true_drift",
     "identify",
     "navigate",
