@@ -68,17 +68,25 @@ def test_range_cells_and_lat0_column(tmp_path):
             {"lat0_deg": 28.0},
             r"row 1: unknown column 'colour'",
         ),
-        ("run,temp_min_c,temp_max_c\n1,1,2\n", {"lat0_deg": 28.0}, r"row 1: missing column 'lat_deg'"),
-        ("run,lat_deg\n1,28\n", {"lat0_deg": 28.0}, r"row 1: missing temperature columns"),
+        (
+            "run,temp_min_c,temp_max_c\n1,1,2\n",
+            {"lat0_deg": 28.0},
+            r"row 1: missing column 'lat_deg' \(latitude at the 12th hour of free navigation, deg\)$",
+        ),
+        (
+            "run,lat_deg\n1,28\n",
+            {"lat0_deg": 28.0},
+            r"row 1: missing columns: expected temp_min_c and temp_max_c, or temp_range_c",
+        ),
         (
             "run,lat_deg,temp_min_c,temp_max_c\n1,28,1,2\n",
             {},
-            r"no lat0_deg column; give the site latitude \(--lat0-deg",
+            r"no lat0_deg column; give the true site latitude \(--lat0-deg, or lat0_deg= in Python\)$",
         ),
         (
             "run,lat_deg,temp_min_c,temp_max_c\n1,28,1,2\n",
             {"lat0_deg": 28.0, "require_truth": True},
-            r"missing column 'drift_deg_h'",
+            r"missing column 'drift_deg_h' \(true axial drift, the training label, deg/h\) for training$",
         ),
         (
             "run,lat_deg,temp_min_c,temp_max_c\n1,28,1,2\n2,abc,1,2\n",

@@ -38,7 +38,9 @@ class Column:
     dtype : str
         One of `DTYPES`.
     required : str
-        When a table must have it (``""``: optional), e.g. ``"always"``, ``"for fit"``, ``"unless temp_range_c"``.
+        When a table must have it: ``"always"``, ``"for fit"`` (a training table), ``"unless OTHER"`` (the column
+        OTHER replaces it and the others of its group), ``"unless --OPTION"`` (unless the caller gives its value) or
+        ``""`` (optional); `gyrodrift.runs.table.read_runs_csv` checks it.
     written_by : str
         The command that writes it: in the run table ``features`` (``gyrodrift features`` always, and ``campaign
         --run-table``), ``features --with-truth`` (with the truth only) or ``""`` (an input a user or
@@ -81,9 +83,9 @@ RUN_TABLE: tuple[Column, ...] = (
            "run identifier (the log's name), unique within a table; a blank cell is numbered by its row"),
     Column("split", "", "text", "", "", "attribute", "`train`, `test` or empty (`fit --split`)"),
     Column("lat_deg", "deg", "float", "always", "features", "attribute",
-           "latitude computed by the free navigation at navigation hour 12"),
+           "latitude at the 12th hour of free navigation"),
     Column("lat0_deg", "deg", "float", "unless --lat0-deg", "features", "attribute",
-           "true (initial) latitude of the site"),
+           "the true site latitude"),
     Column("temp_min_c", "degC", "float", "unless temp_range_c", "features", "attribute",
            "lowest system temperature over the 12 h"),
     Column("temp_max_c", "degC", "float", "unless temp_range_c", "features", "attribute",
@@ -112,7 +114,7 @@ RUN_TABLE: tuple[Column, ...] = (
     Column("smoother_coeff_prior_std_deg_h_per_c", "deg/h/degC", "float", "", "features", "extra",
            "the smoother's own prior 1-sigma of k_z (mean 0)", tags=_SMOOTHER_THERMAL, sigma=True),
     Column("drift_deg_h", "deg/h", "float", "for fit", "features --with-truth", "attribute",
-           "true axial gyro drift (the training label)", std="drift_std_deg_h"),
+           "true axial drift, the training label", std="drift_std_deg_h"),
     Column("drift_std_deg_h", "deg/h", "float", "", "features --with-truth", "extra",
            "1-sigma of the label drift_deg_h (weights the training runs)", sigma=True),
     Column("label_flagged", "", "bool", "", "features --with-truth", "extra",

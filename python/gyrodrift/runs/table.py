@@ -30,6 +30,7 @@ from gyrodrift.runs.columns import (
     FLAG_COLUMNS,
     KNOWN_COLUMNS,
     OPTIONAL_COLUMNS,
+    RUN_TABLE,
     SMOOTHER_THERMAL_COLUMNS,
 )
 
@@ -360,6 +361,25 @@ def _check_run_values(
         raise RunTableError(f"{where}, key split: expected 'train', 'test' or '', got {split!r}")
 
 
+def _check_required(header: set[str], where: str, *, caller_gives: set[str], require_truth: bool) -> None:
+    """The columns a header must have, as each `gyrodrift.runs.columns.Column.required` says: ``always``, ``for
+    fit`` (with `require_truth`), ``unless OTHER`` (the column OTHER replaces it and its group) or ``unless
+    --OPTION`` (unless the caller gives its value: a name in `caller_gives`)."""
+    for column in RUN_TABLE:
+        need, c = column.required, column.name
+        if not need or c in header:
+            continue
+        if need == "always" or (need == "for fit" and require_truth):
+            purpose = " for training" if need == "for fit" else ""
+            raise RunTableError(f"{where}: missing column {c!r} ({column.meaning}, {column.unit}){purpose}")
+        instead = need.removeprefix("unless ")
+        if instead.startswith("--") and c not in caller_gives:
+            raise RunTableError(f"{where}: no {c} column; give {column.meaning} ({instead}, or {c}= in Python)")
+        if instead in COLUMNS and instead not in header:
+            group = " and ".join(n.name for n in RUN_TABLE if n.required == need)
+            raise RunTableError(f"{where}: missing columns: expected {group}, or {instead}")
+
+
 def _check_optional(where: str, key: str, value: float) -> None:
     """An optional column's value: NaN (unknown) or a drift-sized number (|value| <= 10 in its unit); a 1-sigma
     (`gyrodrift.runs.columns.Column.sigma`) must be > 0."""
@@ -491,19 +511,9 @@ def read_runs_csv(path, *, lat0_deg: float | None = None, require_truth: bool = 
             dup = next(h for h in header if header.count(h) > 1)
             raise RunTableError(f"{name}, row 1: column {dup!r} appears twice")
         col = {h: i for i, h in enumerate(header)}
-        if "lat_deg" not in col:
-            raise RunTableError(f"{name}, row 1: missing column 'lat_deg' (latitude at 12 h, deg)")
+        _check_required(set(header), f"{name}, row 1", caller_gives=set() if lat0_deg is None else {"lat0_deg"},
+                        require_truth=require_truth)  # fmt: skip
         has_minmax = "temp_min_c" in col and "temp_max_c" in col
-        if not has_minmax and "temp_range_c" not in col:
-            raise RunTableError(
-                f"{name}, row 1: missing temperature columns: expected temp_min_c and temp_max_c, or temp_range_c"
-            )
-        if "lat0_deg" not in col and lat0_deg is None:
-            raise RunTableError(
-                f"{name}, row 1: no lat0_deg column; give the site latitude (--lat0-deg, or lat0_deg= in Python)"
-            )
-        if require_truth and "drift_deg_h" not in col:
-            raise RunTableError(f"{name}, row 1: missing column 'drift_deg_h' (true axial drift, deg/h) for training")
 
         runs: list[str] = []
         split: list[str] = []
