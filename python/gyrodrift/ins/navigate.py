@@ -210,7 +210,8 @@ def as_log(
     site: Site | Mapping[str, float] | None = None,
     require_temperature: bool = False,
 ) -> ImuLog:
-    """The `gyrodrift.logs.ImuLog` of any IMU source `navigate` takes (a path, an ImuLog, an ImuData, a Scenario).
+    """The `gyrodrift.logs.ImuLog` of any IMU source `gyrodrift.procedure.navigate` takes (a path, an ImuLog, an
+    ImuData, a Scenario).
 
     `site` replaces or completes the source's site as in `gyrodrift.logs.open_log`.
     """
