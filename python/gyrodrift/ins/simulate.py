@@ -22,7 +22,7 @@ from gyrodrift.files.toml_writer import dumps_toml
 from gyrodrift.ins.scenario import Scenario
 from gyrodrift.logs import ImuLog, LogTruth
 from gyrodrift.logs.columns import ROUTE_COLUMNS, imu_file_schema
-from gyrodrift.logs.source import Layout, LogSource, RawBlock, check_rate
+from gyrodrift.logs.source import Layout, LogSource, Provenance, RawBlock, SampleRate, check_rate
 from gyrodrift.progress import progress
 from gyrodrift.site import Site
 
@@ -76,26 +76,24 @@ class ImuData:
         attitude and static part from the scenario; `site` replaces or completes the scenario's as in
         `gyrodrift.logs.open_log`."""
         s = self.scenario
+        known = _provenance(s)
         return ImuLog.from_arrays(
             self.columns,
             rate_hz=s.run.rate_hz,
             site=site,
-            source_site=s.site,
-            truth=_truth(s),
+            source_site=known.site,
+            truth=known.truth,
             require_temperature=require_temperature,
-            static_s=_static_s(s),
+            static_s=known.static_s,
         )
 
 
-def _truth(scenario: Scenario) -> LogTruth:
-    """The true initial attitude of `scenario` [deg]."""
-    a = scenario.attitude
-    return LogTruth(a.pitch_deg, a.roll_deg, a.yaw_deg)
-
-
-def _static_s(scenario: Scenario) -> float | None:
-    """The static part at the start of a moving-base `scenario` [s] (``[trajectory] static_h``), else None."""
-    return None if scenario.trajectory is None else scenario.trajectory.static_h * 3600.0
+def _provenance(scenario: Scenario) -> Provenance:
+    """What `scenario` says about its run: the true site, the true initial attitude [deg] and, on a moving base, the
+    static part at the start [s] (``[trajectory] static_h``)."""
+    a, trajectory = scenario.attitude, scenario.trajectory
+    static_s = None if trajectory is None else trajectory.static_h * 3600.0
+    return Provenance(scenario.site, LogTruth(a.pitch_deg, a.roll_deg, a.yaw_deg), static_s)
 
 
 def imu_schema(scenario: Scenario) -> pa.Schema:
@@ -237,6 +235,8 @@ def simulate(
 class _ScenarioSource(LogSource):
     """The samples of a scenario simulated on the fly by the core, chunk by chunk (nothing stored)."""
 
+    format: str = "scenario"
+
     def blocks(self, chunk_samples: int) -> Iterator[RawBlock]:
         for c in iter_core_chunks(self.scenario, chunk_samples):
             yield RawBlock(
@@ -257,15 +257,10 @@ def scenario_log(scenario: Scenario, *, site: Site | Mapping[str, float] | None 
     label = "<scenario>"
     source = _ScenarioSource(
         label=label,
-        path=None,
-        format="scenario",
         layout=Layout.of_kind("increments", has_temperature=True, has_truth_columns=True),
-        rate_hz=check_rate(scenario.run.rate_hz, label),
-        rate_source="scenario",
+        rate=SampleRate(check_rate(scenario.run.rate_hz, label), "scenario"),
         n_samples=scenario.n_samples,
-        site=scenario.site,
-        truth=_truth(scenario),
-        static_s=_static_s(scenario),
+        provenance=_provenance(scenario),
         name="scenario",
         scenario=scenario,
     )

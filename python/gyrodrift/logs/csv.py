@@ -34,7 +34,17 @@ from gyrodrift.logs.source import (
     short,
 )
 
-__all__ = ["CsvDialect", "CsvSource", "open_csv", "csv_blocks", "csv_problem", "csv_lines", "last_cell", "n_samples"]
+__all__ = [
+    "CsvDialect",
+    "CsvSource",
+    "open_csv",
+    "csv_blocks",
+    "csv_problem",
+    "csv_lines",
+    "last_cell",
+    "n_samples",
+    "number_cell",
+]
 
 
 @dataclass(frozen=True)
@@ -216,6 +226,16 @@ def last_cell(path: Path, dialect: CsvDialect, column: int) -> str | None:
         return None
 
 
+def number_cell(row: list[str], column: int, where: str) -> float:
+    """Cell `column` (0-based) of `row` as a number (an empty cell when the row is short); `LogError` at `where`
+    (``file, row R, column C``) when it is not one."""
+    cell = row[column] if column < len(row) else ""
+    try:
+        return float(cell)
+    except ValueError:
+        raise LogError(f"{where}: expected a number, got {short(cell)!r}") from None
+
+
 def n_samples(label: str, first_s: float, last_s: float | None, rate_hz: float) -> int:
     """The number of samples of a CSV log from its first and last time stamps [s] and its rate [Hz]."""
     if last_s is None or not (math.isfinite(last_s) and last_s > first_s):
@@ -229,6 +249,8 @@ def n_samples(label: str, first_s: float, last_s: float | None, rate_hz: float) 
 @dataclass(frozen=True, kw_only=True)
 class CsvSource(LogSource):
     """A CSV log with the reader's columns; rows are the file's lines (the header is row 1)."""
+
+    format: str = "csv"
 
     raw_names: dict[str, str] = field(default_factory=dict)  # stripped header name -> as written, where they differ
 
@@ -262,29 +284,15 @@ def open_csv(path: Path, label: str, require_temperature: bool) -> CsvSource:
         for row in reader:
             if len(times) > RATE_PROBE:
                 break
-            cell = row[it] if it < len(row) else ""
-            try:
-                times.append(float(cell))
-            except ValueError:
-                raise LogError(
-                    f"{label}, row {reader.line_num}, column t_s: expected a number, got {short(cell)!r}"
-                ) from None
+            times.append(number_cell(row, it, f"{label}, row {reader.line_num}, column t_s"))
     except csv.Error as exc:
         raise LogError(f"{label}: unreadable CSV ({short(exc)})") from None
-    t = np.asarray(times, dtype=float)
-    rate = rate_from_times(t, label)
+    rate = rate_from_times(np.asarray(times, dtype=float), label)
     last_text = last_cell(path, CsvDialect(), it)
     try:
         last = None if last_text is None else float(last_text)
     except ValueError:
         last = None
-    return CsvSource(
-        label=label,
-        path=path,
-        format="csv",
-        layout=layout,
-        rate_hz=rate,
-        rate_source="time stamps",
-        n_samples=n_samples(label, float(t[0]), last, rate),
-        raw_names={h: r for h, r in zip(header, raw_header, strict=True) if h != r},
-    )
+    n = n_samples(label, times[0], last, rate.hz)
+    raw_names = {h: r for h, r in zip(header, raw_header, strict=True) if h != r}
+    return CsvSource(label=label, layout=layout, rate=rate, n_samples=n, path=path, raw_names=raw_names)

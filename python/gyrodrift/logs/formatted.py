@@ -17,7 +17,7 @@ import numpy as np
 import pyarrow as pa
 
 from gyrodrift.logs.columns import REF_HEIGHT_COLUMN, TEMPERATURE, TIME, TRUTH_COLUMNS
-from gyrodrift.logs.csv import CsvDialect, csv_blocks, csv_lines, csv_problem, last_cell, n_samples
+from gyrodrift.logs.csv import CsvDialect, csv_blocks, csv_lines, csv_problem, last_cell, n_samples, number_cell
 from gyrodrift.logs.log_format import ColumnSpec, LogFormat
 from gyrodrift.logs.parquet import first_cells, numeric_type, parquet_blocks, parquet_file, read_site
 from gyrodrift.logs.source import (
@@ -25,6 +25,7 @@ from gyrodrift.logs.source import (
     Layout,
     LogError,
     LogSource,
+    Provenance,
     RawBlock,
     rate_from_times,
     require_cells,
@@ -253,15 +254,7 @@ def _csv_time_cells(label: str, time: ColumnSpec, it: int, rows: list[tuple[int,
     """The time cells of the first rows (text for ISO date-times, else numbers)."""
     if time.is_iso_time:
         return pa.array([row[it].strip() if it < len(row) else "" for _, row in rows], pa.string())
-    cells = []
-    for line_no, row in rows:
-        cell = row[it] if it < len(row) else ""
-        try:
-            cells.append(float(cell))
-        except ValueError:
-            raise LogError(
-                f"{label}, row {line_no}, column {time.describe()}: expected a number, got {short(cell)!r}"
-            ) from None
+    cells = [number_cell(row, it, f"{label}, row {line_no}, column {time.describe()}") for line_no, row in rows]
     return pa.array(cells, pa.float64())
 
 
@@ -315,21 +308,20 @@ def open_formatted(p: Path, label: str, fmt: LogFormat, require_temperature: boo
     rate = rate_from_times(t, label)
     if container == "csv":
         cell = last_cell(p, _dialect(fmt), it)
-        n = n_samples(label, float(t[0]), None if cell is None else _seconds(time, cell, t0_ns), rate)
+        n = n_samples(label, float(t[0]), None if cell is None else _seconds(time, cell, t0_ns), rate.hz)
     return FormattedSource(
         label=label,
-        path=p,
-        format=container,
         layout=Layout.of_kind(
             fmt.kind,
             has_temperature=fmt.has_temperature,
             has_truth_columns=fmt.has_truth,
             has_reference_height=fmt.column("ref_height") is not None,
         ),
-        rate_hz=rate,
-        rate_source="time stamps",
+        rate=rate,
         n_samples=n,
-        site=site,
+        path=p,
+        provenance=Provenance(site),
+        format=container,
         log_format=fmt,
         t0_ns=t0_ns,
         raw_names=raw_names,

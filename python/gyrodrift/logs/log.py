@@ -191,15 +191,15 @@ class ImuLog:
         self.name = source.name or _run_name(source.path, source.label)
         self.format = source.format
         self.kind = layout.kind
-        self.rate_hz = float(source.rate_hz)
-        self.rate_source = source.rate_source
+        self.rate_hz = float(source.rate.hz)
+        self.rate_source = source.rate.source
         self.n_samples = int(source.n_samples)
-        self.site = merge_site(site, source.site, source.label)
-        self.truth = source.truth
+        self.site = merge_site(site, source.provenance.site, source.label)
+        self.truth = source.provenance.truth
         self.has_temperature = layout.has_temperature
         self.has_truth_columns = layout.has_truth_columns
         self.has_reference_height = layout.has_reference_height
-        self.static_s = source.static_s
+        self.static_s = source.provenance.static_s
         self.scenario = source.scenario
         self._static_checked = False  # once `check_static_base` has passed
 

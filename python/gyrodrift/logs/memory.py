@@ -15,7 +15,9 @@ from gyrodrift.logs.source import (
     LogError,
     LogSource,
     LogTruth,
+    Provenance,
     RawBlock,
+    SampleRate,
     check_rate,
     rate_from_times,
 )
@@ -27,6 +29,8 @@ __all__ = ["ArraySource", "array_source"]
 @dataclass(frozen=True, kw_only=True)
 class ArraySource(LogSource):
     """Columns held in memory (not copied), cut into blocks as a file's rows are."""
+
+    format: str = "memory"
 
     arrays: dict[str, np.ndarray] = field(default_factory=dict, repr=False, compare=False)
 
@@ -66,19 +70,7 @@ def array_source(
         raise LogError(f"{label}: {n or 0} sample(s); a log needs many")
     if rate_hz is None:
         rate = rate_from_times(np.asarray(arrays[TIME.name][: RATE_PROBE + 1], float), label)
-        rate_source = "time stamps"
     else:
-        rate, rate_source = check_rate(rate_hz, label), "given"
-    return ArraySource(
-        label=label,
-        path=None,
-        format="memory",
-        layout=layout,
-        rate_hz=rate,
-        rate_source=rate_source,
-        n_samples=n,
-        site=source_site,
-        truth=truth,
-        static_s=static_s,
-        arrays=arrays,
-    )
+        rate = SampleRate(check_rate(rate_hz, label), "given")
+    known = Provenance(source_site, truth, static_s)
+    return ArraySource(label=label, layout=layout, rate=rate, n_samples=n, provenance=known, arrays=arrays)

@@ -25,7 +25,9 @@ from gyrodrift.logs.source import (
     LogError,
     LogSource,
     LogTruth,
+    Provenance,
     RawBlock,
+    SampleRate,
     check_rate,
     rate_from_times,
     recut,
@@ -96,6 +98,8 @@ def parquet_blocks(
 class ParquetSource(LogSource):
     """A Parquet log with the reader's columns."""
 
+    format: str = "parquet"
+
     def blocks(self, chunk_samples: int) -> Iterator[RawBlock]:
         return parquet_blocks(self, self.layout.wanted(), chunk_samples, self._raw_block)
 
@@ -132,31 +136,27 @@ def read_site(meta: Mapping[str, str], label: str) -> Site | None:
     return Site(*(_number(s[k], label, f"gyrodrift.site {k}") for k in ("lat_deg", "lon_deg", "height_m")))
 
 
-def _read_truth(meta: Mapping[str, str], label: str) -> LogTruth | None:
+def _read_provenance(meta: Mapping[str, str], label: str) -> Provenance:
+    """The true site (``gyrodrift.site``), initial attitude and static part (``gyrodrift.scenario``: its
+    ``[attitude]`` and ``[trajectory] static_h``) of the metadata, each None when it does not say."""
+    site = read_site(meta, label)
     if SCENARIO_KEY not in meta:
-        return None
+        return Provenance(site)
     s = _json_value(meta, SCENARIO_KEY, label)
     att = s.get("attitude", {}) if isinstance(s, dict) else None
     if not isinstance(att, dict):
         raise LogError(f"{label}: gyrodrift.scenario metadata must be a table with an [attitude] table")
-    return LogTruth(
+    truth = LogTruth(
         *(
             _number(att.get(k, 0.0), label, f"gyrodrift.scenario attitude {k}")
             for k in ("pitch_deg", "roll_deg", "yaw_deg")
         )
     )
-
-
-def _read_static_s(meta: Mapping[str, str], label: str) -> float | None:
-    """The static part [s] of a simulated moving-base log (``[trajectory] static_h`` of its scenario metadata),
-    or None (a static-base log, or no scenario)."""
-    if SCENARIO_KEY not in meta:
-        return None
-    s = _json_value(meta, SCENARIO_KEY, label)
-    tr = s.get("trajectory") if isinstance(s, dict) else None
+    tr = s.get("trajectory")
     if not isinstance(tr, dict):
-        return None
-    return _number(tr.get("static_h", 0.0), label, "gyrodrift.scenario trajectory static_h") * 3600.0
+        return Provenance(site, truth)
+    static_h = _number(tr.get("static_h", 0.0), label, "gyrodrift.scenario trajectory static_h")
+    return Provenance(site, truth, static_h * 3600.0)
 
 
 def open_parquet(path: Path, label: str, require_temperature: bool) -> ParquetSource:
@@ -171,24 +171,11 @@ def open_parquet(path: Path, label: str, require_temperature: bool) -> ParquetSo
                 raise LogError(f"{label}, column {c}: expected numbers (float64), got a column of type {t}")
         if n < 2:
             raise LogError(f"{label}: {n} sample(s); a log needs many")
-        site = read_site(meta, label)
-        truth = _read_truth(meta, label)
-        static_s = _read_static_s(meta, label)
+        known = _read_provenance(meta, label)
         if RATE_KEY in meta:
-            rate = check_rate(_json_value(meta, RATE_KEY, label), label, "gyrodrift.rate_hz metadata")
-            rate_source = "metadata"
+            hz = check_rate(_json_value(meta, RATE_KEY, label), label, "gyrodrift.rate_hz metadata")
+            rate = SampleRate(hz, "metadata")
         else:
             times = np.asarray(first_cells(pf, TIME.name, label).to_numpy(zero_copy_only=False), float)
-            rate, rate_source = rate_from_times(times, label), "time stamps"
-    return ParquetSource(
-        label=label,
-        path=path,
-        format="parquet",
-        layout=layout,
-        rate_hz=rate,
-        rate_source=rate_source,
-        n_samples=n,
-        site=site,
-        truth=truth,
-        static_s=static_s,
-    )
+            rate = rate_from_times(times, label)
+    return ParquetSource(label=label, layout=layout, rate=rate, n_samples=n, path=path, provenance=known)

@@ -80,7 +80,7 @@ class StaticMeans:
     def __init__(self, source: LogSource, site: Site | None):
         self.source = source
         self.site = site  # the log's true static site (the source's, or the one its caller gave)
-        self.dt = 1.0 / source.rate_hz
+        self.dt = 1.0 / source.rate.hz
         lat = None if site is None else site.lat_rad
         self.w_up = 0.0 if lat is None else OMEGA_IE_RAD_S * math.sin(lat)  # [rad/s]
         self.n = 0
@@ -110,6 +110,7 @@ class StaticMeans:
     def verdict(self) -> None:
         """Raise `ImplausibleLogError` at the first check the sums fail (the order of docs/procedure.md)."""
         source = self.source
+        truth = source.provenance.truth
         span = self.n * self.dt
         site = self.site
         g0 = G0
@@ -132,13 +133,13 @@ class StaticMeans:
                 f"a unit or scale slip: check {source.channels('accel', (0, 1, 2))}"
             )
         tilt = math.degrees(math.acos(max(-1.0, min(1.0, f_up / f_abs))))
-        if source.truth is not None:
-            p, r = math.radians(source.truth.pitch_deg), math.radians(source.truth.roll_deg)
+        if truth is not None:
+            p, r = math.radians(truth.pitch_deg), math.radians(truth.roll_deg)
             declared = math.degrees(math.acos(max(-1.0, min(1.0, math.cos(p) * math.cos(r)))))
             ok = abs(tilt - declared) <= DECLARED_TILT_TOLERANCE_DEG
             want = (
                 f"{declared:.4g} deg +- {DECLARED_TILT_TOLERANCE_DEG:g} deg (the declared pitch "
-                f"{source.truth.pitch_deg:g} deg, roll {source.truth.roll_deg:g} deg)"
+                f"{truth.pitch_deg:g} deg, roll {truth.roll_deg:g} deg)"
             )
         else:
             ok = tilt <= MAX_UNDECLARED_TILT_DEG

@@ -42,7 +42,7 @@ class RowChecker:
 
     def __init__(self, source: LogSource):
         self.source = source
-        self.dt = 1.0 / source.rate_hz
+        self.dt = 1.0 / source.rate.hz
         self.prev_t: float | None = None
         self.increments = source.layout.kind == "increments"
         scale = self.dt if self.increments else 1.0  # limits on the stored values
@@ -175,6 +175,6 @@ class RowChecker:
             k = int(np.flatnonzero(gap)[0])
             raise LogError(
                 f"{self.source.where(first + k + 1 - off, TIME.name)}: gap in time: step {dt[k]:.6g} s from "
-                f"{float(full[k])!r} s, expected {self.dt:.6g} s (rate {self.source.rate_hz:g} Hz, tolerance "
+                f"{float(full[k])!r} s, expected {self.dt:.6g} s (rate {self.source.rate.hz:g} Hz, tolerance "
                 f"{GAP_TOLERANCE:.0%})"
             )

@@ -27,6 +27,8 @@ from gyrodrift.site import Site
 __all__ = [
     "LogError",
     "LogTruth",
+    "Provenance",
+    "SampleRate",
     "RawBlock",
     "Layout",
     "LogSource",
@@ -74,6 +76,24 @@ class LogTruth:
     pitch_deg: float
     roll_deg: float
     yaw_deg: float
+
+
+@dataclass(frozen=True)
+class Provenance:
+    """What a source says about the run it holds (each None when it does not say): the true static site, the true
+    initial attitude and the length of the static part at its start [s] (a simulated moving base's ``static_h``)."""
+
+    site: Site | None = None
+    truth: LogTruth | None = None
+    static_s: float | None = None
+
+
+@dataclass(frozen=True)
+class SampleRate:
+    """A log's sample rate [Hz] and where it comes from: "metadata", "time stamps", "scenario" or "given"."""
+
+    hz: float
+    source: str
 
 
 @dataclass(frozen=True)
@@ -185,20 +205,17 @@ class LogSource:
     """An opened source of IMU samples: what it says about itself, and how to read and name its rows.
 
     A file source holds only its file name and a few numbers, so it pickles cheaply (dask workers reopen the
-    file themselves). Subclasses implement `blocks`; a file whose rows or columns are named otherwise than by the
-    1-based sample index and the reader's column name overrides `row` and `column_label`.
+    file themselves). Subclasses set their `format` and implement `blocks`; a file whose rows or columns are named
+    otherwise than by the 1-based sample index and the reader's column name overrides `row` and `column_label`.
     """
 
     label: str  # what messages call the source (the path, ``<memory>``, ``<scenario>``)
-    path: Path | None  # the file, None for in-memory and simulated sources
-    format: str  # "parquet", "csv", "memory" or "scenario"
     layout: Layout
-    rate_hz: float  # [Hz]
-    rate_source: str  # "metadata", "time stamps", "scenario" or "given"
+    rate: SampleRate
     n_samples: int
-    site: Site | None = None  # the true static site the source carries
-    truth: LogTruth | None = None  # the true initial attitude (simulated logs)
-    static_s: float | None = None  # the known static part at the start [s] (a simulated moving base)
+    path: Path | None = None  # the file, None for in-memory and simulated sources
+    provenance: Provenance = Provenance()
+    format: str = ""  # "parquet", "csv", "memory" or "scenario"
     name: str | None = None  # the run name, when not the file's
     scenario: Any = field(default=None, compare=False)  # the scenario simulated on the fly (its route), else None
 
@@ -253,8 +270,8 @@ def check_rate(rate: Any, label: str, what: str = "sample rate") -> float:
     return r
 
 
-def rate_from_times(t: np.ndarray, label: str) -> float:
-    """The sample rate [Hz] of time stamps `t` [s]: 1 / their median step, rounded to 9 significant digits."""
+def rate_from_times(t: np.ndarray, label: str) -> SampleRate:
+    """The sample rate of time stamps `t` [s]: 1 / their median step [Hz], rounded to 9 significant digits."""
     dt = np.diff(t)
     if len(dt) < 1 or not np.all(np.isfinite(dt)):
         raise LogError(f"{label}: cannot tell the sample rate (fewer than two finite time stamps)")
@@ -263,7 +280,7 @@ def rate_from_times(t: np.ndarray, label: str) -> float:
         raise LogError(f"{label}: cannot tell the sample rate (time stamps do not increase)")
     # 9 significant digits: differences of decimal time stamps make 9.99999999999998 Hz of a 10 Hz log, and the
     # navigation would then differ (by 1e-13 deg) from the same log whose metadata says 10.
-    return check_rate(float(f"{1.0 / med:.9g}"), label, "the sample rate of the time stamps")
+    return SampleRate(check_rate(float(f"{1.0 / med:.9g}"), label, "the sample rate of the time stamps"), "time stamps")
 
 
 def merge_site(given: Site | Mapping[str, float] | None, from_source: Site | None, label: str) -> Site | None:
