@@ -12,6 +12,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCUMENTS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+STUDIES = sorted((ROOT / "docs" / "studies").glob("2*.md"))
+"""Dated measurement pages: docs/studies/YYYY-MM-DD-topic.md, indexed by docs/studies/README.md."""
 FENCE = re.compile(r"^```(\S*)\s*$")
 SKIP = "<!-- skip: next -->"
 LANGUAGES = {*conftest.EXECUTED_LANGUAGES, "text", "toml", "json", "c", "rust"}
@@ -35,7 +37,7 @@ def _blocks(path: Path):
     return out
 
 
-@pytest.mark.parametrize("path", DOCUMENTS, ids=lambda p: p.name)
+@pytest.mark.parametrize("path", [*DOCUMENTS, *STUDIES], ids=lambda p: p.name)
 def test_every_block_says_its_language(path):
     for line, language, _, _ in _blocks(path):
         assert language in LANGUAGES, f"{path.name}:{line}: block language {language!r}, expected one of {LANGUAGES}"
@@ -74,11 +76,42 @@ def test_the_readme_opens_with_the_two_setup_commands():
 LINK = re.compile(r"\]\(([^)#\s]+)(?:#[^)]*)?\)")
 
 
-@pytest.mark.parametrize("path", DOCUMENTS, ids=lambda p: p.name)
+@pytest.mark.parametrize("path", [*DOCUMENTS, *STUDIES, ROOT / "docs" / "studies" / "README.md"], ids=lambda p: p.name)
 def test_every_relative_link_names_a_file_of_the_repository(path):
     for target in LINK.findall(path.read_text(encoding="utf-8")):
         if "://" not in target:
             assert (path.parent / target).exists(), f"{path.name}: link to {target}, not in the repository"
+
+
+STUDY_TITLE = re.compile(r"^# (\d{4}-\d{2}-\d{2}): \S")
+COMMIT = re.compile(r"\b[0-9a-f]{7,40}\b")
+
+
+@pytest.mark.parametrize("path", STUDIES, ids=lambda p: p.name)
+def test_a_study_opens_with_its_date_question_commands_and_commit(path):
+    """A number keeps the command and the commit that produced it (issue 19): the page's title carries the date of
+    its file name, and before its first section it names the question, the command(s) and the commit."""
+    text = path.read_text(encoding="utf-8")
+    title = STUDY_TITLE.match(text)
+    assert title and path.name.startswith(title.group(1) + "-"), f"{path.name}: title '# {path.name[:10]}: ...'"
+    opening = text.split("\n## ", 1)[0]
+    assert "**Question.**" in opening, f"{path.name}: no **Question.** before the first section"
+    assert "**Command" in opening and "```text" in opening, f"{path.name}: no **Commands** block before the numbers"
+    assert "**Commit" in opening and COMMIT.search(opening.split("**Commit", 1)[1]), f"{path.name}: no commit named"
+
+
+@pytest.mark.parametrize("path", STUDIES, ids=lambda p: p.name)
+def test_a_study_runs_nothing_in_the_suite(path):
+    """conftest.py's Sybil runs the blocks of README.md and docs/*.md only: a bash or python block in a study would
+    be silently skipped, so a study's commands are ```text (most take minutes to hours)."""
+    for line, language, _, _ in _blocks(path):
+        assert language not in conftest.EXECUTED_LANGUAGES, f"{path.name}:{line}: a ```{language} block is never run"
+
+
+def test_the_studies_index_lists_every_study():
+    index = (ROOT / "docs" / "studies" / "README.md").read_text(encoding="utf-8")
+    listed = set(re.findall(r"\]\((\d{4}-\d{2}-\d{2}-[a-z0-9-]+\.md)\)", index))
+    assert listed == {p.name for p in STUDIES}
 
 
 def test_the_architecture_names_only_what_the_repository_holds():
