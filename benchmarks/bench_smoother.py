@@ -1,4 +1,4 @@
-"""The 16 h smoother and the labels' 1-sigma at full size (the numbers docs/identification.md quotes).
+"""The 16 h smoother and the labels' 1-sigma at full size (docs/studies/2026-11-23-smoother.md).
 
     python benchmarks/bench_smoother.py [--seeds 30] [--rate-hz 10] [--label-seeds 30]
 

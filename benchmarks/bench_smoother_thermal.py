@@ -1,5 +1,5 @@
-"""The smoother's thermal model on a warming fleet: z-scores of its end-of-span drift (the numbers
-docs/identification.md quotes).
+"""The smoother's thermal model on a warming fleet: z-scores of its end-of-span drift
+(docs/studies/2026-11-23-smoother.md).
 
     python benchmarks/bench_smoother_thermal.py [--seeds 30] [--rate-hz 10] [--workers 1]
 

@@ -1,8 +1,9 @@
 """Identification on a simulated multi-latitude thermal fleet: every method against what a perfect one could know.
 
 Run: ``python examples/identification_study.py [--train 24] [--held-out 12] [--workers 1] [--seeds 11,12,13,14]``
-(5-8 minutes per fleet at the default size on one core of a loaded machine; docs/identification.md quotes its
-output). With several seeds (``--seeds 11,12,13,14`` or ``--seeds 4`` for 11-14) it runs one fleet per seed,
+(5-8 minutes per fleet at the default size on one core of a loaded machine; its output is quoted in
+docs/studies/2026-11-23-identification-study.md). With several seeds (``--seeds 11,12,13,14`` or ``--seeds 4``
+for 11-14) it runs one fleet per seed,
 ``--workers`` fleets side by side, prints each fleet's report and then the targets of issue 10 per seed and as
 mean +- sd.
 
@@ -382,7 +383,7 @@ def run_study(
 
 
 def print_report(r: dict) -> None:
-    """The numbers docs/identification.md quotes."""
+    """The numbers docs/studies/2026-11-23-identification-study.md quotes."""
     print(
         f"{r['n_train']} training runs, {r['n_test']} held out ({int(np.sum(r['out_of_range']))} outside the training "
         f"temperature range); labels (noisy truth) vs effective drift: rms {r['label_error_rms']:.2e} deg/h"
@@ -605,7 +606,7 @@ def coverage_study(
 
 
 def print_coverage(c: dict, n_test: int) -> None:
-    """The coverage numbers docs/identification.md quotes (mean and standard deviation over the seeds)."""
+    """The coverage numbers docs/studies/2026-11-23-identification-study.md quotes (mean and sd over the seeds)."""
     print(
         f"90 % intervals over {len(c['seeds'])} fleets of {n_test} held-out runs (default's physics base: "
         f"{', '.join(sorted(set(c['default_physics_columns'])))}):"

@@ -1,4 +1,4 @@
-"""A simulated fleet from power-on to identified drift: the numbers quoted in docs/procedure.md.
+"""A simulated fleet from power-on to identified drift: docs/studies/2026-11-22-procedure.md quotes it.
 
 Run: ``python examples/simulated_fleet.py [--runs 13] [--rate-hz 10] [--workdir DIR]``. The logs go to DIR when
 given (and stay there), otherwise to a temporary folder removed at the end. It simulates 16 h

@@ -1,6 +1,6 @@
 """examples/identification_study.py at reduced size (8 training, 4 held-out runs at 5 Hz, short swarms): the
-issue-10 claims that hold at any size. The full-size numbers (four fleets, 18 coverage fleets) are in
-docs/identification.md."""
+issue-10 claims that hold at any size. The full-size numbers (four fleets, 8 coverage fleets) are in
+docs/studies/2026-11-23-identification-study.md."""
 
 from __future__ import annotations
 
@@ -96,7 +96,8 @@ def test_seeds_summary_and_seed_option(study, capsys):
 
 
 def test_coverage_over_seeds_runs_at_reduced_size(study, capsys):
-    """The --coverage-seeds mode (docs/identification.md quotes it at 18 fleets): one fleet of 10 + 4 runs, the
+    """The --coverage-seeds mode (8 fleets in docs/studies/2026-11-23-identification-study.md): one fleet of
+    10 + 4 runs, the
     runs measured with the smoother so the default fits on its fleet base."""
     module, _ = study
     c = module.coverage_study([1], n_train=10, n_test=4, n_hot=1, rate_hz=2.0)

@@ -220,7 +220,8 @@ def test_gnss_track_file_is_interpolated_and_must_cover_the_drive(tmp_path):
 
 
 def test_vehicle_test_example_compensation_and_modulation():
-    """examples/scenarios/vehicle_test.toml at 10 Hz (the shipped file is 100 Hz; docs/procedure.md has its numbers)
+    """examples/scenarios/vehicle_test.toml at 10 Hz (the shipped file is 100 Hz; its numbers:
+    docs/studies/2026-11-23-vehicle-test.md)
     with a 4.5 h stand instead of 16 h: the evaluation against the route (alignment, then 72 h of driving without
     and with the 0.003 deg/h drift compensated) goes from above 1 nmi to below it; and the horizontal sensor errors
     alone stay modulated while the vehicle turns (rotation on) but not with the table stopped."""

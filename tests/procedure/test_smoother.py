@@ -2,7 +2,8 @@
 
 Noise-free logs: the smoother's drift equals the simulated constant within 1e-5 deg/h at 20, 40 and 60 deg with
 two rotation schemes. Consistency: z-scores (estimate - simulated drift) / reported sigma over 12 seeds (the
-30-seed runs are in benchmarks/bench_smoother.py and docs/identification.md: here looser bounds), with white
+30-seed runs are in benchmarks/bench_smoother.py and docs/studies/2026-11-23-smoother.md: here looser bounds),
+with white
 noise only and with Gauss-Markov bias instability and rate random walk. The 1-sigma agrees with an independent
 numpy covariance analysis of the same error model (scipy's matrix exponential, no data). Labels: the spread of
 `truth` over noisy seeds around the noise-free twin's truth matches the reported sigma.

@@ -4,7 +4,8 @@ Noise-free: the end-of-span drift equals the simulated one (constant + k1 (T_end
 equals k1 within 1e-6 deg/h/degC. The constant-drift estimate beside it is the thermal state conditioned on
 k_z = 0, i.e. the smoother without that state. The model follows the log: thermal when the temperature column
 varies, constant when it is flat or missing. Consistency: z-scores of the end-of-span drift over a few short, slow
-seeds (the 30-seed runs at full size are in benchmarks/bench_smoother_thermal.py and docs/identification.md).
+seeds (the 30-seed runs at full size are in benchmarks/bench_smoother_thermal.py and
+docs/studies/2026-11-23-smoother.md).
 """
 
 import math

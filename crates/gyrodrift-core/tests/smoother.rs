@@ -100,7 +100,7 @@ fn noise_free_logs_give_the_simulated_drift() {
 
 #[test]
 fn white_noise_z_scores_have_unit_rms() {
-    // 12 seeds (the 30-seed runs are in benchmarks/bench_smoother.py and docs/identification.md).
+    // 12 seeds (the 30-seed runs are in benchmarks/bench_smoother.py and docs/studies/2026-11-23-smoother.md).
     let mut z2 = 0.0;
     let n = 12;
     for seed in 0..n {
