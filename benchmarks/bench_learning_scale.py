@@ -41,7 +41,7 @@ from threadpoolctl import threadpool_limits
 from gyrodrift.learn.encodings import encode
 from gyrodrift.learn.kernels import squared_distances
 from gyrodrift.learn.lssvm_batch import RBFEigenSystem, rbf_batch_errors
-from gyrodrift.learn.tuning import tune_lssvr
+from gyrodrift.learn.tuning import TuningOptions, tune_lssvr
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_predict import synthetic_runs
@@ -102,7 +102,7 @@ def tuning_runs(sizes: list[int], exact_max: int) -> None:
         )
         if n <= exact_max:
             t0, c0 = time.perf_counter(), time.process_time()
-            old = tune_lssvr(X, y, rng=0, sigma_step=None)
+            old = tune_lssvr(X, y, TuningOptions(sigma_step=None), rng=0)
             whole_old, cpu_old = time.perf_counter() - t0, time.process_time() - c0
             print(
                 f"   {'':9s} unsnapped:            {whole_old:7.2f} s wall, {cpu_old:7.2f} s CPU, nfev {old.nfev}, "
@@ -112,7 +112,7 @@ def tuning_runs(sizes: list[int], exact_max: int) -> None:
             )
         if n <= 200:
             t0 = time.perf_counter()
-            short_one = tune_lssvr(X, y, rng=0, max_iter=10, sigma_step=None)
+            short_one = tune_lssvr(X, y, TuningOptions(max_iter=10, sigma_step=None), rng=0)
             one = time.perf_counter() - t0
             with threadpool_limits(limits=None):  # tune_lssvr's own limit applies inside: measure the old code path
                 t0 = time.perf_counter()

@@ -136,12 +136,12 @@ def main() -> None:
     from sklearn.preprocessing import StandardScaler
 
     from gyrodrift.learn.encodings import encode
-    from gyrodrift.learn.tuning import tune_lssvr
+    from gyrodrift.learn.tuning import TuningOptions, tune_lssvr
     from gyrodrift.runs.datasets import load_paper
 
     data = load_paper()
     X = StandardScaler().fit_transform(encode(data.train, "temp_range"))
-    _, wall, cpu = timed(lambda: tune_lssvr(X, data.train.drift_deg_h, objective="train_mae", rng=0))
+    _, wall, cpu = timed(lambda: tune_lssvr(X, data.train.drift_deg_h, TuningOptions(objective="train_mae"), rng=0))
     print("3. reference")
     print(f"   one CPSO tuning run (30 x 100, chaos 10)   : {wall:6.2f} / {cpu:6.2f}")
 

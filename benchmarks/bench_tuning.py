@@ -19,7 +19,7 @@ import numpy as np
 from sklearn.preprocessing import StandardScaler
 
 from gyrodrift.learn.encodings import encode
-from gyrodrift.learn.tuning import make_objective, tune_lssvr
+from gyrodrift.learn.tuning import TuningOptions, make_objective, tune_lssvr
 from gyrodrift.runs.datasets import load_paper
 
 
@@ -75,7 +75,7 @@ def main():
     print(f"naive bordered np.linalg.solve LOO: {slow:12.0f} evaluations/s")
     print(f"ratio                             : {fast / slow:12.1f} x   (max relative difference {dev:.1e})")
     t0 = time.perf_counter()
-    res = tune_lssvr(X, y, objective="loo_mae", method="cpso", rng=0)
+    res = tune_lssvr(X, y, TuningOptions(objective="loo_mae", method="cpso"), rng=0)
     dt = time.perf_counter() - t0
     print(
         f"CPSO tuning run, 30 x 100, chaos 10: {dt:.2f} s, nfev = {res.nfev}, "

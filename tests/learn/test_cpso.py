@@ -10,15 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import Bounds, OptimizeResult
 
-from gyrodrift.learn.cpso import (
-    CPSOSolver,
-    Swarm,
-    _reseed_chaos,
-    chaos_region,
-    logistic_chaos_points,
-    minimize_cpso,
-    pso_move,
-)
+from gyrodrift.learn.cpso import CPSOSettings, CPSOSolver, minimize_cpso
+from gyrodrift.learn.swarm import Swarm, chaos_region, logistic_chaos_points, pso_move, reseed_chaos
 from gyrodrift.testing import ackley, griewank, rastrigin, rosenbrock, sphere
 
 # (name, function, dimension, bounds, argmin)
@@ -335,16 +328,16 @@ def test_all_nan_objective_reports_failure():
 def test_guarded_logistic_map_never_sits_on_a_trap(z, mu, steps, seed):
     gen = np.random.default_rng(seed)
     traps = np.array([0.0, 0.25, 0.5, 0.75, 1.0, 1.0 - 1.0 / mu, 1.0 / mu])
-    z = _reseed_chaos(np.array(z), gen, mu)
+    z = reseed_chaos(np.array(z), gen, mu)
     for _ in range(steps):
-        z = _reseed_chaos(mu * z * (1.0 - z), gen, mu)
+        z = reseed_chaos(mu * z * (1.0 - z), gen, mu)
         assert np.all((z > 0.0) & (z < 1.0))
         assert np.min(np.abs(z[:, None] - traps)) > 1e-10
 
 
 def test_guard_keeps_good_values_and_replaces_traps():
     gen = np.random.default_rng(0)
-    z = _reseed_chaos(np.array([0.0, 0.25, 0.5, 0.75, 1.0, 0.3, 1e-12]), gen, 4.0)
+    z = reseed_chaos(np.array([0.0, 0.25, 0.5, 0.75, 1.0, 0.3, 1e-12]), gen, 4.0)
     assert z[5] == 0.3
     assert np.all(np.abs(z[[0, 1, 2, 3, 4, 6]] - np.array([0.0, 0.25, 0.5, 0.75, 1.0, 1e-12])) > 1e-10)
 
@@ -495,18 +488,18 @@ def test_swarm_bests_move_on_strict_improvement_only_and_chaos_replaces_the_wors
 def test_solver_iterates_one_generation_at_a_time_like_minimize_cpso():
     bounds = [(-5.12, 5.12)] * 2
     whole = minimize_cpso(rastrigin, bounds, rng=3, max_iter=12)
-    with CPSOSolver(rastrigin, bounds, rng=3, max_iter=12) as solver:
+    with CPSOSolver(rastrigin, bounds, CPSOSettings(max_iter=12), rng=3) as solver:
         steps = [(x.copy(), f) for x, f in solver]
         assert len(steps) == 12 == solver.nit
         assert [f for _, f in steps] == list(whole.history)
         assert_identical(solver.result(), whole)
     # Phases called by hand give the same swarm as the iteration.
-    manual = CPSOSolver(rastrigin, bounds, rng=3, max_iter=12)
+    manual = CPSOSolver(rastrigin, bounds, CPSOSettings(max_iter=12), rng=3)
     manual.init_population()
     manual.pso_move(1)
     manual.update_bests()
     manual.chaos_feedback(*manual.chaos_search(1))
-    first = CPSOSolver(rastrigin, bounds, rng=3, max_iter=12)
+    first = CPSOSolver(rastrigin, bounds, CPSOSettings(max_iter=12), rng=3)
     next(first)
     assert manual.swarm.pos.tobytes() == first.swarm.pos.tobytes()
     assert manual.swarm.gbest_fit == first.swarm.gbest_fit == whole.history[0]

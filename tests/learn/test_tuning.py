@@ -5,7 +5,7 @@ import pytest
 
 from gyrodrift.errors import OptionError
 from gyrodrift.learn.lssvr import LSSVR
-from gyrodrift.learn.tuning import make_objective, tune_lssvr
+from gyrodrift.learn.tuning import TuningOptions, make_objective, tune_lssvr
 
 
 @pytest.fixture
@@ -48,9 +48,9 @@ def test_unknown_objective_and_method(data):
     with pytest.raises(ValueError, match="unknown objective 'mse'"):
         make_objective(X, y, "mse")
     with pytest.raises(ValueError, match="unknown method 'annealing'"):
-        tune_lssvr(X, y, method="annealing")
+        tune_lssvr(X, y, TuningOptions(method="annealing"))
     with pytest.raises(ValueError, match="bounds must be"):
-        tune_lssvr(X, y, bounds=((0.0, 1.0), (1.0, 2.0)))
+        tune_lssvr(X, y, TuningOptions(bounds=((0.0, 1.0), (1.0, 2.0))))
     with pytest.raises(ValueError, match="n_folds must be within"):
         make_objective(X, y, "kfold_mae", n_folds=1)
 
@@ -59,7 +59,9 @@ def test_unknown_objective_and_method(data):
 def test_tuners_return_their_best_point_inside_bounds(data, method):
     X, y = data
     bounds = ((1e-1, 1e4), (1e-2, 1e1))
-    res = tune_lssvr(X, y, method=method, bounds=bounds, max_iter=15, n_particles=10, grid_size=12, rng=1)
+    res = tune_lssvr(
+        X, y, TuningOptions(method=method, bounds=bounds, max_iter=15, n_particles=10, grid_size=12), rng=1
+    )
     assert bounds[0][0] <= res.gamma <= bounds[0][1] and bounds[1][0] <= res.sigma <= bounds[1][1]
     # The reported fitness is the objective at the reported point.
     assert res.fitness == pytest.approx(_brute(X, y, res.gamma, res.sigma, "loo_mae"), rel=1e-7)
@@ -72,8 +74,8 @@ def test_tuners_return_their_best_point_inside_bounds(data, method):
 
 def test_cpso_tuning_is_reproducible(data):
     X, y = data
-    a = tune_lssvr(X, y, max_iter=10, n_particles=8, rng=7)
-    b = tune_lssvr(X, y, max_iter=10, n_particles=8, rng=7)
+    a = tune_lssvr(X, y, TuningOptions(max_iter=10, n_particles=8), rng=7)
+    b = tune_lssvr(X, y, TuningOptions(max_iter=10, n_particles=8), rng=7)
     assert (a.gamma, a.sigma, a.fitness, a.nfev) == (b.gamma, b.sigma, b.fitness, b.nfev)
 
 
@@ -101,7 +103,7 @@ def test_tuning_inside_fit_is_the_tuner_then_an_lssvr(paper):
 
     model = fit_drift_model(paper.train, method="cpso", max_iter=8, n_particles=6, rng=4)
     Xs = StandardScaler().fit_transform(encode(paper.train, "temp_range"))
-    res = tune_lssvr(Xs, paper.train.drift_deg_h, max_iter=8, n_particles=6, rng=4)
+    res = tune_lssvr(Xs, paper.train.drift_deg_h, TuningOptions(max_iter=8, n_particles=6), rng=4)
     assert (model.tuning.gamma, model.tuning.sigma, model.tuning.history) == (res.gamma, res.sigma, res.history)
     direct = LSSVR(gamma=res.gamma, sigma=res.sigma).fit(Xs, paper.train.drift_deg_h)
     assert model.lssvr.alpha_.tobytes() == direct.alpha_.tobytes()
@@ -284,8 +286,10 @@ def test_snapping_leaves_small_sets_alone_and_reports_the_snapped_sigma(paper):
     Xs = StandardScaler().fit_transform(encode(paper.train, "temp_range"))
     y = paper.train.drift_deg_h
     assert len(y) <= SNAP_MIN_N
-    before = tune_lssvr(Xs, y, rng=3, max_iter=15, sigma_step=None)  # the swarm as before snapping existed
-    now = tune_lssvr(Xs, y, rng=3, max_iter=15)
+    before = tune_lssvr(
+        Xs, y, TuningOptions(max_iter=15, sigma_step=None), rng=3
+    )  # the swarm as before snapping existed
+    now = tune_lssvr(Xs, y, TuningOptions(max_iter=15), rng=3)
     assert (now.gamma, now.sigma, now.fitness, now.history) == (
         before.gamma,
         before.sigma,
@@ -295,10 +299,10 @@ def test_snapping_leaves_small_sets_alone_and_reports_the_snapped_sigma(paper):
     assert "sigma_step_decades" not in now.settings
 
     X, y = _smooth_data(SNAP_MIN_N + 8)
-    res = tune_lssvr(X, y, rng=3, max_iter=15, n_particles=10)
+    res = tune_lssvr(X, y, TuningOptions(max_iter=15, n_particles=10), rng=3)
     step = res.settings["sigma_step_decades"]
     assert res.sigma == snap_sigmas(res.sigma, step, *res.bounds[1])
     exact = make_objective(X, y, "loo_mae")(np.array([[res.gamma, res.sigma]]))[0]
     assert res.fitness == pytest.approx(exact, rel=1e-8)
     with pytest.raises(OptionError, match="sigma_step must be"):
-        tune_lssvr(X, y, sigma_step=0.0)
+        tune_lssvr(X, y, TuningOptions(sigma_step=0.0))

@@ -28,153 +28,204 @@ import numpy as np
 from scipy.optimize import Bounds, OptimizeResult
 
 from gyrodrift.errors import OptionError
+from gyrodrift.learn.swarm import Swarm, chaos_region, logistic_chaos_points, pso_move, reseed_chaos
 
-__all__ = [
-    "CPSOSolver",
-    "Swarm",
-    "chaos_region",
-    "check_seed",
-    "logistic_chaos_points",
-    "minimize_cpso",
-    "pso_move",
-]
-
-# |z - p| below this counts as having landed on a fixed/absorbing point p of the logistic map.
-_CHAOS_GUARD_ATOL = 1e-10
+__all__ = ["CPSOSettings", "CPSOSolver", "check_seed", "minimize_cpso"]
 
 Mapper = Callable[[Callable[[np.ndarray], float], Iterable[np.ndarray]], Iterable[float]]
 
 
-def minimize_cpso(fun: Callable[..., Any], bounds, **options: Any) -> OptimizeResult:
+@dataclass(frozen=True)
+class CPSOSettings:
+    """The swarm's numbers, checked when made (`OptionError` naming the field); the defaults are the paper's where
+    it gives one (Yu et al. 2013: 30 particles, initial inertia 0.75, c1 = c2 = 2, at most 10 chaos iterations, at
+    most 100 PSO iterations). :class:`CPSOSolver` describes the algorithm that uses them.
+
+    Attributes
+    ----------
+    n_particles : int, default 30
+        Swarm size (paper: 30), at least 2.
+    max_iter : int, default 100
+        Maximum number of PSO iterations (paper: 100), at least 1.
+    w : float, default 0.75
+        Inertia weight (paper: initial inertia 0.75). Non-negative.
+    inertia : {"constant", "linear"}
+        ``"constant"``: ``w_k = w``. ``"linear"``: ``w_k`` decreases linearly from ``w`` at the first
+        iteration to ``w_end`` at iteration ``max_iter``.
+    w_end : float, default 0.4
+        Final inertia of the ``"linear"`` schedule. Non-negative.
+    c1, c2 : float, default 2.0
+        Cognitive and social coefficients (paper: 2 and 2). Non-negative.
+    chaos_steps : int, default 10
+        Logistic-map iterations (= chaos evaluations) per PSO iteration (paper: at most 10); 0 gives
+        plain PSO. The chaos map draws from its own stream (split off ``rng`` at the start), so plain and
+        chaos runs with the same seed start from the same swarm and move it with the same ``r1``, ``r2``
+        until the first chaos improvement: a paired comparison.
+    mu : float, default 4.0
+        Logistic-map parameter, in (2, 4] as in eq. 15 (4 is fully chaotic on [0, 1]).
+    chaos_radius, chaos_radius_end : float, default 0.1 and 1e-6
+        Half-width of the chaos search region as a fraction of each dimension's search width, at the
+        first and at the last iteration, geometric in between:
+        ``rho_k = chaos_radius * (chaos_radius_end / chaos_radius) ** ((k - 1) / (max_iter - 1))``.
+        ``0 < chaos_radius_end <= chaos_radius <= 1``. The paper gives no region; 0.1 lets the early
+        chaos steps jump between neighbouring basins, and the end value 1e-6 lets the last ones refine
+        ``gbest`` well below the spread the swarm itself reaches in 100 iterations with these weights.
+        ``chaos_radius = chaos_radius_end`` gives a fixed region.
+    vmax_frac : float or None, default 0.2
+        Velocity clamp as a fraction of each dimension's search width; ``None`` disables it (with
+        ``w = 0.75``, ``c1 + c2 = 4`` the unclamped swarm is outside the convergent region and explodes
+        onto the bounds).
+    tol : float, default 0.0
+        Used with ``patience``: stop when the best fitness improved by no more than ``tol`` (absolute)
+        over the last ``patience`` iterations.
+    patience : int or None, default None
+        Number of iterations for the ``tol`` rule; ``None`` always runs ``max_iter`` iterations.
+    """
+
+    n_particles: int = 30
+    max_iter: int = 100
+    w: float = 0.75
+    inertia: str = "constant"
+    w_end: float = 0.4
+    c1: float = 2.0
+    c2: float = 2.0
+    chaos_steps: int = 10
+    mu: float = 4.0
+    chaos_radius: float = 0.1
+    chaos_radius_end: float = 1e-6
+    vmax_frac: float | None = 0.2
+    tol: float = 0.0
+    patience: int | None = None
+
+    def __post_init__(self) -> None:
+        def keep(name: str, value: Any) -> None:
+            object.__setattr__(self, name, value)
+
+        keep("n_particles", _validate_int("n_particles", self.n_particles, minimum=2))
+        keep("max_iter", _validate_int("max_iter", self.max_iter, minimum=1))
+        keep("chaos_steps", _validate_int("chaos_steps", self.chaos_steps, minimum=0))
+        for name in ("w", "w_end", "c1", "c2", "tol"):
+            _validate_nonnegative(name, getattr(self, name))
+        keep("mu", float(self.mu))
+        if not (2.0 < self.mu <= 4.0):
+            raise OptionError(f"mu must be in (2, 4], got {self.mu!r}")
+        if self.inertia not in ("constant", "linear"):
+            raise OptionError(f"inertia must be 'constant' or 'linear', got {self.inertia!r}")
+        if not (0.0 < self.chaos_radius <= 1.0):
+            raise OptionError(f"chaos_radius must be in (0, 1], got {self.chaos_radius!r}")
+        if not (0.0 < self.chaos_radius_end <= self.chaos_radius):
+            raise OptionError(
+                f"chaos_radius_end must be in (0, chaos_radius={self.chaos_radius!r}], got {self.chaos_radius_end!r}"
+            )
+        vmax_frac = self.vmax_frac
+        if vmax_frac is not None and not (math.isfinite(vmax_frac) and vmax_frac > 0):
+            raise OptionError(f"vmax_frac must be a positive finite number or None, got {vmax_frac!r}")
+        if self.patience is not None:
+            keep("patience", _validate_int("patience", self.patience, minimum=1))
+
+
+def minimize_cpso(
+    fun: Callable[..., Any],
+    bounds,
+    *,
+    args: tuple = (),
+    n_particles: int = CPSOSettings.n_particles,
+    max_iter: int = CPSOSettings.max_iter,
+    w: float = CPSOSettings.w,
+    inertia: str = CPSOSettings.inertia,
+    w_end: float = CPSOSettings.w_end,
+    c1: float = CPSOSettings.c1,
+    c2: float = CPSOSettings.c2,
+    chaos_steps: int = CPSOSettings.chaos_steps,
+    mu: float = CPSOSettings.mu,
+    chaos_radius: float = CPSOSettings.chaos_radius,
+    chaos_radius_end: float = CPSOSettings.chaos_radius_end,
+    vmax_frac: float | None = CPSOSettings.vmax_frac,
+    tol: float = CPSOSettings.tol,
+    patience: int | None = CPSOSettings.patience,
+    log_scale: bool | Sequence[bool] | None = None,
+    vectorized: bool = False,
+    workers: int | Mapper = 1,
+    threads: int = 1,
+    rng: int | np.random.Generator | None = None,
+    callback: Callable[[OptimizeResult], bool | None] | None = None,
+) -> OptimizeResult:
     """Minimise ``fun`` over a box with chaos particle swarm optimisation (Yu et al. 2013, eq. 13-15).
 
-    ``minimize_cpso(fun, bounds, **options)`` is ``CPSOSolver(fun, bounds, **options).solve()``; see
-    :class:`CPSOSolver` for the algorithm, every keyword option and the result.
+    ``CPSOSolver(fun, bounds, CPSOSettings(n_particles, ..., patience), args=..., ...).solve()``: the swarm's
+    numbers are :class:`CPSOSettings`'s fields of the same names (defaults, units and limits there), the algorithm
+    and the result are :class:`CPSOSolver`'s.
+
+    Parameters
+    ----------
+    bounds : sequence of (low, high) or scipy.optimize.Bounds
+        Finite box, ``low < high`` in each dimension, in natural units (also for log-scaled dimensions).
+    args : tuple
+        Extra positional arguments for ``fun``.
+    log_scale : bool or sequence of bool, optional
+        Search these dimensions in ``log10`` space (bounds must then be positive). Positions, velocities,
+        the velocity clamp and the chaos region all live in the search space; ``fun`` and the result are
+        in natural units (clipped to the bounds after ``10**s`` so round-off never leaves the box).
+    vectorized : bool, default False
+        Call ``fun`` once per batch with a 2-D array (see ``fun``). The returned array must have shape
+        ``(S,)``; anything else raises ``ValueError``. Gives the same result as ``vectorized=False`` for
+        the same seed when ``fun`` computes each row as the scalar version would.
+    workers : 1 or map-like callable, default 1
+        ``1``: evaluate in the calling thread. A map-like callable (e.g. ``multiprocessing.Pool(4).map`` or
+        ``ProcessPoolExecutor(4).map`` for a picklable ``fun``) is used as ``workers(fun, points)`` and must
+        return results in order. Unlike :func:`scipy.optimize.differential_evolution`, an integer
+        ``workers > 1`` is refused rather than read as a number of *processes*: threads are asked for
+        with ``threads``, processes by passing a pool's ``map``.
+    threads : int, default 1
+        Evaluate each batch on a thread pool of this many threads (useful when ``fun`` releases the GIL,
+        as NumPy/LAPACK-heavy objectives do); ``-1``: one thread per CPU; ``1``: no pool. Not together
+        with ``workers`` or ``vectorized=True``. Evaluation order never changes the result: all random
+        numbers are drawn in the calling thread and results are gathered in point order.
+    rng : int, numpy.random.Generator or None
+        Seed or generator; the same seed gives a bitwise identical result. No global state is used.
+    callback : callable, optional
+        ``callback(intermediate_result)`` once per iteration with an ``OptimizeResult`` holding ``x``,
+        ``fun``, ``nit``, ``nfev``. Returning ``True`` or raising ``StopIteration`` stops the run with
+        ``success=True`` and a message saying so.
+    n_particles, max_iter, w, inertia, w_end, c1, c2, chaos_steps, mu, chaos_radius, chaos_radius_end, vmax_frac, \
+tol, patience
+        The swarm's numbers (:class:`CPSOSettings`).
+
+    Returns
+    -------
+    OptimizeResult
+        ``x``, ``fun``, ``nit``, ``nfev``, ``success``, ``message``, ``history``, ``x_history``, ``population``,
+        ``population_fun``, ``n_chaos_improvements`` (:class:`CPSOSolver`).
     """
-    with CPSOSolver(fun, bounds, **options) as solver:
+    settings = CPSOSettings(
+        n_particles=n_particles,
+        max_iter=max_iter,
+        w=w,
+        inertia=inertia,
+        w_end=w_end,
+        c1=c1,
+        c2=c2,
+        chaos_steps=chaos_steps,
+        mu=mu,
+        chaos_radius=chaos_radius,
+        chaos_radius_end=chaos_radius_end,
+        vmax_frac=vmax_frac,
+        tol=tol,
+        patience=patience,
+    )
+    with CPSOSolver(
+        fun,
+        bounds,
+        settings,
+        args=args,
+        log_scale=log_scale,
+        vectorized=vectorized,
+        workers=workers,
+        threads=threads,
+        rng=rng,
+        callback=callback,
+    ) as solver:
         return solver.solve()
-
-
-# --------------------------------------------------------------------------------------------------
-# The steps, as pure functions (each tested on its own)
-# --------------------------------------------------------------------------------------------------
-
-
-def pso_move(
-    pos: np.ndarray,
-    vel: np.ndarray,
-    pbest: np.ndarray,
-    gbest: np.ndarray,
-    r1: np.ndarray,
-    r2: np.ndarray,
-    *,
-    w: float,
-    c1: float,
-    c2: float,
-    vmax: np.ndarray | None,
-    lo: np.ndarray,
-    hi: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray]:
-    """One PSO move (eq. 13-14) in the search space, with the velocity clamp and absorbing walls.
-
-    ``v <- w v + c1 r1 (pbest - x) + c2 r2 (gbest - x)``, each component clamped to ``|v_i| <= vmax_i``
-    (unless ``vmax`` is None), ``x <- x + v``; a coordinate that leaves ``[lo, hi]`` is clipped onto the
-    bound and its velocity set to zero. Returns new ``(pos, vel)`` arrays; the inputs are not modified.
-    """
-    vel = w * vel + c1 * r1 * (pbest - pos) + c2 * r2 * (gbest - pos)
-    if vmax is not None:
-        vel = np.clip(vel, -vmax, vmax)
-    pos = pos + vel
-    outside = (pos < lo) | (pos > hi)
-    pos = np.clip(pos, lo, hi)
-    vel[outside] = 0.0
-    return pos, vel
-
-
-def chaos_region(
-    gbest: np.ndarray, rho: float, width: np.ndarray, lo: np.ndarray, hi: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """The chaos search box ``[max(lo, g - rho w), min(hi, g + rho w)]`` around ``gbest`` (clipped, never shifted)."""
-    return np.maximum(lo, gbest - rho * width), np.minimum(hi, gbest + rho * width)
-
-
-def logistic_chaos_points(
-    z: np.ndarray, a: np.ndarray, b: np.ndarray, steps: int, mu: float, gen: np.random.Generator
-) -> tuple[np.ndarray, np.ndarray]:
-    """``steps`` iterates of the guarded logistic map (eq. 15) mapped onto ``[a, b]``: ``(points, z)``.
-
-    ``z <- mu z (1 - z)``, reseeded from ``gen`` when it lands on a trap (see :class:`CPSOSolver`); each
-    iterate gives the point ``a + z (b - a)``. Returns the ``(steps, n_dim)`` points and the last ``z``
-    (carried over to the next iteration).
-    """
-    points = np.empty((steps, z.size))
-    for j in range(steps):
-        z = _reseed_chaos(mu * z * (1.0 - z), gen, mu)  # eq. (15)
-        points[j] = a + z * (b - a)
-    return points, z
-
-
-@dataclass
-class Swarm:
-    """The state of a particle swarm: positions in the search space (``pos``) and in natural units
-    (``pos_nat``), velocities, fitness, personal bests and the global best."""
-
-    pos: np.ndarray
-    pos_nat: np.ndarray
-    vel: np.ndarray
-    fit: np.ndarray
-    pbest: np.ndarray
-    pbest_nat: np.ndarray
-    pbest_fit: np.ndarray
-    gbest: np.ndarray
-    gbest_nat: np.ndarray
-    gbest_fit: float
-
-    @classmethod
-    def start(cls, pos: np.ndarray, pos_nat: np.ndarray, fit: np.ndarray) -> Swarm:
-        """A swarm at rest (zero velocity) whose personal bests are its positions."""
-        g = int(np.argmin(fit))
-        return cls(
-            pos=pos,
-            pos_nat=pos_nat,
-            vel=np.zeros_like(pos),
-            fit=fit,
-            pbest=pos.copy(),
-            pbest_nat=pos_nat.copy(),
-            pbest_fit=fit.copy(),
-            gbest=pos[g].copy(),
-            gbest_nat=pos_nat[g].copy(),
-            gbest_fit=float(fit[g]),
-        )
-
-    def update_bests(self) -> None:
-        """Personal and global bests from the current fitness, on strict improvement only (ties keep the old)."""
-        better = self.fit < self.pbest_fit
-        self.pbest[better], self.pbest_nat[better], self.pbest_fit[better] = (
-            self.pos[better],
-            self.pos_nat[better],
-            self.fit[better],
-        )
-        g = int(np.argmin(self.pbest_fit))
-        if self.pbest_fit[g] < self.gbest_fit:
-            self.gbest, self.gbest_nat, self.gbest_fit = (
-                self.pbest[g].copy(),
-                self.pbest_nat[g].copy(),
-                float(self.pbest_fit[g]),
-            )
-
-    def accept_chaos(self, cand: np.ndarray, cand_nat: np.ndarray, cand_fit: np.ndarray) -> bool:
-        """Feedback of the chaos search: the best candidate, if strictly better than ``gbest``, becomes
-        ``gbest`` and replaces the worst particle (highest current fitness, lowest index on ties: position,
-        fitness and personal best; its velocity is kept). Returns whether it did."""
-        j = int(np.argmin(cand_fit))
-        if not cand_fit[j] < self.gbest_fit:
-            return False
-        worst = int(np.argmax(self.fit))
-        self.pos[worst], self.pos_nat[worst], self.fit[worst] = cand[j], cand_nat[j], cand_fit[j]
-        self.pbest[worst], self.pbest_nat[worst], self.pbest_fit[worst] = cand[j], cand_nat[j], cand_fit[j]
-        self.gbest, self.gbest_nat, self.gbest_fit = cand[j].copy(), cand_nat[j].copy(), float(cand_fit[j])
-        return True
 
 
 # --------------------------------------------------------------------------------------------------
@@ -236,78 +287,11 @@ class CPSOSolver:
 
     Parameters
     ----------
-    fun : callable
-        ``fun(x, *args) -> float`` with ``x`` of shape ``(n_dim,)`` in natural units. With
-        ``vectorized=True``: ``fun(X, *args) -> ndarray`` with ``X`` of shape ``(S, n_dim)`` (one point
-        per **row**; note that :func:`scipy.optimize.differential_evolution` uses the transpose) and a
-        1-D result of shape ``(S,)``; ``S`` is ``n_particles`` for the swarm and ``chaos_steps`` for the
-        chaos search. NaN values are treated as ``+inf``.
-    bounds : sequence of (low, high) or scipy.optimize.Bounds
-        Finite box, ``low < high`` in each dimension, in natural units (also for log-scaled dimensions).
-    args : tuple
-        Extra positional arguments for ``fun``.
-    n_particles : int, default 30
-        Swarm size (paper: 30), at least 2.
-    max_iter : int, default 100
-        Maximum number of PSO iterations (paper: 100), at least 1.
-    w : float, default 0.75
-        Inertia weight (paper: initial inertia 0.75). Non-negative.
-    inertia : {"constant", "linear"}
-        ``"constant"``: ``w_k = w``. ``"linear"``: ``w_k`` decreases linearly from ``w`` at the first
-        iteration to ``w_end`` at iteration ``max_iter``.
-    w_end : float, default 0.4
-        Final inertia of the ``"linear"`` schedule. Non-negative.
-    c1, c2 : float, default 2.0
-        Cognitive and social coefficients (paper: 2 and 2). Non-negative.
-    chaos_steps : int, default 10
-        Logistic-map iterations (= chaos evaluations) per PSO iteration (paper: at most 10); 0 gives
-        plain PSO. The chaos map draws from its own stream (split off ``rng`` at the start), so plain and
-        chaos runs with the same seed start from the same swarm and move it with the same ``r1``, ``r2``
-        until the first chaos improvement: a paired comparison.
-    mu : float, default 4.0
-        Logistic-map parameter, in (2, 4] as in eq. 15 (4 is fully chaotic on [0, 1]).
-    chaos_radius, chaos_radius_end : float, default 0.1 and 1e-6
-        Half-width of the chaos search region as a fraction of each dimension's search width, at the
-        first and at the last iteration, geometric in between:
-        ``rho_k = chaos_radius * (chaos_radius_end / chaos_radius) ** ((k - 1) / (max_iter - 1))``.
-        ``0 < chaos_radius_end <= chaos_radius <= 1``. The paper gives no region; 0.1 lets the early
-        chaos steps jump between neighbouring basins, and the end value 1e-6 lets the last ones refine
-        ``gbest`` well below the spread the swarm itself reaches in 100 iterations with these weights.
-        ``chaos_radius = chaos_radius_end`` gives a fixed region.
-    vmax_frac : float or None, default 0.2
-        Velocity clamp as a fraction of each dimension's search width; ``None`` disables it (with
-        ``w = 0.75``, ``c1 + c2 = 4`` the unclamped swarm is outside the convergent region and explodes
-        onto the bounds).
-    log_scale : bool or sequence of bool, optional
-        Search these dimensions in ``log10`` space (bounds must then be positive). Positions, velocities,
-        the velocity clamp and the chaos region all live in the search space; ``fun`` and the result are
-        in natural units (clipped to the bounds after ``10**s`` so round-off never leaves the box).
-    vectorized : bool, default False
-        Call ``fun`` once per batch with a 2-D array (see ``fun``). The returned array must have shape
-        ``(S,)``; anything else raises ``ValueError``. Gives the same result as ``vectorized=False`` for
-        the same seed when ``fun`` computes each row as the scalar version would.
-    workers : 1 or map-like callable, default 1
-        ``1``: evaluate in the calling thread. A map-like callable (e.g. ``multiprocessing.Pool(4).map`` or
-        ``ProcessPoolExecutor(4).map`` for a picklable ``fun``) is used as ``workers(fun, points)`` and must
-        return results in order. Unlike :func:`scipy.optimize.differential_evolution`, an integer
-        ``workers > 1`` is refused rather than read as a number of *processes*: threads are asked for
-        with ``threads``, processes by passing a pool's ``map``.
-    threads : int, default 1
-        Evaluate each batch on a thread pool of this many threads (useful when ``fun`` releases the GIL,
-        as NumPy/LAPACK-heavy objectives do); ``-1``: one thread per CPU; ``1``: no pool. Not together
-        with ``workers`` or ``vectorized=True``. Evaluation order never changes the result: all random
-        numbers are drawn in the calling thread and results are gathered in point order.
-    rng : int, numpy.random.Generator or None
-        Seed or generator; the same seed gives a bitwise identical result. No global state is used.
-    callback : callable, optional
-        ``callback(intermediate_result)`` once per iteration with an ``OptimizeResult`` holding ``x``,
-        ``fun``, ``nit``, ``nfev``. Returning ``True`` or raising ``StopIteration`` stops the run with
-        ``success=True`` and a message saying so.
-    tol : float, default 0.0
-        Used with ``patience``: stop when the best fitness improved by no more than ``tol`` (absolute)
-        over the last ``patience`` iterations.
-    patience : int or None, default None
-        Number of iterations for the ``tol`` rule; ``None`` always runs ``max_iter`` iterations.
+    fun, bounds, args, log_scale, vectorized, workers, threads, rng, callback
+        As :func:`minimize_cpso`.
+    settings : CPSOSettings, optional
+        The swarm's numbers (swarm size, iterations, weights, chaos search, stopping rule); None: the
+        defaults (the paper's).
 
     Attributes
     ----------
@@ -344,54 +328,22 @@ class CPSOSolver:
         self,
         fun: Callable[..., Any],
         bounds,
+        settings: CPSOSettings | None = None,
         *,
         args: tuple = (),
-        n_particles: int = 30,
-        max_iter: int = 100,
-        w: float = 0.75,
-        inertia: str = "constant",
-        w_end: float = 0.4,
-        c1: float = 2.0,
-        c2: float = 2.0,
-        chaos_steps: int = 10,
-        mu: float = 4.0,
-        chaos_radius: float = 0.1,
-        chaos_radius_end: float = 1e-6,
-        vmax_frac: float | None = 0.2,
         log_scale: bool | Sequence[bool] | None = None,
         vectorized: bool = False,
         workers: int | Mapper = 1,
         threads: int = 1,
         rng: int | np.random.Generator | None = None,
         callback: Callable[[OptimizeResult], bool | None] | None = None,
-        tol: float = 0.0,
-        patience: int | None = None,
     ) -> None:
+        self.settings = CPSOSettings() if settings is None else settings
+        if not isinstance(self.settings, CPSOSettings):
+            raise OptionError(f"settings must be a CPSOSettings, got {settings!r}")
         self.lo_nat, self.hi_nat = _validate_bounds(bounds)
         self.n_dim = self.lo_nat.size
         self.log_mask = _validate_log_scale(log_scale, self.lo_nat, self.hi_nat)
-        self.n_particles = _validate_int("n_particles", n_particles, minimum=2)
-        self.max_iter = _validate_int("max_iter", max_iter, minimum=1)
-        self.chaos_steps = _validate_int("chaos_steps", chaos_steps, minimum=0)
-        for name, value in (("w", w), ("w_end", w_end), ("c1", c1), ("c2", c2), ("tol", tol)):
-            _validate_nonnegative(name, value)
-        self.w, self.w_end, self.c1, self.c2, self.tol = w, w_end, c1, c2, tol
-        self.mu = float(mu)
-        if not (2.0 < self.mu <= 4.0):
-            raise OptionError(f"mu must be in (2, 4], got {self.mu!r}")
-        if inertia not in ("constant", "linear"):
-            raise OptionError(f"inertia must be 'constant' or 'linear', got {inertia!r}")
-        self.inertia = inertia
-        if not (0.0 < chaos_radius <= 1.0):
-            raise OptionError(f"chaos_radius must be in (0, 1], got {chaos_radius!r}")
-        if not (0.0 < chaos_radius_end <= chaos_radius):
-            raise OptionError(
-                f"chaos_radius_end must be in (0, chaos_radius={chaos_radius!r}], got {chaos_radius_end!r}"
-            )
-        self.chaos_radius, self.chaos_radius_end = chaos_radius, chaos_radius_end
-        if vmax_frac is not None and not (math.isfinite(vmax_frac) and vmax_frac > 0):
-            raise OptionError(f"vmax_frac must be a positive finite number or None, got {vmax_frac!r}")
-        self.patience = None if patience is None else _validate_int("patience", patience, minimum=1)
         if callback is not None and not callable(callback):
             raise OptionError(f"callback must be callable or None, got {callback!r}")
         self.callback = callback
@@ -417,6 +369,7 @@ class CPSOSolver:
         self.lo = np.where(log_mask, np.log10(lo_nat, where=log_mask, out=lo_nat.copy()), lo_nat)
         self.hi = np.where(log_mask, np.log10(hi_nat, where=log_mask, out=hi_nat.copy()), hi_nat)
         self.width = self.hi - self.lo
+        vmax_frac = self.settings.vmax_frac
         self.vmax = None if vmax_frac is None else vmax_frac * self.width
 
         self._stack = ExitStack()
@@ -460,33 +413,39 @@ class CPSOSolver:
 
     def init_population(self) -> Swarm:
         """Phase 0: a swarm uniform in the search box at rest, evaluated; the chaos map's own stream."""
-        pos = self.lo + self._gen.random((self.n_particles, self.n_dim)) * self.width
+        pos = self.lo + self._gen.random((self.settings.n_particles, self.n_dim)) * self.width
         pos_nat = self.to_natural(pos)
         self.swarm = Swarm.start(pos, pos_nat, self._evaluate(pos_nat))
         # The chaos map gets its own stream, drawn whether or not it is used, so that a run with
         # chaos_steps=0 moves its swarm with exactly the random numbers of the chaos run (paired runs).
         self._chaos_gen = np.random.default_rng(self._gen.integers(0, 2**63))
-        if self.chaos_steps:
-            self._z = _reseed_chaos(self._chaos_gen.random(self.n_dim), self._chaos_gen, self.mu)
+        if self.settings.chaos_steps:
+            self._z = reseed_chaos(self._chaos_gen.random(self.n_dim), self._chaos_gen, self.settings.mu)
         return self.swarm
 
     def schedule_fraction(self, k: int) -> float:
         """``(k - 1) / (max_iter - 1)``: where iteration ``k`` lies between the first and the last (0 to 1)."""
-        return (k - 1) / (self.max_iter - 1) if self.max_iter > 1 else 0.0
+        return (k - 1) / (self.settings.max_iter - 1) if self.settings.max_iter > 1 else 0.0
 
     def inertia_weight(self, k: int) -> float:
         """Inertia ``w_k`` of iteration ``k`` (constant, or linear from ``w`` to ``w_end``)."""
-        return self.w if self.inertia == "constant" else self.w - (self.w - self.w_end) * self.schedule_fraction(k)
+        return (
+            self.settings.w
+            if self.settings.inertia == "constant"
+            else self.settings.w - (self.settings.w - self.settings.w_end) * self.schedule_fraction(k)
+        )
 
     def chaos_radius_at(self, k: int) -> float:
         """``rho_k``: the chaos region's half-width as a fraction of the search width, geometric in ``k``."""
-        return self.chaos_radius * (self.chaos_radius_end / self.chaos_radius) ** self.schedule_fraction(k)
+        return self.settings.chaos_radius * (
+            self.settings.chaos_radius_end / self.settings.chaos_radius
+        ) ** self.schedule_fraction(k)
 
     def pso_move(self, k: int) -> None:
         """Phase 1 of iteration ``k``: draw ``r1``, ``r2`` and move the swarm (:func:`pso_move`)."""
         s = self._require_swarm()
-        r1 = self._gen.random((self.n_particles, self.n_dim))
-        r2 = self._gen.random((self.n_particles, self.n_dim))
+        r1 = self._gen.random((self.settings.n_particles, self.n_dim))
+        r2 = self._gen.random((self.settings.n_particles, self.n_dim))
         s.pos, s.vel = pso_move(
             s.pos,
             s.vel,
@@ -495,8 +454,8 @@ class CPSOSolver:
             r1,
             r2,
             w=self.inertia_weight(k),
-            c1=self.c1,
-            c2=self.c2,
+            c1=self.settings.c1,
+            c2=self.settings.c2,
             vmax=self.vmax,
             lo=self.lo,
             hi=self.hi,
@@ -515,7 +474,9 @@ class CPSOSolver:
         s = self._require_swarm()
         assert self._z is not None and self._chaos_gen is not None, "chaos search needs chaos_steps > 0"
         a, b = chaos_region(s.gbest, self.chaos_radius_at(k), self.width, self.lo, self.hi)
-        cand, self._z = logistic_chaos_points(self._z, a, b, self.chaos_steps, self.mu, self._chaos_gen)
+        cand, self._z = logistic_chaos_points(
+            self._z, a, b, self.settings.chaos_steps, self.settings.mu, self._chaos_gen
+        )
         cand = np.clip(cand, self.lo, self.hi)
         cand_nat = self.to_natural(cand)
         return cand, cand_nat, self._evaluate(cand_nat)
@@ -538,13 +499,13 @@ class CPSOSolver:
         """
         if self.swarm is None:
             self.init_population()
-        if self._stopped or self.nit >= self.max_iter:
+        if self._stopped or self.nit >= self.settings.max_iter:
             self.close()
             raise StopIteration
         k = self.nit + 1
         self.pso_move(k)
         self.update_bests()
-        if self.chaos_steps:
+        if self.settings.chaos_steps:
             self.chaos_feedback(*self.chaos_search(k))
         s = self._require_swarm()
         self.nit = k
@@ -561,13 +522,13 @@ class CPSOSolver:
                 self._stopped = True
         if (
             not self._stopped
-            and self.patience is not None
-            and self.nit > self.patience
-            and self.history[-1 - self.patience] - s.gbest_fit <= self.tol
+            and self.settings.patience is not None
+            and self.nit > self.settings.patience
+            and self.history[-1 - self.settings.patience] - s.gbest_fit <= self.settings.tol
         ):
             self.message = (
-                f"Converged: best fitness improved by no more than tol={self.tol!r} over the last "
-                f"{self.patience} iterations."
+                f"Converged: best fitness improved by no more than tol={self.settings.tol!r} over the last "
+                f"{self.settings.patience} iterations."
             )
             self._stopped = True
         return s.gbest_nat.copy(), s.gbest_fit
@@ -653,22 +614,6 @@ def _validate_threads(threads) -> int:
     if n < 1:
         raise OptionError(message)
     return n
-
-
-def _reseed_chaos(z: np.ndarray, gen: np.random.Generator, mu: float) -> np.ndarray:
-    """Replace logistic-map variables that sit on (or collapsed onto) a fixed/absorbing point."""
-    traps = np.array([0.0, 0.25, 0.5, 0.75, 1.0, 1.0 - 1.0 / mu, 1.0 / mu])
-    z = np.array(z, dtype=float)
-    while True:
-        bad = (
-            ~np.isfinite(z)
-            | (z <= 0.0)
-            | (z >= 1.0)
-            | np.any(np.abs(z[:, None] - traps[None, :]) <= _CHAOS_GUARD_ATOL, axis=1)
-        )
-        if not bad.any():
-            return z
-        z[bad] = gen.random(int(bad.sum()))
 
 
 def _validate_bounds(bounds) -> tuple[np.ndarray, np.ndarray]:

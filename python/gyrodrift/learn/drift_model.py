@@ -50,7 +50,7 @@ from gyrodrift.learn.lssvm_system import IllConditionedWarning
 from gyrodrift.learn.lssvr import LSSVR
 from gyrodrift.learn.physics_base import PhysicsBase
 from gyrodrift.learn.ranges import InputCheck, InputRanges
-from gyrodrift.learn.tuning import DEFAULT_BOUNDS, SearchBoundWarning, TuningResult
+from gyrodrift.learn.tuning import SearchBoundWarning, TuningOptions, TuningResult
 from gyrodrift.progress import progress
 from gyrodrift.runs.table import RunTable, as_run_table
 
@@ -429,14 +429,14 @@ def fit_drift_model(
     *,
     encoding: str = "temp_range",
     scaling: str = "standard",
-    objective: str = "loo_mae",
-    method: str = "cpso",
+    objective: str = TuningOptions.objective,
+    method: str = TuningOptions.method,
     gamma: float | None = None,
     sigma: float | None = None,
-    bounds=DEFAULT_BOUNDS,
-    n_particles: int = 30,
-    max_iter: int = 100,
-    chaos_steps: int = 10,
+    bounds=TuningOptions.bounds,
+    n_particles: int = TuningOptions.n_particles,
+    max_iter: int = TuningOptions.max_iter,
+    chaos_steps: int = TuningOptions.chaos_steps,
     rng=None,
     quiet: bool = True,
     callback=None,

@@ -30,8 +30,9 @@ from gyrodrift.learn.encodings import encode, feature_names
 from gyrodrift.learn.lssvm_system import check_sample_weight, condition_warning_message
 from gyrodrift.learn.lssvr import LSSVR, _validate_data
 from gyrodrift.learn.tuning import (
-    DEFAULT_BOUNDS,
+    TUNED_LSSVR_OPTIONS,
     SearchBoundWarning,
+    TuningOptions,
     TuningResult,
     check_bounds,
     on_search_bound,
@@ -123,14 +124,10 @@ class TunedLSSVR(RegressorMixin, BaseEstimator):
     -----------------------------
     gamma, sigma : float or None, default=None
         Fixed hyperparameters (sigma in the units of the scaled inputs), or None for both to tune them.
-    objective : {"loo_mae", "train_mae", "kfold_mae"}, default="loo_mae"
-    method : {"cpso", "pso", "grid"}, default="cpso"
-    bounds : ((gamma_lo, gamma_hi), (sigma_lo, sigma_hi)), default=``DEFAULT_BOUNDS``
-    n_particles, max_iter, w, c1, c2, chaos_steps : swarm settings (the paper's by default)
-    grid_size : int, default=40
-        Points per axis of the ``"grid"`` method.
-    n_folds : int, default=5
-        Folds of ``"kfold_mae"``.
+    objective, method, bounds, n_particles, max_iter, w, c1, c2, chaos_steps, grid_size, n_folds
+        How they are tuned: the fields of :class:`~gyrodrift.learn.tuning.TuningOptions` of the same names (their
+        defaults, units and meaning; `tuning_options`), flat so that ``get_params``, ``GridSearchCV`` and model
+        files see them.
     random_state : int, numpy Generator or None
         Seeds the swarm; an int gives the same result every time, a Generator is consumed.
     callback : callable or None
@@ -159,17 +156,17 @@ class TunedLSSVR(RegressorMixin, BaseEstimator):
         *,
         gamma: float | None = None,
         sigma: float | None = None,
-        objective: str = "loo_mae",
-        method: str = "cpso",
-        bounds=DEFAULT_BOUNDS,
-        n_particles: int = 30,
-        max_iter: int = 100,
-        w: float = 0.75,
-        c1: float = 2.0,
-        c2: float = 2.0,
-        chaos_steps: int = 10,
-        grid_size: int = 40,
-        n_folds: int = 5,
+        objective: str = TuningOptions.objective,
+        method: str = TuningOptions.method,
+        bounds=TuningOptions.bounds,
+        n_particles: int = TuningOptions.n_particles,
+        max_iter: int = TuningOptions.max_iter,
+        w: float = TuningOptions.w,
+        c1: float = TuningOptions.c1,
+        c2: float = TuningOptions.c2,
+        chaos_steps: int = TuningOptions.chaos_steps,
+        grid_size: int = TuningOptions.grid_size,
+        n_folds: int = TuningOptions.n_folds,
         random_state: int | np.random.Generator | None = None,
         callback: Callable[[Any], Any] | None = None,
     ) -> None:
@@ -215,17 +212,7 @@ class TunedLSSVR(RegressorMixin, BaseEstimator):
                 tuning = tune_lssvr(
                     X[keep],
                     y[keep],
-                    objective=self.objective,
-                    method=self.method,
-                    bounds=self.bounds,
-                    n_particles=self.n_particles,
-                    max_iter=self.max_iter,
-                    w=self.w,
-                    c1=self.c1,
-                    c2=self.c2,
-                    chaos_steps=self.chaos_steps,
-                    grid_size=self.grid_size,
-                    n_folds=self.n_folds,
+                    self.tuning_options(),
                     rng=self.random_state,
                     callback=self.callback,
                     sample_weight=None if w is None else w[keep],
@@ -247,6 +234,10 @@ class TunedLSSVR(RegressorMixin, BaseEstimator):
         self.loo_residuals_ = self.lssvr_.loo_residuals_
         self.n_iter_ = tuning.nit if tuning is not None else 1
         return self
+
+    def tuning_options(self) -> TuningOptions:
+        """This estimator's tuning parameters (`TUNED_LSSVR_OPTIONS`) as a `gyrodrift.learn.tuning.TuningOptions`."""
+        return TuningOptions(**{name: getattr(self, name) for name in TUNED_LSSVR_OPTIONS})
 
     def predict(self, X, offset=None) -> np.ndarray:
         """The fitted LSSVR's predictions [unit of y] (``offset``: one more term of each sum, `LSSVR.predict`)."""

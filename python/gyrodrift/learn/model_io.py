@@ -53,6 +53,7 @@ from __future__ import annotations
 import json
 import math
 import warnings
+from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
@@ -74,32 +75,18 @@ from gyrodrift.files.atomic import atomic_write_json, recognise_json_format
 from gyrodrift.files.input_files import read_limited
 from gyrodrift.learn.drift_model import DriftModel, make_drift_model, training_digest
 from gyrodrift.learn.lssvm_system import IllConditionedWarning
-from gyrodrift.learn.tuning import SearchBoundWarning, TuningResult
+from gyrodrift.learn.tuning import TUNED_LSSVR_OPTIONS, SearchBoundWarning, TuningOptions, TuningResult
 from gyrodrift.runs.table import RunTable, RunTableError
 
 FORMAT = "gyrodrift-drift-model"
 SCHEMA_VERSION = 4
 READABLE_SCHEMAS = (2, 3, 4)
 
-#: The TunedLSSVR parameters a model file keeps (``callback`` is not data).
-_PARAMS = (
-    "gamma",
-    "sigma",
-    "objective",
-    "method",
-    "bounds",
-    "n_particles",
-    "max_iter",
-    "w",
-    "c1",
-    "c2",
-    "chaos_steps",
-    "grid_size",
-    "n_folds",
-    "random_state",
-)
-_INT_PARAMS = ("n_particles", "max_iter", "chaos_steps", "grid_size", "n_folds")
-_FLOAT_PARAMS = ("w", "c1", "c2")
+#: The TunedLSSVR parameters a model file keeps (``callback`` is not data): the fixed hyperparameters, the tuning
+#: options (`gyrodrift.learn.tuning.TUNED_LSSVR_OPTIONS`) and the seed.
+_PARAMS = ("gamma", "sigma", *TUNED_LSSVR_OPTIONS, "random_state")
+_INT_PARAMS = tuple(f.name for f in fields(TuningOptions) if f.name in _PARAMS and f.type == "int")
+_FLOAT_PARAMS = tuple(f.name for f in fields(TuningOptions) if f.name in _PARAMS and f.type == "float")
 
 #: Digits beyond which an integer in a model file is refused before Python converts it (its limit is 4300).
 _MAX_INT_DIGITS = 400

@@ -45,7 +45,7 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 
 import numpy as np
 from sklearn.model_selection import KFold
@@ -53,13 +53,67 @@ from threadpoolctl import threadpool_limits
 
 from gyrodrift.choices import METHODS, OBJECTIVES
 from gyrodrift.errors import OptionError
-from gyrodrift.learn.cpso import minimize_cpso
+from gyrodrift.learn.cpso import CPSOSettings, CPSOSolver
 from gyrodrift.learn.kernels import SIGMA_MAX, SIGMA_MIN, available_memory_bytes, check_matrix_memory, squared_distances
 from gyrodrift.learn.lssvm_batch import STACKED_MAX_N, EigenCache, rbf_batch_errors
 from gyrodrift.learn.lssvm_system import check_sample_weight, lssvr_solve
 
 DEFAULT_BOUNDS = ((1e-2, 1e5), (1e-3, 1e2))
 """Default search box ((gamma_lo, gamma_hi), (sigma_lo, sigma_hi)); sigma in the scaled input units."""
+
+
+@dataclass(frozen=True)
+class TuningOptions:
+    """How (gamma, sigma) of an RBF LSSVR are tuned: the options of :func:`tune_lssvr`, declared once (the flat
+    parameters of `gyrodrift.learn.learner.TunedLSSVR`, `TUNED_LSSVR_OPTIONS`, and a model file's ``lssvr_params``
+    are these names).
+
+    Attributes
+    ----------
+    objective : {"loo_mae", "train_mae", "kfold_mae"}, default "loo_mae"
+        The fitness, a mean absolute error in the target's unit (deg/h for drift models; module docstring).
+    method : {"cpso", "pso", "grid"}, default "cpso"
+        The paper's chaos PSO, the same swarm with the chaos search off, or a ``grid_size`` x ``grid_size`` log grid.
+    bounds : ((gamma_lo, gamma_hi), (sigma_lo, sigma_hi)), default ``DEFAULT_BOUNDS``
+        The search box, searched in log10 of both; gamma dimensionless, sigma in the scaled input units.
+    n_particles, max_iter, w, c1, c2, chaos_steps
+        The swarm's size, iterations, inertia, cognitive and social coefficients and chaos steps per iteration
+        (:class:`~gyrodrift.learn.cpso.CPSOSettings`, whose defaults are the paper's); ``"pso"`` runs
+        ``chaos_steps = 0``, ``"grid"`` none of them.
+    grid_size : int, default 40
+        Points per axis of the ``"grid"`` method.
+    n_folds : int, default 5
+        Folds of ``"kfold_mae"`` (contiguous, unshuffled).
+    sigma_step : float [decades], "auto" or None, default "auto"
+        For more than ``SNAP_MIN_N`` samples the swarm's sigmas are snapped onto a log grid of this step anchored
+        at the lower sigma bound (``"auto"``: :func:`sigma_step_for`; None: off; module docstring, "Snapped
+        sigmas"); not for ``"grid"`` or ``"kfold_mae"``.
+    """
+
+    objective: str = "loo_mae"
+    method: str = "cpso"
+    bounds: tuple = DEFAULT_BOUNDS
+    n_particles: int = CPSOSettings.n_particles
+    max_iter: int = CPSOSettings.max_iter
+    w: float = CPSOSettings.w
+    c1: float = CPSOSettings.c1
+    c2: float = CPSOSettings.c2
+    chaos_steps: int = CPSOSettings.chaos_steps
+    grid_size: int = 40
+    n_folds: int = 5
+    sigma_step: float | str | None = "auto"
+
+    def swarm(self) -> CPSOSettings:
+        """The swarm's settings of ``method`` (``"pso"``: no chaos steps)."""
+        steps = self.chaos_steps if self.method == "cpso" else 0
+        return CPSOSettings(
+            n_particles=self.n_particles, max_iter=self.max_iter, w=self.w, c1=self.c1, c2=self.c2, chaos_steps=steps
+        )
+
+
+TUNED_LSSVR_OPTIONS = tuple(f.name for f in fields(TuningOptions) if f.name != "sigma_step")
+"""The `TuningOptions` that `gyrodrift.learn.learner.TunedLSSVR` takes as (flat, scikit-learn) parameters and a model
+file keeps; ``sigma_step`` stays at its default there."""
 
 EDGE_FRACTION = 1e-3
 """A tuned value closer to a bound of its search box than this fraction of the box's width, both measured in the
@@ -275,36 +329,16 @@ def make_objective(
 
 
 def tune_lssvr(
-    X,
-    y,
-    *,
-    objective: str = "loo_mae",
-    method: str = "cpso",
-    bounds=DEFAULT_BOUNDS,
-    n_particles: int = 30,
-    max_iter: int = 100,
-    w: float = 0.75,
-    c1: float = 2.0,
-    c2: float = 2.0,
-    chaos_steps: int = 10,
-    grid_size: int = 40,
-    n_folds: int = 5,
-    rng=None,
-    callback=None,
-    sample_weight=None,
-    sigma_step: float | str | None = "auto",
+    X, y, options: TuningOptions | None = None, *, rng=None, callback=None, sample_weight=None
 ) -> TuningResult:
-    """Tune (gamma, sigma) of an RBF LSSVR on scaled inputs ``X`` (n, d) and targets ``y`` (n,).
+    """Tune (gamma, sigma) of an RBF LSSVR on scaled inputs ``X`` (n, d) and targets ``y`` (n,) as ``options`` say
+    (:class:`TuningOptions`; None: its defaults, the paper's chaos PSO on the LOO MAE).
 
-    ``method="cpso"`` is the paper's chaos PSO (defaults: 30 particles, 100 iterations, w 0.75, c1 = c2 = 2,
-    10 chaos steps); ``"pso"`` the same swarm with the chaos search off; ``"grid"`` a ``grid_size`` x
-    ``grid_size`` log grid over ``bounds``. ``callback(intermediate_result)`` is passed to the optimiser
-    (called once per iteration); ``rng`` seeds the swarm; ``sample_weight`` weights the LSSVMs and the
-    fitness (``make_objective``). ``sigma_step`` (decades; ``"auto"``: :func:`sigma_step_for`; None: off): for
-    more than ``SNAP_MIN_N`` samples the swarm's sigmas are snapped onto a log grid of that step anchored at the
-    lower sigma bound, and the tuned sigma is the snapped one (module docstring, "Snapped sigmas"); not for
-    ``"grid"`` or ``"kfold_mae"``.
+    ``callback(intermediate_result)`` is passed to the optimiser (called once per iteration); ``rng`` seeds the
+    swarm; ``sample_weight`` weights the LSSVMs and the fitness (``make_objective``).
     """
+    options = TuningOptions() if options is None else options
+    method, objective, bounds, sigma_step = options.method, options.objective, options.bounds, options.sigma_step
     if method not in METHODS:
         raise OptionError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
     bounds = check_bounds(bounds)
@@ -321,10 +355,11 @@ def tune_lssvr(
         else None
     )
     fun = make_objective(
-        X, y, objective, n_folds=n_folds, sample_weight=sample_weight, threads=threads, sigma_snap=snap
+        X, y, objective, n_folds=options.n_folds, sample_weight=sample_weight, threads=threads, sigma_snap=snap
     )
     with threadpool_limits(limits=1, user_api="blas"):  # module docstring: "BLAS threads"
         if method == "grid":
+            grid_size = options.grid_size
             if grid_size < 2:
                 raise OptionError(f"grid_size must be at least 2, got {grid_size}")
             g = np.logspace(np.log10(bounds[0][0]), np.log10(bounds[0][1]), grid_size)
@@ -345,21 +380,9 @@ def tune_lssvr(
                 bounds=bounds,
                 settings={"grid_size": grid_size},
             )
-        steps = chaos_steps if method == "cpso" else 0
-        res = minimize_cpso(
-            fun,
-            bounds,
-            n_particles=n_particles,
-            max_iter=max_iter,
-            w=w,
-            c1=c1,
-            c2=c2,
-            chaos_steps=steps,
-            log_scale=True,
-            vectorized=True,
-            rng=rng,
-            callback=callback,
-        )
+        swarm = options.swarm()
+        with CPSOSolver(fun, bounds, swarm, log_scale=True, vectorized=True, rng=rng, callback=callback) as solver:
+            res = solver.solve()
         sigma = float(res.x[1]) if snap is None else float(snap_sigmas(res.x[1], *snap))
         settings = {} if snap is None else {"sigma_step_decades": snap[0]}
         return TuningResult(
@@ -373,12 +396,12 @@ def tune_lssvr(
             history=[float(v) for v in res.history],
             bounds=bounds,
             settings={
-                "n_particles": n_particles,
-                "max_iter": max_iter,
-                "w": w,
-                "c1": c1,
-                "c2": c2,
-                "chaos_steps": steps,
+                "n_particles": options.n_particles,
+                "max_iter": options.max_iter,
+                "w": options.w,
+                "c1": options.c1,
+                "c2": options.c2,
+                "chaos_steps": swarm.chaos_steps,
                 **settings,
             },
         )
