@@ -42,7 +42,7 @@ import numpy as np
 from gyrodrift.learn.baselines import latitude_error_at
 from gyrodrift.learn.drift_model import fit_drift_model
 from gyrodrift.learn.interval import jackknife_half_width
-from gyrodrift.learn.physics_base import THERMAL_COLUMNS
+from gyrodrift.runs.columns import SMOOTHER_COLUMNS, SMOOTHER_THERMAL_COLUMNS
 from gyrodrift.runs.table import RunTable
 from gyrodrift.units import HOUR
 
@@ -86,15 +86,15 @@ def draw_runs(rng, n: int, *, n_lat_out: int = 0, n_hot: int = 0, prefix: str = 
     lat12 = lat0 + (latitude_error_at(12 * HOUR, drift12, lat0) + rng.normal(0.0, 8.0, n)) / 3600.0
     a = 3e-4 * math.cos(math.radians(20.0)) / np.cos(np.radians(lat0))
     c, rho = 2e-4, 0.8
-    cols = {name: np.empty(n) for name in ("drift_smoother_deg_h", "drift_smoother_std_deg_h", *THERMAL_COLUMNS)}
+    cols = {name: np.empty(n) for name in SMOOTHER_COLUMNS}
     for i in range(n):
         meas_cov = np.array([[a[i] ** 2, rho * a[i] * c], [rho * a[i] * c, c**2]])
         y = np.array([end_drift[i], k[i]]) + np.linalg.cholesky(meas_cov) @ rng.normal(size=2)
         post = np.linalg.inv(np.linalg.inv(meas_cov) + np.diag([0.0, 1.0 / K_PRIOR_STD**2]))
         m = post @ np.linalg.solve(meas_cov, y)
         cols["drift_smoother_deg_h"][i], cols["drift_smoother_std_deg_h"][i] = m[0], math.sqrt(post[0, 0])
-        cols[THERMAL_COLUMNS[0]][i], cols[THERMAL_COLUMNS[1]][i] = m[1], math.sqrt(post[1, 1])
-        cols[THERMAL_COLUMNS[2]][i], cols[THERMAL_COLUMNS[3]][i] = post[0, 1], K_PRIOR_STD
+        cols[SMOOTHER_THERMAL_COLUMNS[0]][i], cols[SMOOTHER_THERMAL_COLUMNS[1]][i] = m[1], math.sqrt(post[1, 1])
+        cols[SMOOTHER_THERMAL_COLUMNS[2]][i], cols[SMOOTHER_THERMAL_COLUMNS[3]][i] = post[0, 1], K_PRIOR_STD
     table = RunTable(
         run=np.array([f"{prefix}{i}" for i in range(n)], dtype=object),
         lat_deg=lat12,

@@ -28,7 +28,8 @@ from gyrodrift.learn.drift_model import fit_drift_model, make_drift_model
 from gyrodrift.learn.fleet_prior import drift_with_coefficient_prior, pooled_coefficient_prior
 from gyrodrift.learn.lssvr import LSSVR
 from gyrodrift.learn.model_io import ModelFileError, load_model, model_from_dict, model_to_dict, save_model
-from gyrodrift.learn.physics_base import FLEET_PHYSICS, THERMAL_COLUMNS, physics_estimate, resolve_physics_column
+from gyrodrift.learn.physics_base import FLEET_PHYSICS, physics_estimate, resolve_physics_column
+from gyrodrift.runs.columns import SMOOTHER_COLUMNS, SMOOTHER_THERMAL_COLUMNS
 from gyrodrift.runs.table import RunTable, read_runs_csv
 from gyrodrift.units import HOUR
 
@@ -58,7 +59,7 @@ def synthetic_fleet(n: int, rng, *, constant=(), base_scale: float = 1.0, temp_s
     seen = end - 1e-4 * (tmax - tmin) / 10.0 + rng.normal(0.0, 3e-4, n)
     a = 3e-4 * base_scale * np.cos(np.radians(20.0)) / np.cos(np.radians(lat0))
     c, rho = 2e-4, 0.8
-    cols = {name: np.full(n, np.nan) for name in ("drift_smoother_deg_h", "drift_smoother_std_deg_h", *THERMAL_COLUMNS)}
+    cols = {name: np.full(n, np.nan) for name in SMOOTHER_COLUMNS}
     for i in range(n):
         L = np.array([[a[i] ** 2, rho * a[i] * c], [rho * a[i] * c, c**2]])
         y = np.array([end[i], k_true[i]]) + np.linalg.cholesky(L) @ rng.normal(size=2)
@@ -69,8 +70,8 @@ def synthetic_fleet(n: int, rng, *, constant=(), base_scale: float = 1.0, temp_s
         V = np.linalg.inv(np.linalg.inv(L) + np.diag([0.0, 1.0 / S0**2]))
         m = V @ np.linalg.solve(L, y)
         cols["drift_smoother_deg_h"][i], cols["drift_smoother_std_deg_h"][i] = m[0], math.sqrt(V[0, 0])
-        cols[THERMAL_COLUMNS[0]][i], cols[THERMAL_COLUMNS[1]][i] = m[1], math.sqrt(V[1, 1])
-        cols[THERMAL_COLUMNS[2]][i], cols[THERMAL_COLUMNS[3]][i] = V[0, 1], S0
+        cols[SMOOTHER_THERMAL_COLUMNS[0]][i], cols[SMOOTHER_THERMAL_COLUMNS[1]][i] = m[1], math.sqrt(V[1, 1])
+        cols[SMOOTHER_THERMAL_COLUMNS[2]][i], cols[SMOOTHER_THERMAL_COLUMNS[3]][i] = V[0, 1], S0
     return RunTable(
         run=np.array([f"r{i}" for i in range(n)], dtype=object),
         lat_deg=lat0 + latitude_error_at(12 * HOUR, seen, lat0) / 3600.0,
@@ -85,7 +86,7 @@ def synthetic_fleet(n: int, rng, *, constant=(), base_scale: float = 1.0, temp_s
 
 def _direct_base(runs: RunTable, prior) -> np.ndarray:
     """`drift_with_coefficient_prior` of each run with ``prior`` (one (mean, std) per run)."""
-    cols = [runs.column(c) for c in ("drift_smoother_deg_h", "drift_smoother_std_deg_h", *THERMAL_COLUMNS)]
+    cols = [runs.column(c) for c in SMOOTHER_COLUMNS]
     return np.array([drift_with_coefficient_prior(*(v[i] for v in cols), *prior[i])[0] for i in range(len(runs))])
 
 
@@ -99,7 +100,7 @@ def test_the_fleet_base_is_fleet_prior_leave_one_out_for_training_runs(fleet):
     unweighted = train.replace(extra={k: v for k, v in train.extra.items() if k != "drift_std_deg_h"})
     model = fit_drift_model(unweighted, encoding="physics", target="residual", gamma=20.0, sigma=1.5)
     assert model.physics_column_ == FLEET_PHYSICS and model.physics_column == "auto"
-    k, sk = train.column(THERMAL_COLUMNS[0]), train.column(THERMAL_COLUMNS[1])
+    k, sk = train.column(SMOOTHER_THERMAL_COLUMNS[0]), train.column(SMOOTHER_THERMAL_COLUMNS[1])
     assert model.coefficient_prior_ == pooled_coefficient_prior(k, sk)
     # each training run's base: the prior pooled from the other runs (its own k_z not counted twice)
     loo = [pooled_coefficient_prior(np.delete(k, i), np.delete(sk, i)) for i in range(len(train))]
@@ -125,7 +126,7 @@ def test_auto_resolves_to_the_fleet_base_the_smoother_or_the_inversion(fleet):
     two_thermal = train.replace(
         extra={
             **train.extra,
-            **{c: np.where(np.arange(len(train)) < 2, train.column(c), np.nan) for c in THERMAL_COLUMNS},
+            **{c: np.where(np.arange(len(train)) < 2, train.column(c), np.nan) for c in SMOOTHER_THERMAL_COLUMNS},
         }
     )
     column, why = resolve_physics_column(two_thermal)

@@ -31,7 +31,8 @@ import numpy as np
 from gyrodrift.earth import OMEGA_IE_RAD_S
 from gyrodrift.errors import InputError
 from gyrodrift.learn.encodings import encode
-from gyrodrift.learn.physics_base import FLEET_PHYSICS, THERMAL_COLUMNS, thermal_runs
+from gyrodrift.learn.physics_base import FLEET_PHYSICS, thermal_runs
+from gyrodrift.runs.columns import SMOOTHER_THERMAL_COLUMNS
 from gyrodrift.units import ARCSEC, DEG, DEG_PER_H, HOUR
 
 __all__ = [
@@ -69,9 +70,9 @@ PHYSICS_INPUTS: dict[str, str] = {
 the 16 h smoother's end drift, and for the fleet-prior smoother (`FLEET_PHYSICS`) the smoother's k_z estimate
 (`COEFFICIENT_INPUTS`)."""
 
-COEFFICIENT_INPUTS: tuple[str, ...] = THERMAL_COLUMNS
-"""The smoother's k_z estimate (`gyrodrift.learn.physics_base.THERMAL_COLUMNS`), read by the fleet-prior smoother base
-(`FLEET_PHYSICS`); the last inputs of the struct. NaN for a run whose smoother used its constant model, whose base
+COEFFICIENT_INPUTS: tuple[str, ...] = SMOOTHER_THERMAL_COLUMNS
+"""The smoother's k_z estimate (`gyrodrift.runs.columns.SMOOTHER_THERMAL_COLUMNS`), read by the fleet-prior smoother
+base (`FLEET_PHYSICS`); the last inputs of the struct. NaN for a run whose smoother used its constant model, whose base
 is then its end drift unchanged. The range check wants them all NaN there (some but not all is neither of the
 smoother's models; the base passes such a run through as constant, as `drift_with_coefficient_prior` does), else
 within their range."""

@@ -28,13 +28,12 @@ from gyrodrift.choices import BASE_UNCERTAINTIES, MIN_THERMAL_RUNS, PHYSICS_CHOI
 from gyrodrift.errors import InputError, OptionError
 from gyrodrift.learn.baselines import physics_inversion
 from gyrodrift.learn.fleet_prior import drift_with_coefficient_prior, pooled_coefficient_prior
-from gyrodrift.runs.table import SMOOTHER_THERMAL_COLUMNS, RunTable, check_smoother_thermal
+from gyrodrift.runs.columns import COLUMNS, PHYSICS_BASE_COLUMNS, SMOOTHER_DRIFT_COLUMNS, SMOOTHER_THERMAL_COLUMNS
+from gyrodrift.runs.table import RunTable, check_smoother_thermal
 
 __all__ = [
     "BASE_STD_COLUMNS",
     "FLEET_PHYSICS",
-    "SMOOTHER_COLUMNS",
-    "THERMAL_COLUMNS",
     "PhysicsBase",
     "fleet_priors",
     "label_weights",
@@ -58,21 +57,11 @@ def label_weights(std_deg_h) -> np.ndarray:
 FLEET_PHYSICS = "drift_smoother_fleet_deg_h"
 """The fleet-prior smoother base (``PHYSICS_COLUMNS``): computed by the model, not a table column."""
 
-SMOOTHER_COLUMNS = ("drift_smoother_deg_h", "drift_smoother_std_deg_h")
-"""The smoother's end drift and its 1-sigma [deg/h]: ``physics_column="auto"`` takes the fleet base when every
-training run has both (the base itself needs the drift; its 1-sigma, re-weighted, enters the noise and the
-interval)."""
-
-THERMAL_COLUMNS = SMOOTHER_THERMAL_COLUMNS
-"""The smoother's thermal coefficient k_z, its 1-sigma, cov(end drift, k_z) and its own prior 1-sigma: the fleet
-base needs them in the table (empty for a run under the smoother's constant model)."""
-
-BASE_STD_COLUMNS = {
-    "drift_curvefit_deg_h": "drift_curvefit_std_deg_h",
-    "drift_smoother_deg_h": "drift_smoother_std_deg_h",
-    FLEET_PHYSICS: "drift_smoother_std_deg_h",
+BASE_STD_COLUMNS = {name: COLUMNS[name].std for name in PHYSICS_BASE_COLUMNS} | {
+    FLEET_PHYSICS: COLUMNS["drift_smoother_deg_h"].std
 }
-"""The run-table column of the 1-sigma of a base [deg/h] (the fleet base's is re-weighted from it)."""
+"""The run-table column of the 1-sigma of a base [deg/h] (`gyrodrift.runs.columns`; the fleet base's is re-weighted from
+the smoother drift's)."""
 
 
 def missing_runs(runs: RunTable, values) -> str:
@@ -91,10 +80,10 @@ def require_column(runs: RunTable, column: str, what: str) -> np.ndarray:
 
 
 def thermal_runs(runs: RunTable) -> np.ndarray:
-    """True for the runs with the smoother's thermal estimate of k_z (every ``THERMAL_COLUMNS`` value usable: the
-    test of `gyrodrift.learn.fleet_prior.drift_with_coefficient_prior`); False under its constant model or without
-    the columns."""
-    k, sk, c, s0 = (runs.column(name) for name in THERMAL_COLUMNS)
+    """True for the runs with the smoother's thermal estimate of k_z (every ``SMOOTHER_THERMAL_COLUMNS`` value
+    usable: the test of `gyrodrift.learn.fleet_prior.drift_with_coefficient_prior`); False under its constant model or
+    without the columns."""
+    k, sk, c, s0 = (runs.column(name) for name in SMOOTHER_THERMAL_COLUMNS)
     with np.errstate(over="ignore"):
         vk = sk * sk
     return np.isfinite(k) & np.isfinite(vk) & (vk > 0.0) & np.isfinite(c) & np.isfinite(s0) & (s0 > 0.0)
@@ -103,11 +92,11 @@ def thermal_runs(runs: RunTable) -> np.ndarray:
 def resolve_physics_column(runs: RunTable) -> tuple[str, str]:
     """``(column, why)``: the physics base ``physics_column="auto"`` takes on training runs ``runs``.
 
-    The fleet-prior smoother (``drift_smoother_fleet_deg_h``) when every run has ``SMOOTHER_COLUMNS`` and at
+    The fleet-prior smoother (``drift_smoother_fleet_deg_h``) when every run has ``SMOOTHER_DRIFT_COLUMNS`` and at
     least ``MIN_THERMAL_RUNS`` have a thermal k_z; else the smoother's drift (``drift_smoother_deg_h``) when
     every run has it; else the 12 h inversion (``drift_inversion_deg_h``). ``why`` says so in words."""
     n_thermal = int(thermal_runs(runs).sum())
-    if all(runs.has_column(c) for c in SMOOTHER_COLUMNS):
+    if all(runs.has_column(c) for c in SMOOTHER_DRIFT_COLUMNS):
         if n_thermal >= MIN_THERMAL_RUNS:
             return FLEET_PHYSICS, (
                 f"every run has the smoother's drift and 1-sigma, {n_thermal} of {len(runs)} its thermal k_z: the "
@@ -136,11 +125,12 @@ def fleet_priors(runs: RunTable) -> tuple[tuple[float, float], np.ndarray]:
     if int(thermal.sum()) < MIN_THERMAL_RUNS:
         raise InputError(
             f"{runs.source}: the physics base {FLEET_PHYSICS} needs at least {MIN_THERMAL_RUNS} training runs with "
-            f"the smoother's thermal k_z ({', '.join(THERMAL_COLUMNS[:2])}; each run's base pools the others'), "
+            f"the smoother's thermal k_z ({', '.join(SMOOTHER_THERMAL_COLUMNS[:2])}; each run's base pools the "
+            "others'), "
             f"got {int(thermal.sum())}"
         )
-    k = np.where(thermal, runs.column(THERMAL_COLUMNS[0]), np.nan)
-    sk = np.where(thermal, runs.column(THERMAL_COLUMNS[1]), np.nan)
+    k = np.where(thermal, runs.column(SMOOTHER_THERMAL_COLUMNS[0]), np.nan)
+    sk = np.where(thermal, runs.column(SMOOTHER_THERMAL_COLUMNS[1]), np.nan)
     prior = pooled_coefficient_prior(k, sk)
     per_run = np.tile(np.asarray(prior, float), (len(runs), 1))
     for i in np.flatnonzero(thermal):
@@ -157,7 +147,7 @@ def physics_estimate(runs: RunTable, column: str = "drift_inversion_deg_h", *, p
       (`gyrodrift.learn.fleet_prior.drift_with_coefficient_prior`): ``prior`` is ``(mean, std)`` [deg/h/degC] for
       every run (a model's ``coefficient_prior_``) or an (n_runs, 2) array, one prior per run (the leave-one-out
       priors of training runs, `fleet_priors`). Every run needs ``drift_smoother_deg_h``, and the table the
-      ``THERMAL_COLUMNS`` (a run under the smoother's constant model has them empty: its base is its smoother
+      ``SMOOTHER_THERMAL_COLUMNS`` (a run under the smoother's constant model has them empty: its base is its smoother
       drift unchanged); the 1-sigma comes from ``drift_smoother_std_deg_h`` (NaN without it);
     * any other name: an optional run-table column, which every run must have.
 
@@ -174,11 +164,11 @@ def physics_estimate(runs: RunTable, column: str = "drift_inversion_deg_h", *, p
             raise InputError(f"the physics estimate {FLEET_PHYSICS} needs the fleet's k_z prior")
         drift = require_column(runs, "drift_smoother_deg_h", what)
         drift_std = runs.column("drift_smoother_std_deg_h")
-        for name in THERMAL_COLUMNS:
+        for name in SMOOTHER_THERMAL_COLUMNS:
             if name not in runs.extra:
                 raise InputError(f"{runs.source}: column {name} ({what}) is missing: the table has no such column")
         check_smoother_thermal(runs, what)
-        k, sk, c, s0 = (runs.column(name) for name in THERMAL_COLUMNS)
+        k, sk, c, s0 = (runs.column(name) for name in SMOOTHER_THERMAL_COLUMNS)
         prior = np.asarray(prior, float)
         if prior.shape == (2,):
             estimate, std = drift_with_coefficient_prior(
