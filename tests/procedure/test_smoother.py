@@ -123,15 +123,25 @@ def independent_drift_sigma(lat_deg, noise, span_s=16 * 3600.0, coarse_s=300.0, 
     h = np.zeros((4, n))
     h[0, 3] = h[1, 4] = h[2, 10] = h[3, 11] = 1.0
     r = np.diag([1e-4**2] * 2 + [0.01**2] * 2)
-    t = 0.0
     rate = math.radians(rate_deg_s)
-    for _ in range(int(round((span_s - coarse_s) / update_s))):
-        f = F(rate * (t + update_s / 2))
+
+    def transition(theta):
         big = np.zeros((2 * n, 2 * n))
-        big[:n, :n], big[:n, n:], big[n:, n:] = -f, qc, f.T
+        big[:n, :n], big[:n, n:], big[n:, n:] = -F(theta), qc, F(theta).T
         m = expm(big * update_s)
         phi = m[n:, n:].T
-        q = phi @ m[:n, n:]
+        return phi, phi @ m[:n, n:]
+
+    # The table angle at mid-interval repeats every turn (60 s at 6 deg/s: 6 updates), so each distinct angle's
+    # exact transition is computed once (the same matrices as one expm per interval; 6 expm instead of 5730).
+    transitions = {}
+    t = 0.0
+    for _ in range(int(round((span_s - coarse_s) / update_s))):
+        theta = math.fmod(rate * (t + update_s / 2), 2 * math.pi)
+        key = round(theta, 9)
+        if key not in transitions:
+            transitions[key] = transition(theta)
+        phi, q = transitions[key]
         p = phi @ p @ phi.T + q
         s = h @ p @ h.T + r
         k = p @ h.T @ np.linalg.inv(s)
