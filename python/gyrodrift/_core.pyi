@@ -20,6 +20,10 @@ OMEGA_IE_RAD_S: Final[float]
 NMI_M: Final[float]
 STANDARD_GRAVITY_M_S2: Final[float]
 
+# The smoother's default noise (gyrodrift-core `filter_prior`): `procedure.noise.SensorNoise`'s defaults.
+SMOOTHER_GYRO_ARW_DEG_RTH: Final[float]
+SMOOTHER_ACCEL_VRW_UG_RTHZ: Final[float]
+
 # Limits of the shared quantities, in the units their names carry (gyrodrift-core `limits`, `turntable`,
 # `simulator`); scenario files and the core refuse the same values.
 MAX_LAT_DEG: Final[float]

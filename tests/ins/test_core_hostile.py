@@ -233,6 +233,24 @@ def test_each_core_error_kind_is_its_own_class():
         sm.result()
 
 
+def test_the_filters_noise_priors_are_declared_once():
+    # gyrodrift-core filter_prior: SensorNoise's default is the smoother's prior (read from the core); the aligner's
+    # is twice that grade, with a 10 times tighter gyro bias prior (the reasons are in filter_prior's docs).
+    from gyrodrift.procedure.noise import SensorNoise
+    from gyrodrift.units import DEG_PER_H, MICRO_G
+
+    noise = SensorNoise()
+    site = dict(lat_rad=0.5, lon_rad=0.0, height_m=0.0, rate_hz=RATE_HZ)
+    smoother, aligner = _core.SmootherConfig(**site), _core.AlignerConfig(**site)
+    assert smoother.gyro_arw_rad_rts == pytest.approx(noise.arw_rad_rts, rel=1e-15)
+    assert smoother.accel_vrw_m_s_rts == pytest.approx(noise.vrw_m_s_rts, rel=1e-15)
+    assert aligner.gyro_arw_rad_rts == pytest.approx(2 * noise.arw_rad_rts, rel=1e-15)
+    assert aligner.accel_vrw_m_s_rts == pytest.approx(2 * noise.vrw_m_s_rts, rel=1e-15)
+    assert smoother.gyro_bias_sigma_rad_s == pytest.approx([0.1 * DEG_PER_H] * 3, rel=1e-15)
+    assert aligner.gyro_bias_sigma_rad_s == pytest.approx([0.01 * DEG_PER_H] * 3, rel=1e-15)
+    assert smoother.accel_bias_sigma_m_s2 == aligner.accel_bias_sigma_m_s2 == pytest.approx([100 * MICRO_G] * 3)
+
+
 def test_configs_resolve_the_core_defaults():
     # The defaults live in the core only; the typed configs show them resolved.
     c = _sim_config(rotation_scheme="reciprocating")

@@ -5,27 +5,27 @@ use gyrodrift_core::attitude::Euler;
 use gyrodrift_core::simulator::{ImuChunk, ImuSimulator, ImuSimulatorConfig};
 use gyrodrift_core::strapdown::{Navigator, NavigatorConfig, Vertical};
 use gyrodrift_core::turntable::RotationScheme;
+use gyrodrift_core::units::{DEG, DEG_PER_H, HOUR, SQRT_HOUR};
 use std::time::Instant;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let deg = std::f64::consts::PI / 180.0;
     let scheme = match args.get(1).map(String::as_str).unwrap_or("reciprocating") {
         "none" => RotationScheme::None,
         "continuous" => RotationScheme::Continuous {
-            rate: 6.0 * deg,
-            accel: 10.0 * deg,
+            rate: 6.0 * DEG,
+            accel: 10.0 * DEG,
         },
         "indexing" => RotationScheme::Indexing {
-            rate: 6.0 * deg,
-            accel: 10.0 * deg,
-            positions: vec![0.0, 90.0 * deg, 180.0 * deg, 270.0 * deg],
+            rate: 6.0 * DEG,
+            accel: 10.0 * DEG,
+            positions: vec![0.0, 90.0 * DEG, 180.0 * DEG, 270.0 * DEG],
             dwell: 300.0,
         },
         _ => RotationScheme::Reciprocating {
-            rate: 6.0 * deg,
-            accel: 10.0 * deg,
-            span: 360.0 * deg,
+            rate: 6.0 * DEG,
+            accel: 10.0 * DEG,
+            span: 360.0 * DEG,
             dwell: 0.0,
         },
     };
@@ -45,16 +45,16 @@ fn main() {
     };
     let mut cfg = ImuSimulatorConfig {
         rate_hz: 100.0,
-        duration_s: 72.0 * 3600.0,
+        duration_s: 72.0 * HOUR,
         attitude,
         scheme,
         ..Default::default()
     };
     if args.get(3).map(String::as_str) == Some("noisy") {
         // The facade benchmark's sensor: every noise channel, a warm-up and a temperature drift.
-        let dh = deg / 3600.0;
+        let dh = DEG_PER_H;
         cfg.errors.gyro_bias = [0.002 * dh, -0.002 * dh, 0.003 * dh];
-        cfg.errors.gyro_arw = 0.0005 * deg / 60.0;
+        cfg.errors.gyro_arw = 0.0005 * DEG / SQRT_HOUR;
         cfg.errors.gyro_bias_instability = 0.001 * dh;
         cfg.errors.accel_bias = [20e-5, -20e-5, 15e-5];
         cfg.errors.accel_vrw = 5e-5;

@@ -20,14 +20,12 @@ use crate::attitude::{dcm_to_euler, quat_mul, quat_to_dcm, Euler, Mat3, Vec3};
 use crate::coarse_alignment::InertialCoarseAlignment;
 use crate::earth;
 use crate::error::{check, CoreError};
+use crate::filter_prior::FilterPrior;
 use crate::kalman::{self, ErrorModel, ErrorStateFilter, StateMatrix, DV, EPS, NABLA, N_STATES, PHI};
 use crate::limits::{check_increments, check_site};
 use crate::strapdown::{Navigator, NavigatorConfig, Vertical};
+use crate::units::ARCSEC;
 
-/// One micro-g [m/s^2] (1 ug = 9.80665e-6 m/s^2, the conventions' value).
-pub const MICRO_G: f64 = 9.806_65e-6;
-/// One deg/h [rad/s].
-pub const DEG_PER_HOUR: f64 = std::f64::consts::PI / 180.0 / 3600.0;
 /// Default total alignment span, coarse plus fine \[s\] (4 h).
 pub const DEFAULT_TOTAL_S: f64 = 14_400.0;
 
@@ -48,7 +46,8 @@ pub struct AlignerConfig {
     pub update_s: f64,
     /// Initial attitude error 1-sigma E, N, U \[rad\] (`att_sigma_rad`); None: `coarse_attitude_sigma`.
     pub att_sigma: Option<Vec3>,
-    /// Initial gyro bias 1-sigma, body x y z [rad/s] (`gyro_bias_sigma_rad_s`, default 0.01 deg/h).
+    /// Initial gyro bias 1-sigma, body x y z [rad/s] (`gyro_bias_sigma_rad_s`, default 0.01 deg/h; the defaults of
+    /// the prior and the noise are [`FilterPrior::ALIGNER`], which says why they differ from the smoother's).
     pub gyro_bias_sigma: Vec3,
     /// Initial accelerometer bias 1-sigma, body x y z [m/s^2] (`accel_bias_sigma_m_s2`, default 100 ug).
     pub accel_bias_sigma: Vec3,
@@ -75,10 +74,10 @@ impl AlignerConfig {
             fine_s: Self::default_fine_s(coarse_s),
             update_s: 1.0,
             att_sigma: None,
-            gyro_bias_sigma: [0.01 * DEG_PER_HOUR; 3],
-            accel_bias_sigma: [100.0 * MICRO_G; 3],
-            gyro_arw: 0.001 * std::f64::consts::PI / 180.0 / 60.0,
-            accel_vrw: 10.0 * MICRO_G,
+            gyro_bias_sigma: FilterPrior::ALIGNER.gyro_bias_sigma(),
+            accel_bias_sigma: FilterPrior::ALIGNER.accel_bias_sigma(),
+            gyro_arw: FilterPrior::ALIGNER.gyro_arw(),
+            accel_vrw: FilterPrior::ALIGNER.accel_vrw(),
             zupt_sigma: 0.001,
             history_s: 60.0,
         }
@@ -150,13 +149,12 @@ impl AlignerConfig {
 pub fn coarse_attitude_sigma(cfg: &AlignerConfig) -> Vec3 {
     let g = earth::normal_gravity(cfg.lat, cfg.height);
     let span = cfg.coarse_s;
-    let arcsec = std::f64::consts::PI / 180.0 / 3600.0;
     let acc = cfg.accel_bias_sigma[0].max(cfg.accel_bias_sigma[1]);
     let gyro = cfg.gyro_bias_sigma[0].max(cfg.gyro_bias_sigma[1]);
     let level = (acc / g)
         .hypot(3.0 * cfg.accel_vrw / (g * span.sqrt()))
-        .max(10.0 * arcsec);
-    let heading = (gyro.hypot(3.0 * cfg.gyro_arw / span.sqrt()) / (earth::OMEGA_IE * cfg.lat.cos())).max(60.0 * arcsec);
+        .max(10.0 * ARCSEC);
+    let heading = (gyro.hypot(3.0 * cfg.gyro_arw / span.sqrt()) / (earth::OMEGA_IE * cfg.lat.cos())).max(60.0 * ARCSEC);
     [level, level, heading]
 }
 

@@ -4,6 +4,7 @@
 //! value in user units (deg, deg/s, deg/h, m, Hz, s, g) and the limit, e.g.
 //! `lat_rad: latitude 91.5 deg is outside [-89, 89] deg`.
 
+use crate::units;
 use std::fmt;
 
 /// An expected failure of the core (see the module docs). `key()` names the setting or input.
@@ -105,27 +106,26 @@ pub(crate) enum Unit {
 }
 
 /// rad/sqrt(s) printed in deg/sqrt(h) (angle random walk).
-pub(crate) const DEG_PER_RTH: Unit = Unit::Scaled(180.0 / std::f64::consts::PI * 60.0, "deg/sqrt(h)");
+pub(crate) const DEG_PER_RTH: Unit = Unit::Scaled(units::SQRT_HOUR / units::DEG, "deg/sqrt(h)");
 /// rad/s/sqrt(s) printed in deg/h/sqrt(h) (rate random walk).
-pub(crate) const DEG_H_PER_RTH: Unit = Unit::Scaled(180.0 / std::f64::consts::PI * 3600.0 * 60.0, "deg/h/sqrt(h)");
+pub(crate) const DEG_H_PER_RTH: Unit = Unit::Scaled(units::HOUR * units::SQRT_HOUR / units::DEG, "deg/h/sqrt(h)");
 /// m/s^2 printed in ug (1 ug = 9.80665e-6 m/s^2).
-pub(crate) const MICRO_G: Unit = Unit::Scaled(1.0 / (STANDARD_GRAVITY * 1e-6), "ug");
+pub(crate) const MICRO_G: Unit = Unit::Scaled(1.0 / units::MICRO_G, "ug");
 /// m/s/sqrt(s) printed in ug/sqrt(Hz) (velocity random walk).
-pub(crate) const MICRO_G_PER_RTHZ: Unit = Unit::Scaled(1.0 / (STANDARD_GRAVITY * 1e-6), "ug/sqrt(Hz)");
+pub(crate) const MICRO_G_PER_RTHZ: Unit = Unit::Scaled(1.0 / units::MICRO_G, "ug/sqrt(Hz)");
 /// A ratio printed in ppm.
 pub(crate) const PPM: Unit = Unit::Scaled(1e6, "ppm");
 /// rad printed in arcsec.
-pub(crate) const ARCSEC: Unit = Unit::Scaled(180.0 / std::f64::consts::PI * 3600.0, "arcsec");
-
-/// One standard gravity [m/s^2] (the unit g of messages and of the specific-force limit).
-pub const STANDARD_GRAVITY: f64 = 9.806_65;
+pub(crate) const ARCSEC: Unit = Unit::Scaled(units::HOUR / units::DEG, "arcsec");
+/// rad/s/degC printed in deg/h/degC (a thermal coefficient of the drift).
+pub(crate) const DEG_H_PER_C: Unit = Unit::Scaled(units::HOUR / units::DEG, "deg/h/degC");
 
 impl Unit {
     fn convert(self, x: f64) -> f64 {
         match self {
             Unit::Deg | Unit::DegPerS | Unit::DegPerS2 => x.to_degrees(),
-            Unit::DegPerH => x.to_degrees() * 3600.0,
-            Unit::G => x / STANDARD_GRAVITY,
+            Unit::DegPerH => x.to_degrees() * units::HOUR,
+            Unit::G => x / units::STANDARD_GRAVITY,
             Unit::Si(_) => x,
             Unit::Scaled(factor, _) => x * factor,
         }

@@ -96,8 +96,9 @@ impl ImuErrorParams {
     /// Range checks; errors name the contract key. Limits reject nonsense, not unusual sensors.
     pub fn validate(&self) -> Result<(), CoreError> {
         use crate::error::{
-            all_in_range, in_range, ARCSEC, DEG_H_PER_RTH, DEG_PER_RTH, MICRO_G, MICRO_G_PER_RTHZ, PPM,
+            all_in_range, in_range, ARCSEC, DEG_H_PER_C, DEG_H_PER_RTH, DEG_PER_RTH, MICRO_G, MICRO_G_PER_RTHZ, PPM,
         };
+        use crate::units::{DEG, HOUR};
         let (gb, g) = (MAX_GYRO_BIAS_RAD_S, Unit::DegPerH);
         all_in_range("gyro_bias_rad_s", "gyro bias", &self.gyro_bias, -gb, gb, g)?;
         in_range(
@@ -174,12 +175,18 @@ impl ImuErrorParams {
             200.0,
             Unit::Si("deg C"),
         )?;
-        let per_c = Unit::Scaled(180.0 / std::f64::consts::PI * 3600.0, "deg/h/degC");
-        in_range("drift_k1_rad_s_per_c", "drift k1", self.drift_k1, -1e-3, 1e-3, per_c)?;
-        let per_c2 = Unit::Scaled(180.0 / std::f64::consts::PI * 3600.0, "deg/h/degC^2");
+        in_range(
+            "drift_k1_rad_s_per_c",
+            "drift k1",
+            self.drift_k1,
+            -1e-3,
+            1e-3,
+            DEG_H_PER_C,
+        )?;
+        let per_c2 = Unit::Scaled(HOUR / DEG, "deg/h/degC^2");
         in_range("drift_k2_rad_s_per_c2", "drift k2", self.drift_k2, -1e-3, 1e-3, per_c2)?;
-        // k3 [rad/s per degC/s] in [deg/h per degC/h]: x 180/pi x 3600 / 3600.
-        let per_c_per_h = Unit::Scaled(180.0 / std::f64::consts::PI, "deg/h per degC/h");
+        // k3 [rad/s per degC/s] in [deg/h per degC/h]: the hours cancel.
+        let per_c_per_h = Unit::Scaled(1.0 / DEG, "deg/h per degC/h");
         in_range(
             "drift_k3_rad_s_per_c_per_s",
             "drift k3",

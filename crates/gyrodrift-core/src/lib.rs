@@ -15,7 +15,9 @@
 //! - [`label`]: covariance analysis of the true-drift label (a free navigation with the smoother's error model).
 //! - [`plan`]: covariance analysis for planning an identification (the smoother's drift 1-sigma against the span,
 //!   the position error of a mission), with no IMU samples.
+//! - [`filter_prior`]: the default prior and noise of the aligner and the smoother, and why they differ.
 //! - [`limits`]: the ranges of the shared quantities (site, rate, attitude, samples), checked in one place.
+//! - [`units`]: the unit constants (deg, deg/h, deg/sqrt(h), ug, arcsec, ...), the only conversion factors.
 //! - [`error`]: [`error::CoreError`], the one error type; library code does not panic on data.
 //!
 //! Frames: navigation frame local-level East-North-Up (ENU); body frame Right-Forward-Up.
@@ -26,6 +28,7 @@ pub mod attitude;
 pub mod coarse_alignment;
 pub mod earth;
 pub mod error;
+pub mod filter_prior;
 pub mod imu_error;
 pub mod kalman;
 pub mod label;
@@ -37,3 +40,4 @@ pub mod strapdown;
 pub mod temperature;
 pub mod trajectory;
 pub mod turntable;
+pub mod units;

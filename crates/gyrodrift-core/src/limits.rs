@@ -22,7 +22,8 @@
 //!   walk up to 0.1 deg/h and 0.1 deg/h/sqrt(h), correlation time (0, 1e9] s.
 
 use crate::attitude::Euler;
-use crate::error::{all_positive_at_most, check, in_range, CoreError, Unit, DEG_H_PER_RTH, STANDARD_GRAVITY};
+use crate::error::{all_positive_at_most, check, in_range, CoreError, Unit, DEG_H_PER_RTH};
+use crate::units::STANDARD_GRAVITY;
 
 /// Largest |latitude| \[deg\] (module docs).
 pub const MAX_LAT_DEG: f64 = 89.0;

@@ -259,10 +259,10 @@ pub fn mission_covariance(cfg: &MissionConfig) -> Result<MissionCovariance, Core
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::alignment::DEG_PER_HOUR;
     use crate::earth::OMEGA_IE;
     use crate::smoother::Smoother;
     use crate::turntable::scheme_from_settings;
+    use crate::units::{DEG_PER_H, HOUR};
 
     fn plan_config(lat_deg: f64, spans_h: &[f64]) -> PlanConfig {
         let mut sc = SmootherConfig::new(lat_deg.to_radians(), 0.0, 0.0, 10.0);
@@ -275,9 +275,9 @@ mod tests {
                 roll: 0.0,
                 yaw: 0.0,
             },
-            spans_s: spans_h.iter().map(|h| h * 3600.0).collect(),
-            mission_start_s: 4.0 * 3600.0,
-            mission_s: 72.0 * 3600.0,
+            spans_s: spans_h.iter().map(|h| h * HOUR).collect(),
+            mission_start_s: 4.0 * HOUR,
+            mission_s: 72.0 * HOUR,
         }
     }
 
@@ -288,7 +288,7 @@ mod tests {
             .drift_std;
         assert!(s.windows(2).all(|w| w[1] < w[0]), "{s:?}");
         // Between the alignment-only 2e-3 deg/h of method.md and zero; 16 h near the 1.9e-4 deg/h.
-        let s16 = s[2] / DEG_PER_HOUR;
+        let s16 = s[2] / DEG_PER_H;
         assert!((1.2e-4..3.0e-4).contains(&s16), "{s16}");
     }
 
@@ -337,7 +337,7 @@ mod tests {
         // Cauchy-Schwarz on the east axis, and a correlation that is there after 12 h of overlap (about -0.05).
         let (c, s, floor) = (curve.cross[1][1], curve.drift_std[1], m.pos_cov[1][1].sqrt());
         assert!(c.abs() < s * floor && c.abs() > 0.01 * s * floor, "{c} {s} {floor}");
-        cfg.mission_start_s = 20.0 * 3600.0;
+        cfg.mission_start_s = 20.0 * HOUR;
         assert_eq!(drift_std_curve(&cfg).unwrap().cross[1], [0.0, 0.0]);
     }
 
@@ -356,7 +356,7 @@ mod tests {
         let cfg = MissionConfig {
             lat,
             height: 0.0,
-            span_s: 72.0 * 3600.0,
+            span_s: 72.0 * HOUR,
             step_s: 60.0,
             gyro_arw: 0.0,
             accel_vrw: 0.0,

@@ -128,7 +128,7 @@ mod tests {
         };
         let (t0, r0) = p.at(0.0);
         assert_eq!(t0, 20.0);
-        assert!((r0 - 20.0 / 3600.0).abs() < 1e-15);
+        assert!((r0 - 20.0 / crate::units::HOUR).abs() < 1e-15);
         let (t1, _) = p.at(3600.0);
         assert!((t1 - (40.0 - 20.0 / std::f64::consts::E)).abs() < 1e-12);
         assert!((p.at(1e7).0 - 40.0).abs() < 1e-9);

@@ -439,7 +439,7 @@ pub fn check_route_latitude(traj: &Trajectory, lat0: f64, yaw0: f64, duration_s:
                 format!(
                     "the route reaches latitude {} deg at t = {} h, beyond +-{} deg",
                     sig(p[0].to_degrees()),
-                    sig(t / 3600.0),
+                    sig(t / crate::units::HOUR),
                     sig(lat_max.to_degrees())
                 ),
             );

@@ -24,6 +24,7 @@
 //!   then -270 back. The cruise rate's magnitude is used for every slew.
 
 use crate::error::{check, CoreError, Unit};
+use crate::units::DEG;
 use std::f64::consts::TAU;
 
 /// A rotation scheme about body Up (SI: rad, rad/s, rad/s^2, s).
@@ -176,11 +177,12 @@ pub fn balanced_reciprocating_span(rate: f64, accel: f64, dwell: f64, turns: u32
     Ok(0.5 * (lo + hi))
 }
 
-/// Default cruise rate of the table [rad/s] (6 deg/s).
+/// Default cruise rate of the table [rad/s] (6 deg/s; written (6 pi) / 180, one bit above `6.0 * DEG`, as every
+/// simulated run so far has had it).
 pub const DEFAULT_TABLE_RATE_RAD_S: f64 = 6.0 * std::f64::consts::PI / 180.0;
 /// Default peak acceleration of starts, stops and reversals [rad/s^2] (100 deg/s^2: a ramp to 6 deg/s takes
 /// 0.12 s and a 360 deg reciprocating span leaves 0.2 % of a horizontal error un-modulated).
-pub const DEFAULT_TABLE_ACCEL_RAD_S2: f64 = 100.0 * std::f64::consts::PI / 180.0;
+pub const DEFAULT_TABLE_ACCEL_RAD_S2: f64 = 100.0 * DEG;
 /// Default reciprocating span \[rad\] (one turn).
 pub const DEFAULT_RECIPROCATING_SPAN_RAD: f64 = TAU;
 /// Names of the schemes, as the binding and the scenario files spell them.
@@ -651,8 +653,8 @@ mod tests {
     use super::*;
     use std::f64::consts::{FRAC_PI_2, PI};
 
-    const RATE: f64 = 6.0 * PI / 180.0;
-    const ACC: f64 = 2.0 * PI / 180.0;
+    const RATE: f64 = DEFAULT_TABLE_RATE_RAD_S;
+    const ACC: f64 = 2.0 * DEG;
 
     fn schemes() -> Vec<RotationScheme> {
         vec![

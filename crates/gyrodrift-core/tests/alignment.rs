@@ -1,17 +1,14 @@
 //! Alignment with the simulator and reciprocating rotation against closed forms and the filter's own stds.
 
-use gyrodrift_core::alignment::{attitude_error, Aligner, AlignerConfig, AlignmentResult, DEG_PER_HOUR, MICRO_G};
+use gyrodrift_core::alignment::{attitude_error, Aligner, AlignerConfig, AlignmentResult};
 use gyrodrift_core::attitude::{euler_to_dcm, mat_vec, Euler};
 use gyrodrift_core::earth;
 use gyrodrift_core::imu_error::ImuErrorParams;
 use gyrodrift_core::kalman::N_STATES;
 use gyrodrift_core::simulator::{ImuChunk, ImuSimulator, ImuSimulatorConfig};
 use gyrodrift_core::turntable::RotationScheme;
+use gyrodrift_core::units::{ARCMIN, ARCSEC, DEG, DEG_PER_H, MICRO_G, SQRT_HOUR};
 use std::f64::consts::PI;
-
-const DEG: f64 = PI / 180.0;
-const ARCSEC: f64 = DEG / 3600.0;
-const ARCMIN: f64 = DEG / 60.0;
 const RATE_HZ: f64 = 20.0;
 
 fn lat0() -> f64 {
@@ -29,9 +26,9 @@ fn reciprocating() -> RotationScheme {
 
 fn biased(seed: u64, noise: bool) -> ImuSimulatorConfig {
     let errors = ImuErrorParams {
-        gyro_bias: [0.01 * DEG_PER_HOUR, -0.008 * DEG_PER_HOUR, 0.003 * DEG_PER_HOUR],
+        gyro_bias: [0.01 * DEG_PER_H, -0.008 * DEG_PER_H, 0.003 * DEG_PER_H],
         accel_bias: [50.0 * MICRO_G, -40.0 * MICRO_G, 30.0 * MICRO_G],
-        gyro_arw: if noise { 0.001 * DEG / 60.0 } else { 0.0 },
+        gyro_arw: if noise { 0.001 * DEG / SQRT_HOUR } else { 0.0 },
         accel_vrw: if noise { 10.0 * MICRO_G } else { 0.0 },
         ..Default::default()
     };
@@ -189,12 +186,12 @@ fn fine_alignment_4h_estimates_the_horizontal_biases() {
     let res = &r.res;
     let gb = [0.01, -0.008, 0.003];
     let ab = [50.0, -40.0, 30.0];
-    let gerr: Vec<f64> = (0..3).map(|i| res.gyro_bias[i] / DEG_PER_HOUR - gb[i]).collect();
+    let gerr: Vec<f64> = (0..3).map(|i| res.gyro_bias[i] / DEG_PER_H - gb[i]).collect();
     let aerr: Vec<f64> = (0..3).map(|i| res.accel_bias[i] / MICRO_G - ab[i]).collect();
     let phi = attitude_error(res.attitude, r.true_end);
     println!(
         "fine 4 h, no noise: gyro err {gerr:.5?} deg/h, std {:.5?}",
-        res.gyro_bias_std.map(|x| x / DEG_PER_HOUR)
+        res.gyro_bias_std.map(|x| x / DEG_PER_H)
     );
     println!(
         "  accel err {aerr:.3?} ug, std {:.3?}",
@@ -214,11 +211,11 @@ fn fine_alignment_4h_estimates_the_horizontal_biases() {
     assert!(aerr[0].abs() < 5.0 && aerr[1].abs() < 5.0, "{aerr:?}");
     assert!(phi[0].abs() < 3.0 * ARCSEC && phi[1].abs() < 3.0 * ARCSEC, "{phi:?}");
     for i in 0..3 {
-        assert!(gerr[i].abs() < 3.0 * res.gyro_bias_std[i] / DEG_PER_HOUR, "gyro {i}");
+        assert!(gerr[i].abs() < 3.0 * res.gyro_bias_std[i] / DEG_PER_H, "gyro {i}");
         assert!(phi[i].abs() < 3.0 * res.att_std[i], "att {i}");
     }
     // The axial drift stays weakly observable: its std is of the order of method.md's 0.002 deg/h.
-    let z_std = res.gyro_bias_std[2] / DEG_PER_HOUR;
+    let z_std = res.gyro_bias_std[2] / DEG_PER_H;
     assert!(z_std > 0.001 && z_std < 0.004, "{z_std}");
     assert!(res.gyro_bias_std[0] < res.gyro_bias_std[2] && res.gyro_bias_std[1] < res.gyro_bias_std[2]);
 }
@@ -258,7 +255,7 @@ fn filter_stds_are_consistent_with_the_errors_over_seeds() {
         let res = &r.res;
         let phi = attitude_error(res.attitude, r.true_end);
         let gz: Vec<f64> = (0..3)
-            .map(|i| (res.gyro_bias[i] / DEG_PER_HOUR - gb[i]) / (res.gyro_bias_std[i] / DEG_PER_HOUR))
+            .map(|i| (res.gyro_bias[i] / DEG_PER_H - gb[i]) / (res.gyro_bias_std[i] / DEG_PER_H))
             .collect();
         let az: Vec<f64> = (0..2)
             .map(|i| (res.accel_bias[i] / MICRO_G - ab[i]) / (res.accel_bias_std[i] / MICRO_G))
@@ -267,9 +264,7 @@ fn filter_stds_are_consistent_with_the_errors_over_seeds() {
         println!("seed {seed}: gyro z-scores {gz:.2?}, accel {az:.2?}, attitude {pz:.2?}");
         println!(
             "  gyro err {:.5?} deg/h, accel err {:.2?} ug, att err {:.2?} arcsec",
-            (0..3)
-                .map(|i| res.gyro_bias[i] / DEG_PER_HOUR - gb[i])
-                .collect::<Vec<_>>(),
+            (0..3).map(|i| res.gyro_bias[i] / DEG_PER_H - gb[i]).collect::<Vec<_>>(),
             (0..3).map(|i| res.accel_bias[i] / MICRO_G - ab[i]).collect::<Vec<_>>(),
             phi.map(|x| x / ARCSEC)
         );
@@ -441,10 +436,10 @@ fn continuous_rotation_cannot_tell_horizontal_gyro_from_accelerometer_biases() {
     );
     let prior = 0.01;
     for i in 0..2 {
-        let std = r.res.gyro_bias_std[i] / DEG_PER_HOUR;
+        let std = r.res.gyro_bias_std[i] / DEG_PER_H;
         assert!((std / prior - 1.0).abs() < 0.01, "{i}: {std}");
     }
-    let confounded = earth::normal_gravity(lat0(), 0.0) * prior * DEG_PER_HOUR / (6.0 * DEG) / MICRO_G;
+    let confounded = earth::normal_gravity(lat0(), 0.0) * prior * DEG_PER_H / (6.0 * DEG) / MICRO_G;
     println!(
         "continuous: accel std {:.3?} ug, g eps / w = {confounded:.3} ug",
         r.res.accel_bias_std.map(|x| x / MICRO_G)
@@ -465,8 +460,8 @@ fn four_position_indexing_observes_the_horizontal_gyro_biases() {
     let gb = [0.01, -0.008, 0.003];
     let phi = attitude_error(res.attitude, r.true_end);
     for i in 0..3 {
-        let err = res.gyro_bias[i] / DEG_PER_HOUR - gb[i];
-        let std = res.gyro_bias_std[i] / DEG_PER_HOUR;
+        let err = res.gyro_bias[i] / DEG_PER_H - gb[i];
+        let std = res.gyro_bias_std[i] / DEG_PER_H;
         println!(
             "indexing: gyro {i} err {err:.5} std {std:.5} deg/h; phi {:.2} std {:.2} arcsec",
             phi[i] / ARCSEC,
@@ -474,5 +469,5 @@ fn four_position_indexing_observes_the_horizontal_gyro_biases() {
         );
         assert!(err.abs() < 3.0 * std && phi[i].abs() < 3.0 * res.att_std[i]);
     }
-    assert!(res.gyro_bias_std[0] / DEG_PER_HOUR < 0.001 && res.gyro_bias_std[1] / DEG_PER_HOUR < 0.001);
+    assert!(res.gyro_bias_std[0] / DEG_PER_H < 0.001 && res.gyro_bias_std[1] / DEG_PER_H < 0.001);
 }

@@ -2,11 +2,12 @@
 
 use gyrodrift_core::alignment::{Aligner, AlignerConfig};
 use gyrodrift_core::coarse_alignment::InertialCoarseAlignment;
-use gyrodrift_core::error::{CoreError, STANDARD_GRAVITY};
+use gyrodrift_core::error::CoreError;
 use gyrodrift_core::kalman::{ErrorStateFilter, N_STATES};
 use gyrodrift_core::simulator::{ImuChunkSlices, ImuSimulator, ImuSimulatorConfig, MAX_CHUNK_SAMPLES};
 use gyrodrift_core::strapdown::{Navigator, NavigatorConfig};
 use gyrodrift_core::turntable::RotationScheme;
+use gyrodrift_core::units::STANDARD_GRAVITY;
 
 const RATE_HZ: f64 = 10.0;
 

@@ -5,12 +5,8 @@ use gyrodrift_core::earth::{self, NMI};
 use gyrodrift_core::simulator::{ImuChunk, ImuSimulator, ImuSimulatorConfig};
 use gyrodrift_core::strapdown::{NavState, Navigator, NavigatorConfig, Vertical};
 use gyrodrift_core::turntable::{balanced_reciprocating_span, RotationScheme};
+use gyrodrift_core::units::{ARCSEC, DEG, DEG_PER_H, HOUR, MICRO_G, SQRT_HOUR};
 use std::f64::consts::PI;
-
-const DEG: f64 = PI / 180.0;
-const DEG_H: f64 = PI / 180.0 / 3600.0;
-const UG: f64 = 9.806_65e-6;
-const HOUR: f64 = 3600.0;
 
 fn lat0() -> f64 {
     28.222 * DEG
@@ -153,7 +149,7 @@ fn at_hour(out: &[NavState], h: f64) -> &NavState {
 
 #[test]
 fn constant_axial_drift_gives_the_closed_form_latitude_and_position_errors() {
-    let eps = 0.003 * DEG_H;
+    let eps = 0.003 * DEG_PER_H;
     for (name, scheme) in [("none", RotationScheme::None), ("reciprocating", reciprocating())] {
         let mut cfg = base(scheme, 100.0, 72.0);
         cfg.errors.gyro_bias = [0.0, 0.0, eps];
@@ -162,14 +158,14 @@ fn constant_axial_drift_gives_the_closed_form_latitude_and_position_errors() {
         // Latitude error at 12 h (computed minus true) against 2 eps cos L / w_ie.
         let dlat = at_hour(&out, 12.0).lat - lat;
         let expect = 2.0 * eps * lat.cos() / earth::OMEGA_IE;
-        let dlat_as = dlat.to_degrees() * 3600.0;
+        let dlat_as = dlat / ARCSEC;
         eprintln!(
             "axial {name}: latitude error at 12 h {dlat_as:.3} arcsec, closed form {:.3} arcsec ({:+.3} %)",
-            expect.to_degrees() * 3600.0,
+            expect / ARCSEC,
             (dlat / expect - 1.0) * 100.0
         );
         assert!((dlat / expect - 1.0).abs() < 0.01, "{name}: {dlat_as} arcsec");
-        assert!((expect.to_degrees() * 3600.0 - 72.5).abs() < 0.1);
+        assert!((expect / ARCSEC - 72.5).abs() < 0.1);
         // Position error at 72 h against the closed form (5.40 nmi).
         let s72 = at_hour(&out, 72.0);
         let err = pos_err_m(s72, lat, lon);
@@ -193,8 +189,8 @@ fn horizontal_errors(scheme: RotationScheme) -> (f64, f64) {
     let mut cfg = base(scheme, 100.0, 72.0);
     // Yaw 0: body x, y = East, North, so the north drift is 0.01 deg/h (method.md's ~34 nmi case).
     cfg.attitude.yaw = 0.0;
-    cfg.errors.gyro_bias = [0.01 * DEG_H, 0.01 * DEG_H, 0.0];
-    cfg.errors.accel_bias = [50.0 * UG, 50.0 * UG, 0.0];
+    cfg.errors.gyro_bias = [0.01 * DEG_PER_H, 0.01 * DEG_PER_H, 0.0];
+    cfg.errors.accel_bias = [50.0 * MICRO_G, 50.0 * MICRO_G, 0.0];
     let (lat, lon) = (cfg.lat, cfg.lon);
     let out = run(cfg, 60.0);
     let max = out.iter().map(|s| pos_err_m(s, lat, lon)).fold(0.0, f64::max) / NMI;
@@ -266,11 +262,11 @@ fn z_scale_factor_error_is_an_axial_drift_only_under_unidirectional_rotation() {
     let recip = lat_err(reciprocating());
     eprintln!(
         "z scale 1 ppm at 6 deg/s (eps = {:.4} deg/h): latitude error at 12 h continuous {:.2} arcsec (closed form {:.2}, {:+.2} %), reciprocating {:.4} arcsec",
-        eps / DEG_H,
-        cont.to_degrees() * 3600.0,
-        expect.to_degrees() * 3600.0,
+        eps / DEG_PER_H,
+        cont / ARCSEC,
+        expect / ARCSEC,
         (cont / expect - 1.0) * 100.0,
-        recip.to_degrees() * 3600.0
+        recip / ARCSEC
     );
     assert!((cont / expect - 1.0).abs() < 0.02, "continuous");
     assert!(recip.abs() < 0.01 * expect, "reciprocating");
@@ -278,7 +274,7 @@ fn z_scale_factor_error_is_an_axial_drift_only_under_unidirectional_rotation() {
 
 #[test]
 fn angle_random_walk_heading_error_grows_as_sqrt_t() {
-    let arw = 0.001 * DEG / 60.0; // 0.001 deg/sqrt(h) in rad/sqrt(s)
+    let arw = 0.001 * DEG / SQRT_HOUR; // 0.001 deg/sqrt(h) in rad/sqrt(s)
     let n_seeds = 200;
     let (t1, t2) = (100.0, 400.0);
     let (mut s1, mut s2) = (0.0, 0.0);
@@ -305,8 +301,8 @@ fn angle_random_walk_heading_error_grows_as_sqrt_t() {
 fn bias_compensation_hook_subtracts_the_estimates() {
     // A sensor with large constant biases, navigated with exact estimates, behaves like an error-free one.
     let mut cfg = base(reciprocating(), 100.0, 6.0);
-    let bg = [0.05 * DEG_H, -0.03 * DEG_H, 0.02 * DEG_H];
-    let ba = [300.0 * UG, -200.0 * UG, 100.0 * UG];
+    let bg = [0.05 * DEG_PER_H, -0.03 * DEG_PER_H, 0.02 * DEG_PER_H];
+    let ba = [300.0 * MICRO_G, -200.0 * MICRO_G, 100.0 * MICRO_G];
     cfg.errors.gyro_bias = bg;
     cfg.errors.accel_bias = ba;
     let (lat, lon) = (cfg.lat, cfg.lon);
@@ -366,7 +362,7 @@ fn bias_compensation_hook_subtracts_the_estimates() {
 
 #[test]
 fn vertical_channel_fixed_and_damped() {
-    let ba_up = 50.0 * UG;
+    let ba_up = 50.0 * MICRO_G;
     let mut cfg = base(RotationScheme::None, 100.0, 3.0);
     cfg.errors.accel_bias = [0.0, 0.0, ba_up];
     let h0 = cfg.height;
@@ -409,7 +405,7 @@ fn vertical_channel_fixed_and_damped() {
 fn temperature_drift_enters_gyro_z_as_k1_k2_k3() {
     // Sum of dtheta_z differences between a run with and without the drift equals the closed-form integral.
     let (start, end, tau, t0c) = (20.0, 35.0, 1800.0, 22.0);
-    let (k1, k2, k3) = (1e-4 * DEG_H, 2e-6 * DEG_H, 0.5 * DEG_H);
+    let (k1, k2, k3) = (1e-4 * DEG_PER_H, 2e-6 * DEG_PER_H, 0.5 * DEG_PER_H);
     // No rotation keeps the summed z increments small, so the difference of the sums is not lost to rounding.
     let mut with = base(RotationScheme::None, 100.0, 2.0);
     with.temperature = gyrodrift_core::temperature::TemperatureProfile::WarmUp {

@@ -1,7 +1,6 @@
 //! The full-information smoother against the simulator: the drift of noise-free logs, the consistency of its
 //! 1-sigma over seeds, and the label covariance analysis against its closed-form latitude law.
 
-use gyrodrift_core::alignment::{DEG_PER_HOUR, MICRO_G};
 use gyrodrift_core::attitude::Euler;
 use gyrodrift_core::error::CoreError;
 use gyrodrift_core::imu_error::ImuErrorParams;
@@ -10,12 +9,12 @@ use gyrodrift_core::simulator::{ImuChunk, ImuSimulator, ImuSimulatorConfig};
 use gyrodrift_core::smoother::{state_names, Smoother, SmootherConfig, SmootherResult};
 use gyrodrift_core::temperature::TemperatureProfile;
 use gyrodrift_core::turntable::RotationScheme;
+use gyrodrift_core::units::{DEG, DEG_PER_H, DEG_PER_H_PER_SQRT_H, HOUR, MICRO_G, SQRT_HOUR};
 use std::f64::consts::PI;
 
-const DEG: f64 = PI / 180.0;
 const RATE_HZ: f64 = 5.0;
-const SPAN_S: f64 = 8.0 * 3600.0;
-const ARW: f64 = 0.0005 * DEG / 60.0;
+const SPAN_S: f64 = 8.0 * HOUR;
+const ARW: f64 = 0.0005 * DEG / SQRT_HOUR;
 const VRW: f64 = 5.0 * MICRO_G;
 
 fn sim(lat_deg: f64, drift_deg_h: f64, scheme: RotationScheme, seed: u64, noise: bool) -> ImuSimulatorConfig {
@@ -31,7 +30,7 @@ fn sim(lat_deg: f64, drift_deg_h: f64, scheme: RotationScheme, seed: u64, noise:
         },
         scheme,
         errors: ImuErrorParams {
-            gyro_bias: [0.004 * DEG_PER_HOUR, -0.003 * DEG_PER_HOUR, drift_deg_h * DEG_PER_HOUR],
+            gyro_bias: [0.004 * DEG_PER_H, -0.003 * DEG_PER_H, drift_deg_h * DEG_PER_H],
             accel_bias: [20.0 * MICRO_G, -10.0 * MICRO_G, 5.0 * MICRO_G],
             gyro_arw: if noise { ARW } else { 0.0 },
             accel_vrw: if noise { VRW } else { 0.0 },
@@ -75,11 +74,11 @@ fn noise_free_logs_give_the_simulated_drift() {
         for lat in [20.0, 40.0, 60.0] {
             for drift in [0.003, 0.05] {
                 let r = smooth(sim(lat, drift, scheme.clone(), 1, false));
-                let err = r.drift / DEG_PER_HOUR - drift;
+                let err = r.drift / DEG_PER_H - drift;
                 println!(
                     "{scheme:?} {lat} deg, {drift} deg/h: error {err:.1e} deg/h, 1-sigma {:.1e}, largest attitude \
                      correction after 1 h {:.1e} rad, velocity {:.1e} m/s, position {:.3} m",
-                    r.drift_std / DEG_PER_HOUR,
+                    r.drift_std / DEG_PER_H,
                     r.max_attitude_correction,
                     r.max_velocity_correction,
                     r.max_position_error
@@ -87,7 +86,7 @@ fn noise_free_logs_give_the_simulated_drift() {
                 assert!(err.abs() < 1e-5, "{err}");
                 // The linear regime: arcsecond-free corrections, mm/s, centimetres.
                 assert!(r.max_attitude_correction < 1e-6 && r.max_position_error < 1.0);
-                assert!((r.drift_end - r.drift).abs() < 1e-12 * DEG_PER_HOUR + 1e-3 * r.drift_std);
+                assert!((r.drift_end - r.drift).abs() < 1e-12 * DEG_PER_H + 1e-3 * r.drift_std);
                 // The smoothed history of a constant is that constant.
                 for (d, s) in r.hist_drift.iter().zip(&r.hist_drift_std) {
                     assert!((d - r.drift).abs() < 0.01 * r.drift_std, "{d} {}", r.drift);
@@ -105,7 +104,7 @@ fn white_noise_z_scores_have_unit_rms() {
     let n = 12;
     for seed in 0..n {
         let r = smooth(sim(40.0, 0.003, reciprocating(), 100 + seed, true));
-        let z = (r.drift / DEG_PER_HOUR - 0.003) / (r.drift_std / DEG_PER_HOUR);
+        let z = (r.drift / DEG_PER_H - 0.003) / (r.drift_std / DEG_PER_H);
         z2 += z * z;
     }
     let rms = (z2 / n as f64).sqrt();
@@ -116,19 +115,19 @@ fn white_noise_z_scores_have_unit_rms() {
 #[test]
 fn label_sigma_follows_one_over_sin_cos_latitude() {
     let at =
-        |lat_deg: f64| label_sigma(&LabelConfig::white(lat_deg * DEG, 72.0 * 3600.0, 60.0, ARW, VRW, false)).unwrap();
+        |lat_deg: f64| label_sigma(&LabelConfig::white(lat_deg * DEG, 72.0 * HOUR, 60.0, ARW, VRW, false)).unwrap();
     let s45 = at(45.0).drift_std;
     for lat in [10.0, 80.0] {
         let law = s45 * (0.5 / ((lat * DEG).sin() * (lat * DEG).cos()));
         let ratio = at(lat).drift_std / law;
         println!(
             "{lat} deg: {:.2e} deg/h, {ratio:.3} of the 1/(sin L cos L) law",
-            at(lat).drift_std / DEG_PER_HOUR
+            at(lat).drift_std / DEG_PER_H
         );
         assert!((0.8..1.25).contains(&ratio), "{ratio}");
     }
     // method.md: 1.5-1.7e-4 deg/h at 40 deg for this grade (ARW 0.0005 deg/sqrt(h), 72 h).
-    let s40 = at(40.0).drift_std / DEG_PER_HOUR;
+    let s40 = at(40.0).drift_std / DEG_PER_H;
     assert!((1.0e-4..2.5e-4).contains(&s40), "{s40}");
     assert!(label_sigma(&LabelConfig {
         gyro_arw: f64::NAN,
@@ -140,18 +139,18 @@ fn label_sigma_follows_one_over_sin_cos_latitude() {
 #[test]
 fn label_sigma_adds_the_z_gyro_bias_instability_and_rate_random_walk() {
     // 72 h at 40 deg, final criterion.
-    let white = LabelConfig::white(40.0 * DEG, 72.0 * 3600.0, 60.0, ARW, VRW, false);
+    let white = LabelConfig::white(40.0 * DEG, 72.0 * HOUR, 60.0, ARW, VRW, false);
     let s_white = label_sigma(&white).unwrap().drift_std;
     // A Gauss-Markov z bias (1-sigma bi, correlation time tau): independent of the white noise, so the label's
     // variances add.
-    let (bi, tau) = (0.001 * DEG_PER_HOUR, 600.0);
+    let (bi, tau) = (0.001 * DEG_PER_H, 600.0);
     let gm = LabelConfig {
         gyro_bias_instability: bi,
         gyro_correlation: tau,
         ..white.clone()
     };
     let s_gm = label_sigma(&gm).unwrap().drift_std;
-    let gm_only = LabelConfig::white(40.0 * DEG, 72.0 * 3600.0, 60.0, 0.0, 0.0, false);
+    let gm_only = LabelConfig::white(40.0 * DEG, 72.0 * HOUR, 60.0, 0.0, 0.0, false);
     let s_gm_only = label_sigma(&LabelConfig {
         gyro_bias_instability: bi,
         gyro_correlation: tau,
@@ -164,7 +163,7 @@ fn label_sigma_adds_the_z_gyro_bias_instability_and_rate_random_walk() {
     // through the Earth-rate coupling only (psi' = -Omega x psi + eps): a unit drift impulse tau' before the end
     // moves (east, north) by G(tau') = R (sin L cos L (1 - cos W tau'), cos L sin W tau'), whose integral is the
     // drift response g (method.md's dlon and dL); var(d*) = q^2 int (g . G)^2 / |g|^4 (R cancels).
-    let (t, w, lat) = (72.0 * 3600.0, 7.2921151467e-5, 40.0 * DEG);
+    let (t, w, lat) = (72.0 * HOUR, 7.2921151467e-5, 40.0 * DEG);
     let (sl, cl) = (lat.sin(), lat.cos());
     let steps = 200_000;
     let h = t / steps as f64;
@@ -184,7 +183,7 @@ fn label_sigma_adds_the_z_gyro_bias_instability_and_rate_random_walk() {
     let ratio = s_gm_only / closed;
     println!(
         "GM only (tau {tau} s): {:.3e} deg/h, {ratio:.4} of the closed form",
-        s_gm_only / DEG_PER_HOUR
+        s_gm_only / DEG_PER_H
     );
     assert!((0.97..1.03).contains(&ratio), "{ratio}");
     // Long memory (tau >> 72 h): a random constant, which the label absorbs in full: sigma(d*) = sigma.
@@ -198,8 +197,8 @@ fn label_sigma_adds_the_z_gyro_bias_instability_and_rate_random_walk() {
     assert!((s_const / bi - 1.0).abs() < 0.01, "{}", s_const / bi);
     // A rate random walk that has walked `start` before the navigation: its value then is a constant the label
     // absorbs in full (variance rrw^2 start), independent of its walk during the span: the variances add.
-    let rrw = 0.0005 * DEG_PER_HOUR / 60.0;
-    let start = 4.0 * 3600.0;
+    let rrw = 0.0005 * DEG_PER_H_PER_SQRT_H;
+    let start = 4.0 * HOUR;
     let only_start = label_sigma(&LabelConfig {
         gyro_rrw: rrw,
         rrw_start_s: start,
@@ -249,11 +248,11 @@ fn settings_are_checked_and_results_wait_for_the_span() {
 fn thermal_sim(drift_deg_h: f64, k1_deg_h_per_c: f64, tau_h: f64, seed: u64, noise: bool) -> ImuSimulatorConfig {
     let mut s = sim(40.0, drift_deg_h, reciprocating(), seed, noise);
     s.errors.drift_t0_c = 28.0;
-    s.errors.drift_k1 = k1_deg_h_per_c * DEG_PER_HOUR;
+    s.errors.drift_k1 = k1_deg_h_per_c * DEG_PER_H;
     s.temperature = TemperatureProfile::WarmUp {
         start_c: 18.0,
         end_c: 38.0,
-        tau_s: tau_h * 3600.0,
+        tau_s: tau_h * HOUR,
     };
     s
 }
@@ -275,7 +274,7 @@ fn smooth_thermal(sim_cfg: ImuSimulatorConfig, configure: impl Fn(&mut SmootherC
 
 /// The simulated z drift [deg/h] at time t [s] of `thermal_sim`.
 fn thermal_drift_at(drift_deg_h: f64, k1_deg_h_per_c: f64, tau_h: f64, t_s: f64) -> f64 {
-    let temp = 38.0 + (18.0 - 38.0) * (-t_s / (tau_h * 3600.0)).exp();
+    let temp = 38.0 + (18.0 - 38.0) * (-t_s / (tau_h * HOUR)).exp();
     drift_deg_h + k1_deg_h_per_c * (temp - 28.0)
 }
 
@@ -285,13 +284,13 @@ fn noise_free_thermal_logs_give_the_end_drift_and_the_coefficient() {
         let r = smooth_thermal(thermal_sim(0.003, k1, tau_h, 1, false), |_| {});
         assert!(r.thermal);
         let end = thermal_drift_at(0.003, k1, tau_h, SPAN_S);
-        let err_end = r.drift_end / DEG_PER_HOUR - end;
-        let err_k = r.thermal_coeff / DEG_PER_HOUR - k1;
+        let err_end = r.drift_end / DEG_PER_H - end;
+        let err_k = r.thermal_coeff / DEG_PER_H - k1;
         println!(
             "tau {tau_h} h, k1 {k1}: end drift error {err_end:.1e} deg/h (1-sigma {:.1e}), k error {err_k:.1e} \
              deg/h/degC (1-sigma {:.1e}), T_ref {:.2}, T_end {:.2}, range {:.2} degC",
-            r.drift_end_std / DEG_PER_HOUR,
-            r.thermal_coeff_std / DEG_PER_HOUR,
+            r.drift_end_std / DEG_PER_H,
+            r.thermal_coeff_std / DEG_PER_H,
             r.temp_ref,
             r.temp_end,
             r.temp_range
@@ -300,15 +299,15 @@ fn noise_free_thermal_logs_give_the_end_drift_and_the_coefficient() {
         assert!(err_k.abs() < 1e-6, "{err_k}");
         // eps_z is the drift at T_ref; the history follows the law.
         let at_ref = 0.003 + k1 * (r.temp_ref - 28.0);
-        assert!((r.drift_ref / DEG_PER_HOUR - at_ref).abs() < 1e-5);
+        assert!((r.drift_ref / DEG_PER_H - at_ref).abs() < 1e-5);
         for (t, d) in r.hist_t.iter().zip(&r.hist_drift) {
             assert!(
-                (d / DEG_PER_HOUR - thermal_drift_at(0.003, k1, tau_h, *t)).abs() < 2e-5,
+                (d / DEG_PER_H - thermal_drift_at(0.003, k1, tau_h, *t)).abs() < 2e-5,
                 "{t} {d}"
             );
         }
         // The constant model (conditioned on k_z = 0) sees a mean of the warm-up, not the end.
-        assert!((r.drift / DEG_PER_HOUR - end).abs() > 1e-4);
+        assert!((r.drift / DEG_PER_H - end).abs() > 1e-4);
     }
 }
 
@@ -353,8 +352,8 @@ fn thermal_z_scores_of_the_end_drift_have_unit_rms() {
     let mut z2 = 0.0;
     for seed in 0..n {
         let r = smooth_thermal(thermal_sim(0.003, 0.0002, 3.0, 200 + seed, true), |_| {});
-        let z = (r.drift_end / DEG_PER_HOUR - thermal_drift_at(0.003, 0.0002, 3.0, SPAN_S))
-            / (r.drift_end_std / DEG_PER_HOUR);
+        let z =
+            (r.drift_end / DEG_PER_H - thermal_drift_at(0.003, 0.0002, 3.0, SPAN_S)) / (r.drift_end_std / DEG_PER_H);
         z2 += z * z;
     }
     let rms = (z2 / n as f64).sqrt();
@@ -372,7 +371,7 @@ fn thermal_settings_and_temperatures_are_checked() {
         Smoother::new(cfg.clone()).unwrap_err().key(),
         "thermal_sigma_rad_s_per_c"
     );
-    cfg.thermal_sigma = 0.01 * DEG_PER_HOUR;
+    cfg.thermal_sigma = 0.01 * DEG_PER_H;
     cfg.temp_ref = Some(500.0);
     assert_eq!(Smoother::new(cfg.clone()).unwrap_err().key(), "temp_ref_c");
     cfg.temp_ref = None;

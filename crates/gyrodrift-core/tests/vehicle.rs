@@ -10,9 +10,8 @@ use gyrodrift_core::simulator::{ImuChunk, ImuSimulator, ImuSimulatorConfig};
 use gyrodrift_core::strapdown::{Navigator, NavigatorConfig, Vertical};
 use gyrodrift_core::trajectory::{Segment, TrajectoryConfig};
 use gyrodrift_core::turntable::RotationScheme;
+use gyrodrift_core::units::{DEG, HOUR};
 use std::f64::consts::PI;
-
-const DEG: f64 = PI / 180.0;
 
 fn seg(duration: f64, accel: f64, yaw_rate: f64) -> Segment {
     Segment {
@@ -256,7 +255,7 @@ fn navigate_route(hours: f64, static_s: f64) -> (f64, f64) {
         lon: 112.99 * DEG,
         height: 50.0,
         rate_hz: 100.0,
-        duration_s: hours * 3600.0,
+        duration_s: hours * HOUR,
         attitude: Euler {
             pitch: 0.0,
             roll: 0.0,
@@ -314,7 +313,7 @@ fn error_free_imu_navigates_a_road_route() {
 #[test]
 #[ignore]
 fn error_free_imu_navigates_a_road_route_for_72_h() {
-    let (worst, last) = navigate_route(88.0, 16.0 * 3600.0);
+    let (worst, last) = navigate_route(88.0, 16.0 * HOUR);
     eprintln!(
         "error-free road route, 16 h + 72 h: max {:.3e} nmi, final {:.3e} nmi",
         worst / NMI,

@@ -502,7 +502,11 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("WGS84_F", earth::F)?;
     m.add("OMEGA_IE_RAD_S", earth::OMEGA_IE)?;
     m.add("NMI_M", earth::NMI)?;
-    m.add("STANDARD_GRAVITY_M_S2", gyrodrift_core::error::STANDARD_GRAVITY)?;
+    m.add("STANDARD_GRAVITY_M_S2", gyrodrift_core::units::STANDARD_GRAVITY)?;
+    // The smoother's default noise (gyrodrift-core `filter_prior`), in the units of `SensorNoise`'s keys.
+    let prior = gyrodrift_core::filter_prior::FilterPrior::SMOOTHER;
+    m.add("SMOOTHER_GYRO_ARW_DEG_RTH", prior.gyro_arw_deg_rth)?;
+    m.add("SMOOTHER_ACCEL_VRW_UG_RTHZ", prior.accel_vrw_ug_rthz)?;
     // The limits of gyrodrift-core (`limits`, `turntable`, `simulator`), in the units their names carry.
     {
         use gyrodrift_core::limits as l;

@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from gyrodrift import _core
 from gyrodrift.errors import InputError
 from gyrodrift.files.toml_input import read_toml
 from gyrodrift.logs import ImuLog
@@ -54,10 +55,14 @@ class SensorNoise:
         Gyro rate random walk [deg/h/sqrt(h)] (0: none).
     source : str
         Where the numbers come from (``"given"``, ``"log"``, ``"default"``).
+
+    The default ARW and VRW are the smoother's defaults, read from the core (gyrodrift-core
+    ``filter_prior::FilterPrior::SMOOTHER``, which also says why the aligner's differ): 0.0005 deg/sqrt(h) and
+    5 ug/sqrt(Hz), the RLG grade of the study.
     """
 
-    arw_deg_rth: float = 0.0005
-    vrw_ug_rthz: float = 5.0
+    arw_deg_rth: float = _core.SMOOTHER_GYRO_ARW_DEG_RTH
+    vrw_ug_rthz: float = _core.SMOOTHER_ACCEL_VRW_UG_RTHZ
     bias_instability_deg_h: float = 0.0
     correlation_s: float = 3600.0
     rrw_deg_h_rth: float = 0.0

@@ -1,10 +1,12 @@
 //! The smoother's settings ([`SmootherConfig`]), their range checks and the state layout they give.
 
 use super::{DEFAULT_THERMAL_MIN_RANGE_C, DEFAULT_THERMAL_SIGMA_DEG_H_PER_C, MAX_UPDATES, POS};
-use crate::alignment::{AlignerConfig, DEG_PER_HOUR, MICRO_G};
+use crate::alignment::AlignerConfig;
 use crate::error::{check, CoreError};
+use crate::filter_prior::FilterPrior;
 use crate::kalman::{N_STATES as N_BASE, STATE_NAMES as BASE_NAMES};
 use crate::limits::{check_site, check_slow_bias};
+use crate::units::DEG_PER_H;
 
 /// Settings of the smoother (SI). Keys of the binding in brackets.
 #[derive(Clone, Debug, PartialEq)]
@@ -23,7 +25,8 @@ pub struct SmootherConfig {
     /// Initial attitude 1-sigma E N U \[rad\] (`att_sigma_rad`); None: the aligner's `coarse_attitude_sigma`.
     pub att_sigma: Option<[f64; 3]>,
     /// Prior 1-sigma of the constant gyro biases [rad/s] (`gyro_bias_sigma_rad_s`, default 0.1 deg/h: wide, so the
-    /// prior pulls a 0.05 deg/h drift by less than 1e-7 deg/h).
+    /// prior pulls a 0.05 deg/h drift by less than 1e-7 deg/h; the defaults of the prior and the noise are
+    /// [`FilterPrior::SMOOTHER`], which says why they differ from the aligner's).
     pub gyro_bias_sigma: [f64; 3],
     /// Prior 1-sigma of the accelerometer biases [m/s^2] (`accel_bias_sigma_m_s2`, default 100 ug).
     pub accel_bias_sigma: [f64; 3],
@@ -68,10 +71,10 @@ impl SmootherConfig {
             span_s: 57_600.0,
             update_s: 10.0,
             att_sigma: None,
-            gyro_bias_sigma: [0.1 * DEG_PER_HOUR; 3],
-            accel_bias_sigma: [100.0 * MICRO_G; 3],
-            gyro_arw: 0.0005 * std::f64::consts::PI / 180.0 / 60.0,
-            accel_vrw: 5.0 * MICRO_G,
+            gyro_bias_sigma: FilterPrior::SMOOTHER.gyro_bias_sigma(),
+            accel_bias_sigma: FilterPrior::SMOOTHER.accel_bias_sigma(),
+            gyro_arw: FilterPrior::SMOOTHER.gyro_arw(),
+            accel_vrw: FilterPrior::SMOOTHER.accel_vrw(),
             gyro_bias_instability: 0.0,
             gyro_correlation: 3600.0,
             gyro_rrw: 0.0,
@@ -79,7 +82,7 @@ impl SmootherConfig {
             position_sigma: 0.01,
             history_s: 600.0,
             thermal: false,
-            thermal_sigma: DEFAULT_THERMAL_SIGMA_DEG_H_PER_C * DEG_PER_HOUR,
+            thermal_sigma: DEFAULT_THERMAL_SIGMA_DEG_H_PER_C * DEG_PER_H,
             temp_ref: None,
             thermal_min_range: DEFAULT_THERMAL_MIN_RANGE_C,
         }
@@ -87,7 +90,7 @@ impl SmootherConfig {
 
     /// Range checks; errors name the key.
     pub fn validate(&self) -> Result<(), CoreError> {
-        use crate::error::{all_positive_at_most, in_range, sig, Unit};
+        use crate::error::{all_positive_at_most, in_range, sig, Unit, DEG_H_PER_C};
         check_site(self.lat, self.lon, self.height, self.rate_hz)?;
         // The aligner's checks of the shared settings (one set of limits).
         self.aligner_config().validate()?;
@@ -111,13 +114,12 @@ impl SmootherConfig {
             1e4,
             Unit::Si("m"),
         )?;
-        let per_c = Unit::Scaled(180.0 / std::f64::consts::PI * 3600.0, "deg/h/degC");
         all_positive_at_most(
             "thermal_sigma_rad_s_per_c",
             "thermal coefficient prior sigma",
             &[self.thermal_sigma],
-            DEG_PER_HOUR,
-            per_c,
+            DEG_PER_H,
+            DEG_H_PER_C,
         )?;
         if let Some(t) = self.temp_ref {
             in_range(
