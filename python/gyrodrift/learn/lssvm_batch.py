@@ -18,6 +18,7 @@ from gyrodrift.learn.kernels import check_sigma, rbf_from_squared_distances
 from gyrodrift.learn.lssvm_system import (
     COND_REFUSE,
     check_sample_weight,
+    check_square_system,
     cho_solve,
     cholesky_upper,
     condition_estimate,
@@ -107,15 +108,8 @@ def rbf_batch_errors(
     """
     if kind not in ("train", "loo"):
         raise ValueError(f"kind must be 'train' or 'loo', got {kind!r}")
-    D = np.asarray(sqdist, dtype=float)
-    y = np.asarray(y, dtype=float)
-    if D.ndim != 2 or D.shape[0] != D.shape[1]:
-        raise ValueError(f"sqdist must be a square 2-D matrix, got shape {D.shape}")
+    D, y = check_square_system(sqdist, y, "sqdist", "matrix", multi_output=False)
     n = D.shape[0]
-    if n < 2:
-        raise ValueError(f"the LSSVM needs at least 2 samples, got n_samples={n}")
-    if y.ndim != 1 or y.shape[0] != n:
-        raise ValueError(f"y must have shape ({n},) to match sqdist of shape {D.shape}, got {y.shape}")
     if not (np.all(np.isfinite(D)) and np.all(D >= 0.0)):
         raise ValueError("sqdist must be finite and non-negative")
     if not np.all(np.isfinite(y)):

@@ -63,6 +63,7 @@ __all__ = [
     "StoredSolutionError",
     "check_condition",
     "check_sample_weight",
+    "check_square_system",
     "cho_solve",
     "cholesky_upper",
     "condition_estimate",
@@ -244,17 +245,25 @@ def loo_from_factor(U: np.ndarray, alpha: np.ndarray, p: np.ndarray, s: float) -
     return alpha / (denom if alpha.ndim == 1 else denom[:, None])
 
 
-def _check_system(K, y, gamma):
-    gamma = check_positive("gamma", gamma)
-    K = np.asarray(K, dtype=float)
+def check_square_system(M, y, name: str, what: str, *, multi_output: bool) -> tuple[np.ndarray, np.ndarray]:
+    """``M`` (an n x n ``what`` named ``name``, n >= 2) and the targets ``y`` (shape (n,), or (n, k) with
+    ``multi_output``) as float arrays; else ``ValueError`` naming what does not fit."""
+    M = np.asarray(M, dtype=float)
     y = np.asarray(y, dtype=float)
-    if K.ndim != 2 or K.shape[0] != K.shape[1]:
-        raise ValueError(f"K must be a square 2-D kernel matrix, got shape {K.shape}")
-    n = K.shape[0]
+    if M.ndim != 2 or M.shape[0] != M.shape[1]:
+        raise ValueError(f"{name} must be a square 2-D {what}, got shape {M.shape}")
+    n = M.shape[0]
     if n < 2:
         raise ValueError(f"the LSSVM needs at least 2 samples, got n_samples={n}")
-    if y.ndim not in (1, 2) or y.shape[0] != n:
-        raise ValueError(f"y must have shape ({n},) or ({n}, k) to match K of shape {K.shape}, got {y.shape}")
+    if y.ndim not in ((1, 2) if multi_output else (1,)) or y.shape[0] != n:
+        shapes = f"({n},) or ({n}, k)" if multi_output else f"({n},)"
+        raise ValueError(f"y must have shape {shapes} to match {name} of shape {M.shape}, got {y.shape}")
+    return M, y
+
+
+def _check_system(K, y, gamma):
+    gamma = check_positive("gamma", gamma)
+    K, y = check_square_system(K, y, "K", "kernel matrix", multi_output=True)
     if not np.all(np.isfinite(K)):
         raise ValueError("K contains NaN or infinity")
     if not np.all(np.isfinite(y)):
