@@ -1,0 +1,84 @@
+"""The drift model is its parts joined by a small meta-estimator (issue 19): a learner pipeline, a physics base, an
+interval and input ranges; and a model file written before the parts existed loads with the numbers it holds, and
+refitting it today gives the same file."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from sklearn.base import clone
+
+from gyrodrift.cli import main
+from gyrodrift.learn.drift_model import fit_drift_model, make_drift_model
+from gyrodrift.learn.interval import DriftInterval
+from gyrodrift.learn.model_io import load_model, model_to_dict
+from gyrodrift.learn.physics_base import PhysicsBase, physics_estimate
+from gyrodrift.learn.ranges import InputRanges
+from gyrodrift.runs.datasets import load_paper, paper_csv_path
+
+BEFORE = Path(__file__).resolve().parents[1] / "data" / "model_schema4_before_parts.json"
+"""`gyrodrift fit paper_runs.csv --lat0-deg 45.7 --seed 1 --out model.json`, written by the code before the drift
+model was split into parts (commit ad28759)."""
+
+
+@pytest.fixture(scope="module")
+def paper():
+    return load_paper()
+
+
+def test_a_hybrid_predicts_its_physics_base_plus_its_learner(paper):
+    model = fit_drift_model(paper.train, encoding="temperature", target="residual", gamma=30.0, sigma=1.5)
+    assert isinstance(model.base_, PhysicsBase) and isinstance(model.interval_, DriftInterval)
+    assert isinstance(model.ranges_, InputRanges) and model.physics_column_ == "drift_inversion_deg_h"
+    base = physics_estimate(paper.test, "drift_inversion_deg_h")
+    np.testing.assert_allclose(model.predict(paper.test), base + model.learner_.predict(paper.test), rtol=1e-12)
+    # the learner learnt the labels minus the base: its leave-one-out residuals are those of the drift
+    np.testing.assert_array_equal(model.loo_residuals_deg_h, model.learner_.named_steps["lssvr"].loo_residuals_)
+
+
+def test_the_parameters_are_the_learners_and_the_models_own_and_fit_leaves_them_unfitted(paper):
+    model = make_drift_model(encoding="temp_span", method="grid", grid_size=5)
+    params = model.get_params()
+    assert params["learner__encode__encoding"] == "temp_span" and params["learner__lssvr__grid_size"] == 5
+    assert {"target", "physics_column", "label_weighting", "calibration_folds", "base_uncertainty"} <= set(params)
+    twin = clone(model).set_params(learner__lssvr__grid_size=4, target="residual")
+    assert twin.learner.named_steps["lssvr"].grid_size == 4 and model.learner.named_steps["lssvr"].grid_size == 5
+    model.fit(paper.train)
+    assert not hasattr(model.learner.named_steps["lssvr"], "lssvr_")  # fit works on a clone: learner_
+    assert model.learner_.named_steps["lssvr"].tuning_.settings == {"grid_size": 5}
+
+
+def test_a_model_file_written_before_the_parts_loads_with_its_numbers():
+    doc = json.loads(BEFORE.read_text())
+    again = model_to_dict(load_model(BEFORE))
+    for key in ("fitted", "lssvr_params", "tuning", "warnings", "target", "physics_column", "encoding"):
+        assert again[key] == doc[key], key
+    assert again["training"] == doc["training"]
+
+
+def test_refitting_the_file_before_the_parts_gives_the_same_numbers(tmp_path):
+    out = tmp_path / "model.json"
+    args = ["fit", str(paper_csv_path()), "--lat0-deg", "45.7", "--seed", "1", "--out", str(out), "--quiet"]
+    result = CliRunner().invoke(main, args)
+    assert result.exit_code == 0, result.output
+    now, before = json.loads(out.read_text()), json.loads(BEFORE.read_text())
+    for doc in (now, before):
+        del doc["gyrodrift_version"], doc["training"]["source"]
+    assert _same(now, before, "")
+
+
+def _same(a, b, where: str) -> bool:
+    """Equal JSON documents, floats to 1e-12 relative (another BLAS may round the last bits differently)."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        assert a.keys() == b.keys(), where
+        return all(_same(a[k], b[k], f"{where}.{k}") for k in a)
+    if isinstance(a, list) and isinstance(b, list):
+        assert len(a) == len(b), where
+        return all(_same(x, y, f"{where}[{i}]") for i, (x, y) in enumerate(zip(a, b, strict=True)))
+    if isinstance(a, float) and isinstance(b, float):
+        assert a == pytest.approx(b, rel=1e-12, abs=0.0), where
+        return True
+    assert a == b, where
+    return True
