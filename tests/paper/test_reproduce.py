@@ -182,6 +182,8 @@ def test_failed_run_leaves_previous_results(run, tmp_path, monkeypatch):
         stage.file("report.md").write_text("half")
         raise RuntimeError("disk full")
 
+    # the failure is in the writing: the work is the fixture's (its results handed back, not computed again)
+    monkeypatch.setattr("gyrodrift.paper.reproduce.run_reproduction", lambda **kw: run[1])
     monkeypatch.setattr("gyrodrift.paper.report.write_report", boom)
     with pytest.raises(RuntimeError, match="disk full"):
         reproduce(out, seed=0, quiet=True)
@@ -200,9 +202,14 @@ def test_a_folder_with_the_users_files_is_refused_before_the_work(tmp_path, monk
     assert [p.name for p in out.iterdir()] == ["notes.txt"]
 
 
-def test_cli_prints_a_summary(tmp_path):
+def test_cli_prints_a_summary(run, tmp_path, monkeypatch):
+    # the command's part: the seed passed on, the summary printed, the files written (the work is the fixture's,
+    # its results handed back: test_deterministic_for_a_seed runs it again)
+    seeds = []
+    monkeypatch.setattr("gyrodrift.paper.reproduce.run_reproduction", lambda seed, quiet: seeds.append(seed) or run[1])
     r = CliRunner().invoke(main, ["reproduce", "--out", str(tmp_path / "r"), "--seed", "1"])
     assert r.exit_code == 0, r.output
+    assert seeds == [1]
     assert "physics inversion" in r.output and "selected by LOO" in r.output
     assert "wall time" in r.output and "simulated 72 h" in r.output
     assert (tmp_path / "r" / "results.json").exists()
