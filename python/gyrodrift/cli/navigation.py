@@ -6,15 +6,7 @@ from pathlib import Path
 
 import click
 
-from gyrodrift.cli.options import (
-    json_option,
-    log_format_option,
-    print_json,
-    quiet_option,
-    say_wrote,
-    site_from_options,
-    site_options,
-)
+from gyrodrift.cli.options import json_option, log_options, out_folder_option, print_json, quiet_option, say_wrote
 from gyrodrift.cli.types import DRIFT_DEG_H, FiniteFloat, InputPath, Seed
 
 __all__ = ["simulate_command", "navigate_command"]
@@ -25,14 +17,7 @@ __all__ = ["simulate_command", "navigate_command"]
     epilog="Example: gyrodrift simulate examples/scenarios/tour.toml --seed 2 --duration-h 20 --out sim",
 )
 @click.argument("scenario_toml", metavar="SCENARIO.toml", type=InputPath(path_type=Path))
-@click.option(
-    "--out",
-    "out_dir",
-    required=True,
-    type=click.Path(path_type=Path),
-    help="Folder receiving imu.parquet and scenario.resolved.toml: new, empty, or holding only gyrodrift's "
-    "outputs (docs/outputs.md). Required.",
-)
+@out_folder_option("receiving imu.parquet and scenario.resolved.toml")
 @click.option(
     "--duration-h",
     type=FiniteFloat(min=0.0, min_open=True),
@@ -150,16 +135,10 @@ _INITIAL_WORDS = {
     help="Initial state: the log's truth (simulated logs), an alignment of its first 4 h (navigation starts at "
     "the end of it), or auto (truth when the log carries it, else alignment).",
 )
-@site_options
-@log_format_option
-@click.option(
-    "--out",
-    "out_dir",
-    required=True,
-    type=click.Path(path_type=Path),
-    help="Folder receiving nav.parquet (the curves: state and errors every 1 s) and summary.json, and "
-    "navigation.png with --plot: new, empty, or holding only gyrodrift's outputs, e.g. the simulation's own "
-    "folder (docs/outputs.md). Required.",
+@log_options
+@out_folder_option(
+    "receiving nav.parquet (the curves: state and errors every 1 s) and summary.json, and navigation.png with --plot",
+    note=", e.g. the simulation's own folder",
 )
 @click.option(
     "--plot",
@@ -176,9 +155,7 @@ def navigate_command(
     drift_deg_h: float | None,
     old_drift_deg_h: float | None,
     initial: str,
-    lat0_deg: float | None,
-    lon0_deg: float | None,
-    height_m: float | None,
+    site: dict | None,
     log_format: Path | None,
     out_dir: Path,
     plot: bool,
@@ -200,7 +177,6 @@ def navigate_command(
         drift_deg_h = old_drift_deg_h
     from gyrodrift.logs import ImuLog, open_log
 
-    site = site_from_options(lat0_deg, lon0_deg, height_m)
     imu: Path | ImuLog = log
     if log_format is not None:  # the site goes to the log it completes
         imu, site = open_log(log, site=site, format=log_format, require_temperature=False), None

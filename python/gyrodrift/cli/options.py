@@ -1,21 +1,25 @@
 """Options and output lines shared by the commands (the conventions of docs/cli.md).
 
-The static site of the commands that read IMU logs (``--lat0-deg``, ``--lon0-deg``, ``--height-m``), ``--json``,
-``--quiet``, and the one ``wrote ...`` line of every command that writes files.
+The options of the commands that read IMU logs (the static site ``--lat0-deg``, ``--lon0-deg``, ``--height-m``
+and ``--format``), the sensor noise (``--noise``, ...), an output folder ``--out``, ``--connect-timeout-s``,
+``--json``, ``--quiet``, and the one ``wrote ...`` line of every command that writes files.
 """
 
 from __future__ import annotations
+
+import functools
+from pathlib import Path
+from typing import Any
 
 import click
 
 from gyrodrift.cli.types import FiniteFloat, InputPath
 
 __all__ = [
-    "site_options",
-    "site_from_options",
-    "log_format_option",
+    "log_options",
     "noise_options",
-    "noise_from_options",
+    "out_folder_option",
+    "connect_timeout_option",
     "json_option",
     "quiet_option",
     "print_json",
@@ -23,7 +27,20 @@ __all__ = [
 ]
 
 
-def site_options(f):
+def log_options(f):
+    """Add the options of a command reading an IMU log: the static site ``--lat0-deg``, ``--lon0-deg`` and
+    ``--height-m`` (finite numbers; latitude strictly within +-90) and ``--format FILE``. The command receives them
+    as ``site`` (the ``site`` mapping of `gyrodrift.logs.open_log`, None when no site option was given) and
+    ``log_format`` (a path or None)."""
+
+    @functools.wraps(f)
+    def command(*args, lat0_deg, lon0_deg, height_m, **kwargs):
+        return f(*args, site=_site_from_options(lat0_deg, lon0_deg, height_m), **kwargs)
+
+    return _site_options(_log_format_option(command))
+
+
+def _site_options(f):
     """Add ``--lat0-deg``, ``--lon0-deg`` and ``--height-m`` (finite numbers; latitude strictly within +-90)."""
     f = click.option(
         "--height-m",
@@ -46,7 +63,7 @@ def site_options(f):
     return f
 
 
-def site_from_options(lat0_deg: float | None, lon0_deg: float | None, height_m: float | None) -> dict | None:
+def _site_from_options(lat0_deg: float | None, lon0_deg: float | None, height_m: float | None) -> dict | None:
     """The ``site`` mapping of `gyrodrift.logs.open_log` from the options given (None when none was)."""
     site = {}
     if lat0_deg is not None:
@@ -58,10 +75,8 @@ def site_from_options(lat0_deg: float | None, lon0_deg: float | None, height_m: 
     return site or None
 
 
-def log_format_option(f):
+def _log_format_option(f):
     """Add ``--format FILE``: the log format description of a log with its own columns (`gyrodrift.logs.log_format`)."""
-    from pathlib import Path
-
     return click.option(
         "--format",
         "log_format",
@@ -75,23 +90,27 @@ def log_format_option(f):
 
 def noise_options(f):
     """Add ``--noise FILE``, ``--gyro-arw-deg-rth`` and ``--accel-vrw-ug-rthz``: the sensor noise the smoother and
-    the label's 1-sigma assume (`gyrodrift.procedure.noise.SensorNoise`); default: measured from the log."""
-    from pathlib import Path
+    the label's 1-sigma assume. The command receives it as ``noise``: a `gyrodrift.procedure.noise.SensorNoise`, or
+    None when no noise option was given (measure it from the log)."""
 
-    f = click.option(
+    @functools.wraps(f)
+    def command(*args, noise_file, gyro_arw_deg_rth, accel_vrw_ug_rthz, **kwargs):
+        return f(*args, noise=_noise_from_options(noise_file, gyro_arw_deg_rth, accel_vrw_ug_rthz), **kwargs)
+
+    click.option(
         "--accel-vrw-ug-rthz",
         type=FiniteFloat(0.0, 1e6, min_open=True),
         default=None,
         help="Accelerometer velocity random walk [ug/sqrt(Hz)] (with --gyro-arw-deg-rth, or over --noise's). "
         "Default: measured from the log.",
-    )(f)
-    f = click.option(
+    )(command)
+    click.option(
         "--gyro-arw-deg-rth",
         type=FiniteFloat(0.0, 1e3, min_open=True),
         default=None,
         help="Gyro angle random walk [deg/sqrt(h)] (with --accel-vrw-ug-rthz, or over --noise's). Default: "
         "measured from the log.",
-    )(f)
+    )(command)
     return click.option(
         "--noise",
         "noise_file",
@@ -100,10 +119,10 @@ def noise_options(f):
         help="Noise file (TOML): [gyro] arw_deg_rth, [accel] vrw_ug_rthz, optionally [gyro] "
         "bias_instability_deg_h, correlation_s, rrw_deg_h_rth (a scenario file works). Default: measured from "
         "the log.",
-    )(f)
+    )(command)
 
 
-def noise_from_options(noise_file, gyro_arw_deg_rth: float | None, accel_vrw_ug_rthz: float | None):
+def _noise_from_options(noise_file, gyro_arw_deg_rth: float | None, accel_vrw_ug_rthz: float | None):
     """The `SensorNoise` of the noise options, or None (measure it from the log)."""
     from dataclasses import replace
 
@@ -121,6 +140,30 @@ def noise_from_options(noise_file, gyro_arw_deg_rth: float | None, accel_vrw_ug_
     if accel_vrw_ug_rthz is not None:
         noise = replace(noise, vrw_ug_rthz=accel_vrw_ug_rthz)
     return noise
+
+
+def out_folder_option(files: str, *, required: bool = True, note: str = ""):
+    """An option ``--out`` (the command's ``out_dir``): the folder receiving `files` ("for plan.json and
+    plan.png"), new, empty, or holding only gyrodrift's outputs (`note` added to that rule). Not `required`: the
+    command saves its result there only when given, and prints it either way."""
+    rule = f"new, empty, or holding only gyrodrift's outputs{note} (docs/outputs.md)"
+    presence: dict[str, Any] = {"required": True} if required else {"default": None}
+    if required:
+        text = f"Folder {files}: {rule}. Required."
+    else:
+        text = f"Also save the result: folder {files}, {rule}. Default: print only."
+    return click.option("--out", "out_dir", type=click.Path(path_type=Path), help=text, **presence)
+
+
+def connect_timeout_option(f):
+    """Add ``--connect-timeout-s``: how long to wait for a dask scheduler (``--scheduler``) to answer [s]."""
+    return click.option(
+        "--connect-timeout-s",
+        type=FiniteFloat(min=0.0, max=3600.0, min_open=True),
+        default=10.0,
+        show_default=True,
+        help="Time [s] to wait for --scheduler to answer before giving up.",
+    )(f)
 
 
 def json_option(f):

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from gyrodrift.cli.options import json_option, noise_options, print_json, quiet_option, say_wrote
+from gyrodrift.cli.options import json_option, noise_options, out_folder_option, print_json, quiet_option, say_wrote
 
 __all__ = ["plan_command", "COMMANDS"]
 
@@ -17,14 +17,7 @@ SCHEMES = ("none", "continuous", "reciprocating", "indexing")
     "plan",
     epilog="Example: gyrodrift plan --noise allan/noise.toml --lat0-deg 40 --out plan",
 )
-@click.option(
-    "--out",
-    "out_dir",
-    required=True,
-    type=click.Path(path_type=Path),
-    help="Folder for plan.json and plan.png: new, empty, or holding only gyrodrift's outputs (docs/outputs.md). "
-    "Required.",
-)
+@out_folder_option("for plan.json and plan.png")
 @click.option(
     "--scenario",
     "scenario_path",
@@ -101,9 +94,7 @@ SCHEMES = ("none", "continuous", "reciprocating", "indexing")
 def plan_command(
     out_dir: Path,
     scenario_path: Path | None,
-    noise_file,
-    gyro_arw_deg_rth: float | None,
-    accel_vrw_ug_rthz: float | None,
+    noise,
     lat0_deg: float | None,
     rotation: str | None,
     coeff_std_deg_h_per_c: float,
@@ -123,7 +114,6 @@ def plan_command(
     """
     import dataclasses
 
-    from gyrodrift.cli.options import noise_from_options
     from gyrodrift.files.atomic import OutputFolder
     from gyrodrift.ins.scenario import Rotation, Scenario, load_scenario
     from gyrodrift.procedure.noise import SensorNoise
@@ -132,9 +122,7 @@ def plan_command(
 
     if scenario_path is None and lat0_deg is None:
         raise click.UsageError("give --lat0-deg or --scenario FILE (the site)")
-    inputs = [p for p in (scenario_path, noise_file) if p is not None]
-    out = OutputFolder(out_dir, "plan", PLAN_FILES, inputs=inputs)
-    noise = noise_from_options(noise_file, gyro_arw_deg_rth, accel_vrw_ug_rthz)
+    out = OutputFolder(out_dir, "plan", PLAN_FILES, inputs=[] if scenario_path is None else [scenario_path])
     if scenario_path is not None:
         scenario = load_scenario(scenario_path)
         if noise is None:

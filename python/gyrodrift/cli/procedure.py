@@ -7,19 +7,33 @@ from pathlib import Path
 import click
 
 from gyrodrift.cli.options import (
+    connect_timeout_option,
     json_option,
-    log_format_option,
-    noise_from_options,
+    log_options,
     noise_options,
+    out_folder_option,
     print_json,
     quiet_option,
     say_wrote,
-    site_from_options,
-    site_options,
 )
 from gyrodrift.cli.types import DRIFT_DEG_H, FiniteFloat, InputPath
 
 __all__ = ["features_command", "truth_command", "evaluate_command", "identify_command"]
+
+_hours_option = click.option(
+    "--hours",
+    type=FiniteFloat(min=0.0, min_open=True),
+    default=72.0,
+    show_default=True,
+    help="Hours of free navigation [h], counted from the end of the 4 h alignment.",
+)
+
+
+def _criterion_option(help_text: str):
+    """``--criterion`` of the true drift (`gyrodrift.procedure.truth.CRITERIA`), explained by `help_text`."""
+    return click.option(
+        "--criterion", type=click.Choice(["final", "rms", "max"]), default="final", show_default=True, help=help_text
+    )
 
 
 def _open(path, site, log_format=None):
@@ -43,19 +57,14 @@ def _open(path, site, log_format=None):
     type=click.Path(path_type=Path),
     help="Run table to write (CSV, atomically; replaces only a run table gyrodrift wrote). Required.",
 )
-@site_options
-@log_format_option
+@log_options
 @click.option(
     "--with-truth",
     is_flag=True,
     help="Also find each log's true drift [deg/h] (logs >= 76 h) -> drift_deg_h column. Default: off.",
 )
-@click.option(
-    "--criterion",
-    type=click.Choice(["final", "rms", "max"]),
-    default="final",
-    show_default=True,
-    help="Criterion of the true drift (with --with-truth): the 72 h position error at its end, RMS, or maximum.",
+@_criterion_option(
+    "Criterion of the true drift (with --with-truth): the 72 h position error at its end, RMS, or maximum."
 )
 @click.option(
     "--workers",
@@ -69,13 +78,7 @@ def _open(path, site, log_format=None):
     default=None,
     help="Address of a running dask scheduler (tcp://host:8786). Default: none (see --workers).",
 )
-@click.option(
-    "--connect-timeout-s",
-    type=FiniteFloat(min=0.0, max=3600.0, min_open=True),
-    default=10.0,
-    show_default=True,
-    help="Time [s] to wait for --scheduler to answer before giving up.",
-)
+@connect_timeout_option
 @click.option(
     "--curves",
     type=click.Path(path_type=Path),
@@ -97,9 +100,7 @@ def _open(path, site, log_format=None):
 def features_command(
     logs,
     out,
-    lat0_deg,
-    lon0_deg,
-    height_m,
+    site,
     log_format,
     with_truth,
     criterion,
@@ -108,9 +109,7 @@ def features_command(
     connect_timeout_s,
     curves,
     smoother,
-    noise_file,
-    gyro_arw_deg_rth,
-    accel_vrw_ug_rthz,
+    noise,
     as_json,
     quiet,
 ):
@@ -128,11 +127,10 @@ def features_command(
 
     if workers is not None and scheduler is not None:
         raise click.UsageError("give --workers or --scheduler, not both")
-    noise = noise_from_options(noise_file, gyro_arw_deg_rth, accel_vrw_ug_rthz)
     check_features_outputs(out, curves, inputs=logs)
     rows = features_table(
         [str(p) for p in logs],
-        site=site_from_options(lat0_deg, lon0_deg, height_m),
+        site=site,
         log_format=log_format,
         with_truth=with_truth,
         criterion=criterion,
@@ -151,56 +149,21 @@ def features_command(
 
 @click.command("truth", epilog="Example: gyrodrift truth sim/imu.parquet --criterion final --out truth")
 @click.argument("log", type=InputPath(path_type=Path))
-@click.option(
-    "--criterion",
-    type=click.Choice(["final", "rms", "max"]),
-    default="final",
-    show_default=True,
-    help="Position-error criterion over the navigation: at its end, RMS, or maximum.",
-)
-@click.option(
-    "--hours",
-    type=FiniteFloat(min=0.0, min_open=True),
-    default=72.0,
-    show_default=True,
-    help="Hours of free navigation [h], counted from the end of the 4 h alignment.",
-)
-@site_options
-@log_format_option
-@click.option(
-    "--out",
-    "out_dir",
-    type=click.Path(path_type=Path),
-    default=None,
-    help="Also save the result: folder for true_drift.json, criterion.png, alignment.json and "
-    "alignment_z_sigma.png, new, empty, or holding only gyrodrift's outputs (docs/outputs.md). Default: print only.",
-)
+@_criterion_option("Position-error criterion over the navigation: at its end, RMS, or maximum.")
+@_hours_option
+@log_options
+@out_folder_option("for true_drift.json, criterion.png, alignment.json and alignment_z_sigma.png", required=False)
 @noise_options
 @json_option
 @quiet_option
-def truth_command(
-    log,
-    criterion,
-    hours,
-    lat0_deg,
-    lon0_deg,
-    height_m,
-    log_format,
-    out_dir,
-    noise_file,
-    gyro_arw_deg_rth,
-    accel_vrw_ug_rthz,
-    as_json,
-    quiet,
-):
+def truth_command(log, criterion, hours, site, log_format, out_dir, noise, as_json, quiet):
     """Find the z-gyro drift [deg/h] minimising the position error of the navigation after alignment."""
     from gyrodrift.files.atomic import OutputFolder
     from gyrodrift.procedure.truth import find_true_drift
     from gyrodrift.procedure.writers import ALIGNMENT_FILES, TRUTH_FILES, write_alignment, write_truth
 
-    noise = noise_from_options(noise_file, gyro_arw_deg_rth, accel_vrw_ug_rthz)
     out = None if out_dir is None else OutputFolder(out_dir, "truth", TRUTH_FILES + ALIGNMENT_FILES, inputs=[log])
-    imu = _open(log, site_from_options(lat0_deg, lon0_deg, height_m), log_format)
+    imu = _open(log, site, log_format)
     res = find_true_drift(imu, criterion=criterion, hours=hours, noise=noise, quiet=quiet)
     if out is not None:
         with out.publish() as stage:
@@ -248,22 +211,11 @@ def truth_command(
     help="Drift model file (JSON, from `gyrodrift fit`) identifying the drift to compensate. Default: none; give it "
     "or --drift-deg-h.",
 )
-@click.option(
-    "--out",
-    "out_dir",
-    required=True,
-    type=click.Path(path_type=Path),
-    help="Folder for evaluation.json, position_error.png and its curves position_error.parquet (before/after, "
-    "t_h, lat/lon errors [arcsec], position error [nmi]): new, empty, or holding only gyrodrift's outputs "
-    "(docs/outputs.md). Required.",
+@out_folder_option(
+    "for evaluation.json, position_error.png and its curves position_error.parquet (before/after, t_h, lat/lon "
+    "errors [arcsec], position error [nmi])"
 )
-@click.option(
-    "--hours",
-    type=FiniteFloat(min=0.0, min_open=True),
-    default=72.0,
-    show_default=True,
-    help="Hours of free navigation [h], counted from the end of the 4 h alignment.",
-)
+@_hours_option
 @click.option(
     "--reference",
     "reference",
@@ -273,13 +225,10 @@ def truth_command(
     "vel_e/n/u_m_s; times on the log's time base) to compute the errors against; adds route_map.png. "
     "Default: the simulated route of a moving-base imu.parquet, else the static site.",
 )
-@site_options
-@log_format_option
+@log_options
 @json_option
 @quiet_option
-def evaluate_command(
-    log, drift_deg_h, model_path, out_dir, hours, reference, lat0_deg, lon0_deg, height_m, log_format, as_json, quiet
-):
+def evaluate_command(log, drift_deg_h, model_path, out_dir, hours, reference, site, log_format, as_json, quiet):
     """Navigate LOG 72 h after alignment without and with compensating the axial drift; plot both errors."""
     from gyrodrift.files.atomic import OutputFolder
     from gyrodrift.ins.track import route_of
@@ -292,7 +241,7 @@ def evaluate_command(
     moving = reference is not None or route_of(log) is not None
     inputs = [p for p in (log, model_path, reference) if p is not None]
     out = OutputFolder(out_dir, "evaluate", evaluation_files(moving), inputs=inputs)
-    imu = _open(log, site_from_options(lat0_deg, lon0_deg, height_m), log_format)
+    imu = _open(log, site, log_format)
     alignment = None
     source = "given"
     if model_path is not None:
@@ -323,33 +272,12 @@ def evaluate_command(
     type=InputPath(path_type=Path),
     help="Drift model file (JSON, from `gyrodrift fit`). Required.",
 )
-@site_options
-@log_format_option
-@click.option(
-    "--out",
-    "out_dir",
-    type=click.Path(path_type=Path),
-    default=None,
-    help="Also save the result: folder for identification.json, alignment.json and alignment_z_sigma.png, new, "
-    "empty, or holding only gyrodrift's outputs (docs/outputs.md). Default: print only.",
-)
+@log_options
+@out_folder_option("for identification.json, alignment.json and alignment_z_sigma.png", required=False)
 @noise_options
 @json_option
 @quiet_option
-def identify_command(
-    log,
-    model_path,
-    lat0_deg,
-    lon0_deg,
-    height_m,
-    log_format,
-    out_dir,
-    noise_file,
-    gyro_arw_deg_rth,
-    accel_vrw_ug_rthz,
-    as_json,
-    quiet,
-):
+def identify_command(log, model_path, site, log_format, out_dir, noise, as_json, quiet):
     """Align LOG, navigate 12 h and identify its axial drift with the model."""
     from gyrodrift.files.atomic import OutputFolder
     from gyrodrift.procedure.identify import identify
@@ -361,10 +289,9 @@ def identify_command(
         write_identification,
     )
 
-    noise = noise_from_options(noise_file, gyro_arw_deg_rth, accel_vrw_ug_rthz)
     files = IDENTIFICATION_FILES + ALIGNMENT_FILES
     out = None if out_dir is None else OutputFolder(out_dir, "identify", files, inputs=[log, model_path])
-    imu = _open(log, site_from_options(lat0_deg, lon0_deg, height_m), log_format)
+    imu = _open(log, site, log_format)
     res = identify(imu, model_path, noise=noise, quiet=quiet)
     doc = identification_document(res)
     if out is not None:

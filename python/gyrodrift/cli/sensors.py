@@ -6,15 +6,7 @@ from pathlib import Path
 
 import click
 
-from gyrodrift.cli.options import (
-    json_option,
-    log_format_option,
-    print_json,
-    quiet_option,
-    say_wrote,
-    site_from_options,
-    site_options,
-)
+from gyrodrift.cli.options import json_option, log_options, out_folder_option, print_json, quiet_option, say_wrote
 from gyrodrift.cli.types import InputPath
 
 __all__ = ["allan_command", "COMMANDS"]
@@ -22,24 +14,14 @@ __all__ = ["allan_command", "COMMANDS"]
 
 @click.command("allan", epilog="Example: gyrodrift allan static.parquet --out allan")
 @click.argument("log", type=InputPath(path_type=Path))
-@click.option(
-    "--out",
-    "out_dir",
-    required=True,
-    type=click.Path(path_type=Path),
-    help="Folder for allan.json, allan.png and noise.toml: new, empty, or holding only gyrodrift's outputs "
-    "(docs/outputs.md). Required.",
-)
-@site_options
-@log_format_option
+@out_folder_option("for allan.json, allan.png and noise.toml")
+@log_options
 @json_option
 @quiet_option
 def allan_command(
     log: Path,
     out_dir: Path,
-    lat0_deg: float | None,
-    lon0_deg: float | None,
-    height_m: float | None,
+    site: dict | None,
     log_format: Path | None,
     as_json: bool,
     quiet: bool,
@@ -56,7 +38,7 @@ def allan_command(
     from gyrodrift.sensors.allan_output import ALLAN_FILES, allan_files, noise_summary
 
     out = OutputFolder(out_dir, "allan", ALLAN_FILES, inputs=[log])
-    imu = open_log(log, site=site_from_options(lat0_deg, lon0_deg, height_m), format=log_format)
+    imu = open_log(log, site=site, format=log_format)
     result = allan_deviation(imu, quiet=quiet)
     if result.constant_axes:
         click.echo(
