@@ -195,27 +195,16 @@ def _run_reproduction(seed: int, quiet: bool) -> dict:
             common: dict[str, Any] = dict(
                 encoding=enc, scaling=SCALING, n_particles=PAPER_SETTINGS["n_particles"], quiet=True
             )
-            m = fit_drift_model(
-                data.train,
-                objective="train_mae",
+            cpso: dict[str, Any] = dict(
+                common,
                 method="cpso",
                 max_iter=PAPER_SETTINGS["max_iter"],
                 chaos_steps=PAPER_SETTINGS["chaos_steps"],
-                rng=np.random.default_rng(seeds[3 * k]),
                 callback=tick,
-                **common,
             )
+            m = fit_drift_model(data.train, objective="train_mae", rng=np.random.default_rng(seeds[3 * k]), **cpso)
             methods.append(_model_entry(f"CPSO-LSSVM, paper settings, train MAE ({enc})", "cpso_paper", m, data))
-            m = fit_drift_model(
-                data.train,
-                objective="loo_mae",
-                method="cpso",
-                max_iter=PAPER_SETTINGS["max_iter"],
-                chaos_steps=PAPER_SETTINGS["chaos_steps"],
-                rng=np.random.default_rng(seeds[3 * k + 1]),
-                callback=tick,
-                **common,
-            )
+            m = fit_drift_model(data.train, objective="loo_mae", rng=np.random.default_rng(seeds[3 * k + 1]), **cpso)
             assert m.tuning is not None
             cpso_nfev = m.tuning.nfev
             methods.append(_model_entry(f"CPSO-LSSVM, LOO MAE ({enc})", "cpso_loo", m, data))
