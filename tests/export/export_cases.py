@@ -25,7 +25,6 @@ import gyrodrift
 from gyrodrift.choices import ENCODINGS, PHYSICS_COLUMNS, SCALINGS
 from gyrodrift.export.languages import export_model
 from gyrodrift.export.spec import (
-    COEFFICIENT_INPUTS,
     FEATURE_EXPRESSIONS,
     INPUTS,
     PHYSICS_EXPRESSIONS,
@@ -39,6 +38,7 @@ from gyrodrift.learn.fleet_prior import drift_with_coefficient_prior
 from gyrodrift.learn.kernels import kernel_matrix
 from gyrodrift.learn.lssvr import LSSVR
 from gyrodrift.learn.physics_base import FLEET_PHYSICS, physics_estimate
+from gyrodrift.runs.columns import SMOOTHER_THERMAL_COLUMNS
 from gyrodrift.runs.table import RunTable
 
 TOL = 1e-12
@@ -46,7 +46,7 @@ N_ROWS = 1000
 RAW = ("lat_deg", "lat0_deg", "temp_min_c", "temp_max_c")
 ALL = tuple(INPUTS)  # the raw inputs, then the physics columns the navigation computer computes
 FLEET = FLEET_PHYSICS
-KZ = COEFFICIENT_INPUTS
+KZ = SMOOTHER_THERMAL_COLUMNS
 PHYSICS_INPUTS_READ = {
     "drift_inversion_deg_h": (),
     "drift_curvefit_deg_h": ("drift_curvefit_deg_h",),
@@ -112,7 +112,7 @@ def hybrid_runs(rng: np.random.Generator) -> RunTable:
 
 def thermal_rows(runs: RunTable) -> np.ndarray:
     """Rows with the smoother's thermal k_z (the test of `drift_with_coefficient_prior`; the others: NaN)."""
-    k, sk, c, s0 = (runs.column(name) for name in COEFFICIENT_INPUTS)
+    k, sk, c, s0 = (runs.column(name) for name in SMOOTHER_THERMAL_COLUMNS)
     return np.isfinite(k) & np.isfinite(sk * sk) & (sk * sk > 0) & np.isfinite(c) & np.isfinite(s0) & (s0 > 0)
 
 
@@ -122,7 +122,7 @@ def physics_reference(model, rows: RunTable) -> np.ndarray:
     column = physics_column(model)
     if column != FLEET_PHYSICS:
         return physics_estimate(rows, column)
-    names = ("drift_smoother_deg_h", "drift_smoother_std_deg_h", *COEFFICIENT_INPUTS)
+    names = ("drift_smoother_deg_h", "drift_smoother_std_deg_h", *SMOOTHER_THERMAL_COLUMNS)
     return drift_with_coefficient_prior(*(rows.column(n) for n in names), *model.coefficient_prior_)[0]
 
 
@@ -141,7 +141,7 @@ def probe_rows(train: RunTable, rng: np.random.Generator) -> RunTable:
     for name in [*RAW, *(c for c in physics if np.isfinite(train.column(c)).any())]:
         v = input_values(train, name)
         lo, hi = float(np.nanmin(v)), float(np.nanmax(v))
-        span = hi - lo or (0.5 * abs(hi) if name in COEFFICIENT_INPUTS else 0.5)  # a k_z 1-sigma stays > 0
+        span = hi - lo or (0.5 * abs(hi) if name in SMOOTHER_THERMAL_COLUMNS else 0.5)  # a k_z 1-sigma stays > 0
         cols[name] = rng.uniform(lo - 0.1 * span, hi + 0.1 * span, n)
     on_site = rng.random(n) < 0.8  # mostly at a training site, so that the other inputs decide the range check
     cols["lat0_deg"][on_site] = rng.choice(train.lat0_deg, int(on_site.sum()))
@@ -156,7 +156,7 @@ def probe_rows(train: RunTable, rng: np.random.Generator) -> RunTable:
             train.column("smoother_coeff_prior_std_deg_h_per_c")[thermal_rows(train)], int(usual.sum())
         )
     constant = rng.random(n) < 1 / 3  # a third of the rows without k_z: the smoother's constant model
-    for name in COEFFICIENT_INPUTS:
+    for name in SMOOTHER_THERMAL_COLUMNS:
         if name in cols:
             cols[name][constant] = np.nan
     return RunTable(
@@ -216,7 +216,7 @@ def python_reference(model, rows: RunTable) -> dict:
     thermal = thermal_rows(rows)
     for name in used_inputs(model):
         v, t = input_values(rows, name), input_values(train, name)
-        if name in COEFFICIENT_INPUTS:  # over the training runs with k_z; NaN on a row without
+        if name in SMOOTHER_THERMAL_COLUMNS:  # over the training runs with k_z; NaN on a row without
             t = t[thermal_rows(train)]
             inside &= np.where(thermal, (v >= t.min()) & (v <= t.max()), ~np.isfinite(v))
         else:

@@ -21,19 +21,20 @@ import pytest
 from gyrodrift.errors import InputError
 from gyrodrift.export.languages import LANGUAGES, export_model
 from gyrodrift.export.render import literal
-from gyrodrift.export.spec import COEFFICIENT_INPUTS, PHYSICS_INPUTS, export_spec
+from gyrodrift.export.spec import PHYSICS_INPUTS, export_spec
 from gyrodrift.learn.drift_model import fit_drift_model
 from gyrodrift.learn.encodings import encode
 from gyrodrift.learn.fleet_prior import drift_with_coefficient_prior, pooled_coefficient_prior
 from gyrodrift.learn.model_io import load_model, save_model
 from gyrodrift.learn.physics_base import FLEET_PHYSICS
+from gyrodrift.runs.columns import SMOOTHER_THERMAL_COLUMNS
 from gyrodrift.runs.table import RunTable, RunTableError
 
 CC = shutil.which("cc")
 CARGO = shutil.which("cargo")
 CFLAGS = ["-std=c99", "-pedantic", "-Wall", "-Wextra", "-Wconversion", "-Wshadow", "-Wdouble-promotion", "-Werror"]
 FLEET = FLEET_PHYSICS
-KZ = COEFFICIENT_INPUTS
+KZ = SMOOTHER_THERMAL_COLUMNS
 FIELDS = ("lat_deg", "lat0_deg", "temp_min_c", "temp_max_c", "drift_smoother_deg_h", *KZ)
 """The fields of the generated struct of a fleet hybrid with encoding ``physics`` (it reads all four raw inputs and
 `cos`), in order."""

@@ -13,9 +13,9 @@ import pytest
 import gyrodrift
 from gyrodrift.export import render
 from gyrodrift.export.languages import LANGUAGES, export_model
-from gyrodrift.export.spec import COEFFICIENT_INPUTS
 from gyrodrift.learn.drift_model import fit_drift_model
 from gyrodrift.learn.physics_base import FLEET_PHYSICS
+from gyrodrift.runs.columns import SMOOTHER_THERMAL_COLUMNS
 
 TEMPLATES = files("gyrodrift.export").joinpath("templates")
 
@@ -35,7 +35,7 @@ def _smoother_runs():
         "smoother_end_coeff_cov": rng.uniform(-0.9, 0.9, n) * d_std * k_std,
         "smoother_coeff_prior_std_deg_h_per_c": np.full(n, 1e-2),
     }
-    assert tuple(kz) == COEFFICIENT_INPUTS
+    assert tuple(kz) == SMOOTHER_THERMAL_COLUMNS
     extra = {
         "drift_smoother_deg_h": runs.drift_deg_h + rng.normal(0.0, d_std),
         "drift_smoother_std_deg_h": d_std,

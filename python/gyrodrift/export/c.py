@@ -5,8 +5,9 @@ allocation, no I/O; the physics functions of a hybrid (templates/hybrid.c.in) an
 from __future__ import annotations
 
 from gyrodrift.export import render
-from gyrodrift.export.spec import COEFFICIENT_INPUTS, INPUTS, PHYSICS_EXPRESSIONS, ExportSpec
+from gyrodrift.export.spec import INPUTS, PHYSICS_EXPRESSIONS, ExportSpec
 from gyrodrift.learn.physics_base import FLEET_PHYSICS
+from gyrodrift.runs.columns import SMOOTHER_THERMAL_COLUMNS
 
 __all__ = ["FILES", "c_files"]
 
@@ -134,8 +135,8 @@ def _source(spec: ExportSpec, provenance: str) -> str:
     input_count = "GYRODRIFT_MODEL_N_INPUTS"
     fleet_functions = no_coefficient = ""
     if fleet:
-        args = ", ".join(f"inputs->{name}" for name in COEFFICIENT_INPUTS)
-        n_constant = len(COEFFICIENT_INPUTS)  # a constant-model run checks the inputs before the k_z ones
+        args = ", ".join(f"inputs->{name}" for name in SMOOTHER_THERMAL_COLUMNS)
+        n_constant = len(SMOOTHER_THERMAL_COLUMNS)  # a constant-model run checks the inputs before the k_z ones
         input_count = f"gyrodrift_model_thermal({args}) ? {input_count} : {input_count} - {n_constant}"
         fleet_functions = render.fill("fleet_base.c.in") + "\n"
         no_coefficient = """    for (k = n_inputs; k < GYRODRIFT_MODEL_N_INPUTS; ++k) {

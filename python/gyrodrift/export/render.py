@@ -24,8 +24,9 @@ from string import Template
 
 from gyrodrift import __version__
 from gyrodrift.errors import InputError
-from gyrodrift.export.spec import COEFFICIENT_INPUTS, FEATURE_EXPRESSIONS, INPUTS, ExportSpec, FeatureExpression
+from gyrodrift.export.spec import FEATURE_EXPRESSIONS, INPUTS, ExportSpec, FeatureExpression
 from gyrodrift.learn.physics_base import FLEET_PHYSICS
+from gyrodrift.runs.columns import SMOOTHER_THERMAL_COLUMNS
 
 __all__ = [
     "SCALING_STEPS",
@@ -165,7 +166,9 @@ def provenance_lines(spec: ExportSpec) -> list[str]:
         )
     lines.append("Inputs read, with their range over the training runs (the range check refuses inputs outside it):")
     for name, (lo, hi) in zip(spec.inputs, spec.input_ranges, strict=True):
-        note = " (over the runs with k_z; must be NaN where the run has none)" if name in COEFFICIENT_INPUTS else ""
+        note = (
+            " (over the runs with k_z; must be NaN where the run has none)" if name in SMOOTHER_THERMAL_COLUMNS else ""
+        )
         lines.append(f"  {name}: [{literal(lo)}, {literal(hi)}]{note}, {INPUTS[name]}")
     lines.append("Features, with their range over the training runs (checked too):")
     for name, (lo, hi) in zip(spec.feature_names, spec.feature_ranges, strict=True):

@@ -5,8 +5,9 @@ base (templates/fleet_base.rs.in) where the model has them."""
 from __future__ import annotations
 
 from gyrodrift.export import render
-from gyrodrift.export.spec import COEFFICIENT_INPUTS, FEATURE_EXPRESSIONS, INPUTS, PHYSICS_EXPRESSIONS, ExportSpec
+from gyrodrift.export.spec import FEATURE_EXPRESSIONS, INPUTS, PHYSICS_EXPRESSIONS, ExportSpec
 from gyrodrift.learn.physics_base import FLEET_PHYSICS
+from gyrodrift.runs.columns import SMOOTHER_THERMAL_COLUMNS
 
 __all__ = ["FILES", "rust_files"]
 
@@ -139,7 +140,7 @@ pub fn in_range(inputs: &Inputs, math: &Math) -> bool {{
     within(&INPUT_RANGES, &[{input_values}]) && within(&FEATURE_RANGES, &features(inputs, math))
 }}
 """
-    args = ", ".join(f"inputs.{name}" for name in COEFFICIENT_INPUTS)
+    args = ", ".join(f"inputs.{name}" for name in SMOOTHER_THERMAL_COLUMNS)
     return (
         render.fill("fleet_base.rs.in")
         + f"""
@@ -148,7 +149,7 @@ pub fn in_range(inputs: &Inputs, math: &Math) -> bool {{
 #[must_use]
 pub fn in_range(inputs: &Inputs, math: &Math) -> bool {{
     let u = [{input_values}];
-    let n = if thermal({args}) {{ N_INPUTS }} else {{ N_INPUTS - {len(COEFFICIENT_INPUTS)} }};
+    let n = if thermal({args}) {{ N_INPUTS }} else {{ N_INPUTS - {len(SMOOTHER_THERMAL_COLUMNS)} }};
     within(&INPUT_RANGES[..n], &u[..n])
         && u[n..].iter().all(|v| !v.is_finite())
         && within(&FEATURE_RANGES, &features(inputs, math))

@@ -36,7 +36,6 @@ from gyrodrift.runs.columns import SMOOTHER_THERMAL_COLUMNS
 from gyrodrift.units import ARCSEC, DEG, DEG_PER_H, HOUR
 
 __all__ = [
-    "COEFFICIENT_INPUTS",
     "FEATURE_EXPRESSIONS",
     "INPUTS",
     "PHYSICS_EXPRESSIONS",
@@ -66,16 +65,12 @@ PHYSICS_INPUTS: dict[str, str] = {
     "(NaN under its constant model)",
 }
 """Inputs of a hybrid's physics estimate that the navigation computer computes itself (run-table columns,
-`gyrodrift.runs.table.OPTIONAL_COLUMNS`), passed to the generated function after the raw inputs: the 12 h curve fit,
+`gyrodrift.runs.columns.OPTIONAL_COLUMNS`), passed to the generated function after the raw inputs: the 12 h curve fit,
 the 16 h smoother's end drift, and for the fleet-prior smoother (`FLEET_PHYSICS`) the smoother's k_z estimate
-(`COEFFICIENT_INPUTS`)."""
-
-COEFFICIENT_INPUTS: tuple[str, ...] = SMOOTHER_THERMAL_COLUMNS
-"""The smoother's k_z estimate (`gyrodrift.runs.columns.SMOOTHER_THERMAL_COLUMNS`), read by the fleet-prior smoother
-base (`FLEET_PHYSICS`); the last inputs of the struct. NaN for a run whose smoother used its constant model, whose base
-is then its end drift unchanged. The range check wants them all NaN there (some but not all is neither of the
-smoother's models; the base passes such a run through as constant, as `drift_with_coefficient_prior` does), else
-within their range."""
+(`gyrodrift.runs.columns.SMOOTHER_THERMAL_COLUMNS`, the last inputs of the struct). The k_z inputs are NaN for a run
+whose smoother used its constant model, whose base is then its end drift unchanged; the range check wants them all
+NaN there (some but not all is neither of the smoother's models; the base passes such a run through as constant, as
+`drift_with_coefficient_prior` does), else within their range over the training runs that had them."""
 
 INPUTS: dict[str, str] = {**RAW_INPUTS, **PHYSICS_INPUTS}
 """Every input a generated function can read, in the order of its fields, with its unit."""
@@ -132,7 +127,7 @@ FEATURE_EXPRESSIONS: dict[str, FeatureExpression] = {
 """Every feature name of every encoding, as generated C and Rust (tests/export/test_export.py checks that none is
 missing: a new encoding must add its features here)."""
 
-_FLEET_ARGS = ", ".join(f"{{{name}}}" for name in ("drift_smoother_deg_h", *COEFFICIENT_INPUTS))
+_FLEET_ARGS = ", ".join(f"{{{name}}}" for name in ("drift_smoother_deg_h", *SMOOTHER_THERMAL_COLUMNS))
 
 PHYSICS_EXPRESSIONS: dict[str, FeatureExpression] = {
     # learn.physics_base.physics_estimate: physics_inversion(runs, t_h=12.0), the same operations as the feature
@@ -144,7 +139,7 @@ PHYSICS_EXPRESSIONS: dict[str, FeatureExpression] = {
     # drift_with_coefficient_prior(drift, ., coeff, coeff_std, cov, prior_std, *coefficient_prior_)[0]: a function
     # of the generated code (templates/fleet_base.c.in, fleet_base.rs.in) reading the fleet prior's constants
     FLEET_PHYSICS: FeatureExpression(
-        ("drift_smoother_deg_h", *COEFFICIENT_INPUTS),
+        ("drift_smoother_deg_h", *SMOOTHER_THERMAL_COLUMNS),
         f"gyrodrift_model_fleet_base_deg_h({_FLEET_ARGS})",
         f"fleet_base_deg_h({_FLEET_ARGS})",
         "deg/h",
@@ -161,7 +156,7 @@ class ExportSpec:
 
     ``input_ranges`` and ``feature_ranges`` hold (min, max) of each input (``inputs``, `INPUTS`: the raw inputs the
     features or the physics estimate read, then a physics column passed in) and of each feature (``feature_names``)
-    over the training runs, in their units (the k_z inputs, `COEFFICIENT_INPUTS`, over the runs with a thermal
+    over the training runs, in their units (the k_z inputs, ``SMOOTHER_THERMAL_COLUMNS``, over the runs with a thermal
     estimate); ``physics`` is the hybrid's physics column (None when the model learns the drift itself,
     ``target="drift"``); ``coefficient_prior`` the fleet's k_z prior (mean, 1-sigma) [deg/h/degC] of the
     fleet-prior base (`FLEET_PHYSICS`), else None; ``mean``/
@@ -275,7 +270,7 @@ def export_spec(model, *, model_sha256: str | None = None) -> ExportSpec:
     input_ranges = []
     for name in inputs:
         values = runs.column(name) if name in PHYSICS_INPUTS else getattr(runs, name)
-        if name in COEFFICIENT_INPUTS:  # the runs with a thermal estimate (the others do not read them)
+        if name in SMOOTHER_THERMAL_COLUMNS:  # the runs with a thermal estimate (the others do not read them)
             values = values[thermal_runs(runs)]
         if values.size == 0 or not np.all(np.isfinite(values)):
             raise InputError(f"input {name} of the model is missing for some training runs; it cannot be exported")
