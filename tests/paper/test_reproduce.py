@@ -167,6 +167,7 @@ def test_physics_baseline_is_the_closed_form(run):
     np.testing.assert_array_equal(m["test_pred_deg_h"], physics_inversion(load_paper().test))
 
 
+@pytest.mark.slow
 def test_deterministic_for_a_seed(run, tmp_path):
     _, first = run
     again = reproduce(tmp_path / "again", seed=3, quiet=True)

@@ -134,6 +134,7 @@ def test_the_thermal_term_can_rule_out_every_span():
     assert np.allclose(plan.drift_std_deg_h, np.hypot(plan.drift_std_id_deg_h, 1e-3))
 
 
+@pytest.mark.slow
 def test_mission_outlook_ready_and_not_ready():
     ok = mission_outlook(5e-5, 40.0, RLG, span_h=16.0)
     assert ok["ready"] and ok["more_static_h"] is None and ok["quantiles_nmi"]["0.95"] < 1.0
@@ -200,6 +201,7 @@ def test_a_shorter_coarse_span_is_the_smoothers_too():
     assert a != b and b == pytest.approx(a, rel=0.05)
 
 
+@pytest.mark.slow
 def test_identify_says_what_its_drift_sigma_means_for_the_mission():
     # A short time line (1 h alignment + 2 h) keeps the run cheap; the outlook is the planner's function of the
     # smoother's 1-sigma and the run's latitude, to the digit.

@@ -146,6 +146,7 @@ def test_threaded_and_sequential_passes_are_identical(long_log, long_alignment):
 # ------------------------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_true_drift_recovers_the_simulated_constant(long_log, long_alignment, tmp_path):
     res = find_true_drift(open_log(long_log), alignment=long_alignment)
     assert abs(res.drift_deg_h - LONG_DRIFT) < 1e-5
@@ -158,6 +159,7 @@ def test_true_drift_recovers_the_simulated_constant(long_log, long_alignment, tm
     assert res.grid_nmi.min() == pytest.approx(res.predicted_nmi, abs=1e-3)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("criterion", ["rms", "max"])
 def test_truth_command_other_criteria(long_log, tmp_path, criterion):
     out = tmp_path / "truth"
@@ -209,6 +211,7 @@ def test_drift_known_to_0_0005_keeps_72h_error_below_1_nmi(long_log, long_alignm
     assert paths["png"].read_bytes()[:8] == PNG_MAGIC
 
 
+@pytest.mark.slow
 def test_evaluate_command_with_a_drift_and_with_a_model(long_log, model, tmp_path):
     r = CliRunner().invoke(main, ["evaluate", str(long_log), "--drift-deg-h", "0.003", "--out", str(tmp_path / "a")])
     assert r.exit_code == 0, r.output
@@ -315,6 +318,7 @@ def test_missing_dask_is_a_clear_message(fleet, monkeypatch, tmp_path):
     assert r.exit_code == 1 and "pip install 'gyrodrift[dask]'" in r.output
 
 
+@pytest.mark.slow
 def test_identification_on_held_out_runs(fleet, fleet_features, model):
     m, path = model
     paths, drifts = fleet
@@ -339,6 +343,7 @@ def test_identification_on_held_out_runs(fleet, fleet_features, model):
     np.testing.assert_allclose([x.drift_deg_h for x in held], m.predict(test), rtol=0, atol=1e-12)
 
 
+@pytest.mark.slow
 def test_identify_command(fleet, model, tmp_path):
     r = CliRunner().invoke(
         main, ["identify", str(fleet[0][11]), "--model", str(model[1]), "--json", "--quiet", "--out", str(tmp_path)]
@@ -365,6 +370,7 @@ def test_identify_command(fleet, model, tmp_path):
     assert "error on its training runs (loo_mae)" in r.output
 
 
+@pytest.mark.slow
 def test_features_with_truth_on_a_long_log(long_log, tmp_path):
     out = tmp_path / "runs.csv"
     r = CliRunner().invoke(main, ["features", str(long_log), "--with-truth", "--quiet", "--out", str(out)])
@@ -375,6 +381,7 @@ def test_features_with_truth_on_a_long_log(long_log, tmp_path):
     assert runs.lat_err_arcsec[0] == pytest.approx(72.5, abs=1.5)  # method.md: 72.5 arcsec for 0.003 deg/h
 
 
+@pytest.mark.slow
 def test_a_csv_log_of_rates_gives_the_features_of_its_parquet(fleet, fleet_features, tmp_path):
     table = pq.read_table(fleet[0][1])
     rate = 10.0

@@ -128,6 +128,7 @@ def test_a_model_with_another_base_reports_no_fleet_base(training):
     assert doc["smoother_fleet_drift_deg_h"] is None and doc["coefficient_prior_deg_h_per_c"] is None
 
 
+@pytest.mark.slow
 @needs_fleet_base
 def test_identify_command_prints_the_fleet_base_of_a_saved_model(training, tmp_path):
     from click.testing import CliRunner

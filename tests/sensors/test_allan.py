@@ -40,6 +40,7 @@ def test_gauss_markov_avar_limits():
     assert abs(v[1] / v[0] - 1.0) < 5e-3
 
 
+@pytest.mark.slow
 @settings(max_examples=20, deadline=None)
 @given(
     white=st.floats(1e-4, 1e-1),
@@ -96,6 +97,7 @@ def _constant_columns(log, columns, path):
     return path
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [1, 2])
 def test_recovers_simulated_arw_and_vrw_within_10_percent(tmp_path, seed):
     log = _static_log(tmp_path, seed, bias_instability_deg_h=0.003, correlation_s=300.0)
@@ -136,6 +138,7 @@ def test_a_log_whose_channels_are_all_constant_is_refused_in_one_line(tmp_path):
     assert not (out / "allan.json").exists()
 
 
+@pytest.mark.slow
 def test_a_30_s_log_reports_no_bias_instability_and_no_rate_random_walk(tmp_path):
     # issue 18: a 30 s log of white noise only gave a bias instability of 0.0079 deg/h and an RRW of 0.029
     log = _static_log(tmp_path, 6, hours=30.0 / 3600.0)
@@ -162,6 +165,7 @@ def test_a_30_s_log_reports_no_bias_instability_and_no_rate_random_walk(tmp_path
     assert "Gauss-Markov not resolved, RRW not resolved" in r.output
 
 
+@pytest.mark.slow
 def test_one_noisy_gyro_and_two_dead_ones_the_dead_are_named_and_left_out(tmp_path):
     # issue 18: the dead axes were averaged into the noise block (ARW 1/3 of the truth)
     log = _static_log(tmp_path, 7, hours=0.25)
@@ -184,6 +188,7 @@ def test_one_noisy_gyro_and_two_dead_ones_the_dead_are_named_and_left_out(tmp_pa
     Scenario.from_dict({**block, "run": {"duration_h": 0.5, "rate_hz": 100.0}, "rotation": {"scheme": "none"}})
 
 
+@pytest.mark.slow
 def test_a_log_whose_gyros_are_all_constant_measures_its_accelerometers_and_says_so(tmp_path):
     log = _static_log(tmp_path, 9, hours=0.05)
     dead = _constant_columns(log, ["dtheta_x_rad", "dtheta_y_rad", "dtheta_z_rad"], tmp_path / "g.parquet")
@@ -197,6 +202,7 @@ def test_a_log_whose_gyros_are_all_constant_measures_its_accelerometers_and_says
     assert block["gyro"]["arw_deg_rth"] == 0.0 and block["accel"]["vrw_ug_rthz"] == pytest.approx(20.0, rel=0.10)
 
 
+@pytest.mark.slow
 def test_two_hours_of_pure_white_noise_report_no_rate_random_walk_nor_bias_instability(tmp_path):
     # issue 18: such a log reported a rate random walk of 0.0019 deg/h/sqrt(h)
     result = allan_deviation(open_log(_static_log(tmp_path, 8, hours=2.0)))
@@ -229,6 +235,7 @@ def test_a_long_log_with_a_rate_random_walk_reports_it_within_its_statistics(tmp
     assert 0.75 < doc["scenario_noise"]["gyro"]["rrw_deg_h_rth"] / 0.05 < 1.25
 
 
+@pytest.mark.slow
 def test_cli_writes_json_png_and_a_noise_block_a_scenario_accepts(tmp_path):
     log = _static_log(tmp_path, 4)
     out = tmp_path / "allan"
