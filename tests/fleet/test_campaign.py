@@ -17,7 +17,7 @@ import pytest
 
 from gyrodrift.errors import InputError, OutputError
 from gyrodrift.fleet.campaign import run_campaign
-from gyrodrift.fleet.run_table import write_run_table
+from gyrodrift.fleet.run_table import run_table_rows
 from gyrodrift.fleet.science import trial_drift_deg_h
 from gyrodrift.fleet.spec import CampaignError, load_campaign, parse_campaign
 from gyrodrift.fleet.store import CURVE_COLUMNS, CampaignStore, read_runs
@@ -59,10 +59,10 @@ def store(tmp_path_factory):
         ),
         ('[vary."gyro.bias_deg_h"]\ndist = "uniform"\nlow = 1\nhigh = 2\n', "a vector key takes an index"),
         ('[vary."gyro.bias_deg_h[3]"]\ndist = "uniform"\nlow = 1\nhigh = 2\n', "index out of range"),
-        ('[vary."site.lon_deg"]\ndist = "gauss"\n', '[vary."site.lon_deg"].dist: expected one of'),
-        ('[vary."site.lon_deg"]\ndist = "uniform"\nlow = 3\nhigh = 2\n', ".high: must be >= low"),
-        ('[vary."site.lon_deg"]\ndist = "log_uniform"\nlow = 0\nhigh = 2\n', ".low: must be > 0"),
-        ('[vary."site.lon_deg"]\ndist = "normal"\nmean = 1\n', "takes mean, std"),
+        ('[vary."site.lon_deg"]\ndist = "gauss"\n', '[vary."site.lon_deg"] dist: expected one of'),
+        ('[vary."site.lon_deg"]\ndist = "uniform"\nlow = 3\nhigh = 2\n', " high: must be >= low"),
+        ('[vary."site.lon_deg"]\ndist = "log_uniform"\nlow = 0\nhigh = 2\n', " low: must be > 0"),
+        ('[vary."site.lon_deg"]\ndist = "normal"\nmean = 1\n', "]: missing std"),
         ('[vary."run.seed"]\ndist = "uniform"\nlow = 1\nhigh = 2\n', "derives from [campaign] seed"),
         ('[vary."rotation.scheme"]\ndist = "choice"\nvalues = ["spin"]\n', "[rotation] scheme"),
     ],
@@ -77,14 +77,21 @@ def test_bad_vary_names_file_and_key(tmp_path, vary, fragment):
 
 def test_bad_head_grade_and_base(tmp_path):
     for text, fragment in [
-        ("[campaign]\ncount = 0\n", "[campaign] count: expected an integer >= 1"),
+        ("[campaign]\ncount = 0\n", "[campaign] count: must be >= 1, got 0"),
         ("[campaign]\ncount = 2\nseed = 1.5\n", "[campaign] seed"),
         ("[campaign]\ncount = 2\n[base.site]\nlat_deg = 95\n", "[base]: [site] lat_deg"),
-        ("[campaign]\ncount = 2\n[grades.a]\nnoise = 1\n", "[grades.a] noise: unknown noise key"),
+        ("[campaign]\ncount = 2\n[grades.a]\nnoise = 1\n", "[grades.a] noise: unknown key (expected one of: arw"),
         ("[campaign]\ncount = 2\n[grades.a]\narw_deg_rth = 0.001\n", "no [vary.grade]"),
         ('[campaign]\ncount = 2\n[vary.grade]\ndist = "choice"\nvalues = ["x"]\n', "unknown grade 'x'"),
         ("[campaign]\ncount = 2\n[imu]\n", "[imu]: unknown section"),
-        ("[campaign]\ncount = 2\n[options]\nfeatures_h = 1.5\n", "[options] features_h"),
+        ("[campaign]\ncount = 2\n[options]\nfeatures_h = 1.5\n", "[options] features_h: expected whole hours"),
+        ('grades = "x"\n[campaign]\ncount = 2\n', "[grades] must be a table, got string"),
+        ("vary = 3\n[campaign]\ncount = 2\n", "[vary] must be a table, got number"),
+        ("options = []\n[campaign]\ncount = 2\n", "[options] must be a table, got array"),
+        (
+            '[campaign]\ncount = 2\n[grades.a]\narw_deg_rth = 1e-3\n[vary.grade]\ndist = "choice"\nvalues = [[1]]\n',
+            '[vary."grade"] values: unknown grade [1]',
+        ),
     ]:
         p = tmp_path / "bad.toml"
         p.write_text(text)
@@ -145,13 +152,14 @@ def test_store_rows_resume_and_refusals(store, tmp_path):
 
 def test_run_table_is_read_by_fit(store, tmp_path):
     from gyrodrift.learn.drift_model import fit_drift_model
-    from gyrodrift.runs.table import read_runs_csv
+    from gyrodrift.runs.table import read_runs_csv, write_run_table
 
     out, _ = store
     runs = read_runs(out, curves=False)
-    n = write_run_table(runs, tmp_path / "runs.csv")
+    rows, columns = run_table_rows(runs)
+    write_run_table(tmp_path / "runs.csv", rows, columns)
     table = read_runs_csv(tmp_path / "runs.csv", require_truth=True)
-    assert n == len(table) == 12
+    assert len(rows) == len(table) == 12
     np.testing.assert_array_equal(table.drift_deg_h, runs.numbers("drift_deg_h"))
     model = fit_drift_model(table, encoding="physics", gamma=10.0, sigma=1.0)
     assert np.all(np.isfinite(model.predict(table)))
@@ -370,7 +378,7 @@ def test_runs_carry_the_smoothers_thermal_columns(store, tmp_path):
     from gyrodrift.ins.simulate import scenario_log
     from gyrodrift.procedure.smoother import smooth_log
     from gyrodrift.runs.columns import SMOOTHER_THERMAL_COLUMNS
-    from gyrodrift.runs.table import read_runs_csv
+    from gyrodrift.runs.table import read_runs_csv, write_run_table
 
     out, src = store
     runs = read_runs(out, curves=False)
@@ -383,7 +391,7 @@ def test_runs_carry_the_smoothers_thermal_columns(store, tmp_path):
     assert runs.numbers("drift_smoother_deg_h")[3] == est.navigation_drift_deg_h
     for c, v in est.thermal_columns().items():
         assert runs.numbers(c)[3] == v, c
-    write_run_table(runs, tmp_path / "runs.csv")
+    write_run_table(tmp_path / "runs.csv", *run_table_rows(runs))
     table = read_runs_csv(tmp_path / "runs.csv")
     for c in SMOOTHER_THERMAL_COLUMNS:
         np.testing.assert_array_equal(table.column(c), runs.numbers(c))

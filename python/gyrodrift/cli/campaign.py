@@ -66,9 +66,10 @@ def campaign_command(source, out, workers, scheduler, connect_timeout_s, limit, 
     """
     from gyrodrift.errors import OptionError
     from gyrodrift.fleet.campaign import CampaignFailedError, run_campaign
-    from gyrodrift.fleet.run_table import write_run_table
+    from gyrodrift.fleet.run_table import run_table_rows
     from gyrodrift.fleet.spec import load_campaign
     from gyrodrift.fleet.store import CampaignStore, read_runs
+    from gyrodrift.runs.table import write_run_table
 
     if source.is_dir():
         store = CampaignStore(source)
@@ -79,8 +80,9 @@ def campaign_command(source, out, workers, scheduler, connect_timeout_s, limit, 
             if not runs.ok.any():  # a header-only table `fit` would refuse: say why here, write nothing
                 why = f"every one of its {len(runs)} committed run(s) failed" if len(runs) else "no run is committed"
                 raise CampaignFailedError(f"{source}: no successful run to write to {run_table}: {why}")
-            n = write_run_table(runs, run_table)
-            say_wrote([run_table], quiet=quiet, as_json=as_json, detail=f"{n} run(s)")
+            rows, columns = run_table_rows(runs)
+            write_run_table(run_table, rows, columns)
+            say_wrote([run_table], quiet=quiet, as_json=as_json, detail=f"{len(rows)} run(s)")
         if export_run is not None:
             _export(store.campaign(), export_run, out, quiet, as_json)
         return

@@ -24,21 +24,14 @@ from typing import Any
 import numpy as np
 
 from gyrodrift.fleet.spec import Campaign
-from gyrodrift.fleet.store import SMOOTHER_COLUMNS, param_column
+from gyrodrift.fleet.store import param_column
+from gyrodrift.runs.columns import FEATURES_COLUMNS, SMOOTHER_COLUMNS
 
 __all__ = ["noise_model", "process_run", "trial_drift_deg_h"]
 
-FEATURE_COLUMNS = (
-    "lat0_deg",
-    "lat_deg",
-    "temp_start_c",
-    "temp_end_c",
-    "temp_min_c",
-    "temp_max_c",
-    "drift_curvefit_deg_h",
-    "drift_curvefit_std_deg_h",
-)
-"""The columns of a run taken as they are from its 12 h features (`gyrodrift.procedure.results.RunFeatures`)."""
+FROM_FEATURES = tuple(c for c in FEATURES_COLUMNS if c != "run" and c not in SMOOTHER_COLUMNS)
+"""The run-table columns of a run taken as they are from its 12 h features (`gyrodrift.procedure.results.RunFeatures`;
+the smoother's are timed on their own)."""
 
 
 def noise_model(scenario):
@@ -158,7 +151,7 @@ def _measure(campaign: Campaign, index: int, chunk_samples: int) -> dict[str, An
                 ).curves[0]
                 gn, ge = (extra.north_m - opt.north_m) / 1e-3, (extra.east_m - opt.east_m) / 1e-3
                 n0, e0 = opt.north_m - d_star * gn, opt.east_m - d_star * ge
-    out.update({c: getattr(f, c) for c in FEATURE_COLUMNS})
+    out.update({c: getattr(f, c) for c in FROM_FEATURES})
     out.update(
         drift_deg_h=d_star,
         drift_std_deg_h=float(truth.drift_std_deg_h),

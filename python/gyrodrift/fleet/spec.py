@@ -34,6 +34,7 @@ import numpy as np
 
 from gyrodrift.errors import InputError, OptionError
 from gyrodrift.files.toml_input import read_toml
+from gyrodrift.files.toml_schema import Choice, Field, Flag, Integer, Number, Scope, fmt_number, show, type_name
 
 __all__ = [
     "CAMPAIGN_FORMAT",
@@ -66,6 +67,12 @@ NOISE_KEYS = {
 TWIN_OFF = ("arw_deg_rth", "bias_instability_deg_h", "rrw_deg_h_rth", "vrw_ug_rthz")
 TIMELINE_KEYS = ("align_h", "features_h", "truth_h")
 """`[options]` keys shortening the procedure's time line (tests and quick looks; default 4 h, 12 h, 72 h)."""
+OPTIONS: dict[str, Field] = {"smoother": Flag(), "verify": Flag(), **dict.fromkeys(TIMELINE_KEYS, Number.positive())}
+"""The ``[options]`` keys: the 16 h smoother on (default) or off, the truth verified (off), the time line [h]."""
+SECTIONS = ("campaign", "base", "vary", "grades", "options")
+MAX_RUNS = 1_000_000
+_STD = Number.non_negative()
+_LOG_LOW = Number.positive()
 _PATH_RE = re.compile(r"^(?P<section>[a-z_]+)\.(?P<key>[a-z0-9_]+)(?:\[(?P<index>[0-9]+)\])?$")
 
 
@@ -215,149 +222,116 @@ def _set_path(scenario: dict, path: str, value: Any, defaults: Mapping[str, Mapp
         table[key] = vec
 
 
-def _fail(source: str, key: str, msg: str) -> CampaignError:
-    return CampaignError(f"{source}: {key}: {msg}")
+def _section(root: Scope, data: Mapping[str, Any], name: str) -> Mapping[str, Any]:
+    """The ``[name]`` table of `data` ({} when absent), whatever its keys (names of grades, varied paths)."""
+    table = data.get(name, {})
+    if not isinstance(table, Mapping):
+        raise root.fail(None, f"[{name}] must be a table, got {type_name(table)}")
+    return table
 
 
-def _number(source: str, where: str, v: Any) -> float:
-    if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
-        raise _fail(source, where, f"expected a finite number, got {v!r}")
-    return float(v)
-
-
-def _distribution(source: str, where: str, table: Any) -> Distribution:
-    if not isinstance(table, dict):
-        raise _fail(source, where, f"expected a table with dist = one of {', '.join(DISTRIBUTIONS)}")
-    kind = table.get("dist")
-    if kind not in DISTRIBUTIONS:
-        raise _fail(source, f"{where}.dist", f"expected one of {', '.join(DISTRIBUTIONS)}, got {kind!r}")
+def _distribution(at: Scope, table: Any) -> Distribution:
+    """The distribution of one ``[vary."PATH"]`` table (`at` names it in errors)."""
+    if not isinstance(table, Mapping):
+        raise at.fail(None, f"expected a table with dist = one of {', '.join(DISTRIBUTIONS)}, got {type_name(table)}")
+    kind = Choice(tuple(DISTRIBUTIONS)).read(at, "dist", table.get("dist"))
     names = DISTRIBUTIONS[kind]
-    unknown = sorted(set(table) - {"dist", *names})
-    missing = [n for n in names if n not in table]
-    if unknown or missing:
-        raise _fail(
-            source,
-            where,
-            f"dist = {kind!r} takes {', '.join(names)}" + (f"; unknown {unknown[0]!r}" if unknown else ""),
-        )
+    at.keys(table, ("dist", *names), what=f" for dist = {kind!r}")
+    at.require(table, names)
     if kind == "choice":
         values = table["values"]
         if not isinstance(values, list) or not values:
-            raise _fail(source, f"{where}.values", "expected a non-empty list")
+            raise at.fail("values", f"expected a non-empty array, got {type_name(values)} {show(values)}")
         return Distribution(kind, (tuple(values),))
-    a, b = (_number(source, f"{where}.{n}", table[n]) for n in names)
-    if kind == "normal" and not b >= 0:
-        raise _fail(source, f"{where}.std", f"must be >= 0, got {b:g}")
-    if kind in ("uniform", "log_uniform") and not a <= b:
-        raise _fail(source, f"{where}.high", f"must be >= low ({a:g}), got {b:g}")
-    if kind == "log_uniform" and not a > 0:
-        raise _fail(source, f"{where}.low", f"must be > 0 for log_uniform, got {a:g}")
-    return Distribution(kind, (a, b))
+    if kind == "normal":
+        return Distribution(kind, (Number().read(at, "mean", table["mean"]), _STD.read(at, "std", table["std"])))
+    low = (_LOG_LOW if kind == "log_uniform" else Number()).read(at, "low", table["low"])
+    high = Number().read(at, "high", table["high"])
+    if not low <= high:
+        raise at.fail("high", f"must be >= low ({fmt_number(low)}), got {fmt_number(high)}")
+    return Distribution(kind, (low, high))
+
+
+def _check_path(at: Scope, path: str, dist: Distribution, base: dict, defaults: Mapping[str, Any]) -> None:
+    """A varied scenario key `path` exists, is not the seed, has an index exactly when it is a vector, and every
+    value `dist` can give (its choices, a normal's mean, the bounds) makes a valid scenario from `base`."""
+    from gyrodrift.ins.scenario import Scenario
+
+    m = _PATH_RE.match(path)
+    if m is None or m["section"] not in defaults or m["key"] not in defaults[m["section"]]:
+        raise at.fail(None, "expected a scenario key SECTION.KEY or SECTION.KEY[i] of docs/scenarios.md")
+    if m["key"] == "seed":
+        raise at.fail(None, "the seed of each run derives from [campaign] seed; it is not varied")
+    default = defaults[m["section"]][m["key"]]
+    if isinstance(default, list) != (m["index"] is not None):
+        raise at.fail(None, "a vector key takes an index [i]" if isinstance(default, list) else "not a vector key")
+    if m["index"] is not None and int(m["index"]) >= len(default):
+        raise at.fail(None, f"index out of range (the key has {len(default)} elements)")
+    for value in dist.args[0] if dist.kind == "choice" else dist.args[:1] if dist.kind == "normal" else dist.args:
+        trial = json.loads(json.dumps(base))
+        _set_path(trial, path, value, defaults)
+        try:
+            Scenario.from_dict(trial, source="")
+        except InputError as exc:
+            raise at.fail(None, f"the value {show(value)} makes no valid run: {str(exc).lstrip(': ')}") from None
 
 
 def parse_campaign(data: Mapping[str, Any], source: str = "<campaign>") -> Campaign:
     """Validate a TOML-shaped mapping into a `Campaign` (every error names `source` and the key)."""
     from gyrodrift.ins.scenario import Scenario
 
-    unknown = sorted(set(data) - {"campaign", "base", "vary", "grades", "options"})
-    if unknown:
-        raise _fail(source, f"[{unknown[0]}]", "unknown section (expected campaign, base, vary, grades, options)")
-    head = data.get("campaign", {})
-    if not isinstance(head, dict):
-        raise _fail(source, "[campaign]", "expected a table")
-    bad = sorted(set(head) - {"name", "count", "seed"})
-    if bad:
-        raise _fail(source, f"[campaign] {bad[0]}", "unknown key (expected name, count, seed)")
-    count, seed = head.get("count"), head.get("seed", 0)
-    for key, v in (("count", count), ("seed", seed)):
-        if isinstance(v, bool) or not isinstance(v, int) or v < (1 if key == "count" else 0):
-            raise _fail(source, f"[campaign] {key}", f"expected an integer >= {1 if key == 'count' else 0}, got {v!r}")
-    assert isinstance(count, int) and isinstance(seed, int)  # checked just above
-    if count > 1_000_000:
-        raise _fail(source, "[campaign] count", f"at most 1000000 runs, got {count}")
+    root = Scope(source, CampaignError)
+    for section in data:
+        if section not in SECTIONS:
+            raise root.section(section).fail(None, f"unknown section (expected one of: {', '.join(SECTIONS)})")
+    head = root.table(data, "campaign", ("name", "count", "seed"))
+    at = root.section("campaign")
+    at.require(head, ("count",))
+    count = Integer(ge=1).read(at, "count", head["count"])
+    if count > MAX_RUNS:
+        raise at.fail("count", f"at most {MAX_RUNS} runs, got {count}")
+    seed = Integer(ge=0).read(at, "seed", head["seed"]) if "seed" in head else 0
     name = head.get("name", Path(source).stem)
     if not isinstance(name, str):
-        raise _fail(source, "[campaign] name", f"expected a string, got {name!r}")
+        raise at.fail("name", f"expected a string, got {type_name(name)} {show(name)}")
     base = data.get("base", {})
     if not isinstance(base, dict):
-        raise _fail(source, "[base]", "expected a scenario table (docs/scenarios.md)")
+        raise root.section("base").fail(None, f"expected a scenario table (docs/scenarios.md), got {type_name(base)}")
     Scenario.from_dict(base, source=f"{source}: [base]")  # scenario errors name the file and key
     defaults = Scenario().to_toml_dict()
     grades: dict[str, dict[str, float]] = {}
-    for gname, g in (data.get("grades") or {}).items():
-        if not isinstance(g, dict) or not g:
-            raise _fail(source, f"[grades.{gname}]", f"expected a table of {', '.join(NOISE_KEYS)}")
-        for key, v in g.items():
-            if key not in NOISE_KEYS:
-                raise _fail(
-                    source, f"[grades.{gname}] {key}", f"unknown noise key (expected one of {', '.join(NOISE_KEYS)})"
-                )
-            _number(source, f"[grades.{gname}] {key}", v)
-        grades[gname] = {k: float(v) for k, v in g.items()}
+    for gname, g in _section(root, data, "grades").items():
+        at = root.section(f"grades.{gname}")
+        if not isinstance(g, Mapping) or not g:
+            raise at.fail(None, f"expected a table of {', '.join(NOISE_KEYS)}, got {type_name(g)} {show(g)}")
+        at.keys(g, NOISE_KEYS)
+        grades[gname] = {key: Number().read(at, key, v) for key, v in g.items()}
     vary: dict[str, Distribution] = {}
-    for path, table in (data.get("vary") or {}).items():
-        where = f'[vary."{path}"]'
-        dist = _distribution(source, where, table)
+    for path, table in _section(root, data, "vary").items():
+        at = root.section(f'vary."{path}"')
+        dist = _distribution(at, table)
         if path == "grade":
             if dist.kind != "choice":
-                raise _fail(source, f"{where}.dist", "the noise grade takes dist = 'choice' over [grades] names")
+                raise at.fail("dist", "the noise grade takes dist = 'choice' over [grades] names")
             for v in dist.args[0]:
-                if v not in grades:
-                    raise _fail(
-                        source, f"{where}.values", f"unknown grade {v!r} (defined: {', '.join(grades) or 'none'})"
-                    )
+                if not isinstance(v, str) or v not in grades:
+                    raise at.fail("values", f"unknown grade {show(v)} (defined: {', '.join(grades) or 'none'})")
         else:
-            m = _PATH_RE.match(path)
-            if m is None or m["section"] not in defaults or m["key"] not in defaults[m["section"]]:
-                raise _fail(source, where, "expected a scenario key SECTION.KEY or SECTION.KEY[i] of docs/scenarios.md")
-            if m["key"] == "seed":
-                raise _fail(source, where, "the seed of each run derives from [campaign] seed; it is not varied")
-            default = defaults[m["section"]][m["key"]]
-            if isinstance(default, list) != (m["index"] is not None):
-                raise _fail(
-                    source,
-                    where,
-                    f"{'a vector key takes an index [i]' if isinstance(default, list) else 'not a vector key'}",
-                )
-            if m["index"] is not None and int(m["index"]) >= len(default):
-                raise _fail(source, where, f"index out of range (the key has {len(default)} elements)")
-            for value in (
-                dist.args[0] if dist.kind == "choice" else dist.args[:1] if dist.kind == "normal" else dist.args
-            ):
-                trial = json.loads(json.dumps(base))
-                _set_path(trial, path, value, defaults)
-                try:
-                    Scenario.from_dict(trial, source="")
-                except InputError as exc:
-                    raise _fail(
-                        source, where, f"the value {value!r} makes no valid run: {str(exc).lstrip(': ')}"
-                    ) from None
+            _check_path(at, path, dist, base, defaults)
         vary[path] = dist
     if grades and "grade" not in vary:
-        raise _fail(source, "[vary.grade]", "grades are defined but no [vary.grade] chooses among them")
-    options = dict(data.get("options") or {})
-    bad = sorted(set(options) - {"smoother", "verify", *TIMELINE_KEYS})
-    if bad:
-        raise _fail(
-            source, f"[options] {bad[0]}", f"unknown key (expected smoother, verify, {', '.join(TIMELINE_KEYS)})"
-        )
-    for key in ("smoother", "verify"):
-        if key in options and not isinstance(options[key], bool):
-            raise _fail(source, f"[options] {key}", f"expected true or false, got {options[key]!r}")
-    for key in TIMELINE_KEYS:
-        if key in options:
-            v = _number(source, f"[options] {key}", options[key])
-            if not v > 0 or (key == "features_h" and v != int(v)):
-                raise _fail(
-                    source,
-                    f"[options] {key}",
-                    f"expected {'whole ' if key == 'features_h' else ''}hours > 0, got {v:g}",
-                )
+        raise root.section("vary.grade").fail(None, "grades are defined but no [vary.grade] chooses among them")
+    options = dict(root.table(data, "options", OPTIONS))  # as given: the campaign's digest hashes them
+    at = root.section("options")
+    for key, v in options.items():
+        value = OPTIONS[key].read(at, key, v)
+        if key == "features_h" and not value.is_integer():
+            raise at.fail(key, f"expected whole hours, got {fmt_number(value)}")
     campaign = Campaign(name, count, seed, base, vary, grades, source, options)
     try:
         campaign.timeline  # noqa: B018 - the time line's own checks (align_h fits the coarse span, ...)
     except ValueError as exc:
-        raise _fail(source, "[options]", str(exc)) from None
+        raise at.fail(None, str(exc)) from None
     campaign.scenario(0)  # a sampled run must be a valid scenario too (errors name the run)
     return campaign
 
@@ -383,10 +357,10 @@ def check_feasible(campaign: Campaign) -> None:
     _check_static(campaign, need_h)
     first = campaign.scenario(0).run
     if "run.duration_h" in campaign.vary:
-        longest_h, key = _largest(campaign.vary["run.duration_h"]), '[vary."run.duration_h"]'
+        longest_h, table, key = _largest(campaign.vary["run.duration_h"]), 'vary."run.duration_h"', None
     else:
-        longest_h = first.duration_h
-        key = "[base.run] duration_h" + ("" if "duration_h" in campaign.base.get("run", {}) else " (its default)")
+        longest_h, table = first.duration_h, "base.run"
+        key = "duration_h" + ("" if "duration_h" in campaign.base.get("run", {}) else " (its default)")
     rate = campaign.vary.get("run.rate_hz")
     if rate is None:
         rates = [first.rate_hz]
@@ -398,8 +372,7 @@ def check_feasible(campaign: Campaign) -> None:
         return  # unbounded or not numbers: some run may be long enough
     if all(longest_h * 3600.0 * r + 1.0 < need_h * 3600.0 * r for r in rates):  # short by more than one sample
         names = {k: "" if k in campaign.options else " (default)" for k in ("align_h", *TIMELINE_KEYS[1:])}
-        raise _fail(
-            campaign.source,
+        raise Scope(campaign.source, CampaignError, table).fail(
             key,
             f"every run lasts at most {longest_h:g} h, shorter than the {need_h:g} h the procedure needs "
             f"([options] align_h = {timeline.align_h:g}{names['align_h']} + the longer of features_h = "
@@ -416,9 +389,8 @@ def _check_static(campaign: Campaign, need_h: float) -> None:
     if route is None or not route.segments or route.static_h >= need_h - 1e-9:
         return
     given = "static_h" in campaign.base.get("trajectory", {})
-    raise _fail(
-        campaign.source,
-        "[base.trajectory] static_h" + ("" if given else " (default)"),
+    raise Scope(campaign.source, CampaignError, "base.trajectory").fail(
+        "static_h" + ("" if given else " (default)"),
         f"the vehicle drives off at {route.static_h:g} h, before the {need_h:g} h of static base the procedure "
         "needs (align_h + the longer of features_h and truth_h, [options]): a campaign's runs are identified on a "
         f"static base; give static_h >= {need_h:g} h",

@@ -25,14 +25,13 @@ import numpy as np
 
 from gyrodrift.errors import InputError, OutputError
 from gyrodrift.fleet.spec import CAMPAIGN_FORMAT, Campaign, load_campaign, run_id
-from gyrodrift.runs.table import SMOOTHER_THERMAL_COLUMNS
+from gyrodrift.runs.columns import FLAG_COLUMNS, SMOOTHER_COLUMNS
 
 __all__ = [
     "BOOL_COLUMNS",
     "CURVE_COLUMNS",
     "CampaignRuns",
     "CampaignStore",
-    "SMOOTHER_COLUMNS",
     "STAGES",
     "linear_error_nmi",
     "param_column",
@@ -40,22 +39,14 @@ __all__ = [
     "run_schema",
 ]
 
-BOOL_COLUMNS = ("truth_verified", "label_flagged")
-"""The yes/no columns of a run (empty when unknown)."""
+BOOL_COLUMNS = ("truth_verified", *FLAG_COLUMNS)
+"""The yes/no columns of a run file (empty when unknown): the truth verified (``[options] verify``), then the run
+table's flags (`gyrodrift.runs.columns.FLAG_COLUMNS`)."""
 STAGES = ("align", "passes", "smoother", "twin")
 """The timed stages of a run (columns ``t_STAGE_s`` wall and ``cpu_STAGE_s`` CPU seconds, and ``_total``)."""
 CURVE_COLUMNS = ("curve_t_h", "curve_north0_m", "curve_east0_m", "curve_north_per_deg_h", "curve_east_per_deg_h")
 """The linear 72 h error curves of a run (float32 lists): time since the end of alignment [h], uncompensated
 north/east position error [m], and their change per deg/h of compensated z drift [m/(deg/h)]."""
-SMOOTHER_COLUMNS = (
-    "drift_smoother_deg_h",
-    "drift_smoother_std_deg_h",
-    *SMOOTHER_THERMAL_COLUMNS,
-)
-"""The smoother's columns of a run: its drift carried into navigation and 1-sigma [deg/h], and under its thermal
-model k_z and its 1-sigma [deg/h/degC], cov(end drift, k_z) [(deg/h)^2/degC] and its prior 1-sigma of k_z
-[deg/h/degC] (`gyrodrift.runs.table.SMOOTHER_THERMAL_COLUMNS`; NaN under the constant model). A store
-written before the last four existed reads them as NaN (`read_runs`)."""
 _RUN_FILE_RE = re.compile(r"^run-(?P<index>[0-9]{6})\.parquet$")
 
 
