@@ -1,1 +1,1 @@
-"""Fleets of runs: campaign specification, the resumable store, execution on processes or Dask, and the method study."""
+"""Fleets of runs: campaign spec, one run's science, the resumable store, one executor, the method study."""
