@@ -19,7 +19,7 @@ from hypothesis import strategies as st
 
 from gyrodrift.cli import main
 from gyrodrift.errors import InputError
-from gyrodrift.ins import Scenario, simulate
+from gyrodrift.ins import Scenario
 from gyrodrift.logs import open_log
 from gyrodrift.sensors.allan import CONFIDENCE, allan_deviation, fit_noise, gauss_markov_avar
 
@@ -74,8 +74,9 @@ def test_fit_keeps_no_term_the_interval_does_not_show():
     assert many.rrw == pytest.approx(rrw, rel=0.05) and "rrw" not in many.not_resolved
 
 
-def _static_log(tmp_path, seed, *, arw=0.002, vrw=20.0, hours=1.0, scheme="none", rate_hz=100.0, **gyro):
-    scn = Scenario.from_dict(
+def _static_log(simulated_log, seed, *, arw=0.002, vrw=20.0, hours=1.0, scheme="none", rate_hz=100.0, **gyro):
+    """A static log (tests/conftest.py's session cache: shared, never modified)."""
+    return simulated_log(
         {
             "run": {"duration_h": hours, "rate_hz": rate_hz, "seed": seed},
             "rotation": {"scheme": scheme},
@@ -83,7 +84,6 @@ def _static_log(tmp_path, seed, *, arw=0.002, vrw=20.0, hours=1.0, scheme="none"
             "accel": {"vrw_ug_rthz": vrw},
         }
     )
-    return simulate(scn, out_dir=tmp_path / f"run{seed}")
 
 
 def _constant_columns(log, columns, path):
@@ -99,8 +99,8 @@ def _constant_columns(log, columns, path):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("seed", [1, 2])
-def test_recovers_simulated_arw_and_vrw_within_10_percent(tmp_path, seed):
-    log = _static_log(tmp_path, seed, bias_instability_deg_h=0.003, correlation_s=300.0)
+def test_recovers_simulated_arw_and_vrw_within_10_percent(simulated_log, seed):
+    log = _static_log(simulated_log, seed, bias_instability_deg_h=0.003, correlation_s=300.0)
     result = allan_deviation(open_log(log))
     doc = result.to_dict()
     for axis in GYROS:
@@ -116,14 +116,14 @@ def test_recovers_simulated_arw_and_vrw_within_10_percent(tmp_path, seed):
     assert lo < gx.adev[i] < hi
 
 
-def test_a_turning_table_is_refused(tmp_path):
+def test_a_turning_table_is_refused(simulated_log):
     with pytest.raises(InputError, match=r"the turntable turns.*rotation off"):
-        allan_deviation(open_log(_static_log(tmp_path, 3, hours=0.1, scheme="continuous")))
+        allan_deviation(open_log(_static_log(simulated_log, 3, hours=0.1, scheme="continuous")))
 
 
-def test_a_log_whose_channels_are_all_constant_is_refused_in_one_line(tmp_path):
+def test_a_log_whose_channels_are_all_constant_is_refused_in_one_line(simulated_log, tmp_path):
     # issue 18: such a log gave an ARW of 2.9e-16 deg/sqrt(h) and a correlation time of 1184 s, exit 0
-    log = _static_log(tmp_path, 5, hours=0.05)
+    log = _static_log(simulated_log, 5, hours=0.05)
     dead = _constant_columns(
         log,
         ["dtheta_x_rad", "dtheta_y_rad", "dtheta_z_rad", "dv_x_m_s", "dv_y_m_s", "dv_z_m_s"],
@@ -139,9 +139,9 @@ def test_a_log_whose_channels_are_all_constant_is_refused_in_one_line(tmp_path):
 
 
 @pytest.mark.slow
-def test_a_30_s_log_reports_no_bias_instability_and_no_rate_random_walk(tmp_path):
+def test_a_30_s_log_reports_no_bias_instability_and_no_rate_random_walk(simulated_log, tmp_path):
     # issue 18: a 30 s log of white noise only gave a bias instability of 0.0079 deg/h and an RRW of 0.029
-    log = _static_log(tmp_path, 6, hours=30.0 / 3600.0)
+    log = _static_log(simulated_log, 6, hours=30.0 / 3600.0)
     out = tmp_path / "allan"
     r = CliRunner().invoke(main, ["allan", str(log), "--out", str(out)])
     assert r.exit_code == 0, r.output
@@ -166,9 +166,9 @@ def test_a_30_s_log_reports_no_bias_instability_and_no_rate_random_walk(tmp_path
 
 
 @pytest.mark.slow
-def test_one_noisy_gyro_and_two_dead_ones_the_dead_are_named_and_left_out(tmp_path):
+def test_one_noisy_gyro_and_two_dead_ones_the_dead_are_named_and_left_out(simulated_log, tmp_path):
     # issue 18: the dead axes were averaged into the noise block (ARW 1/3 of the truth)
-    log = _static_log(tmp_path, 7, hours=0.25)
+    log = _static_log(simulated_log, 7, hours=0.25)
     dead = _constant_columns(log, ["dtheta_y_rad", "dtheta_z_rad"], tmp_path / "dead.parquet")
     out = tmp_path / "allan"
     r = CliRunner().invoke(main, ["allan", str(dead), "--out", str(out)])
@@ -189,8 +189,8 @@ def test_one_noisy_gyro_and_two_dead_ones_the_dead_are_named_and_left_out(tmp_pa
 
 
 @pytest.mark.slow
-def test_a_log_whose_gyros_are_all_constant_measures_its_accelerometers_and_says_so(tmp_path):
-    log = _static_log(tmp_path, 9, hours=0.05)
+def test_a_log_whose_gyros_are_all_constant_measures_its_accelerometers_and_says_so(simulated_log, tmp_path):
+    log = _static_log(simulated_log, 9, hours=0.05)
     dead = _constant_columns(log, ["dtheta_x_rad", "dtheta_y_rad", "dtheta_z_rad"], tmp_path / "g.parquet")
     out = tmp_path / "allan"
     r = CliRunner().invoke(main, ["allan", str(dead), "--out", str(out)])
@@ -203,9 +203,9 @@ def test_a_log_whose_gyros_are_all_constant_measures_its_accelerometers_and_says
 
 
 @pytest.mark.slow
-def test_two_hours_of_pure_white_noise_report_no_rate_random_walk_nor_bias_instability(tmp_path):
+def test_two_hours_of_pure_white_noise_report_no_rate_random_walk_nor_bias_instability(simulated_log):
     # issue 18: such a log reported a rate random walk of 0.0019 deg/h/sqrt(h)
-    result = allan_deviation(open_log(_static_log(tmp_path, 8, hours=2.0)))
+    result = allan_deviation(open_log(_static_log(simulated_log, 8, hours=2.0)))
     for axis in result.axes:
         assert axis.rrw is None and axis.gm_sigma is None and axis.bias_instability is None, axis.axis
         assert axis.white is not None
@@ -217,12 +217,12 @@ def test_two_hours_of_pure_white_noise_report_no_rate_random_walk_nor_bias_insta
 
 @pytest.mark.slow
 @pytest.mark.parametrize("seed", [11, 12, 13])
-def test_a_long_log_with_a_rate_random_walk_reports_it_within_its_statistics(tmp_path, seed):
+def test_a_long_log_with_a_rate_random_walk_reports_it_within_its_statistics(simulated_log, seed):
     # 48 h at 10 Hz, ARW 0.01 deg/sqrt(h), RRW 0.05 deg/h/sqrt(h): the rate random walk crosses the white noise
     # at tau = sqrt(3) N / K = 1250 s, five octaves below the longest averaging time (52 000 s). Over 20 seeds of
     # the same process (numpy, one axis each) it was reported every time, within 0.80-1.22 of the truth; the test
     # allows 0.6-1.4 per axis and 0.75-1.25 for the mean of the three gyros (the scenario block).
-    log = _static_log(tmp_path, seed, arw=0.01, hours=48.0, rate_hz=10.0, rrw_deg_h_rth=0.05)
+    log = _static_log(simulated_log, seed, arw=0.01, hours=48.0, rate_hz=10.0, rrw_deg_h_rth=0.05)
     result = allan_deviation(open_log(log))
     doc = result.to_dict()
     for axis in GYROS:
@@ -236,8 +236,8 @@ def test_a_long_log_with_a_rate_random_walk_reports_it_within_its_statistics(tmp
 
 
 @pytest.mark.slow
-def test_cli_writes_json_png_and_a_noise_block_a_scenario_accepts(tmp_path):
-    log = _static_log(tmp_path, 4)
+def test_cli_writes_json_png_and_a_noise_block_a_scenario_accepts(simulated_log, tmp_path):
+    log = _static_log(simulated_log, 4)
     out = tmp_path / "allan"
     r = CliRunner().invoke(main, ["allan", str(log), "--out", str(out)])
     assert r.exit_code == 0, r.output
@@ -260,9 +260,9 @@ def test_cli_on_a_missing_log_is_one_line(tmp_path):
     assert r.exit_code == 1 and "Traceback" not in r.output and "nope.parquet" in r.output
 
 
-def test_cli_without_the_allan_extra_says_how_to_install_it(tmp_path, monkeypatch):
+def test_cli_without_the_allan_extra_says_how_to_install_it(simulated_log, tmp_path, monkeypatch):
     # allantools is an extra (it pulls pytest and numpydoc at run time): without it, one line naming the install
-    log = _static_log(tmp_path, 4)
+    log = _static_log(simulated_log, 4)
     monkeypatch.setitem(sys.modules, "allantools", None)  # the next `import allantools` fails
     out = tmp_path / "allan"
     r = CliRunner().invoke(main, ["allan", str(log), "--out", str(out)])
