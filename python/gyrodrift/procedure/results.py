@@ -316,8 +316,6 @@ class TrueDrift:
         }
 
 
-RUN_TABLE_COLUMNS = FEATURES_COLUMNS  # TEMPORARY for fleet.run_table until it calls runs.table.write_run_table
-
 SMOOTHER_THERMAL_FIELDS = (
     "thermal_coeff_deg_h_per_c",
     "thermal_coeff_std_deg_h_per_c",

@@ -27,7 +27,7 @@ from gyrodrift.procedure.figures import (
 )
 from gyrodrift.procedure.results import Alignment, Evaluation, Identification, RunFeatures, TrueDrift
 from gyrodrift.runs.columns import CURVES_TABLE, EVALUATION_CURVES_TABLE, FEATURES_COLUMNS, LABEL_COLUMNS
-from gyrodrift.runs.table import recognise_run_table, run_table_target, run_table_text
+from gyrodrift.runs.table import run_table_target, run_table_text
 
 __all__ = [
     "ALIGNMENT_FILES",
@@ -64,7 +64,6 @@ EVALUATION_CURVE_COLUMNS = tuple(c.name for c in EVALUATION_CURVES_TABLE)
 IDENTIFICATION_FILES = ("identification.json",)
 CURVES_COLUMNS = tuple(c.name for c in CURVES_TABLE)
 """Columns of the curves table of ``features --curves`` (`gyrodrift.runs.columns.CURVES_TABLE`)."""
-RUN_TABLE_RECOGNISER = recognise_run_table  # TEMPORARY for fleet.run_table until it calls runs.table.write_run_table
 CURVES_RECOGNISER = recognise_header(",".join(CURVES_COLUMNS) + "\n")
 """Recognises a curves table written by `write_features_csv` (``curves=``)."""
 
