@@ -10,22 +10,89 @@ use crate::smoother::model::{symmetrise, Model};
 use crate::smoother::{SmootherConfig, POS};
 use nalgebra::{DMatrix, DVector};
 
-/// Settings of the label covariance analysis ([`label_sigma`]), SI.
+/// A free navigation propagated by covariance alone, with no measurements (SI): the settings of the label's sigma
+/// ([`LabelConfig`]) and of the planner's mission (`plan::mission_covariance`), checked with one set of limits.
 #[derive(Clone, Debug, PartialEq)]
-pub struct LabelConfig {
+pub struct FreeNavigation {
     /// Site latitude \[rad\] and height \[m\].
     pub lat: f64,
     pub height: f64,
     /// Navigation after the alignment \[s\] (72 h).
     pub span_s: f64,
-    /// Interval of the error curves the criterion is taken over \[s\] (60).
+    /// Propagation step \[s\] (60; for the label, the interval of the error curves the criterion is taken over).
     pub step_s: f64,
-    /// Angle random walk [rad/sqrt(s)] and velocity random walk [m/s/sqrt(s)] of the log.
+    /// Angle random walk [rad/sqrt(s)] and velocity random walk [m/s/sqrt(s)].
     pub gyro_arw: f64,
     pub accel_vrw: f64,
     /// Attitude error 1-sigma E N U at the start of the navigation \[rad\] (the alignment's), and velocity [m/s].
     pub att_sigma: [f64; 3],
     pub vel_sigma: f64,
+}
+
+impl FreeNavigation {
+    /// White noise only at the site (height 0), the alignment's errors left out.
+    pub fn white(lat: f64, span_s: f64, step_s: f64, gyro_arw: f64, accel_vrw: f64) -> Self {
+        FreeNavigation {
+            lat,
+            height: 0.0,
+            span_s,
+            step_s,
+            gyro_arw,
+            accel_vrw,
+            att_sigma: [0.0; 3],
+            vel_sigma: 0.0,
+        }
+    }
+
+    /// Range checks; errors name the key (`step_what` names the step in the message).
+    pub(crate) fn validate(&self, step_what: &str) -> Result<(), CoreError> {
+        use crate::error::{all_in_range, in_range, Unit, DEG_PER_RTH, MICRO_G_PER_RTHZ};
+        check_site(self.lat, 0.0, self.height, 1.0)?;
+        let s = Unit::Si("s");
+        in_range("span_s", "span", self.span_s, 60.0, 1e7, s)?;
+        in_range("step_s", step_what, self.step_s, 1.0, self.span_s, s)?;
+        in_range(
+            "gyro_arw_rad_rts",
+            "angle random walk",
+            self.gyro_arw,
+            0.0,
+            0.1,
+            DEG_PER_RTH,
+        )?;
+        in_range(
+            "accel_vrw_m_s_rts",
+            "velocity random walk",
+            self.accel_vrw,
+            0.0,
+            1.0,
+            MICRO_G_PER_RTHZ,
+        )?;
+        all_in_range("att_sigma_rad", "attitude sigma", &self.att_sigma, 0.0, 0.2, Unit::Deg)?;
+        in_range(
+            "vel_sigma_m_s",
+            "velocity sigma",
+            self.vel_sigma,
+            0.0,
+            10.0,
+            Unit::Si("m/s"),
+        )
+    }
+
+    /// The smoother's settings whose error model this navigation propagates (its site and noise; a 1 Hz placeholder
+    /// rate, which the model does not use).
+    pub(crate) fn smoother_config(&self) -> SmootherConfig {
+        let mut sc = SmootherConfig::new(self.lat, 0.0, self.height, 1.0);
+        sc.gyro_arw = self.gyro_arw;
+        sc.accel_vrw = self.accel_vrw;
+        sc
+    }
+}
+
+/// Settings of the label covariance analysis ([`label_sigma`]), SI.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LabelConfig {
+    /// The navigation after the alignment (its `step_s` is the interval of the error curves).
+    pub navigation: FreeNavigation,
     /// `true`: the criterion is the root mean square of the position error over the curve; `false`: its last value.
     pub rms: bool,
     /// The z gyro's slowly varying bias, which the label's constant absorbs and the run's noise-free twin lacks:
@@ -42,14 +109,7 @@ impl LabelConfig {
     /// White noise only (no bias instability, no rate random walk), the alignment's errors left out.
     pub fn white(lat: f64, span_s: f64, step_s: f64, gyro_arw: f64, accel_vrw: f64, rms: bool) -> Self {
         LabelConfig {
-            lat,
-            height: 0.0,
-            span_s,
-            step_s,
-            gyro_arw,
-            accel_vrw,
-            att_sigma: [0.0; 3],
-            vel_sigma: 0.0,
+            navigation: FreeNavigation::white(lat, span_s, step_s, gyro_arw, accel_vrw),
             rms,
             gyro_bias_instability: 0.0,
             gyro_correlation: 3600.0,
@@ -57,54 +117,6 @@ impl LabelConfig {
             rrw_start_s: 0.0,
         }
     }
-}
-
-/// A free navigation propagated by covariance alone ([`label_sigma`], the planner's mission): the settings both
-/// check with one set of limits (SI; `step_what` names the step in the message).
-pub(crate) struct FreeNavigation<'a> {
-    pub lat: f64,
-    pub height: f64,
-    pub span_s: f64,
-    pub step_s: f64,
-    pub step_what: &'a str,
-    pub gyro_arw: f64,
-    pub accel_vrw: f64,
-    pub att_sigma: [f64; 3],
-    pub vel_sigma: f64,
-}
-
-/// Range checks of a [`FreeNavigation`]; errors name the key.
-pub(crate) fn check_free_navigation(f: &FreeNavigation) -> Result<(), CoreError> {
-    use crate::error::{all_in_range, in_range, Unit, DEG_PER_RTH, MICRO_G_PER_RTHZ};
-    check_site(f.lat, 0.0, f.height, 1.0)?;
-    let s = Unit::Si("s");
-    in_range("span_s", "span", f.span_s, 60.0, 1e7, s)?;
-    in_range("step_s", f.step_what, f.step_s, 1.0, f.span_s, s)?;
-    in_range(
-        "gyro_arw_rad_rts",
-        "angle random walk",
-        f.gyro_arw,
-        0.0,
-        0.1,
-        DEG_PER_RTH,
-    )?;
-    in_range(
-        "accel_vrw_m_s_rts",
-        "velocity random walk",
-        f.accel_vrw,
-        0.0,
-        1.0,
-        MICRO_G_PER_RTHZ,
-    )?;
-    all_in_range("att_sigma_rad", "attitude sigma", &f.att_sigma, 0.0, 0.2, Unit::Deg)?;
-    in_range(
-        "vel_sigma_m_s",
-        "velocity sigma",
-        f.vel_sigma,
-        0.0,
-        10.0,
-        Unit::Si("m/s"),
-    )
 }
 
 /// The label's uncertainty ([`label_sigma`]).
@@ -135,23 +147,12 @@ pub struct LabelSigma {
 /// period this is close to sqrt(1.5 T) N / |g(T)| (N the ARW; tests/procedure/test_label_flags_and_noise.py derives it).
 pub fn label_sigma(cfg: &LabelConfig) -> Result<LabelSigma, CoreError> {
     use crate::error::{in_range, Unit};
-    check_free_navigation(&FreeNavigation {
-        lat: cfg.lat,
-        height: cfg.height,
-        span_s: cfg.span_s,
-        step_s: cfg.step_s,
-        step_what: "curve interval",
-        gyro_arw: cfg.gyro_arw,
-        accel_vrw: cfg.accel_vrw,
-        att_sigma: cfg.att_sigma,
-        vel_sigma: cfg.vel_sigma,
-    })?;
+    let nav = &cfg.navigation;
+    nav.validate("curve interval")?;
     let s = Unit::Si("s");
     check_slow_bias(cfg.gyro_bias_instability, cfg.gyro_correlation, cfg.gyro_rrw)?;
     in_range("rrw_start_s", "random-walk start", cfg.rrw_start_s, 0.0, 1e7, s)?;
-    let mut sc = SmootherConfig::new(cfg.lat, 0.0, cfg.height, 1.0);
-    sc.gyro_arw = cfg.gyro_arw;
-    sc.accel_vrw = cfg.accel_vrw;
+    let mut sc = nav.smoother_config();
     sc.gyro_bias_instability = cfg.gyro_bias_instability;
     sc.gyro_correlation = cfg.gyro_correlation;
     sc.gyro_rrw = cfg.gyro_rrw;
@@ -163,15 +164,15 @@ pub fn label_sigma(cfg: &LabelConfig) -> Result<LabelSigma, CoreError> {
         model.qc[first + 1] = 0.0;
     }
     let identity: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-    let (phi, q) = model.discretise(&identity, 0.0, cfg.step_s);
+    let (phi, q) = model.discretise(&identity, 0.0, nav.step_s);
     // Augmented covariance: the error state and the accumulator s (last).
     let na = n + 1;
     let mut p = DMatrix::zeros(na, na);
     for i in 0..3 {
-        p[(PHI + i, PHI + i)] = cfg.att_sigma[i] * cfg.att_sigma[i];
+        p[(PHI + i, PHI + i)] = nav.att_sigma[i] * nav.att_sigma[i];
     }
     for i in 0..2 {
-        p[(DV + i, DV + i)] = cfg.vel_sigma * cfg.vel_sigma;
+        p[(DV + i, DV + i)] = nav.vel_sigma * nav.vel_sigma;
     }
     if let Some(g) = model.gm {
         p[(g + 2, g + 2)] = cfg.gyro_bias_instability * cfg.gyro_bias_instability;
@@ -186,7 +187,7 @@ pub fn label_sigma(cfg: &LabelConfig) -> Result<LabelSigma, CoreError> {
     // Response to a unit z drift: the bias state set to 1 rad/s and carried by the same transition.
     let mut g = DVector::zeros(n);
     g[EPS + 2] = 1.0;
-    let steps = (cfg.span_s / cfg.step_s).round().max(1.0) as usize;
+    let steps = (nav.span_s / nav.step_s).round().max(1.0) as usize;
     let mut sum_g2 = 0.0;
     for _ in 0..steps {
         g = &phi * g;

@@ -28,7 +28,7 @@
 use crate::attitude::{euler_to_dcm, mat_mul, rot_z, Euler, Mat3};
 use crate::error::{check, CoreError};
 use crate::kalman::EPS;
-use crate::label::{check_free_navigation, FreeNavigation};
+use crate::label::FreeNavigation;
 use crate::smoother::model::{initial_sigma, measurement_model, symmetrise, Model};
 use crate::smoother::{SmootherConfig, POS};
 use crate::turntable::{RotationScheme, Turntable};
@@ -179,23 +179,6 @@ pub fn drift_std_curve(cfg: &PlanConfig) -> Result<DriftCurve, CoreError> {
 /// Step of the free propagations \[s\].
 const MISSION_STEP_S: f64 = 60.0;
 
-/// Settings of [`mission_covariance`] (SI).
-#[derive(Clone, Debug, PartialEq)]
-pub struct MissionConfig {
-    /// Site latitude \[rad\] and height \[m\].
-    pub lat: f64,
-    pub height: f64,
-    /// Free navigation \[s\] (72 h) and the propagation step \[s\] (60).
-    pub span_s: f64,
-    pub step_s: f64,
-    /// Angle random walk [rad/sqrt(s)] and velocity random walk [m/s/sqrt(s)].
-    pub gyro_arw: f64,
-    pub accel_vrw: f64,
-    /// Attitude error 1-sigma E N U \[rad\] and velocity error 1-sigma [m/s] at the start of the navigation.
-    pub att_sigma: [f64; 3],
-    pub vel_sigma: f64,
-}
-
 /// The position error at the end of a free navigation ([`mission_covariance`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MissionCovariance {
@@ -208,21 +191,9 @@ pub struct MissionCovariance {
 }
 
 /// The north/east position error after `span_s` of free navigation (module docs).
-pub fn mission_covariance(cfg: &MissionConfig) -> Result<MissionCovariance, CoreError> {
-    check_free_navigation(&FreeNavigation {
-        lat: cfg.lat,
-        height: cfg.height,
-        span_s: cfg.span_s,
-        step_s: cfg.step_s,
-        step_what: "propagation step",
-        gyro_arw: cfg.gyro_arw,
-        accel_vrw: cfg.accel_vrw,
-        att_sigma: cfg.att_sigma,
-        vel_sigma: cfg.vel_sigma,
-    })?;
-    let mut sc = SmootherConfig::new(cfg.lat, 0.0, cfg.height, 1.0);
-    sc.gyro_arw = cfg.gyro_arw;
-    sc.accel_vrw = cfg.accel_vrw;
+pub fn mission_covariance(cfg: &FreeNavigation) -> Result<MissionCovariance, CoreError> {
+    cfg.validate("propagation step")?;
+    let sc = cfg.smoother_config();
     let model = Model::new(&sc);
     let n = model.n;
     let level: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
@@ -323,16 +294,13 @@ mod tests {
         let mut cfg = plan_config(40.0, &[3.0, 16.0]);
         let curve = drift_std_curve(&cfg).unwrap();
         assert_eq!(curve.cross[0], [0.0, 0.0]); // the span ends before the mission starts
-        let m = mission_covariance(&MissionConfig {
-            lat: cfg.smoother.lat,
-            height: 0.0,
-            span_s: cfg.mission_s,
-            step_s: 60.0,
-            gyro_arw: cfg.smoother.gyro_arw,
-            accel_vrw: cfg.smoother.accel_vrw,
-            att_sigma: [0.0; 3],
-            vel_sigma: 0.0,
-        })
+        let m = mission_covariance(&FreeNavigation::white(
+            cfg.smoother.lat,
+            cfg.mission_s,
+            60.0,
+            cfg.smoother.gyro_arw,
+            cfg.smoother.accel_vrw,
+        ))
         .unwrap();
         // Cauchy-Schwarz on the east axis, and a correlation that is there after 12 h of overlap (about -0.05).
         let (c, s, floor) = (curve.cross[1][1], curve.drift_std[1], m.pos_cov[1][1].sqrt());
@@ -353,16 +321,7 @@ mod tests {
     fn the_mission_response_follows_the_closed_forms() {
         // dL(t) = (eps cos L / w)(1 - cos w t), dlon(t) = eps sin L (t - sin(w t) / w), Schuler terms aside.
         let lat = 40f64.to_radians();
-        let cfg = MissionConfig {
-            lat,
-            height: 0.0,
-            span_s: 72.0 * HOUR,
-            step_s: 60.0,
-            gyro_arw: 0.0,
-            accel_vrw: 0.0,
-            att_sigma: [0.0; 3],
-            vel_sigma: 0.0,
-        };
+        let cfg = FreeNavigation::white(lat, 72.0 * HOUR, 60.0, 0.0, 0.0);
         let m = mission_covariance(&cfg).unwrap();
         let t = cfg.span_s;
         let w = OMEGA_IE;

@@ -129,11 +129,7 @@ fn label_sigma_follows_one_over_sin_cos_latitude() {
     // method.md: 1.5-1.7e-4 deg/h at 40 deg for this grade (ARW 0.0005 deg/sqrt(h), 72 h).
     let s40 = at(40.0).drift_std / DEG_PER_H;
     assert!((1.0e-4..2.5e-4).contains(&s40), "{s40}");
-    assert!(label_sigma(&LabelConfig {
-        gyro_arw: f64::NAN,
-        ..LabelConfig::white(0.5, 3600.0, 60.0, 0.0, 0.0, true)
-    })
-    .is_err());
+    assert!(label_sigma(&LabelConfig::white(0.5, 3600.0, 60.0, f64::NAN, 0.0, true)).is_err());
 }
 
 #[test]

@@ -3,10 +3,9 @@
 
 use super::config::SimulatorConfig;
 use super::core_err;
+use super::label::free_navigation;
 use super::smoother::SmootherConfig;
-use gyrodrift_core::plan::{
-    drift_std_curve as core_curve, mission_covariance as core_mission, MissionConfig, PlanConfig,
-};
+use gyrodrift_core::plan::{drift_std_curve as core_curve, mission_covariance as core_mission, PlanConfig};
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -59,16 +58,16 @@ pub fn mission_covariance<'py>(
     att_sigma_rad: [f64; 3],
     vel_sigma_m_s: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let cfg = MissionConfig {
-        lat: lat_rad,
-        height: height_m,
+    let cfg = free_navigation(
+        lat_rad,
+        height_m,
         span_s,
         step_s,
-        gyro_arw: gyro_arw_rad_rts,
-        accel_vrw: accel_vrw_m_s_rts,
-        att_sigma: att_sigma_rad,
-        vel_sigma: vel_sigma_m_s,
-    };
+        gyro_arw_rad_rts,
+        accel_vrw_m_s_rts,
+        att_sigma_rad,
+        vel_sigma_m_s,
+    );
     let r = py.detach(|| core_mission(&cfg)).map_err(core_err)?;
     let d = PyDict::new(py);
     let cov = vec![r.pos_cov[0].to_vec(), r.pos_cov[1].to_vec()];

@@ -31,7 +31,7 @@ alignment's own z estimate plays no part.
 
 Uncertainty of the label: with sensor noise, d* is the constant that best cancels this run's random
 walk, not the sensor's drift. Its 1-sigma ``drift_std_deg_h`` comes from a linear covariance analysis of the 72 h
-navigation with the core's error model (`_core.label_sigma`, gyrodrift-core ``smoother::label_sigma``: attitude,
+navigation with the core's error model (`_core.label_sigma`, gyrodrift-core ``label::label_sigma``: attitude,
 velocity and north/east position errors driven by ARW and VRW over the navigation, and by the z gyro's
 Gauss-Markov bias instability and rate random walk when the noise model has them (`SensorNoise`; a noise measured
 from the log has none): d* follows their weighted average over the span, which the run's noise-free twin lacks;
