@@ -18,9 +18,13 @@ from gyrodrift.learn.physics_base import PhysicsBase, physics_estimate
 from gyrodrift.learn.ranges import InputRanges
 from gyrodrift.runs.datasets import load_paper, paper_csv_path
 
-BEFORE = Path(__file__).resolve().parents[1] / "data" / "model_schema4_before_parts.json"
+DATA = Path(__file__).resolve().parents[1] / "data"
+BEFORE = DATA / "model_schema4_before_parts.json"
 """`gyrodrift fit paper_runs.csv --lat0-deg 45.7 --seed 1 --out model.json`, written by the code before the drift
 model was split into parts (commit ad28759)."""
+FLEET_BEFORE = DATA / "model_schema4_fleet_before_parts.json"
+"""`gyrodrift fit runs.csv --seed 1` on the run table of ``campaign examples/campaigns/tiny.toml`` at commit ad28759:
+a hybrid on the fleet-prior smoother base, its training runs with label 1-sigmas and every optional column."""
 
 
 @pytest.fixture(scope="module")
@@ -50,9 +54,10 @@ def test_the_parameters_are_the_learners_and_the_models_own_and_fit_leaves_them_
     assert model.learner_.named_steps["lssvr"].tuning_.settings == {"grid_size": 5}
 
 
-def test_a_model_file_written_before_the_parts_loads_with_its_numbers():
-    doc = json.loads(BEFORE.read_text())
-    again = model_to_dict(load_model(BEFORE))
+@pytest.mark.parametrize("path", [BEFORE, FLEET_BEFORE], ids=["paper", "fleet"])
+def test_a_model_file_written_before_the_parts_loads_with_its_numbers(path):
+    doc = json.loads(path.read_text())
+    again = model_to_dict(load_model(path))  # the training runs' digest and the fitted record are checked
     for key in ("fitted", "lssvr_params", "tuning", "warnings", "target", "physics_column", "encoding"):
         assert again[key] == doc[key], key
     assert again["training"] == doc["training"]

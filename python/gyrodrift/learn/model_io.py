@@ -73,7 +73,7 @@ from gyrodrift.choices import (
 from gyrodrift.errors import GyrodriftError, InputError
 from gyrodrift.files.atomic import atomic_write_json, recognise_json_format
 from gyrodrift.files.input_files import read_limited
-from gyrodrift.learn.drift_model import DriftModel, make_drift_model, training_digest
+from gyrodrift.learn.drift_model import DriftModel, file_column_order, make_drift_model, training_digest
 from gyrodrift.learn.lssvm_system import IllConditionedWarning
 from gyrodrift.learn.tuning import TUNED_LSSVR_OPTIONS, SearchBoundWarning, TuningOptions, TuningResult
 from gyrodrift.runs.table import RunTable, RunTableError
@@ -168,9 +168,15 @@ def model_to_dict(model: DriftModel) -> dict:
             "source": training["source"],
             "weighted": bool(training.get("weighted", False)),
             "left_out": [str(r) for r in training.get("left_out", [])],
-            "runs": runs.records(),
+            "runs": [_in_file_order(record, runs) for record in runs.records()],
         },
     }
+
+
+def _in_file_order(record: dict, runs: RunTable) -> dict:
+    """A training run's record with its optional columns in `file_column_order`."""
+    extra = [name for name in file_column_order(runs.extra) if name in record]
+    return {key: record[key] for key in record if key not in runs.extra} | {key: record[key] for key in extra}
 
 
 MODEL_FILE_RECOGNISER = recognise_json_format(FORMAT)
