@@ -35,7 +35,7 @@ from gyrodrift.choices import ENCODINGS, PHYSICS_COLUMNS, default_encoding
 from gyrodrift.cli import main
 from gyrodrift.errors import InputError, OptionError
 from gyrodrift.export.languages import export_model, output_names
-from gyrodrift.export.render import literal
+from gyrodrift.export.literals import literal
 from gyrodrift.export.spec import (
     FEATURE_EXPRESSIONS,
     INPUTS,

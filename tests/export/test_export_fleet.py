@@ -20,7 +20,7 @@ import pytest
 
 from gyrodrift.errors import InputError
 from gyrodrift.export.languages import LANGUAGES, export_model
-from gyrodrift.export.render import literal
+from gyrodrift.export.literals import literal
 from gyrodrift.export.spec import PHYSICS_INPUTS, export_spec
 from gyrodrift.learn.drift_model import fit_drift_model
 from gyrodrift.learn.encodings import encode

@@ -5,6 +5,7 @@ allocation, no I/O; the physics functions of a hybrid (templates/hybrid.c.in) an
 from __future__ import annotations
 
 from gyrodrift.export import render
+from gyrodrift.export.literals import array, literal, range_rows
 from gyrodrift.export.spec import INPUTS, PHYSICS_EXPRESSIONS, ExportSpec
 from gyrodrift.learn.physics_base import FLEET_PHYSICS
 from gyrodrift.runs.columns import SMOOTHER_THERMAL_COLUMNS
@@ -36,8 +37,8 @@ def _header(spec: ExportSpec, provenance: str) -> str:
             mean, std = spec.coefficient_prior
             physics_macro += (
                 "/* The training fleet's prior on k_z [deg/h/degC]: mean and 1-sigma. */\n"
-                f"#define GYRODRIFT_MODEL_COEFF_PRIOR_MEAN_DEG_H_PER_C {render.literal(mean)}\n"
-                f"#define GYRODRIFT_MODEL_COEFF_PRIOR_STD_DEG_H_PER_C {render.literal(std)}\n"
+                f"#define GYRODRIFT_MODEL_COEFF_PRIOR_MEAN_DEG_H_PER_C {literal(mean)}\n"
+                f"#define GYRODRIFT_MODEL_COEFF_PRIOR_STD_DEG_H_PER_C {literal(std)}\n"
             )
         drift_decl = f"""/* The physics estimate [deg/h]: {render.physics_doc(spec)}. */
 double gyrodrift_model_physics_deg_h(const gyrodrift_model_inputs *inputs);
@@ -64,10 +65,10 @@ def _data(spec: ExportSpec) -> str:
     row = '    {{"{name}", {lo}, {hi}}}'
     data = [
         f"static const gyrodrift_model_range gyrodrift_model_input_range_table[{n_inputs}] = {{\n"
-        + render.range_rows(spec.inputs, spec.input_ranges, row, ",\n")
+        + range_rows(spec.inputs, spec.input_ranges, row, ",\n")
         + "\n};",
         f"static const gyrodrift_model_range gyrodrift_model_feature_range_table[{n_features}] = {{\n"
-        + render.range_rows(spec.feature_names, spec.feature_ranges, row, ",\n")
+        + range_rows(spec.feature_names, spec.feature_ranges, row, ",\n")
         + "\n};",
     ]
     for name, values in render.scaler_arrays(spec):
@@ -75,12 +76,12 @@ def _data(spec: ExportSpec) -> str:
     sv_rows = ",\n".join("    " + _array(sv) for sv in spec.support_vectors)
     data.append(f"static const double gyrodrift_model_support_vectors[{n_sv}][{n_features}] = {{\n{sv_rows}\n}};")
     data.append(f"static const double gyrodrift_model_alpha[{n_sv}] = {_array(spec.alpha)};")
-    data.append(f"static const double gyrodrift_model_intercept = {render.literal(spec.intercept)};")
+    data.append(f"static const double gyrodrift_model_intercept = {literal(spec.intercept)};")
     return "\n\n".join(data)
 
 
 def _array(values) -> str:
-    return render.array(values, "{}")
+    return array(values, "{}")
 
 
 def _kernel_body(spec: ExportSpec) -> str:
@@ -88,7 +89,7 @@ def _kernel_body(spec: ExportSpec) -> str:
     decls = "        double kval, term, next, back;\n" + (
         "        double base;\n        int j;\n" if spec.kernel == "poly" else ""
     )
-    sigma2 = f"({render.literal(spec.sigma)} * {render.literal(spec.sigma)})"
+    sigma2 = f"({literal(spec.sigma)} * {literal(spec.sigma)})"
     if spec.kernel == "rbf":
         return (
             decls
@@ -111,7 +112,7 @@ def _kernel_body(spec: ExportSpec) -> str:
     return (
         body
         + f"""
-        base = dot / {sigma2} + {render.literal(spec.coef0)};
+        base = dot / {sigma2} + {literal(spec.coef0)};
         kval = base;
         for (j = 1; j < {spec.degree}; ++j) {{
             kval *= base;

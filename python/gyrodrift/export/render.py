@@ -1,12 +1,11 @@
-"""The text shared by the C and the Rust generator: literals, arrays, comments, provenance, and the templates.
+"""The text shared by the C and the Rust generator: comments, provenance, expressions, and the templates.
 
-Every float is printed with 17 significant digits, which round-trips a float64, so the constants are the model's
-bits (`literal`). The generated code does the IEEE operations of Python's prediction in the same order
-(`gyrodrift.learn.lssvr`, "prediction arithmetic": distances in feature order, the C library's ``exp``,
-``b + sum_i alpha_i K_i`` (+ the physics estimate) as a compensated sum in support-vector order), so on the same
-machine it returns the same bits; on a navigation computer only a libm rounding ``exp`` or ``cos`` the other way
-can differ, by about eps times the size of the summed terms (`numerics_note`; docs/export.md gives the
-measurements and what the compiler must not do).
+The constants are printed as `gyrodrift.export.literals.literal`, so they are the model's bits. The generated code
+does the IEEE operations of Python's prediction in the same order (`gyrodrift.learn.lssvr`, "prediction arithmetic":
+distances in feature order, the C library's ``exp``, ``b + sum_i alpha_i K_i`` (+ the physics estimate) as a
+compensated sum in support-vector order), so on the same machine it returns the same bits; on a navigation computer
+only a libm rounding ``exp`` or ``cos`` the other way can differ, by about eps times the size of the summed terms
+(`numerics_note`; docs/export.md gives the measurements and what the compiler must not do).
 
 Provenance travels with the code (`provenance_lines`): the training digest, the exporting package's version, the
 encoding, scaling, kernel and hyperparameters, the target (a hybrid's physics column), and the range of each input
@@ -17,30 +16,26 @@ and feature over the training runs. The code skeletons are source files in ``tem
 from __future__ import annotations
 
 import json
-import math
 import re
 from importlib.resources import files
 from string import Template
 
 from gyrodrift import __version__
-from gyrodrift.errors import InputError
+from gyrodrift.export.literals import literal
 from gyrodrift.export.spec import FEATURE_EXPRESSIONS, INPUTS, ExportSpec, FeatureExpression
 from gyrodrift.learn.physics_base import FLEET_PHYSICS
 from gyrodrift.runs.columns import SMOOTHER_THERMAL_COLUMNS
 
 __all__ = [
     "SCALING_STEPS",
-    "array",
     "comment_block",
     "expression",
     "feature_expressions",
     "fill",
     "identity",
-    "literal",
     "numerics_note",
     "physics_doc",
     "provenance_lines",
-    "range_rows",
     "scaler_arrays",
 ]
 
@@ -72,31 +67,6 @@ def fill(template: str, **values: str | int) -> str:
     """The template file ``templates/<template>`` with each ``$name`` replaced by ``values[name]``."""
     text = files("gyrodrift.export").joinpath("templates", template).read_text(encoding="utf-8")
     return Template(text).substitute(values)
-
-
-def literal(x: float) -> str:
-    """A float64 literal valid in C and Rust that reads back as exactly ``x`` (17 significant digits)."""
-    x = float(x)
-    if not math.isfinite(x):
-        raise InputError(f"the model holds a non-finite number ({x}); it cannot be exported")
-    text = format(x, ".17g")
-    if not any(ch in text for ch in ".e"):
-        text += ".0"
-    assert float(text) == x  # 17 significant digits always round-trip a float64
-    return text
-
-
-def array(values, brackets: str) -> str:
-    """``values`` as an array literal between ``brackets`` (``"{}"`` in C, ``"[]"`` in Rust)."""
-    return brackets[0] + ", ".join(literal(v) for v in values) + brackets[1]
-
-
-def range_rows(names, ranges, row: str, separator: str) -> str:
-    """One ``row`` per name (``row.format(name=..., lo=..., hi=...)``, the bounds as literals), joined by
-    ``separator``."""
-    return separator.join(
-        row.format(name=name, lo=literal(lo), hi=literal(hi)) for name, (lo, hi) in zip(names, ranges, strict=True)
-    )
 
 
 def scaler_arrays(spec: ExportSpec) -> list[tuple[str, object]]:

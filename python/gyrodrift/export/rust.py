@@ -5,6 +5,7 @@ base (templates/fleet_base.rs.in) where the model has them."""
 from __future__ import annotations
 
 from gyrodrift.export import render
+from gyrodrift.export.literals import array, literal, range_rows
 from gyrodrift.export.spec import FEATURE_EXPRESSIONS, INPUTS, PHYSICS_EXPRESSIONS, ExportSpec
 from gyrodrift.learn.physics_base import FLEET_PHYSICS
 from gyrodrift.runs.columns import SMOOTHER_THERMAL_COLUMNS
@@ -66,9 +67,9 @@ pub const PHYSICS: &str = "{spec.physics}";
     if spec.coefficient_prior is not None:
         mean, std = spec.coefficient_prior
         text += f"""/// Mean of the training fleet's prior on k_z [deg/h/degC].
-pub const COEFF_PRIOR_MEAN_DEG_H_PER_C: f64 = {render.literal(mean)};
+pub const COEFF_PRIOR_MEAN_DEG_H_PER_C: f64 = {literal(mean)};
 /// 1-sigma of the training fleet's prior on k_z [deg/h/degC].
-pub const COEFF_PRIOR_STD_DEG_H_PER_C: f64 = {render.literal(std)};
+pub const COEFF_PRIOR_STD_DEG_H_PER_C: f64 = {literal(std)};
 """
     return text
 
@@ -77,19 +78,17 @@ def _data(spec: ExportSpec) -> str:
     """The static tables: the training ranges, the scaler, the support vectors, alpha and the intercept."""
     row = '    Range {{ name: "{name}", min: {lo}, max: {hi} }},'
     data = [
-        "static INPUT_RANGES: [Range; N_INPUTS] = [\n"
-        + render.range_rows(spec.inputs, spec.input_ranges, row, "\n")
-        + "\n];",
+        "static INPUT_RANGES: [Range; N_INPUTS] = [\n" + range_rows(spec.inputs, spec.input_ranges, row, "\n") + "\n];",
         "static FEATURE_RANGES: [Range; N_FEATURES] = [\n"
-        + render.range_rows(spec.feature_names, spec.feature_ranges, row, "\n")
+        + range_rows(spec.feature_names, spec.feature_ranges, row, "\n")
         + "\n];",
     ]
     for name, values in render.scaler_arrays(spec):
-        data.append(f"static {name.upper()}: [f64; N_FEATURES] = {render.array(values, '[]')};")
-    sv_rows = "\n".join("    " + render.array(sv, "[]") + "," for sv in spec.support_vectors)
+        data.append(f"static {name.upper()}: [f64; N_FEATURES] = {array(values, '[]')};")
+    sv_rows = "\n".join("    " + array(sv, "[]") + "," for sv in spec.support_vectors)
     data.append(f"static SUPPORT_VECTORS: [[f64; N_FEATURES]; N_SUPPORT_VECTORS] = [\n{sv_rows}\n];")
-    data.append(f"static ALPHA: [f64; N_SUPPORT_VECTORS] = {render.array(spec.alpha, '[]')};")
-    data.append(f"const INTERCEPT: f64 = {render.literal(spec.intercept)};")
+    data.append(f"static ALPHA: [f64; N_SUPPORT_VECTORS] = {array(spec.alpha, '[]')};")
+    data.append(f"const INTERCEPT: f64 = {literal(spec.intercept)};")
     return "\n\n".join(data)
 
 
@@ -105,7 +104,7 @@ def _scale_loop(spec: ExportSpec) -> str:
 
 def _kernel_body(spec: ExportSpec) -> str:
     """The kernel value ``kval`` of support vector ``sv`` against the scaled features ``x``."""
-    sigma2 = f"({render.literal(spec.sigma)}_f64 * {render.literal(spec.sigma)}_f64)"
+    sigma2 = f"({literal(spec.sigma)}_f64 * {literal(spec.sigma)}_f64)"
     if spec.kernel == "rbf":
         return f"""        let mut d2 = 0.0_f64;
         for k in 0..N_FEATURES {{
@@ -122,7 +121,7 @@ def _kernel_body(spec: ExportSpec) -> str:
     return (
         body
         + f"""
-        let base = dot / {sigma2} + {render.literal(spec.coef0)}_f64;
+        let base = dot / {sigma2} + {literal(spec.coef0)}_f64;
         let mut kval = base;
         for _ in 1..{spec.degree} {{
             kval *= base;

@@ -30,6 +30,7 @@ import numpy as np
 
 from gyrodrift.earth import OMEGA_IE_RAD_S
 from gyrodrift.errors import InputError
+from gyrodrift.export.literals import literal
 from gyrodrift.learn.encodings import encode
 from gyrodrift.learn.physics_base import FLEET_PHYSICS, thermal_runs
 from gyrodrift.runs.columns import SMOOTHER_THERMAL_COLUMNS
@@ -96,10 +97,9 @@ def _drift_equiv_template() -> str:
     """C/Rust template of the drift equivalent of the 12 h latitude error (`physics_inversion`)."""
     w = OMEGA_IE_RAD_S
     one_minus_cos = 1.0 - math.cos(w * 12.0 * HOUR)
-    lit = lambda x: format(float(x), ".17g")  # noqa: E731 - reads back as the same float64
     return (
-        f"{lit(w)} * (({{lat_deg}} - {{lat0_deg}}) * 3600.0 * {lit(ARCSEC)}) / "
-        f"({{cos}}({{lat0_deg}} * {lit(DEG)}) * {lit(one_minus_cos)}) / {lit(DEG_PER_H)}"
+        f"{literal(w)} * (({{lat_deg}} - {{lat0_deg}}) * 3600.0 * {literal(ARCSEC)}) / "
+        f"({{cos}}({{lat0_deg}} * {literal(DEG)}) * {literal(one_minus_cos)}) / {literal(DEG_PER_H)}"
     )
 
 
