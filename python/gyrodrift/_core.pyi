@@ -393,16 +393,26 @@ class Smoother:
     def process(self, dtheta_rad: ArrayLike, dv_m_s: ArrayLike, temp_c: ArrayLike | None = None) -> int: ...
     def result(self) -> dict[str, Any]: ...
 
+class FreeNavigationConfig:
+    """A free navigation propagated by covariance alone (the settings `label_sigma` and `mission_covariance` take;
+    checked by the function that takes it)."""
+
+    def __init__(
+        self,
+        *,
+        lat_rad: float,
+        height_m: float,
+        span_s: float,
+        step_s: float,
+        gyro_arw_rad_rts: float,
+        accel_vrw_m_s_rts: float,
+        att_sigma_rad: Sequence[float],
+        vel_sigma_m_s: float,
+    ) -> None: ...
+
 def label_sigma(
+    navigation: FreeNavigationConfig,
     *,
-    lat_rad: float,
-    height_m: float,
-    span_s: float,
-    step_s: float,
-    gyro_arw_rad_rts: float,
-    accel_vrw_m_s_rts: float,
-    att_sigma_rad: list[float],
-    vel_sigma_m_s: float,
     rms: bool,
     gyro_bias_instability_rad_s: float = ...,
     gyro_correlation_s: float = ...,
@@ -417,14 +427,4 @@ def drift_std_curve(
     mission_start_s: float,
     mission_s: float,
 ) -> dict[str, Any]: ...
-def mission_covariance(
-    *,
-    lat_rad: float,
-    height_m: float,
-    span_s: float,
-    step_s: float,
-    gyro_arw_rad_rts: float,
-    accel_vrw_m_s_rts: float,
-    att_sigma_rad: list[float],
-    vel_sigma_m_s: float,
-) -> dict[str, Any]: ...
+def mission_covariance(navigation: FreeNavigationConfig) -> dict[str, Any]: ...

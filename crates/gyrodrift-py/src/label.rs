@@ -1,5 +1,6 @@
-//! Binding of `gyrodrift_core::label` as `_core.label_sigma`, and the one conversion of the free-navigation keywords
-//! it shares with `_core.mission_covariance`. It converts types and releases the GIL, nothing else.
+//! Binding of `gyrodrift_core::label` as `_core.FreeNavigationConfig` (the settings `_core.label_sigma` and
+//! `_core.mission_covariance` share, converted once) and `_core.label_sigma`. It converts types and releases the
+//! GIL, nothing else.
 
 use super::core_err;
 use gyrodrift_core::label::{label_sigma as core_label_sigma, FreeNavigation, LabelConfig};
@@ -7,49 +8,59 @@ use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-/// The free navigation of the keywords `label_sigma` and `mission_covariance` share (SI; validated by the core).
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn free_navigation(
-    lat_rad: f64,
-    height_m: f64,
-    span_s: f64,
-    step_s: f64,
-    gyro_arw_rad_rts: f64,
-    accel_vrw_m_s_rts: f64,
-    att_sigma_rad: [f64; 3],
-    vel_sigma_m_s: f64,
-) -> FreeNavigation {
-    FreeNavigation {
-        lat: lat_rad,
-        height: height_m,
-        span_s,
-        step_s,
-        gyro_arw: gyro_arw_rad_rts,
-        accel_vrw: accel_vrw_m_s_rts,
-        att_sigma: att_sigma_rad,
-        vel_sigma: vel_sigma_m_s,
+/// A free navigation propagated by covariance alone (SI; keyword-only): site, span, propagation step, noise and
+/// the attitude and velocity errors at its start. Checked by the function that takes it, whose message names
+/// the step as that function uses it.
+#[pyclass(module = "gyrodrift._core", frozen)]
+pub struct FreeNavigationConfig {
+    pub(crate) inner: FreeNavigation,
+}
+
+#[pymethods]
+impl FreeNavigationConfig {
+    #[new]
+    #[pyo3(signature = (*, lat_rad, height_m, span_s, step_s, gyro_arw_rad_rts, accel_vrw_m_s_rts, att_sigma_rad,
+                        vel_sigma_m_s))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        lat_rad: f64,
+        height_m: f64,
+        span_s: f64,
+        step_s: f64,
+        gyro_arw_rad_rts: f64,
+        accel_vrw_m_s_rts: f64,
+        att_sigma_rad: [f64; 3],
+        vel_sigma_m_s: f64,
+    ) -> Self {
+        FreeNavigationConfig {
+            inner: FreeNavigation {
+                lat: lat_rad,
+                height: height_m,
+                span_s,
+                step_s,
+                gyro_arw: gyro_arw_rad_rts,
+                accel_vrw: accel_vrw_m_s_rts,
+                att_sigma: att_sigma_rad,
+                vel_sigma: vel_sigma_m_s,
+            },
+        }
+    }
+
+    fn __repr__(&self) -> String {
+        format!("FreeNavigationConfig({:?})", self.inner)
     }
 }
 
-/// 1-sigma of the true-drift label (gyrodrift-core `label::label_sigma`): returns a dict with
-/// `drift_std_rad_s`, `sensitivity_m_per_rad_s` and `pos_std_m` (north, east at the end). The z gyro's
-/// Gauss-Markov bias and rate random walk (`rrw_start_s`: how long it has walked when the navigation starts)
-/// default to none.
+/// 1-sigma of the true-drift label (gyrodrift-core `label::label_sigma`) after the free `navigation` (its
+/// `step_s` the interval of the error curves): returns a dict with `drift_std_rad_s`, `sensitivity_m_per_rad_s`
+/// and `pos_std_m` (north, east at the end). The z gyro's Gauss-Markov bias and rate random walk (`rrw_start_s`:
+/// how long it has walked when the navigation starts) default to none.
 #[pyfunction]
-#[pyo3(signature = (*, lat_rad, height_m, span_s, step_s, gyro_arw_rad_rts, accel_vrw_m_s_rts, att_sigma_rad,
-                    vel_sigma_m_s, rms, gyro_bias_instability_rad_s=0.0, gyro_correlation_s=3600.0,
+#[pyo3(signature = (navigation, *, rms, gyro_bias_instability_rad_s=0.0, gyro_correlation_s=3600.0,
                     gyro_rrw_rad_s_rts=0.0, rrw_start_s=0.0))]
-#[allow(clippy::too_many_arguments)]
 pub fn label_sigma<'py>(
     py: Python<'py>,
-    lat_rad: f64,
-    height_m: f64,
-    span_s: f64,
-    step_s: f64,
-    gyro_arw_rad_rts: f64,
-    accel_vrw_m_s_rts: f64,
-    att_sigma_rad: [f64; 3],
-    vel_sigma_m_s: f64,
+    navigation: &FreeNavigationConfig,
     rms: bool,
     gyro_bias_instability_rad_s: f64,
     gyro_correlation_s: f64,
@@ -57,16 +68,7 @@ pub fn label_sigma<'py>(
     rrw_start_s: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
     let cfg = LabelConfig {
-        navigation: free_navigation(
-            lat_rad,
-            height_m,
-            span_s,
-            step_s,
-            gyro_arw_rad_rts,
-            accel_vrw_m_s_rts,
-            att_sigma_rad,
-            vel_sigma_m_s,
-        ),
+        navigation: navigation.inner.clone(),
         rms,
         gyro_bias_instability: gyro_bias_instability_rad_s,
         gyro_correlation: gyro_correlation_s,

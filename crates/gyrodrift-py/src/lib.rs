@@ -560,6 +560,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<alignment::Aligner>()?;
     m.add_class::<smoother::SmootherConfig>()?;
     m.add_class::<smoother::Smoother>()?;
+    m.add_class::<label::FreeNavigationConfig>()?;
     m.add_function(wrap_pyfunction!(label::label_sigma, m)?)?;
     m.add_function(wrap_pyfunction!(plan::drift_std_curve, m)?)?;
     m.add_function(wrap_pyfunction!(plan::mission_covariance, m)?)?;

@@ -3,7 +3,7 @@
 
 use super::config::SimulatorConfig;
 use super::core_err;
-use super::label::free_navigation;
+use super::label::FreeNavigationConfig;
 use super::smoother::SmootherConfig;
 use gyrodrift_core::plan::{drift_std_curve as core_curve, mission_covariance as core_mission, PlanConfig};
 use numpy::{PyArray1, PyArray2};
@@ -41,34 +41,12 @@ pub fn drift_std_curve<'py>(
     Ok(d)
 }
 
-/// Position error after a free navigation (gyrodrift-core `plan::mission_covariance`): a dict with `pos_cov_m2`
-/// (2 x 2, north, east) and `response_m_per_rad_s` (north, east per unit z drift).
+/// Position error after the free `navigation` (gyrodrift-core `plan::mission_covariance`): a dict with
+/// `pos_cov_m2` (2 x 2, north, east) and `response_m_per_rad_s` (north, east per unit z drift).
 #[pyfunction]
-#[pyo3(signature = (*, lat_rad, height_m, span_s, step_s, gyro_arw_rad_rts, accel_vrw_m_s_rts, att_sigma_rad,
-                    vel_sigma_m_s))]
-#[allow(clippy::too_many_arguments)]
-pub fn mission_covariance<'py>(
-    py: Python<'py>,
-    lat_rad: f64,
-    height_m: f64,
-    span_s: f64,
-    step_s: f64,
-    gyro_arw_rad_rts: f64,
-    accel_vrw_m_s_rts: f64,
-    att_sigma_rad: [f64; 3],
-    vel_sigma_m_s: f64,
-) -> PyResult<Bound<'py, PyDict>> {
-    let cfg = free_navigation(
-        lat_rad,
-        height_m,
-        span_s,
-        step_s,
-        gyro_arw_rad_rts,
-        accel_vrw_m_s_rts,
-        att_sigma_rad,
-        vel_sigma_m_s,
-    );
-    let r = py.detach(|| core_mission(&cfg)).map_err(core_err)?;
+pub fn mission_covariance<'py>(py: Python<'py>, navigation: &FreeNavigationConfig) -> PyResult<Bound<'py, PyDict>> {
+    let cfg = &navigation.inner;
+    let r = py.detach(|| core_mission(cfg)).map_err(core_err)?;
     let d = PyDict::new(py);
     let cov = vec![r.pos_cov[0].to_vec(), r.pos_cov[1].to_vec()];
     d.set_item("pos_cov_m2", PyArray2::from_vec2(py, &cov)?)?;

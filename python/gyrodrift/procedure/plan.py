@@ -211,14 +211,16 @@ def mission_error_model(
     lat = _finite("lat_deg", lat_deg, low=-90.0, high=90.0)
     h = _finite("hours", hours, low=1.0 / 60.0, high=1000.0)
     r = _core.mission_covariance(
-        lat_rad=lat * DEG,
-        height_m=float(height_m),
-        span_s=h * HOUR,
-        step_s=_MISSION_STEP_S,
-        gyro_arw_rad_rts=noise.arw_rad_rts,
-        accel_vrw_m_s_rts=noise.vrw_m_s_rts,
-        att_sigma_rad=[0.0, 0.0, 0.0],
-        vel_sigma_m_s=0.0,
+        _core.FreeNavigationConfig(
+            lat_rad=lat * DEG,
+            height_m=float(height_m),
+            span_s=h * HOUR,
+            step_s=_MISSION_STEP_S,
+            gyro_arw_rad_rts=noise.arw_rad_rts,
+            accel_vrw_m_s_rts=noise.vrw_m_s_rts,
+            att_sigma_rad=[0.0, 0.0, 0.0],
+            vel_sigma_m_s=0.0,
+        )
     )
     c = np.asarray(r["pos_cov_m2"], dtype=float)
     g = np.asarray(r["response_m_per_rad_s"], dtype=float) * DEG_PER_H

@@ -134,7 +134,7 @@ def label_sigma_deg_h(
 
     if criterion not in CRITERIA:
         raise ValueError(f"unknown criterion {criterion!r}; expected one of {', '.join(CRITERIA)}")
-    r = _core.label_sigma(
+    navigation = _core.FreeNavigationConfig(
         lat_rad=float(lat_deg) * DEG,
         height_m=float(height_m),
         span_s=float(hours) * HOUR,
@@ -143,6 +143,9 @@ def label_sigma_deg_h(
         accel_vrw_m_s_rts=noise.vrw_m_s_rts,
         att_sigma_rad=[float(a) * ARCSEC for a in att_std_arcsec],
         vel_sigma_m_s=0.0,
+    )
+    r = _core.label_sigma(
+        navigation,
         rms=criterion != "final",
         gyro_bias_instability_rad_s=noise.bias_instability_deg_h * DEG_PER_H,
         gyro_correlation_s=float(noise.correlation_s),
