@@ -3,14 +3,25 @@ collected by the root conftest.py (Sybil) and run by `python -m pytest`; these t
 
 from __future__ import annotations
 
+import importlib.util
 import re
 import tomllib
 from pathlib import Path
 
-import conftest
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
+
+
+def _docs_runner():
+    """The root conftest.py (the Sybil runner), loaded by path: here `import conftest` finds tests/conftest.py."""
+    spec = importlib.util.spec_from_file_location("docs_runner", ROOT / "conftest.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+conftest = _docs_runner()
 DOCUMENTS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 STUDIES = sorted((ROOT / "docs" / "studies").glob("2*.md"))
 """Dated measurement pages: docs/studies/YYYY-MM-DD-topic.md, indexed by docs/studies/README.md."""
