@@ -43,6 +43,7 @@ def scenario(lat, drift=0.003, *, noise=None, seed=1, hours=16.0, rate=10.0, sch
     )
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("scheme", ["reciprocating", "continuous", "indexing"])
 def test_noise_free_logs_give_the_simulated_drift_at_three_latitudes(scheme):
     for lat in (20.0, 40.0, 60.0):
@@ -65,6 +66,7 @@ def z_scores(n, noise, gyro=None, filter_noise=None):
     return np.sqrt(np.mean(np.square(z))), np.std(est), np.mean(sig)
 
 
+@pytest.mark.slow
 def test_white_noise_z_scores_have_unit_rms_and_the_spread_is_the_sigma():
     rms, spread, sigma = z_scores(12, RLG)
     assert 0.6 < rms < 1.5, rms
@@ -73,6 +75,7 @@ def test_white_noise_z_scores_have_unit_rms_and_the_spread_is_the_sigma():
     assert sigma < 2.5e-4
 
 
+@pytest.mark.slow
 def test_gauss_markov_and_rate_random_walk_z_scores_with_the_noise_model_told():
     gyro = {"bias_instability_deg_h": 0.002, "correlation_s": 3600.0, "rrw_deg_h_rth": 0.0005}
     told = SensorNoise.from_block({"gyro": {**gyro, "arw_deg_rth": 0.0005}, "accel": {"vrw_ug_rthz": 5.0}})
@@ -173,6 +176,7 @@ def test_noise_is_measured_from_the_log_and_given_noise_is_checked():
         smooth_log(log, hours=1.0, options={"update_s": 0.05})
 
 
+@pytest.mark.slow
 def test_truth_spread_matches_the_label_sigma_and_the_latitude_law():
     # 40 noisy seeds at 40 deg, 2 Hz: the spread of truth around the noise-free twin's truth.
     twin = find_true_drift(scenario_log(scenario(40.0, hours=76.0, rate=2.0))).drift_deg_h
