@@ -22,7 +22,7 @@ use crate::earth;
 use crate::error::{check, CoreError};
 use crate::filter_prior::FilterPrior;
 use crate::kalman::{self, ErrorModel, ErrorStateFilter, StateMatrix, DV, EPS, NABLA, N_STATES, PHI};
-use crate::limits::{check_increments, check_site};
+use crate::limits::{check_arw, check_increments, check_site, check_vrw};
 use crate::strapdown::{Navigator, NavigatorConfig, Vertical};
 use crate::units::ARCSEC;
 
@@ -90,7 +90,7 @@ impl AlignerConfig {
 
     /// Range checks; errors name the contract key.
     pub fn validate(&self) -> Result<(), CoreError> {
-        use crate::error::{all_positive_at_most, in_range, sig, Unit, ARCSEC, DEG_PER_RTH, MICRO_G, MICRO_G_PER_RTHZ};
+        use crate::error::{all_positive_at_most, in_range, sig, Unit, ARCSEC, MICRO_G};
         check_site(self.lat, self.lon, self.height, self.rate_hz)?;
         let s = Unit::Si("s");
         in_range("coarse_s", "coarse span", self.coarse_s, 10.0, 86_400.0, s)?;
@@ -112,23 +112,8 @@ impl AlignerConfig {
         all_positive_at_most("gyro_bias_sigma_rad_s", "gyro bias sigma", gyro, 0.1, Unit::DegPerH)?;
         let acc = &self.accel_bias_sigma;
         all_positive_at_most("accel_bias_sigma_m_s2", "accelerometer bias sigma", acc, 10.0, MICRO_G)?;
-        in_range(
-            "gyro_arw_rad_rts",
-            "angle random walk",
-            self.gyro_arw,
-            0.0,
-            0.1,
-            DEG_PER_RTH,
-        )?;
-        let vrw = self.accel_vrw;
-        in_range(
-            "accel_vrw_m_s_rts",
-            "velocity random walk",
-            vrw,
-            0.0,
-            1.0,
-            MICRO_G_PER_RTHZ,
-        )?;
+        check_arw(self.gyro_arw)?;
+        check_vrw(self.accel_vrw)?;
         let zupt = [self.zupt_sigma];
         all_positive_at_most("zupt_sigma_m_s", "zero-velocity sigma", &zupt, 10.0, Unit::Si("m/s"))?;
         all_positive_at_most("history_s", "history interval", &[self.history_s], 1e6, s)

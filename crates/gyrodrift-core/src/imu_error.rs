@@ -28,6 +28,7 @@
 
 use crate::attitude::Vec3;
 use crate::error::{check, CoreError, Unit};
+use crate::limits::{check_arw, check_vrw};
 use rand_core::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_pcg::Pcg64Mcg;
@@ -95,20 +96,11 @@ impl Default for ImuErrorParams {
 impl ImuErrorParams {
     /// Range checks; errors name the contract key. Limits reject nonsense, not unusual sensors.
     pub fn validate(&self) -> Result<(), CoreError> {
-        use crate::error::{
-            all_in_range, in_range, ARCSEC, DEG_H_PER_C, DEG_H_PER_RTH, DEG_PER_RTH, MICRO_G, MICRO_G_PER_RTHZ, PPM,
-        };
+        use crate::error::{all_in_range, in_range, ARCSEC, DEG_H_PER_C, DEG_H_PER_RTH, MICRO_G, PPM};
         use crate::units::{DEG, HOUR};
         let (gb, g) = (MAX_GYRO_BIAS_RAD_S, Unit::DegPerH);
         all_in_range("gyro_bias_rad_s", "gyro bias", &self.gyro_bias, -gb, gb, g)?;
-        in_range(
-            "gyro_arw_rad_rts",
-            "angle random walk",
-            self.gyro_arw,
-            0.0,
-            0.1,
-            DEG_PER_RTH,
-        )?;
+        check_arw(self.gyro_arw)?;
         in_range(
             "gyro_bias_instability_rad_s",
             "bias instability",
@@ -151,14 +143,7 @@ impl ImuErrorParams {
             ab,
             MICRO_G,
         )?;
-        in_range(
-            "accel_vrw_m_s_rts",
-            "velocity random walk",
-            self.accel_vrw,
-            0.0,
-            1.0,
-            MICRO_G_PER_RTHZ,
-        )?;
+        check_vrw(self.accel_vrw)?;
         all_in_range(
             "accel_scale",
             "accelerometer scale factor",

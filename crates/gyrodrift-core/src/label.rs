@@ -5,7 +5,7 @@
 use crate::attitude::Mat3;
 use crate::error::{check, CoreError};
 use crate::kalman::{DV, EPS, PHI};
-use crate::limits::{check_site, check_slow_bias};
+use crate::limits::{check_arw, check_site, check_slow_bias, check_vrw};
 use crate::smoother::model::{symmetrise, Model};
 use crate::smoother::{SmootherConfig, POS};
 use nalgebra::{DMatrix, DVector};
@@ -46,27 +46,13 @@ impl FreeNavigation {
 
     /// Range checks; errors name the key (`step_what` names the step in the message).
     pub(crate) fn validate(&self, step_what: &str) -> Result<(), CoreError> {
-        use crate::error::{all_in_range, in_range, Unit, DEG_PER_RTH, MICRO_G_PER_RTHZ};
+        use crate::error::{all_in_range, in_range, Unit};
         check_site(self.lat, 0.0, self.height, 1.0)?;
         let s = Unit::Si("s");
         in_range("span_s", "span", self.span_s, 60.0, 1e7, s)?;
         in_range("step_s", step_what, self.step_s, 1.0, self.span_s, s)?;
-        in_range(
-            "gyro_arw_rad_rts",
-            "angle random walk",
-            self.gyro_arw,
-            0.0,
-            0.1,
-            DEG_PER_RTH,
-        )?;
-        in_range(
-            "accel_vrw_m_s_rts",
-            "velocity random walk",
-            self.accel_vrw,
-            0.0,
-            1.0,
-            MICRO_G_PER_RTHZ,
-        )?;
+        check_arw(self.gyro_arw)?;
+        check_vrw(self.accel_vrw)?;
         all_in_range("att_sigma_rad", "attitude sigma", &self.att_sigma, 0.0, 0.2, Unit::Deg)?;
         in_range(
             "vel_sigma_m_s",

@@ -22,7 +22,9 @@
 //!   walk up to 0.1 deg/h and 0.1 deg/h/sqrt(h), correlation time (0, 1e9] s.
 
 use crate::attitude::Euler;
-use crate::error::{all_positive_at_most, check, in_range, CoreError, Unit, DEG_H_PER_RTH};
+use crate::error::{
+    all_positive_at_most, check, in_range, CoreError, Unit, DEG_H_PER_RTH, DEG_PER_RTH, MICRO_G_PER_RTHZ,
+};
 use crate::units::STANDARD_GRAVITY;
 
 /// Largest |latitude| \[deg\] (module docs).
@@ -105,6 +107,25 @@ pub fn check_attitude(e: Euler) -> Result<(), CoreError> {
     in_range("roll_rad", "roll", e.roll, -r, r, Unit::Deg)?;
     let y = MAX_YAW_DEG.to_radians();
     in_range("yaw_rad", "yaw", e.yaw, -y, y, Unit::Deg)
+}
+
+/// A gyro's angle random walk [rad/sqrt(s)]: finite, in [0, 0.1] (344 deg/sqrt(h)); one limit for the simulated
+/// IMU and the filters' models.
+pub(crate) fn check_arw(arw: f64) -> Result<(), CoreError> {
+    in_range("gyro_arw_rad_rts", "angle random walk", arw, 0.0, 0.1, DEG_PER_RTH)
+}
+
+/// An accelerometer's velocity random walk [m/s/sqrt(s)]: finite, in [0, 1] (102 000 ug/sqrt(Hz)); one limit for
+/// the simulated IMU and the filters' models.
+pub(crate) fn check_vrw(vrw: f64) -> Result<(), CoreError> {
+    in_range(
+        "accel_vrw_m_s_rts",
+        "velocity random walk",
+        vrw,
+        0.0,
+        1.0,
+        MICRO_G_PER_RTHZ,
+    )
 }
 
 /// The z gyro's slow bias terms (Gauss-Markov 1-sigma [rad/s] and correlation time \[s\], rate random walk

@@ -233,7 +233,7 @@ impl ImuSimulator {
     /// Produce the next samples into caller-provided buffers (e.g. numpy arrays): as many as `out.t_s.len()`
     /// or the samples remaining, whichever is smaller. Returns the number produced. Every slice must hold at
     /// least that many samples (x 3 for `dtheta` and `dv`).
-    pub fn fill(&mut self, out: ImuChunkSlices<'_>) -> Result<usize, CoreError> {
+    pub fn fill(&mut self, mut out: ImuChunkSlices<'_>) -> Result<usize, CoreError> {
         let m = self.remaining().min(out.t_s.len() as u64) as usize;
         let short = [
             ("dtheta_rad", out.dtheta.len(), 3 * m),
@@ -276,23 +276,9 @@ impl ImuSimulator {
             for i in start..end {
                 let k = self.k + 1;
                 let t1 = k as f64 / rate;
-                let (mut dth, mut dv) = self.true_increments(k, t0, t1);
-                let (temp, (temp_mid, rate_mid)) = self.temperature(k, t1, temp_drift);
-                let drift = if temp_drift {
-                    self.errors.params().axial_drift(temp_mid, rate_mid)
-                } else {
-                    0.0
-                };
-                self.errors.apply_deterministic(drift, &mut dth, &mut dv);
-                out.t_s[i] = t1;
+                let increments = self.true_increments(k, t0, t1);
+                self.write_sample(&mut out, i, k, t1, temp_drift, increments);
                 t0 = t1;
-                out.dtheta[3 * i..3 * i + 3].copy_from_slice(&dth);
-                out.dv[3 * i..3 * i + 3].copy_from_slice(&dv);
-                out.temp_c[i] = temp;
-                out.table_angle[i] = self.alpha;
-                out.pitch[i] = self.sin_alpha;
-                out.roll[i] = self.cos_alpha;
-                self.k = k;
             }
             // Third pass: the random terms, a tight loop around the generator.
             self.errors
@@ -305,6 +291,40 @@ impl ImuSimulator {
             );
         }
         Ok(m)
+    }
+}
+
+impl ImuSimulator {
+    /// The first pass of `fill` for sample `i` (sample `k` of the run, ending at `t1` \[s\]) from its true
+    /// `increments`: the temperature (and the axial drift it drives when `temp_drift`), the deterministic errors,
+    /// then the time, the increments, the temperature and the table angle written out, the angle's sine and
+    /// cosine parked in the pitch and roll outputs for the attitude pass; the run advances to sample `k`.
+    #[inline(always)]
+    pub(super) fn write_sample(
+        &mut self,
+        out: &mut ImuChunkSlices<'_>,
+        i: usize,
+        k: u64,
+        t1: f64,
+        temp_drift: bool,
+        increments: (Vec3, Vec3),
+    ) {
+        let (mut dth, mut dv) = increments;
+        let (temp, (temp_mid, rate_mid)) = self.temperature(k, t1, temp_drift);
+        let drift = if temp_drift {
+            self.errors.params().axial_drift(temp_mid, rate_mid)
+        } else {
+            0.0
+        };
+        self.errors.apply_deterministic(drift, &mut dth, &mut dv);
+        out.t_s[i] = t1;
+        out.dtheta[3 * i..3 * i + 3].copy_from_slice(&dth);
+        out.dv[3 * i..3 * i + 3].copy_from_slice(&dv);
+        out.temp_c[i] = temp;
+        out.table_angle[i] = self.alpha;
+        out.pitch[i] = self.sin_alpha;
+        out.roll[i] = self.cos_alpha;
+        self.k = k;
     }
 }
 

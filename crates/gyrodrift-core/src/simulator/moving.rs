@@ -126,21 +126,7 @@ impl ImuSimulator {
                 } else {
                     self.moving_increments(k, t0, t1, self.dt)
                 };
-                let (mut dth, mut dv) = (sample.dtheta, sample.dv);
-                let (temp, (temp_mid, rate_mid)) = self.temperature(k, t1, temp_drift);
-                let drift = if temp_drift {
-                    self.errors.params().axial_drift(temp_mid, rate_mid)
-                } else {
-                    0.0
-                };
-                self.errors.apply_deterministic(drift, &mut dth, &mut dv);
-                out.t_s[i] = t1;
-                out.dtheta[3 * i..3 * i + 3].copy_from_slice(&dth);
-                out.dv[3 * i..3 * i + 3].copy_from_slice(&dv);
-                out.temp_c[i] = temp;
-                out.table_angle[i] = self.alpha;
-                out.pitch[i] = self.sin_alpha;
-                out.roll[i] = self.cos_alpha;
+                self.write_sample(&mut out, i, k, t1, temp_drift, (sample.dtheta, sample.dv));
                 out.yaw[i] = sample.yaw - yaw0;
                 if let Some(tr) = out.truth.as_mut() {
                     let mv = self.moving.as_ref().expect("moving base");
@@ -149,7 +135,6 @@ impl ImuSimulator {
                     tr.height[i] = sample.height;
                     tr.vel[3 * i..3 * i + 3].copy_from_slice(&sample.vel);
                 }
-                self.k = k;
             }
             self.errors
                 .add_noise(&mut out.dtheta[3 * start..3 * end], &mut out.dv[3 * start..3 * end]);
