@@ -20,7 +20,7 @@ from gyrodrift.choices import (
     default_encoding,
 )
 from gyrodrift.cli.errors import write_stdout
-from gyrodrift.cli.options import json_option, print_json, quiet_option, say_wrote
+from gyrodrift.cli.options import choice_option, json_option, print_json, quiet_option, say_wrote
 from gyrodrift.cli.types import FiniteFloat, InputPath, Seed
 
 PREDICTIONS_HEADERS = ("run,drift_identified_deg_h", '{"run": ')
@@ -95,20 +95,18 @@ _split_option = click.option(
     "latitude, and the temperature range; the default for --target drift), physics_lat (plus the site "
     "latitude), or one of the paper's readings (raw arcsec).",
 )
-@click.option(
+@choice_option(
     "--target",
-    type=click.Choice(list(TARGETS)),
-    default="residual",
-    show_default=True,
-    help="residual: hybrid model, physics estimate (--physics-column) plus a learned temperature correction; "
+    TARGETS,
+    "residual",
+    "residual: hybrid model, physics estimate (--physics-column) plus a learned temperature correction; "
     "drift: the LSSVR learns the drift itself.",
 )
-@click.option(
+@choice_option(
     "--physics-column",
-    type=click.Choice(list(PHYSICS_CHOICES)),
-    default="auto",
-    show_default=True,
-    help="Physics estimate of the hybrid: auto (the 16 h smoother with the fleet's pooled k_z prior when every "
+    PHYSICS_CHOICES,
+    "auto",
+    "Physics estimate of the hybrid: auto (the 16 h smoother with the fleet's pooled k_z prior when every "
     f"run has the smoother's columns and at least {MIN_THERMAL_RUNS} its thermal k_z, else the smoother's drift "
     "when every run has it, else the 12 h inversion; said on stderr), the 12 h inversion, a run-table column, or "
     "the fleet-prior smoother (drift_smoother_fleet_deg_h).",
@@ -121,35 +119,16 @@ _split_option = click.option(
     "(weighted LS-SVM) unless --no-label-weights. Default: 0.001.",
 )
 @click.option("--no-label-weights", is_flag=True, help="Do not weight the runs by drift_std_deg_h. Default: weighted.")
-@click.option(
+@choice_option(
     "--flagged-labels",
-    type=click.Choice(["exclude", "keep"]),
-    default="exclude",
-    show_default=True,
-    help="Runs whose label_flagged is true (truth's label 1-sigma beyond the 1 nmi / 72 h budget): leave them "
+    ("exclude", "keep"),
+    "exclude",
+    "Runs whose label_flagged is true (truth's label 1-sigma beyond the 1 nmi / 72 h budget): leave them "
     "out, or keep them, down-weighted by their drift_std_deg_h.",
 )
-@click.option(
-    "--scaling",
-    type=click.Choice(list(SCALINGS)),
-    default="standard",
-    show_default=True,
-    help="Scaling of the encoded inputs before the kernel.",
-)
-@click.option(
-    "--objective",
-    type=click.Choice(list(OBJECTIVES)),
-    default="loo_mae",
-    show_default=True,
-    help="What the tuning minimises (leave-one-out MAE [deg/h], ...).",
-)
-@click.option(
-    "--method",
-    type=click.Choice(list(METHODS)),
-    default="cpso",
-    show_default=True,
-    help="Tuner of gamma and sigma (chaos PSO, plain PSO, grid, ...).",
-)
+@choice_option("--scaling", SCALINGS, "standard", "Scaling of the encoded inputs before the kernel.")
+@choice_option("--objective", OBJECTIVES, "loo_mae", "What the tuning minimises (leave-one-out MAE [deg/h], ...).")
+@choice_option("--method", METHODS, "cpso", "Tuner of gamma and sigma (chaos PSO, plain PSO, grid, ...).")
 @click.option(
     "--gamma",
     type=FiniteFloat(0.0, min_open=True),

@@ -6,7 +6,15 @@ from pathlib import Path
 
 import click
 
-from gyrodrift.cli.options import json_option, log_options, out_folder_option, print_json, quiet_option, say_wrote
+from gyrodrift.cli.options import (
+    choice_option,
+    json_option,
+    log_options,
+    out_folder_option,
+    print_json,
+    quiet_option,
+    say_wrote,
+)
 from gyrodrift.cli.types import DRIFT_DEG_H, FiniteFloat, InputPath, Seed
 
 __all__ = ["simulate_command", "navigate_command"]
@@ -127,12 +135,11 @@ _INITIAL_WORDS = {
     hidden=True,
     help="Deprecated name of --drift-deg-h [deg/h].",
 )
-@click.option(
+@choice_option(
     "--initial",
-    type=click.Choice(["auto", "truth", "alignment"]),
-    default="auto",
-    show_default=True,
-    help="Initial state: the log's truth (simulated logs), an alignment of its first 4 h (navigation starts at "
+    ("auto", "truth", "alignment"),
+    "auto",
+    "Initial state: the log's truth (simulated logs), an alignment of its first 4 h (navigation starts at "
     "the end of it), or auto (truth when the log carries it, else alignment).",
 )
 @log_options

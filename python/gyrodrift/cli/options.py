@@ -19,6 +19,7 @@ __all__ = [
     "log_options",
     "noise_options",
     "out_folder_option",
+    "choice_option",
     "connect_timeout_option",
     "json_option",
     "quiet_option",
@@ -153,6 +154,11 @@ def out_folder_option(files: str, *, required: bool = True, note: str = ""):
     else:
         text = f"Also save the result: folder {files}, {rule}. Default: print only."
     return click.option("--out", "out_dir", type=click.Path(path_type=Path), help=text, **presence)
+
+
+def choice_option(name: str, choices, default: str, help_text: str):
+    """An option `name` taking one of `choices` [str], `default` when not given (shown in the help)."""
+    return click.option(name, type=click.Choice(list(choices)), default=default, show_default=True, help=help_text)
 
 
 def connect_timeout_option(f):

@@ -7,6 +7,7 @@ from pathlib import Path
 import click
 
 from gyrodrift.cli.options import (
+    choice_option,
     connect_timeout_option,
     json_option,
     log_options,
@@ -20,6 +21,9 @@ from gyrodrift.cli.types import DRIFT_DEG_H, FiniteFloat, InputPath
 
 __all__ = ["features_command", "truth_command", "evaluate_command", "identify_command"]
 
+_CRITERIA = ("final", "rms", "max")
+"""The criteria of the true drift (`gyrodrift.procedure.truth.CRITERIA`, not imported: the CLI starts light)."""
+
 _hours_option = click.option(
     "--hours",
     type=FiniteFloat(min=0.0, min_open=True),
@@ -27,13 +31,6 @@ _hours_option = click.option(
     show_default=True,
     help="Hours of free navigation [h], counted from the end of the 4 h alignment.",
 )
-
-
-def _criterion_option(help_text: str):
-    """``--criterion`` of the true drift (`gyrodrift.procedure.truth.CRITERIA`), explained by `help_text`."""
-    return click.option(
-        "--criterion", type=click.Choice(["final", "rms", "max"]), default="final", show_default=True, help=help_text
-    )
 
 
 def _open(path, site, log_format=None):
@@ -63,8 +60,11 @@ def _open(path, site, log_format=None):
     is_flag=True,
     help="Also find each log's true drift [deg/h] (logs >= 76 h) -> drift_deg_h column. Default: off.",
 )
-@_criterion_option(
-    "Criterion of the true drift (with --with-truth): the 72 h position error at its end, RMS, or maximum."
+@choice_option(
+    "--criterion",
+    _CRITERIA,
+    "final",
+    "Criterion of the true drift (with --with-truth): the 72 h position error at its end, RMS, or maximum.",
 )
 @click.option(
     "--workers",
@@ -149,7 +149,12 @@ def features_command(
 
 @click.command("truth", epilog="Example: gyrodrift truth sim/imu.parquet --criterion final --out truth")
 @click.argument("log", type=InputPath(path_type=Path))
-@_criterion_option("Position-error criterion over the navigation: at its end, RMS, or maximum.")
+@choice_option(
+    "--criterion",
+    _CRITERIA,
+    "final",
+    "Position-error criterion over the navigation: at its end, RMS, or maximum.",
+)
 @_hours_option
 @log_options
 @out_folder_option("for true_drift.json, criterion.png, alignment.json and alignment_z_sigma.png", required=False)
