@@ -75,9 +75,7 @@ def consistency(n: int, rate: float) -> None:
     ):
         est, sig = [], []
         for seed in range(n):
-            e = smooth_log(
-                scenario_log(scenario(40.0, noise=RLG, seed=100 + seed, gyro=gyro, rate=rate)), noise=told
-            )
+            e = smooth_log(scenario_log(scenario(40.0, noise=RLG, seed=100 + seed, gyro=gyro, rate=rate)), noise=told)
             est.append(e.drift_deg_h - 0.003)
             sig.append(e.drift_std_deg_h)
         z = np.array(est) / np.array(sig)
