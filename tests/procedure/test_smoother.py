@@ -178,11 +178,15 @@ def test_noise_is_measured_from_the_log_and_given_noise_is_checked():
 
 @pytest.mark.slow
 def test_truth_spread_matches_the_label_sigma_and_the_latitude_law():
-    # 40 noisy seeds at 40 deg, 2 Hz: the spread of truth around the noise-free twin's truth.
-    twin = find_true_drift(scenario_log(scenario(40.0, hours=76.0, rate=2.0))).drift_deg_h
+    # 40 noisy seeds at 40 deg, 2 Hz: the spread of truth around the noise-free twin's truth. The labels as a
+    # campaign makes them (the nominal drift as the trial, no verification read): they differ from the verified
+    # ones by at most 8e-8 deg/h (0.05 % of the sigma; the ratio below 0.9912 both ways) for 2/3 of the CPU.
+    as_campaign = {"trial_deg_h": 0.003, "verify": False}
+    twin = find_true_drift(scenario_log(scenario(40.0, hours=76.0, rate=2.0)), **as_campaign).drift_deg_h
     dev, sig = [], []
     for seed in range(40):
-        t = find_true_drift(scenario_log(scenario(40.0, noise=RLG, seed=seed, hours=76.0, rate=2.0)))
+        log = scenario_log(scenario(40.0, noise=RLG, seed=seed, hours=76.0, rate=2.0))
+        t = find_true_drift(log, **as_campaign)
         dev.append(t.drift_deg_h - twin)
         sig.append(t.drift_std_deg_h)
         assert not t.flagged
