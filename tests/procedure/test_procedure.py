@@ -335,7 +335,8 @@ def test_identification_on_held_out_runs(fleet, fleet_features, model):
     # the interval is centred on the prediction; its half-width is the calibration (Student-t quantile times the
     # scores' robust scale) times the run's 1-sigma (docs/identification.md, "Intervals and extrapolation")
     q = m.interval_.scale_.multiplier(0.9)
-    for x, v in zip(held, np.hypot(*m._interval_sigmas(test)), strict=True):
+    Z, learned = m._learned(test)
+    for x, v in zip(held, np.hypot(*m.interval_.sigmas(Z, learned, m.base_.predict_std(test))), strict=True):
         lo, hi = x.interval_deg_h
         assert lo < x.drift_deg_h < hi and (hi - lo) / 2 == pytest.approx(q * v, rel=1e-12)
     assert h.physics_drift_deg_h == pytest.approx(physics_inversion(test)[0])
