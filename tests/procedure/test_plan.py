@@ -17,7 +17,7 @@ from gyrodrift.ins.simulate import scenario_log
 from gyrodrift.procedure.noise import SensorNoise
 from gyrodrift.procedure.plan import (
     MissionBudget,
-    drift_std_curve_deg_h,
+    identification_curve,
     mission_error_model,
     mission_outlook,
     norm_cdf,
@@ -45,15 +45,15 @@ def test_the_planner_sigma_is_the_smoothers_reported_sigma_on_a_simulated_run():
         }
     )
     est = smooth_log(scenario_log(scn), noise=RLG, hours=3.0, thermal=False)
-    planned = drift_std_curve_deg_h(RLG, [3.0], scenario=scn)[0]
+    planned = identification_curve(RLG, [3.0], scenario=scn).drift_std_deg_h[0]
     assert planned == pytest.approx(est.drift_end_std_deg_h, rel=0.02)
     assert est.model == "constant"
 
 
 def test_the_drift_sigma_falls_with_the_span_and_the_noise():
     spans = [6.0, 10.0, 16.0, 24.0]
-    rlg = drift_std_curve_deg_h(RLG, spans, lat_deg=40.0)
-    quiet = drift_std_curve_deg_h(SensorNoise(arw_deg_rth=0.0002, vrw_ug_rthz=2.0), spans, lat_deg=40.0)
+    rlg = identification_curve(RLG, spans, lat_deg=40.0).drift_std_deg_h
+    quiet = identification_curve(SensorNoise(arw_deg_rth=0.0002, vrw_ug_rthz=2.0), spans, lat_deg=40.0).drift_std_deg_h
     assert np.all(np.diff(rlg) < 0) and np.all(np.diff(quiet) < 0)
     assert np.all(quiet < 0.6 * rlg)
 
@@ -196,8 +196,8 @@ def test_the_command_reads_a_scenario_and_refuses_bad_options(tmp_path):
 
 def test_a_shorter_coarse_span_is_the_smoothers_too():
     # The timeline's coarse span reaches the core (both start the filter there).
-    a = drift_std_curve_deg_h(RLG, [6.0], lat_deg=40.0)[0]
-    b = drift_std_curve_deg_h(RLG, [6.0], lat_deg=40.0, timeline=Timeline(coarse_s=120.0))[0]
+    a = identification_curve(RLG, [6.0], lat_deg=40.0).drift_std_deg_h[0]
+    b = identification_curve(RLG, [6.0], lat_deg=40.0, timeline=Timeline(coarse_s=120.0)).drift_std_deg_h[0]
     assert a != b and b == pytest.approx(a, rel=0.05)
 
 

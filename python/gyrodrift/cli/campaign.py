@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from gyrodrift.cli.options import json_option, print_json, quiet_option, say_wrote
+from gyrodrift.cli.options import connect_timeout_option, json_option, print_json, quiet_option, say_wrote
 from gyrodrift.cli.types import FiniteFloat, InputPath, Seed
 
 __all__ = ["COMMANDS", "campaign_command", "study_command"]
@@ -28,13 +28,7 @@ __all__ = ["COMMANDS", "campaign_command", "study_command"]
 )
 @click.option("--workers", type=click.IntRange(min=1), default=None, help="Local processes (default: one per CPU).")
 @click.option("--scheduler", default=None, help="Address of a running dask scheduler (tcp://host:8786). Default: none.")
-@click.option(
-    "--connect-timeout-s",
-    type=FiniteFloat(min=0.0, max=3600.0, min_open=True),
-    default=10.0,
-    show_default=True,
-    help="Time [s] to wait for --scheduler to answer before giving up.",
-)
+@connect_timeout_option
 @click.option(
     "--limit", type=click.IntRange(min=1), default=None, help="Process at most this many pending runs. Default: all."
 )

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from gyrodrift.cli.options import json_option, print_json, quiet_option, say_wrote
+from gyrodrift.cli.options import json_option, out_folder_option, print_json, quiet_option, say_wrote
 from gyrodrift.cli.types import InputPath
 
 
@@ -24,13 +24,7 @@ from gyrodrift.cli.types import InputPath
     metavar="c|rust",
     help="c: gyrodrift_model.h and gyrodrift_model.c (C99); rust: gyrodrift_model.rs (a no_std module). Required.",
 )
-@click.option(
-    "--out",
-    "out_dir",
-    required=True,
-    type=click.Path(path_type=Path),
-    help="Folder for the generated files: new, empty, or holding only gyrodrift's outputs (docs/outputs.md). Required.",
-)
+@out_folder_option("for the generated files")
 @json_option
 @quiet_option
 def export_command(model_file: Path, lang: str, out_dir: Path, as_json: bool, quiet: bool) -> None:

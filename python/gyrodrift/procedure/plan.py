@@ -62,7 +62,6 @@ __all__ = [
     "MissionErrorModel",
     "Plan",
     "IdentificationCurve",
-    "drift_std_curve_deg_h",
     "identification_curve",
     "mission_error_model",
     "mission_outlook",
@@ -314,18 +313,6 @@ def identification_curve(
         drift_std_deg_h=np.asarray(out["drift_std_rad_s"], dtype=float) / DEG_PER_H,
         cross_m_deg_h=np.asarray(out["cross_rad_s_m"], dtype=float).reshape(-1, 2) / DEG_PER_H,
     )
-
-
-def drift_std_curve_deg_h(
-    noise: SensorNoise,
-    spans_h: Sequence[float] | np.ndarray,
-    *,
-    scenario=None,
-    lat_deg: float | None = None,
-    timeline: Timeline = DEFAULT_TIMELINE,
-) -> np.ndarray:
-    """The smoother's drift 1-sigma [deg/h] after each span [h] (`identification_curve`'s ``drift_std_deg_h``)."""
-    return identification_curve(noise, spans_h, scenario=scenario, lat_deg=lat_deg, timeline=timeline).drift_std_deg_h
 
 
 @dataclass(frozen=True)
