@@ -80,8 +80,16 @@ def test_the_readme_opens_with_the_two_setup_commands():
     blocks = _blocks(ROOT / "README.md")
     assert blocks[0][2].splitlines() == [
         "python -m pip install . && gyrodrift reproduce",
-        'python -m pip install ".[test]" && python -m pytest',
+        'python -m pip install ".[test]" && python -m pytest -n auto',
     ]
+
+
+def test_ci_runs_the_readmes_test_command():
+    """.ci/run runs the README's test command as written, nothing weaker."""
+    readme_test = _blocks(ROOT / "README.md")[0][2].splitlines()[1].split(" && ")[1]
+    ci = [line.split("#")[0].strip() for line in (ROOT / ".ci" / "run").read_text().splitlines()]
+    assert ci[-1] == readme_test
+    assert 'python -m pip install ".[test]"' in ci
 
 
 LINK = re.compile(r"\]\(([^)#\s]+)(?:#[^)]*)?\)")
