@@ -187,22 +187,21 @@ def used_inputs(model) -> list[str]:
 
 def kernel_terms(est, X: np.ndarray) -> np.ndarray:
     """K(X[j], x_i), shape (n_rows, n_train), by the documented operations (gyrodrift.learn.lssvr, "prediction
-    arithmetic"), written out here one row at a time: features in order, exp of the C library, powers multiplied."""
-    out = np.empty((len(X), len(est.X_fit_)))
-    s2 = est.sigma * est.sigma
-    for j, x in enumerate(X.tolist()):
-        for i, z in enumerate(est.X_fit_.tolist()):
-            acc = 0.0
-            for a, b in zip(x, z, strict=True):
-                acc += (a - b) * (a - b) if est.kernel == "rbf" else a * b
-            if est.kernel == "rbf":
-                acc = math.exp(-acc / s2)
-            elif est.kernel != "linear":
-                base = acc / s2 + est.coef0
-                acc = base
-                for _ in range(1, est.degree):
-                    acc *= base
-            out[j, i] = acc
+    arithmetic"), written out here element by element (numpy's +, -, * and / round each element as Python's float
+    operations do): features summed in order, exp of the C library (`math.exp`), powers multiplied."""
+    acc = np.zeros((len(X), len(est.X_fit_)))
+    for k in range(X.shape[1]):  # feature k of every (row, support vector) pair
+        a, b = X[:, k, None], est.X_fit_[None, :, k]
+        acc = acc + ((a - b) * (a - b) if est.kernel == "rbf" else a * b)
+    if est.kernel == "rbf":
+        scaled = (-acc / (est.sigma * est.sigma)).ravel().tolist()
+        return np.fromiter(map(math.exp, scaled), float, len(scaled)).reshape(acc.shape)
+    if est.kernel == "linear":
+        return acc
+    base = acc / (est.sigma * est.sigma) + est.coef0
+    out = base
+    for _ in range(1, est.degree):
+        out = out * base
     return out
 
 
@@ -267,7 +266,7 @@ DEFAULT_CASE = "cli-default-fit"
 which `auto` resolves to on a table with the smoother's k_z, weighted by the label 1-sigmas, one run left out),
 exported by `gyrodrift export`."""
 CLI_EXPORTS: dict[str, dict[str, str]] = {}
-"""Language -> the files `gyrodrift export` wrote for DEFAULT_CASE (filled by the `fitted` fixture)."""
+"""Language -> the files `gyrodrift export` wrote for DEFAULT_CASE (filled by the `default_model` fixture)."""
 
 COS_SUFFIX = "+cos"
 """A case exported with the latitude error written as ``(lat - lat0) * 3600 * cos(0 * lat0)`` (the same bits):

@@ -16,7 +16,6 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 from export_cases import (
-    CASE_IDS,
     CC,
     CFLAGS,
     DEFAULT_CASE,
@@ -114,8 +113,8 @@ def test_a_hybrid_reads_its_physics_inputs_and_checks_their_range(physics, encod
         assert f"pub const COEFF_PRIOR_STD_DEG_H_PER_C: f64 = {std};" in rust
 
 
-def test_label_weights_change_the_model_but_need_nothing_at_prediction(fitted):
-    weighted, _, _ = fitted[DEFAULT_CASE]
+def test_label_weights_change_the_model_but_need_nothing_at_prediction(default_model):
+    weighted = default_model
     assert weighted.training["weighted"]
     runs = weighted.training_["runs"]
     est = weighted.lssvr
@@ -155,8 +154,8 @@ def test_unknown_language_is_an_option_error():
         output_names("fortran")
 
 
-def test_export_is_deterministic_and_carries_provenance(fitted):
-    model, _, _ = fitted[CASE_IDS[0]]
+def test_export_is_deterministic_and_carries_provenance(first_model):
+    model = first_model
     first, second = export_model(model, "c", model_sha256="ab" * 32), export_model(model, "c")
     assert (
         first["gyrodrift_model.c"].replace(f" * Model file SHA-256: {'ab' * 32}\n", "") == second["gyrodrift_model.c"]
@@ -225,9 +224,9 @@ def test_the_c_source_refuses_x87_extended_precision(tmp_path):
 
 
 @pytest.fixture(scope="module")
-def model_file(tmp_path_factory, fitted):
+def model_file(tmp_path_factory, first_model):
     path = tmp_path_factory.mktemp("model") / "model.json"
-    save_model(fitted[CASE_IDS[0]][0], path)
+    save_model(first_model, path)
     return path
 
 
