@@ -234,6 +234,16 @@ edition = "2021"
 publish = false
 
 [dependencies]
+
+# The models are checked by tests/check.rs: no unit-test build of the library nor rustdoc run (it has no tests),
+# no debug info, no incremental cache (half the build's CPU; the code and its arithmetic are the same).
+[lib]
+test = false
+doctest = false
+
+[profile.dev]
+debug = false
+incremental = false
 """
 
 _RUST_RUNNER = """use gyrodrift_export_check as g;
