@@ -13,6 +13,7 @@ import time
 from pathlib import Path
 
 import pytest
+from test_campaign_store_checks import FAST
 
 from gyrodrift.fleet.store import read_runs
 
@@ -20,12 +21,17 @@ TINY = Path(__file__).resolve().parents[2] / "examples" / "campaigns" / "tiny.to
 COUNT = 8
 
 
-def _campaign(tmp_path: Path, rate_hz: float) -> Path:
+def _campaign(tmp_path: Path, text: str) -> Path:
+    p = tmp_path / "c.toml"
+    p.write_text(text)
+    return p
+
+
+def _tiny(rate_hz: float) -> str:
+    """`COUNT` runs of the tiny campaign (14 h) at `rate_hz`."""
     text = TINY.read_text()
     assert "count = 16" in text and "rate_hz = 5.0" in text
-    p = tmp_path / "c.toml"
-    p.write_text(text.replace("count = 16", f"count = {COUNT}").replace("rate_hz = 5.0", f"rate_hz = {rate_hz}"))
-    return p
+    return text.replace("count = 16", f"count = {COUNT}").replace("rate_hz = 5.0", f"rate_hz = {rate_hz}")
 
 
 def _committed(out: Path) -> dict[str, int]:
@@ -74,7 +80,8 @@ def _rerun_completes(src: Path, out: Path, before: dict[str, int]) -> None:
 
 
 def test_first_sigint_finishes_the_runs_in_progress_then_rerun_resumes(tmp_path):
-    src, out = _campaign(tmp_path, 5.0), tmp_path / "out"
+    # test_campaign_store_checks's 2 h runs at 4 Hz (under a second each): a run is in progress at the first commit
+    src, out = _campaign(tmp_path, FAST.format(count=COUNT).replace("rate_hz = 1.0", "rate_hz = 4.0")), tmp_path / "out"
     proc = _start(src, out)
     try:
         _wait_for(out, 1, proc)
@@ -99,7 +106,7 @@ def test_first_sigint_finishes_the_runs_in_progress_then_rerun_resumes(tmp_path)
 
 def test_second_sigint_aborts_at_once_and_stops_the_workers(tmp_path):
     psutil = pytest.importorskip("psutil")
-    src, out = _campaign(tmp_path, 20.0), tmp_path / "out"  # runs of a second or more: the abort meets them
+    src, out = _campaign(tmp_path, _tiny(20.0)), tmp_path / "out"  # runs of a second or more: the abort meets them
     proc = _start(src, out)
     try:
         _wait_for(out, 1, proc)
