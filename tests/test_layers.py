@@ -17,7 +17,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "python" / "gyrodrift"
 
 LAYERS: tuple[tuple[str, ...], ...] = (
     # foundation: the core, errors, units and the Earth model, the site, shared choices, progress
-    ("_core", "errors", "progress", "choices", "earth", "units", "site", "__init__"),
+    ("_core", "errors", "progress", "choices", "earth", "units", "site", "drift_law", "__init__"),
     ("files",),  # atomic outputs, bounded reads, TOML
     ("runs",),  # the run table (the contract between the halves) and the paper's runs
     ("learn", "sensors", "testing"),  # estimators and the drift model; Allan deviation; optimiser test functions
