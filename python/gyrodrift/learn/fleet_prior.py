@@ -5,13 +5,15 @@ the warm-up is seen through hours of heading-error growth), so the smoother's en
 that uncertainty. Units of one type share their coefficient more or less: pooling the training runs' k_z gives a
 prior for one more unit that is far tighter than the filter's own wide N(0, s0^2).
 
-Two pure functions on plain numbers or numpy arrays (the procedure's `SmootherEstimate`, the drift model's
+Pure functions on plain numbers or numpy arrays (the procedure's `SmootherEstimate`, the drift model's
 ``drift_smoother_fleet_deg_h`` physics base and the exported code all use them):
 
 * `pooled_coefficient_prior`: random-effects pooled mean of the runs' k_z (weights 1/sigma_i^2,
   DerSimonian-Laird between-unit variance) and the 1-sigma of a new unit's k_z about it;
 * `drift_with_coefficient_prior`: the end drift and its 1-sigma with another prior on k_z, exact for the
-  linear-Gaussian model (the joint posterior of (end drift, k_z) re-weighted by the ratio of the two priors).
+  linear-Gaussian model (the joint posterior of (end drift, k_z) re-weighted by the ratio of the two priors);
+* `posterior_with_coefficient_prior`: the same re-weighted joint posterior whole, the end drift and k_z with
+  their 2 x 2 covariance (what `gyrodrift.procedure.identify`'s drift law carries).
 
 Units: drifts [deg/h], coefficients [deg/h/degC], ``cov`` = cov(end drift, k_z) [deg/h x deg/h/degC].
 """
@@ -24,7 +26,7 @@ import numpy as np
 
 from gyrodrift.errors import InputError
 
-__all__ = ["pooled_coefficient_prior", "drift_with_coefficient_prior"]
+__all__ = ["pooled_coefficient_prior", "drift_with_coefficient_prior", "posterior_with_coefficient_prior"]
 
 
 def pooled_coefficient_prior(coeff, coeff_std) -> tuple[float, float]:
@@ -50,16 +52,17 @@ def pooled_coefficient_prior(coeff, coeff_std) -> tuple[float, float]:
     return mean, math.sqrt(1.0 / float(np.sum(w)) + tau2)
 
 
-def drift_with_coefficient_prior(drift, drift_std, coeff, coeff_std, cov, prior_std, mean, std):
-    """The end drift and its 1-sigma [deg/h] with the prior N(mean, std^2) on k_z in place of N(0, prior_std^2).
+def posterior_with_coefficient_prior(drift, drift_std, coeff, coeff_std, cov, prior_std, mean, std):
+    """The joint posterior of (end drift, k_z) with the prior N(mean, std^2) on k_z in place of N(0, prior_std^2).
 
-    ``drift``, ``drift_std``: the smoother's end-of-span drift and 1-sigma; ``coeff``, ``coeff_std``: its k_z and
-    1-sigma; ``cov``: cov(end drift, k_z); ``prior_std``: the filter's own k_z prior 1-sigma s0. With
-    V_k = coeff_std^2 and lever = cov / V_k, the new k_z precision is ``L = 1/V_k - 1/s0^2 + 1/std^2``, mean
-    ``k* = (k/V_k + mean/std^2) / L``; then ``d* = d + lever (k* - k)``, ``var = V_d - lever cov + lever^2 / L``.
-    Elementwise over arrays (numpy broadcasting). Where the run has no thermal estimate (``coeff`` or ``cov`` not
-    finite: the constant model), ``drift`` and ``drift_std`` are returned unchanged. The operations are exactly
-    these, in this order (the exported code repeats them bit for bit).
+    Arguments as `drift_with_coefficient_prior`. The smoother's posterior N((d, k), [[V_d, c], [c, V_k]]) times
+    N(k; mean, std^2) / N(k; 0, s0^2): the marginal of k_z gets the precision ``L = 1/V_k - 1/s0^2 + 1/std^2`` and
+    the mean ``k* = (k/V_k + mean/std^2) / L``, the drift given k_z is unchanged (slope ``lever = c / V_k``), so
+    ``d* = d + lever (k* - k)``, ``var(d*) = V_d - lever c + lever^2 / L``, ``cov(d*, k*) = lever / L`` and
+    ``var(k*) = 1 / L``. Returns ``(thermal, d*, k*, var_d, cov_dk, var_k)``: ``thermal`` (bool, elementwise) is
+    false where the run has no thermal estimate (``coeff`` or ``cov`` not finite), and there ``d*`` is ``drift``,
+    ``var_d`` its square and k*, cov_dk and var_k are NaN. The operations of ``d*`` and ``k*`` are exactly these, in
+    this order (the exported code repeats them bit for bit). Numpy arrays (0-d for scalar arguments).
     """
     if not (math.isfinite(mean) and math.isfinite(std) and std > 0.0):
         raise InputError(f"a k_z prior needs a finite mean and a positive finite 1-sigma, got {mean!r}, {std!r}")
@@ -76,8 +79,35 @@ def drift_with_coefficient_prior(drift, drift_std, coeff, coeff_std, cov, prior_
         k_new = (k / vk + mean / (std * std)) / precision
         d_new = d + lever * (k_new - k)
         var = vd - lever * c + lever * lever / precision
-    d_out = np.where(thermal, d_new, d)
-    std_out = np.where(thermal, np.sqrt(np.maximum(np.where(thermal, var, vd), 0.0)), np.sqrt(vd))
+        cov_dk = lever / precision
+        var_k = 1.0 / precision
+    nan = np.nan
+    return (
+        thermal,
+        np.where(thermal, d_new, d),
+        np.where(thermal, k_new, nan),
+        np.where(thermal, var, vd),
+        np.where(thermal, cov_dk, nan),
+        np.where(thermal, var_k, nan),
+    )
+
+
+def drift_with_coefficient_prior(drift, drift_std, coeff, coeff_std, cov, prior_std, mean, std):
+    """The end drift and its 1-sigma [deg/h] with the prior N(mean, std^2) on k_z in place of N(0, prior_std^2).
+
+    ``drift``, ``drift_std``: the smoother's end-of-span drift and 1-sigma; ``coeff``, ``coeff_std``: its k_z and
+    1-sigma; ``cov``: cov(end drift, k_z); ``prior_std``: the filter's own k_z prior 1-sigma s0. With
+    V_k = coeff_std^2 and lever = cov / V_k, the new k_z precision is ``L = 1/V_k - 1/s0^2 + 1/std^2``, mean
+    ``k* = (k/V_k + mean/std^2) / L``; then ``d* = d + lever (k* - k)``, ``var = V_d - lever cov + lever^2 / L``
+    (`posterior_with_coefficient_prior`, of which this is the drift's marginal). Elementwise over arrays (numpy
+    broadcasting). Where the run has no thermal estimate (``coeff`` or ``cov`` not finite: the constant model),
+    ``drift`` and ``drift_std`` are returned unchanged. The operations are exactly these, in this order (the
+    exported code repeats them bit for bit).
+    """
+    _, d_out, _, var, _, _ = posterior_with_coefficient_prior(
+        drift, drift_std, coeff, coeff_std, cov, prior_std, mean, std
+    )
+    std_out = np.sqrt(np.maximum(var, 0.0))
     if d_out.ndim == 0:
         return float(d_out), float(std_out)
     return d_out, std_out
