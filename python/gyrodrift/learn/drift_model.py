@@ -348,6 +348,18 @@ class DriftModel(RegressorMixin, BaseEstimator):
         half = self.interval_.half_width(Z, learned, self.base_.predict_std(runs), coverage)
         return pred, pred - half, pred + half
 
+    def learned_std_deg_h(self, runs) -> np.ndarray:
+        """The 1-sigma of each run's learned term [deg/h] (the LSSVR's output: the whole drift for
+        ``target="drift"``, the correction added to the base for a hybrid): the interval's learner share
+        (`gyrodrift.learn.interval.DriftInterval.sigmas`, the spread model's 1-sigma at the run, capped) times its
+        calibration scale c (without the coverage's t quantile). What the identified drift law adds to the variance
+        of its eps_ref (`gyrodrift.procedure.identify`); a Gaussian reading of the empirical interval."""
+        check_is_fitted(self, "interval_")
+        runs = as_run_table(runs)
+        Z, learned = self._learned(runs)
+        learned_std, _ = self.interval_.sigmas(Z, learned, None)
+        return np.asarray(learned_std, float) * float(self.interval_.scale_.scale)
+
     def interval_summary(self, coverage: float = 0.9) -> dict:
         """What the interval rests on (`gyrodrift.learn.interval.DriftInterval.summary`). O(n): no prediction."""
         coverage = check_coverage(coverage)
