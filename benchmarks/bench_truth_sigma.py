@@ -1,7 +1,7 @@
 """Calibration of `truth`'s 1-sigma: z = (truth - effective drift) / reported sigma over many seeds.
 
     python benchmarks/bench_truth_sigma.py [--seeds 60] [--first-seed 0] [--rate-hz 10] [--lat-deg 20,40,60]
-        [--hours 72] [--workers 1] [--thermal] [--noise log|given] [--gm-rrw] [--twin-alignment]
+        [--hours 72] [--workers 1] [--thermal] [--noise log|given] [--gm-rrw] [--twin-alignment] [--results FILE]
 
 For every latitude and seed: a noisy 4 h + `--hours` static log (RLG grade: ARW 0.0005 deg/sqrt(h), VRW
 5 ug/sqrt(Hz); reciprocating table; x/y gyro biases 0.004, -0.003 deg/h, accelerometer biases 20, -10, 5 ug;
@@ -25,6 +25,11 @@ against the white-noise-only sigma (what `truth` reported before it took these t
 ``--twin-alignment``: every noisy run is navigated from its twin's alignment instead of its own, so the
 alignment's noise-driven errors (which the label's covariance analysis leaves out) play no part.
 
+``--results FILE``: every truth is appended to FILE (one JSON line) as it is made, and the truths of the same
+settings already there are not made again: a long study can be cut short, its completed seeds summarised by a
+re-run with a smaller ``--seeds``, and resumed. The seeds are taken in turn across the latitudes, so a cut study
+has about as many at each.
+
 Printed per latitude: the rms of z with its 95 % interval (n rms^2 / s^2 ~ chi-square with n degrees of freedom
 for Gaussian z of scale s: the rms of 60 z-scores has a relative standard error of about 1 / sqrt(2 n) = 9 %),
 the mean z, the observed rms deviation and the mean reported sigma. Only reports; never fails.
@@ -33,9 +38,11 @@ the mean z, the observed rms deviation and the mean reported sigma. Only reports
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import time
 from multiprocessing import Pool
+from pathlib import Path
 
 import numpy as np
 from scipy.stats import chi2
@@ -109,7 +116,7 @@ def mean_simulated_drift(seed: int, hours: float) -> float:
 
 
 def one(task: tuple) -> tuple:
-    """``(key, drift [deg/h], reported sigma [deg/h])`` of one truth."""
+    """``(task, drift [deg/h], reported sigma [deg/h])`` of one truth."""
     lat, seed, rate, hours, noise, thermal, noise_mode, gm_rrw, twin_alignment = task
     log = scenario_log(scenario(lat, seed, rate, hours, noise=noise, thermal=thermal, gm_rrw=gm_rrw))
     alignment = None
@@ -126,7 +133,15 @@ def one(task: tuple) -> tuple:
         threads=1,
         noise=told if noise_mode == "given" or not noise else None,
     )
-    return (lat, seed, noise), t.drift_deg_h, t.drift_std_deg_h
+    return task, t.drift_deg_h, t.drift_std_deg_h
+
+
+def recorded(path: Path | None) -> dict:
+    """The truths already in the results file: task -> (drift, sigma) (none without a file)."""
+    if path is None or not path.exists():
+        return {}
+    rows = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+    return {tuple(r["task"]): (r["drift_deg_h"], r["sigma_deg_h"]) for r in rows}
 
 
 def rms_interval(z: np.ndarray, level: float = 0.95) -> tuple[float, float, float]:
@@ -150,27 +165,37 @@ def main() -> None:
     ap.add_argument("--noise", choices=("log", "given"), default="log", help="ARW/VRW of the sigma")
     ap.add_argument("--gm-rrw", action="store_true", help="Gauss-Markov bias and rate random walk on every gyro")
     ap.add_argument("--twin-alignment", action="store_true", help="navigate each noisy run from its twin's alignment")
+    ap.add_argument("--results", type=Path, help="JSON-lines file: each truth appended as made, reused when there")
     a = ap.parse_args()
     if a.gm_rrw:
         a.noise = "given"
     lats = [float(v) for v in a.lat_deg.split(",")]
     seeds = range(a.first_seed, a.first_seed + a.seeds)
+    common = (a.thermal, a.noise, a.gm_rrw, a.twin_alignment)
     tasks = []
-    for lat in lats:
-        twin_seeds = seeds if a.thermal else [a.first_seed]
-        common = (a.thermal, a.noise, a.gm_rrw, a.twin_alignment)
-        tasks += [(lat, s, a.rate_hz, a.hours, False, *common) for s in twin_seeds]
-        tasks += [(lat, s, a.rate_hz, a.hours, True, *common) for s in seeds]
+    for s in seeds:  # seed by seed across the latitudes: a study cut short has about as many at each
+        for lat in lats:
+            if a.thermal or s == a.first_seed:
+                tasks.append((lat, s, a.rate_hz, a.hours, False, *common))
+            tasks.append((lat, s, a.rate_hz, a.hours, True, *common))
+    done = recorded(a.results)
+    todo = [t for t in tasks if t not in done]
+    out = {(t[0], t[1], t[4]): done[t] for t in tasks if t in done}
     t0 = time.perf_counter()
     with Pool(a.workers) as pool:
-        out = {key: (d, s) for key, d, s in pool.imap_unordered(one, tasks)}
+        for task, d, s in pool.imap(one, todo):
+            out[(task[0], task[1], task[4])] = (d, s)
+            if a.results is not None:
+                with a.results.open("a") as f:
+                    f.write(json.dumps({"task": list(task), "drift_deg_h": d, "sigma_deg_h": s}) + "\n")
     wall = time.perf_counter() - t0
     env = "thermal (warm-up + daily swing)" if a.thermal else "constant drift"
     env += ", Gauss-Markov + rate random walk" if a.gm_rrw else ""
     env += ", navigated from the twin's alignment" if a.twin_alignment else ""
     print(
         f"truth's 1-sigma: {a.seeds} seeds ({seeds[0]}-{seeds[-1]}), {a.rate_hz:g} Hz, {a.hours:g} h navigation, "
-        f"{env}, noise {a.noise}; {len(tasks)} truths in {wall:.0f} s with {a.workers} worker(s)"
+        f"{env}, noise {a.noise}; {len(todo)} truths made in {wall:.0f} s with {a.workers} worker(s), "
+        f"{len(tasks) - len(todo)} read from {a.results}"
     )
     for lat in lats:
         dev, sig, dev_mean = [], [], []
