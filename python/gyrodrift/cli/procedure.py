@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import click
@@ -347,6 +348,7 @@ def identify_command(log, model_path, site, log_format, out_dir, noise, as_json,
             f"physics base: {res.smoother_fleet_drift_deg_h:.6f} +- {res.smoother_fleet_drift_std_deg_h:.6f} deg/h "
             f"(1-sigma); the model's learned correction {res.drift_deg_h - res.smoother_fleet_drift_deg_h:+.6f} deg/h"
         )
+    click.echo(f"  {_law_line(res)}")
     if res.mission is not None:
         q = ", ".join(f"{100 * float(p):g} % {v:.2f}" for p, v in res.mission["quantiles_nmi"].items())
         click.echo(f"  72 h mission after compensation (from {res.mission['drift_std_source']}): {q} nmi")
@@ -358,6 +360,23 @@ def identify_command(log, model_path, site, log_format, out_dir, noise, as_json,
     click.echo(
         f"  temperature over 12 h: {f.temp_min_c:.2f} ~ {f.temp_max_c:.2f} deg C "
         f"(start {f.temp_start_c:.2f}, end {f.temp_end_c:.2f})"
+    )
+
+
+def _law_line(res) -> str:
+    """The identified drift law in one line: its formula, coefficients with 1-sigma and the constant it replaces."""
+    law = res.drift_law
+    std = res.drift_law_std_deg_h
+    sigma = "" if not math.isfinite(std) else f" +- {std:.6f}"
+    if law.is_constant:
+        return (
+            f"drift law: the constant {law.eps_ref_deg_h:.6f}{sigma} deg/h (k1 = 0: no fleet k_z prior in the model "
+            "or no thermal model in the smoother)"
+        )
+    k1_std = "" if law.cov is None else f" +- {math.sqrt(law.cov[1][1]):.2e}"
+    return (
+        f"drift law: eps(T) = {law.eps_ref_deg_h:.6f}{sigma} + {law.k1_deg_h_per_c:.3e}{k1_std} deg/h/degC x "
+        f"(T - {law.t_ref_c:.2f} degC) deg/h (1-sigma), replacing the constant {res.drift_deg_h:.6f} deg/h"
     )
 
 

@@ -21,6 +21,18 @@ A hybrid whose physics base is the fleet-prior smoother (``DriftModel.physics_co
 "drift_smoother_fleet_deg_h"``) gets the run's smoother columns, its thermal ones included (``features_run_table``),
 and the result reports that base, the smoother's end drift re-weighted by the model's pooled k_z prior
 (``DriftModel.coefficient_prior_``), with its 1-sigma: the model's drift is that base plus its learned correction.
+
+The drift law (``Identification.drift_law``, a `gyrodrift.drift_law.DriftLaw`): the drift to subtract as a function
+of the measured temperature, eps(T) = eps_ref + k1 (T - T_ref), identified at the end of the 16 h span (the end of
+the features window, where the smoother's end drift refers to). T_ref is the temperature there
+(``RunFeatures.temp_end_c``), eps_ref the identified drift (the constant the law replaces: the law at T_ref is it,
+so nothing that uses the constant changes), k1 the smoother's k_z re-weighted by the model's fleet prior, exactly
+as the base's end drift is (`gyrodrift.learn.fleet_prior.posterior_with_coefficient_prior`). Its covariance over
+(eps_ref, k1, k3): the joint posterior of (end drift, k_z) with the learned correction's variance
+(`DriftModel.learned_std_deg_h`) added to eps_ref's. k3 (the temperature-rate term) is 0: the smoother has no
+rate state, so the alignment's data say nothing about it. Without the fleet base, or when the run's smoother used
+its constant model (no temperature column, or a temperature that spanned less than its ``thermal_min_range_c``),
+the law is the constant (k1 = k3 = 0), its 1-sigma the base's and the learned term's when both are known.
 """
 
 from __future__ import annotations
@@ -30,9 +42,10 @@ import os
 
 import numpy as np
 
+from gyrodrift.drift_law import DriftLaw
 from gyrodrift.learn.baselines import physics_inversion
 from gyrodrift.learn.drift_model import DriftModel
-from gyrodrift.learn.fleet_prior import drift_with_coefficient_prior
+from gyrodrift.learn.fleet_prior import posterior_with_coefficient_prior
 from gyrodrift.learn.interval import min_runs_for_coverage
 from gyrodrift.logs import ImuLog
 from gyrodrift.procedure.features import extract_features, features_run_table
@@ -42,7 +55,15 @@ from gyrodrift.procedure.results import Identification, RunFeatures
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 from gyrodrift.runs.table import drift_range_problems
 
-__all__ = ["identify", "fleet_base", "model_physics_column", "FLEET_BASE", "NO_UNCERTAINTY_NOTE", "INTERVAL_NOTE"]
+__all__ = [
+    "identify",
+    "identified_law",
+    "fleet_posterior",
+    "model_physics_column",
+    "FLEET_BASE",
+    "NO_UNCERTAINTY_NOTE",
+    "INTERVAL_NOTE",
+]
 
 FLEET_BASE = "drift_smoother_fleet_deg_h"
 """The physics base of a hybrid that starts from the smoother with the training fleet's k_z prior."""
@@ -73,12 +94,14 @@ def model_physics_column(model: DriftModel) -> str | None:
     return str(getattr(model, "physics_column_", None) or model.physics_column)
 
 
-def fleet_base(features: RunFeatures, prior: tuple[float, float]) -> tuple[float, float]:
-    """The run's smoother end drift and 1-sigma [deg/h] with the k_z prior ``(mean, std)`` [deg/h/degC] in place
-    of the smoother's own (`gyrodrift.learn.fleet_prior.drift_with_coefficient_prior` of the run-table columns: what
-    the model's fleet base computes); unchanged under the smoother's constant model."""
+def fleet_posterior(features: RunFeatures, prior: tuple[float, float]) -> tuple:
+    """The run's smoother end drift and k_z with the k_z prior ``(mean, std)`` [deg/h/degC] in place of the
+    smoother's own, with their covariance (`gyrodrift.learn.fleet_prior.posterior_with_coefficient_prior` of the
+    run-table columns: the end drift is what the model's fleet base computes): ``(thermal, drift, k_z, var_drift,
+    cov, var_k_z)`` as floats [deg/h, deg/h/degC]; under the smoother's constant model ``thermal`` is false, the
+    drift and its variance the smoother's and the rest NaN."""
     mean, std = (float(v) for v in prior)
-    return drift_with_coefficient_prior(
+    out = posterior_with_coefficient_prior(
         features.drift_smoother_deg_h,
         features.drift_smoother_std_deg_h,
         features.smoother_coeff_deg_h_per_c,
@@ -87,6 +110,39 @@ def fleet_base(features: RunFeatures, prior: tuple[float, float]) -> tuple[float
         features.smoother_coeff_prior_std_deg_h_per_c,
         mean,
         std,
+    )
+    return (bool(out[0]), *(float(v) for v in out[1:]))
+
+
+def identified_law(
+    model: DriftModel, table, features: RunFeatures, drift_deg_h: float, fleet: tuple | None
+) -> DriftLaw:
+    """The drift law of the run (module docstring, "The drift law"): eps_ref the identified drift `drift_deg_h`
+    [deg/h] at T_ref the temperature at the end of the features window (``features.temp_end_c``, the smoother's
+    last sample, where its end drift refers to), k1 the smoother's k_z with the fleet's prior (`fleet_posterior`)
+    when the model has the fleet base and the run's smoother its thermal model, else 0 (the constant); k3 0.
+    Covariance: the fleet posterior's (end drift, k_z) block with the learned term's variance
+    (`DriftModel.learned_std_deg_h`) added to eps_ref's; for the constant, eps_ref's variance is the base's plus the
+    learned term's (None when either is unknown: a model without the interval, a base without a 1-sigma)."""
+    t_ref = float(features.temp_end_c)
+    learned_var = math.nan
+    if getattr(model, "interval_", None) is not None:
+        learned_var = float(model.learned_std_deg_h(table)[0]) ** 2
+    if fleet is not None and fleet[0] and math.isfinite(t_ref):
+        _, _, k1, var_d, cov_dk, var_k = fleet
+        var_ref = var_d + learned_var
+        cov = None
+        if math.isfinite(var_ref):
+            cov = ((var_ref, cov_dk, 0.0), (cov_dk, var_k, 0.0), (0.0, 0.0, 0.0))
+        return DriftLaw(eps_ref_deg_h=drift_deg_h, t_ref_c=t_ref, k1_deg_h_per_c=k1, cov=cov)
+    if fleet is not None:
+        base_var = fleet[3]
+    else:
+        _, base_std = model.base_.predict(table, with_std=True)
+        base_var = 0.0 if model.target != "residual" else math.nan if base_std is None else float(base_std[0]) ** 2
+    std = math.sqrt(base_var + learned_var)
+    return DriftLaw.constant(
+        drift_deg_h, std if math.isfinite(std) else None, t_ref_c=t_ref if math.isfinite(t_ref) else 20.0
     )
 
 
@@ -151,10 +207,11 @@ def identify(
     err, kind = _training_error(model)
     base_column = model_physics_column(model)
     prior = getattr(model, "coefficient_prior_", None) if base_column == FLEET_BASE else None
-    fleet = (math.nan, math.nan) if prior is None else fleet_base(features, prior)
+    fleet = None if prior is None else fleet_posterior(features, prior)
+    base_drift, base_std = (math.nan, math.nan) if fleet is None else (fleet[1], math.sqrt(max(fleet[3], 0.0)))
     al = features.alignment
-    sm, fleet_ok = features.smoother, math.isfinite(fleet[1])
-    sigma = fleet[1] if fleet_ok else features.drift_smoother_std_deg_h
+    sm, fleet_ok = features.smoother, math.isfinite(base_std)
+    sigma = base_std if fleet_ok else features.drift_smoother_std_deg_h
     mission = None  # what the drift's 1-sigma means for the 72 h (gyrodrift.procedure.plan, as `gyrodrift plan`)
     if sm is not None and math.isfinite(sigma):
         src = "the smoother with the fleet's k_z prior" if fleet_ok else "the smoother (the Cramer-Rao line)"
@@ -180,8 +237,9 @@ def identify(
         range_warnings=warnings,
         outside_drift_range=implausible is not None,
         model_physics_column=base_column,
-        smoother_fleet_drift_deg_h=float(fleet[0]),
-        smoother_fleet_drift_std_deg_h=float(fleet[1]),
+        smoother_fleet_drift_deg_h=base_drift,
+        smoother_fleet_drift_std_deg_h=base_std,
         coefficient_prior_deg_h_per_c=None if prior is None else (float(prior[0]), float(prior[1])),
         mission=mission,
+        drift_law=identified_law(model, table, features, drift, fleet),
     )

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from gyrodrift.drift_law import DriftLaw
 from gyrodrift.earth import NMI_M
 from gyrodrift.learn.fleet_prior import drift_with_coefficient_prior
 from gyrodrift.runs.columns import FEATURES_COLUMNS, LABEL_COLUMNS, SMOOTHER_THERMAL_COLUMNS
@@ -518,6 +519,10 @@ class Identification:
         What the smoother's drift 1-sigma (with the fleet's k_z prior under the fleet base) means for the 72 h
         mission at the run's latitude (`gyrodrift.procedure.plan.mission_outlook`: predicted error quantiles after
         compensation, ``ready``, ``more_static_h``, ``note``); None when the smoother did not run.
+    drift_law : DriftLaw or None
+        The identified drift law (`gyrodrift.procedure.identify`, "The drift law"): eps_ref = ``drift_deg_h`` at
+        T_ref, the temperature at the end of the features window; the constant when the model has no fleet base or
+        the smoother no thermal model. None only for a result not made by ``identify``.
     """
 
     run: str
@@ -544,6 +549,13 @@ class Identification:
     smoother_fleet_drift_std_deg_h: float = math.nan
     coefficient_prior_deg_h_per_c: tuple[float, float] | None = None
     mission: dict[str, Any] | None = None
+    drift_law: DriftLaw | None = None
+
+    @property
+    def drift_law_std_deg_h(self) -> float:
+        """1-sigma of the drift law at its T_ref [deg/h] (NaN when its covariance is unknown or there is no law)."""
+        law = self.drift_law
+        return math.nan if law is None else float(law.std_deg_h(law.t_ref_c))
 
     @property
     def smoother_model(self) -> str | None:
@@ -581,6 +593,7 @@ class Identification:
             "training_error_deg_h": self.training_error_deg_h,
             "training_error_kind": self.training_error_kind,
             "mission": self.mission,
+            "drift_law": None if self.drift_law is None else self.drift_law.to_dict(),
             "features": {
                 **f.row(),
                 "lat_err_arcsec": f.lat_err_arcsec,
