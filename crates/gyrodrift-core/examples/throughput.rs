@@ -63,6 +63,7 @@ fn main() {
             start_c: 20.0,
             end_c: 35.0,
             tau_s: 7200.0,
+            swing: gyrodrift_core::temperature::DailySwing::NONE,
         };
     }
     let nav_cfg = NavigatorConfig {

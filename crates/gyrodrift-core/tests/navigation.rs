@@ -412,6 +412,7 @@ fn temperature_drift_enters_gyro_z_as_k1_k2_k3() {
         start_c: start,
         end_c: end,
         tau_s: tau,
+        swing: gyrodrift_core::temperature::DailySwing::NONE,
     };
     let mut without = with.clone();
     with.errors.drift_t0_c = t0c;

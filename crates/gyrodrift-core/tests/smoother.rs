@@ -249,6 +249,7 @@ fn thermal_sim(drift_deg_h: f64, k1_deg_h_per_c: f64, tau_h: f64, seed: u64, noi
         start_c: 18.0,
         end_c: 38.0,
         tau_s: tau_h * HOUR,
+        swing: gyrodrift_core::temperature::DailySwing::NONE,
     };
     s
 }
@@ -334,6 +335,7 @@ fn the_constant_model_is_the_thermal_state_conditioned_on_zero() {
         start_c: 30.0,
         end_c: 30.0,
         tau_s: 3600.0,
+        swing: gyrodrift_core::temperature::DailySwing::NONE,
     };
     let plain = smooth(flat.clone());
     let th = smooth_thermal(flat, |_| {});

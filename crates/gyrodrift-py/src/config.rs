@@ -9,7 +9,7 @@ use gyrodrift_core::attitude::Euler;
 use gyrodrift_core::imu_error::ImuErrorParams;
 use gyrodrift_core::simulator::ImuSimulatorConfig;
 use gyrodrift_core::strapdown::{NavigatorConfig as CoreNavigatorConfig, Vertical};
-use gyrodrift_core::temperature::{TemperatureProfile, DEFAULT_TAU_S, DEFAULT_TEMP_C};
+use gyrodrift_core::temperature::{DailySwing, TemperatureProfile, DEFAULT_TAU_S, DEFAULT_TEMP_C};
 use gyrodrift_core::trajectory::{Segment, TrajectoryConfig};
 use gyrodrift_core::turntable::{
     default_indexing_positions, scheme_from_settings, RotationScheme, DEFAULT_RECIPROCATING_SPAN_RAD,
@@ -80,6 +80,12 @@ pub struct SimulatorConfig {
     #[pyo3(get)]
     temp_tau_s: f64,
     #[pyo3(get)]
+    temp_swing_amplitude_c: f64,
+    #[pyo3(get)]
+    temp_swing_period_s: f64,
+    #[pyo3(get)]
+    temp_swing_phase_rad: f64,
+    #[pyo3(get)]
     temp_series_t_s: Option<Vec<f64>>,
     #[pyo3(get)]
     temp_series_c: Option<Vec<f64>>,
@@ -112,8 +118,8 @@ impl SimulatorConfig {
         positions_rad = None, dwell_s = None, gyro_bias_rad_s = None, gyro_arw_rad_rts = None,
         gyro_bias_instability_rad_s = None, gyro_correlation_s = None, gyro_rrw_rad_s_rts = None,
         gyro_scale = None, gyro_misalignment_rad = None, accel_bias_m_s2 = None, accel_vrw_m_s_rts = None,
-        accel_scale = None, temp_start_c = None, temp_end_c = None, temp_tau_s = None, temp_series_t_s = None,
-        temp_series_c = None, drift_t0_c = None, drift_k1_rad_s_per_c = None, drift_k2_rad_s_per_c2 = None,
+        accel_scale = None, temp_start_c = None, temp_end_c = None, temp_tau_s = None, temp_swing_amplitude_c = None,
+        temp_swing_period_s = None, temp_swing_phase_rad = None, temp_series_t_s = None, temp_series_c = None, drift_t0_c = None, drift_k1_rad_s_per_c = None, drift_k2_rad_s_per_c2 = None,
         drift_k3_rad_s_per_c_per_s = None, trajectory_start_s = None, trajectory_segments = None,
         trajectory_repeat = false
     ))]
@@ -148,6 +154,9 @@ impl SimulatorConfig {
         temp_start_c: Option<f64>,
         temp_end_c: Option<f64>,
         temp_tau_s: Option<f64>,
+        temp_swing_amplitude_c: Option<f64>,
+        temp_swing_period_s: Option<f64>,
+        temp_swing_phase_rad: Option<f64>,
         temp_series_t_s: Option<Vec<f64>>,
         temp_series_c: Option<Vec<f64>>,
         drift_t0_c: Option<f64>,
@@ -175,6 +184,7 @@ impl SimulatorConfig {
             temp_start_c,
             temp_end_c,
             temp_tau_s,
+            (temp_swing_amplitude_c, temp_swing_period_s, temp_swing_phase_rad),
             temp_series_t_s.clone(),
             temp_series_c.clone(),
         )
@@ -258,12 +268,18 @@ impl SimulatorConfig {
                 dwell,
             } => (Some(*rate), Some(*accel), None, Some(positions.clone()), Some(*dwell)),
         };
-        let (start, end, tau, series_t, series_c) = match &inner.temperature {
-            TemperatureProfile::WarmUp { start_c, end_c, tau_s } => (*start_c, *end_c, *tau_s, None, None),
+        let (start, end, tau, swing, series_t, series_c) = match &inner.temperature {
+            TemperatureProfile::WarmUp {
+                start_c,
+                end_c,
+                tau_s,
+                swing,
+            } => (*start_c, *end_c, *tau_s, *swing, None, None),
             TemperatureProfile::Series { t_s, temp_c } => (
                 temp_c.first().copied().unwrap_or(DEFAULT_TEMP_C),
                 temp_c.last().copied().unwrap_or(DEFAULT_TEMP_C),
                 DEFAULT_TAU_S,
+                DailySwing::NONE,
                 Some(t_s.clone()),
                 Some(temp_c.clone()),
             ),
@@ -299,6 +315,9 @@ impl SimulatorConfig {
             temp_start_c: start,
             temp_end_c: end,
             temp_tau_s: tau,
+            temp_swing_amplitude_c: swing.amplitude_c,
+            temp_swing_period_s: swing.period_s,
+            temp_swing_phase_rad: swing.phase_rad,
             temp_series_t_s: series_t,
             temp_series_c: series_c,
             drift_t0_c: e.drift_t0_c,

@@ -4,7 +4,7 @@ use crate::attitude::Euler;
 use crate::error::{check, CoreError};
 use crate::imu_error::ImuErrorParams;
 use crate::limits::{check_attitude, check_duration, check_site};
-use crate::temperature::TemperatureProfile;
+use crate::temperature::{DailySwing, TemperatureProfile};
 use crate::trajectory::{check_route_latitude, Trajectory, TrajectoryConfig};
 use crate::turntable::{RotationScheme, Turntable};
 
@@ -48,6 +48,7 @@ impl Default for ImuSimulatorConfig {
                 start_c: 20.0,
                 end_c: 20.0,
                 tau_s: 3600.0,
+                swing: DailySwing::NONE,
             },
             trajectory: None,
         }

@@ -53,6 +53,23 @@ fn tau_decay(p: &TemperatureProfile, dt: f64) -> f64 {
     }
 }
 
+/// (sin, cos) of the angle of a warm-up's daily swing at time `t` \[s\] (`from_start`: with its phase, else
+/// the angle it advances over `t`); (0, 1) for a series.
+fn swing_sin_cos(p: &TemperatureProfile, t: f64, from_start: bool) -> (f64, f64) {
+    match p {
+        TemperatureProfile::WarmUp { swing, .. } => {
+            (swing.omega() * t + if from_start { swing.phase_rad } else { 0.0 }).sin_cos()
+        }
+        TemperatureProfile::Series { .. } => (0.0, 1.0),
+    }
+}
+
+/// The angle whose (sin, cos) is `a` advanced by the angle whose (sin, cos) is `b`.
+#[inline(always)]
+fn rotate(a: (f64, f64), b: (f64, f64)) -> (f64, f64) {
+    (a.0 * b.1 + a.1 * b.0, a.1 * b.1 - a.0 * b.0)
+}
+
 /// The simulator (see the module docs).
 #[derive(Clone, Debug)]
 pub struct ImuSimulator {
@@ -84,6 +101,10 @@ pub struct ImuSimulator {
     decay: f64,
     decay_step: f64,
     decay_half: f64,
+    /// Daily swing recurrence: (sin, cos) of its angle at the last sample, over dt and over dt / 2.
+    swing_sc: (f64, f64),
+    swing_step: (f64, f64),
+    swing_half: (f64, f64),
     /// Moving base (None: static base).
     moving: Option<Moving>,
 }
@@ -122,6 +143,9 @@ impl ImuSimulator {
             decay: 1.0,
             decay_step: tau_decay(&cfg.temperature, dt),
             decay_half: tau_decay(&cfg.temperature, 0.5 * dt),
+            swing_sc: swing_sin_cos(&cfg.temperature, 0.0, true),
+            swing_step: swing_sin_cos(&cfg.temperature, dt, false),
+            swing_half: swing_sin_cos(&cfg.temperature, 0.5 * dt, false),
             cfg,
         })
     }
@@ -154,26 +178,46 @@ impl ImuSimulator {
     #[inline]
     fn temperature(&mut self, k: u64, t1: f64, need_mid: bool) -> (f64, (f64, f64)) {
         match self.cfg.temperature {
-            TemperatureProfile::WarmUp { start_c, end_c, tau_s } => {
-                if start_c == end_c {
+            TemperatureProfile::WarmUp {
+                start_c,
+                end_c,
+                tau_s,
+                swing,
+            } => {
+                if start_c == end_c && swing.amplitude_c == 0.0 {
                     return (end_c, (end_c, 0.0));
                 }
-                // e_k = exp(-t_k / tau) by recurrence, exact every SINCOS_RESYNC samples.
+                // e_k = exp(-t_k / tau) and the swing's (sin, cos) by recurrence, exact every SINCOS_RESYNC
+                // samples.
+                let resync = k % SINCOS_RESYNC == 0;
                 let e_prev = self.decay;
-                let e1 = if k % SINCOS_RESYNC == 0 {
+                let e1 = if resync {
                     (-t1 / tau_s).exp()
                 } else {
                     e_prev * self.decay_step
                 };
                 self.decay = e1;
                 let d = start_c - end_c;
-                let mid = if need_mid {
+                let (mut temp, mut mid) = (end_c + d * e1, (0.0, 0.0));
+                if need_mid {
                     let em = e_prev * self.decay_half;
-                    (end_c + d * em, -d / tau_s * em)
-                } else {
-                    (0.0, 0.0)
-                };
-                (end_c + d * e1, mid)
+                    mid = (end_c + d * em, -d / tau_s * em);
+                }
+                if swing.amplitude_c != 0.0 {
+                    let sc_prev = self.swing_sc;
+                    self.swing_sc = if resync {
+                        (swing.omega() * t1 + swing.phase_rad).sin_cos()
+                    } else {
+                        rotate(sc_prev, self.swing_step)
+                    };
+                    temp += swing.from_sin_cos(self.swing_sc.0, self.swing_sc.1).0;
+                    if need_mid {
+                        let (sm, cm) = rotate(sc_prev, self.swing_half);
+                        let (ts, rs) = swing.from_sin_cos(sm, cm);
+                        mid = (mid.0 + ts, mid.1 + rs);
+                    }
+                }
+                (temp, mid)
             }
             TemperatureProfile::Series { .. } => {
                 let mid = if need_mid {
