@@ -26,7 +26,12 @@ import numpy as np
 
 from gyrodrift.errors import InputError
 
-__all__ = ["pooled_coefficient_prior", "drift_with_coefficient_prior", "posterior_with_coefficient_prior"]
+__all__ = [
+    "pooled_coefficient_prior",
+    "leave_one_out_coefficient_priors",
+    "drift_with_coefficient_prior",
+    "posterior_with_coefficient_prior",
+]
 
 
 def pooled_coefficient_prior(coeff, coeff_std) -> tuple[float, float]:
@@ -52,6 +57,61 @@ def pooled_coefficient_prior(coeff, coeff_std) -> tuple[float, float]:
     return mean, math.sqrt(1.0 / float(np.sum(w)) + tau2)
 
 
+LOO_CHUNK_ELEMENTS = 1 << 21
+"""Largest (rows x runs) block `leave_one_out_coefficient_priors` holds at once (16 MiB per float array)."""
+
+
+def leave_one_out_coefficient_priors(coeff, coeff_std, rows) -> np.ndarray:
+    """``(len(rows), 2)``: for each index ``i`` in ``rows``, `pooled_coefficient_prior` of every entry but ``i``.
+
+    The same floats as calling `pooled_coefficient_prior` on the arrays with entry ``i`` deleted, in O(n) numpy
+    calls per block of rows instead of O(n) Python calls per row: each row of an (rows, n - 1) block is a
+    contiguous copy of the usable entries but ``i``, summed along the row as `pooled_coefficient_prior` sums its
+    1-D array (numpy's pairwise sum of a contiguous row), and the scalar steps are the same IEEE operations
+    elementwise. A row with fewer than two usable entries left raises as `pooled_coefficient_prior` does.
+    """
+    k_all = np.asarray(coeff, float).ravel()
+    s_all = np.asarray(coeff_std, float).ravel()
+    rows = np.asarray(rows, int).ravel()
+    if k_all.shape != s_all.shape:
+        raise InputError(f"k_z estimates and 1-sigmas differ in length ({k_all.size} vs {s_all.size})")
+    use = np.isfinite(k_all) & np.isfinite(s_all) & (s_all > 0.0)
+    m = int(use.sum())
+    out = np.empty((rows.size, 2))
+    if m - 1 < 2:  # too few usable entries once one is left out: the plain function says why
+        for r, i in enumerate(rows):
+            others = np.arange(k_all.size) != i
+            out[r] = pooled_coefficient_prior(k_all[others], s_all[others])
+        return out
+    k, w = k_all[use], 1.0 / s_all[use] ** 2
+    position = np.cumsum(use) - 1  # index of each usable entry among the usable ones
+    unused = ~use[rows]
+    if unused.any():  # leaving out an unusable entry changes nothing
+        out[unused] = pooled_coefficient_prior(k, s_all[use])
+    left = np.flatnonzero(~unused)
+    step = max(1, LOO_CHUNK_ELEMENTS // (m - 1))
+    cols = np.arange(m - 1)[None, :]
+    for start in range(0, left.size, step):
+        block = left[start : start + step]
+        skip = position[rows[block]][:, None]
+        idx = cols + (cols >= skip)
+        kb, wb = k[idx], w[idx]
+        sw = np.sum(wb, axis=1)
+        mean = np.sum(wb * kb, axis=1) / sw
+        q = np.sum(wb * (kb - mean[:, None]) ** 2, axis=1)
+        denominator = sw - np.sum(wb**2, axis=1) / sw
+        with np.errstate(divide="ignore", invalid="ignore"):
+            tau2 = (q - (m - 2)) / denominator
+        tau2 = np.where(tau2 > 0.0, tau2, 0.0)  # max(0.0, x) of the scalar code (x NaN: 0.0)
+        if not np.all(denominator != 0.0):  # the scalar code's ZeroDivisionError, where it would raise
+            for r in block[denominator == 0.0]:
+                others = np.arange(k_all.size) != rows[r]
+                pooled_coefficient_prior(k_all[others], s_all[others])
+        out[block, 0] = mean
+        out[block, 1] = np.sqrt(1.0 / sw + tau2)
+    return out
+
+
 def posterior_with_coefficient_prior(drift, drift_std, coeff, coeff_std, cov, prior_std, mean, std):
     """The joint posterior of (end drift, k_z) with the prior N(mean, std^2) on k_z in place of N(0, prior_std^2).
 
@@ -62,9 +122,13 @@ def posterior_with_coefficient_prior(drift, drift_std, coeff, coeff_std, cov, pr
     ``var(k*) = 1 / L``. Returns ``(thermal, d*, k*, var_d, cov_dk, var_k)``: ``thermal`` (bool, elementwise) is
     false where the run has no thermal estimate (``coeff`` or ``cov`` not finite), and there ``d*`` is ``drift``,
     ``var_d`` its square and k*, cov_dk and var_k are NaN. The operations of ``d*`` and ``k*`` are exactly these, in
-    this order (the exported code repeats them bit for bit). Numpy arrays (0-d for scalar arguments).
+    this order (the exported code repeats them bit for bit). Numpy arrays (0-d for scalar arguments); ``mean``
+    and ``std`` may be arrays too (one prior per run, elementwise: the floats of one call per run).
     """
-    if not (math.isfinite(mean) and math.isfinite(std) and std > 0.0):
+    means, stds = np.broadcast_arrays(np.asarray(mean, float), np.asarray(std, float))
+    bad = np.flatnonzero(~(np.isfinite(means) & np.isfinite(stds) & (stds > 0.0)).ravel())
+    if bad.size:
+        mean, std = float(means.flat[bad[0]]), float(stds.flat[bad[0]])
         raise InputError(f"a k_z prior needs a finite mean and a positive finite 1-sigma, got {mean!r}, {std!r}")
     d = np.asarray(drift, float)
     vd = np.asarray(drift_std, float) ** 2

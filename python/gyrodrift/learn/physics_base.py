@@ -27,7 +27,11 @@ from sklearn.utils.validation import check_is_fitted
 from gyrodrift.choices import BASE_UNCERTAINTIES, MIN_THERMAL_RUNS, PHYSICS_CHOICES, PHYSICS_COLUMNS, TARGETS
 from gyrodrift.errors import InputError, OptionError
 from gyrodrift.learn.baselines import physics_inversion
-from gyrodrift.learn.fleet_prior import drift_with_coefficient_prior, pooled_coefficient_prior
+from gyrodrift.learn.fleet_prior import (
+    drift_with_coefficient_prior,
+    leave_one_out_coefficient_priors,
+    pooled_coefficient_prior,
+)
 from gyrodrift.runs.columns import COLUMNS, PHYSICS_BASE_COLUMNS, SMOOTHER_DRIFT_COLUMNS, SMOOTHER_THERMAL_COLUMNS
 from gyrodrift.runs.table import RunTable, check_smoother_thermal
 
@@ -133,9 +137,8 @@ def fleet_priors(runs: RunTable) -> tuple[tuple[float, float], np.ndarray]:
     sk = np.where(thermal, runs.column(SMOOTHER_THERMAL_COLUMNS[1]), np.nan)
     prior = pooled_coefficient_prior(k, sk)
     per_run = np.tile(np.asarray(prior, float), (len(runs), 1))
-    for i in np.flatnonzero(thermal):
-        others = np.arange(len(runs)) != i
-        per_run[i] = pooled_coefficient_prior(k[others], sk[others])
+    rows = np.flatnonzero(thermal)
+    per_run[rows] = leave_one_out_coefficient_priors(k, sk, rows)
     return prior, per_run
 
 
@@ -174,13 +177,8 @@ def physics_estimate(runs: RunTable, column: str = "drift_inversion_deg_h", *, p
             estimate, std = drift_with_coefficient_prior(
                 drift, drift_std, k, sk, c, s0, float(prior[0]), float(prior[1])
             )
-        elif prior.shape == (len(runs), 2):
-            pairs = [
-                drift_with_coefficient_prior(drift[i], drift_std[i], k[i], sk[i], c[i], s0[i], *map(float, prior[i]))
-                for i in range(len(runs))
-            ]
-            estimate = np.array([p[0] for p in pairs], float)
-            std = np.array([p[1] for p in pairs], float)
+        elif prior.shape == (len(runs), 2):  # elementwise: the floats of one call per run
+            estimate, std = drift_with_coefficient_prior(drift, drift_std, k, sk, c, s0, prior[:, 0], prior[:, 1])
         else:
             raise InputError(f"a k_z prior is (mean, std) or one per run, shape ({len(runs)}, 2); got {prior.shape}")
     else:
