@@ -1,6 +1,6 @@
 """The export spec as C99: a header and a source (templates/gyrodrift_model.h.in, .c.in), const data only, no
 allocation, no I/O; the physics functions of a hybrid (templates/hybrid.c.in) and the fleet-prior base
-(templates/fleet_base.c.in) where the model has them."""
+(templates/fleet_base.c.in) and its drift law (templates/law.c.in) where the model has them."""
 
 from __future__ import annotations
 
@@ -49,6 +49,9 @@ double gyrodrift_model_correction_deg_h(const gyrodrift_model_inputs *inputs);
 /* The identified axial gyro drift [deg/h]: physics estimate + learned correction.
  * Check gyrodrift_model_in_range first: the model does not extrapolate. */
 double gyrodrift_model_drift_deg_h(const gyrodrift_model_inputs *inputs);"""
+        if spec.temp_range_c is not None:
+            lo, hi = (literal(t) for t in spec.temp_range_c)
+            drift_decl += "\n\n" + render.fill("law.h.in", temp_min=lo, temp_max=hi).rstrip("\n")
     return render.fill(
         "gyrodrift_model.h.in",
         provenance=provenance,
@@ -165,4 +168,7 @@ def _source(spec: ExportSpec, provenance: str) -> str:
     if spec.physics is None:
         return source
     physics = render.expression(PHYSICS_EXPRESSIONS[spec.physics], "c", "inputs->{}", "{}")
-    return source + "\n" + render.fill("hybrid.c.in", physics=physics)
+    source += "\n" + render.fill("hybrid.c.in", physics=physics)
+    if spec.temp_range_c is None:
+        return source
+    return source + render.fill("law.c.in")

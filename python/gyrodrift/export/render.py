@@ -134,6 +134,13 @@ def provenance_lines(spec: ExportSpec) -> list[str]:
             f"Fleet k_z prior: mean = {literal(mean)}, 1-sigma = {literal(std)} [deg/h/degC] (pooled over the "
             "training runs' k_z: gyrodrift.learn.fleet_prior.pooled_coefficient_prior)"
         )
+    if spec.temp_range_c is not None:
+        lo, hi = spec.temp_range_c
+        lines.append(
+            "Drift law: eps(T) = drift + k1 (T - T_ref) [deg/h], T_ref the temperature at the end of the 16 h span, "
+            "k1 the smoother's k_z with the fleet's prior (0 on a constant-model run)"
+        )
+        lines.append(f"  T within the training runs' temperatures: [{literal(lo)}, {literal(hi)}] deg C")
     lines.append("Inputs read, with their range over the training runs (the range check refuses inputs outside it):")
     for name, (lo, hi) in zip(spec.inputs, spec.input_ranges, strict=True):
         note = (

@@ -1,6 +1,6 @@
 """The export spec as a ``no_std`` Rust module (templates/gyrodrift_model.rs.in): only ``core``, no allocation, no
 I/O, the math functions passed in; the physics functions of a hybrid (templates/hybrid.rs.in) and the fleet-prior
-base (templates/fleet_base.rs.in) where the model has them."""
+base (templates/fleet_base.rs.in) and its drift law (templates/law.rs.in) where the model has them."""
 
 from __future__ import annotations
 
@@ -54,6 +54,9 @@ def rust_files(spec: ExportSpec) -> dict[str, str]:
         physics_math="math" if expr.functions else "_math",
         physics=render.expression(expr, "rust", "inputs.{}", "(math.{})"),
     )
+    if spec.temp_range_c is not None:
+        lo, hi = spec.temp_range_c
+        hybrid += render.fill("law.rs.in", temp_min=literal(lo), temp_max=literal(hi))
     return {FILES[0]: text + "\n" + hybrid}
 
 

@@ -8,7 +8,10 @@ inside (`PHYSICS_EXPRESSIONS`, the operations of `gyrodrift.learn.baselines.phys
 and the 16 h smoother are computed by the navigation computer itself and passed in as one more input
 (`PHYSICS_INPUTS`, deg/h); the fleet-prior smoother (`FLEET_PHYSICS`) takes the smoother's end drift and its k_z
 estimate as inputs and re-weights them inside with the training fleet's k_z prior, baked in as two constants (the
-operations of `gyrodrift.learn.fleet_prior.drift_with_coefficient_prior`). The learned part is the encoding's
+operations of `gyrodrift.learn.fleet_prior.drift_with_coefficient_prior`); such a model also exports its drift law
+(`gyrodrift.procedure.identify`, "The drift law": the drift at the temperature measured in navigation, eps_ref + k1
+(T - T_ref) with k1 the re-weighted k_z) and the training runs' temperature range to check T against
+(``temp_range_c``). The learned part is the encoding's
 features (`FEATURE_EXPRESSIONS`, the same operations as `gyrodrift.learn.encodings.encode`), the scaler, the kernel
 (the conventions of `gyrodrift.learn.kernels`: rbf ``exp(-|x - z|^2 / sigma^2)``, linear ``x . z``, polynomial
 ``(x . z / sigma^2 + coef0)^degree``), the support vectors, alpha and the intercept.
@@ -159,7 +162,9 @@ class ExportSpec:
     over the training runs, in their units (the k_z inputs, ``SMOOTHER_THERMAL_COLUMNS``, over the runs with a thermal
     estimate); ``physics`` is the hybrid's physics column (None when the model learns the drift itself,
     ``target="drift"``); ``coefficient_prior`` the fleet's k_z prior (mean, 1-sigma) [deg/h/degC] of the
-    fleet-prior base (`FLEET_PHYSICS`), else None; ``mean``/
+    fleet-prior base (`FLEET_PHYSICS`), else None; ``temp_range_c`` the training runs' system temperatures
+    (lowest ``temp_min_c``, highest ``temp_max_c``) [deg C] that the drift law of the fleet-prior base may be
+    evaluated at (None without the law); ``mean``/
     ``scale`` (standard: ``(x - mean) / scale``) or ``scale``/``offset`` (minmax: ``x * scale + offset``)
     the scaler; ``support_vectors`` are in scaled units.
     """
@@ -169,6 +174,7 @@ class ExportSpec:
     target: str
     physics: str | None
     coefficient_prior: tuple[float, float] | None
+    temp_range_c: tuple[float, float] | None
     feature_names: tuple[str, ...]
     inputs: tuple[str, ...]
     functions: tuple[str, ...]
@@ -275,12 +281,20 @@ def export_spec(model, *, model_sha256: str | None = None) -> ExportSpec:
         if values.size == 0 or not np.all(np.isfinite(values)):
             raise InputError(f"input {name} of the model is missing for some training runs; it cannot be exported")
         input_ranges.append((float(values.min()), float(values.max())))
+    temp_range = None
+    if prior is not None:  # the drift law's temperatures: those of the training runs
+        temp_range = (float(np.min(runs.temp_min_c)), float(np.max(runs.temp_max_c)))
+        if not (math.isfinite(temp_range[0]) and math.isfinite(temp_range[1])):
+            raise InputError(
+                "the training runs' temperatures (temp_min_c, temp_max_c) are missing; it cannot be exported"
+            )
     return ExportSpec(
         encoding=model.encoding,
         scaling=model.scaling,
         target=target,
         physics=physics,
         coefficient_prior=prior,
+        temp_range_c=temp_range,
         feature_names=names,
         inputs=inputs,
         functions=functions,

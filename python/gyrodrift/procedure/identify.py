@@ -123,7 +123,8 @@ def identified_law(
     when the model has the fleet base and the run's smoother its thermal model, else 0 (the constant); k3 0.
     Covariance: the fleet posterior's (end drift, k_z) block with the learned term's variance
     (`DriftModel.learned_std_deg_h`) added to eps_ref's; for the constant, eps_ref's variance is the base's plus the
-    learned term's (None when either is unknown: a model without the interval, a base without a 1-sigma)."""
+    learned term's (None when either is unknown: a model without the interval, a base without a 1-sigma, or when
+    the re-weighted block is no covariance: a smoother whose own k_z prior is tighter than the fleet's)."""
     t_ref = float(features.temp_end_c)
     learned_var = math.nan
     if getattr(model, "interval_", None) is not None:
@@ -131,8 +132,8 @@ def identified_law(
     if fleet is not None and fleet[0] and math.isfinite(t_ref):
         _, _, k1, var_d, cov_dk, var_k = fleet
         var_ref = var_d + learned_var
-        cov = None
-        if math.isfinite(var_ref):
+        cov = None  # unknown, or not a covariance (a smoother's own k_z prior tighter than the fleet's)
+        if math.isfinite(var_ref) and var_ref >= 0.0 and var_k > 0.0 and cov_dk * cov_dk <= var_ref * var_k:
             cov = ((var_ref, cov_dk, 0.0), (cov_dk, var_k, 0.0), (0.0, 0.0, 0.0))
         return DriftLaw(eps_ref_deg_h=drift_deg_h, t_ref_c=t_ref, k1_deg_h_per_c=k1, cov=cov)
     if fleet is not None:
