@@ -1,7 +1,7 @@
 """Benchmark: what the learning side costs as the fleet grows (issue 20). Prints times and ratios; never fails.
 
     python benchmarks/bench_learning_scale.py [--sizes 22,200,1000] [--tune-sizes 22,200] [--exact-max 200]
-                                              [--model-runs 1500] [--no-cli]
+                                              [--model-runs 1500] [--no-cli] [--no-calibration]
 
 1. **One LOO evaluation** of the tuner (closed-form LOO residuals of one (gamma, sigma) candidate) on ``n`` runs,
    per candidate, three ways in the same process: ``rbf_batch_errors`` with the BLAS's default threads (what the
@@ -13,11 +13,20 @@
    ``gyrodrift.learn.tuning.sigma_step_for``) and, up to ``--exact-max`` runs, the same seed unsnapped (as before): the
    ratio and the tuned LOO MAE of both; for n <= 200 also the ratio of the default BLAS threads to one, measured on
    the first 10 iterations (the default-thread run of 100 iterations takes minutes at 200 runs).
-3. **The CLI** (subprocesses, wall time including Python's start-up and imports): ``gyrodrift fit`` with defaults on
-   the paper's 22 training runs and on ``--sizes`` synthetic runs; ``gyrodrift reproduce``; ``gyrodrift predict``
-   and ``gyrodrift export`` with a model of ``--model-runs`` runs (fitted with a fixed ``--gamma 100 --sigma 0.7``
-   to keep this benchmark short: the load does not depend on how gamma and sigma were found), and the model file's
-   load alone in this process (what ``identify`` adds to its alignment and navigation).
+3. **The CLI** (subprocesses, Python's start-up and imports included), one line per issue 20 target: the command,
+   the child's CPU time (user + system, what the work cost on a shared machine) and wall time, and the target
+   (wall, on a quiet 2-core machine): ``gyrodrift fit`` with defaults on the paper's 22 training runs and on
+   ``--sizes`` synthetic runs; ``gyrodrift reproduce``; ``gyrodrift predict`` and ``gyrodrift export`` with a model
+   of ``--model-runs`` runs (fitted with a fixed ``--gamma 100 --sigma 0.7`` to keep this benchmark short: the load
+   does not depend on how gamma and sigma were found); then the references of the same run: ``python -c pass`` and
+   the imports every learning command pays (``gyrodrift.cli``, the model file and interval modules: numpy, scipy,
+   scikit-learn), and the model file's load alone in this process (what ``identify`` adds to its alignment and
+   navigation).
+4. **Calibrating an interval against the tune it calibrates** (issue 20: the first must cost no more than the
+   second): ``fit_drift_model`` with defaults on the paper's 22 training runs and on ``--sizes`` synthetic runs, in
+   this process, with the CPU time of the one tune (``tune_lssvr``) and of the interval's work (the spread model's
+   fit, its leave-one-out spreads, the calibration: ``DriftInterval.fit_spread``, ``loo_spreads``, ``calibrate``,
+   and any out-of-fold refit ``DriftModel._out_of_fold``) measured inside the same fit, and their ratio.
 
 Synthetic runs: ``benchmarks/bench_predict.py``'s ``synthetic_runs`` (three sites, the smoother's columns, so that
 ``fit``'s default hybrid resolves to the fleet-prior smoother), seed 1. The machine is shared: compare the ratios
@@ -27,7 +36,9 @@ printed in one run, and repeat for the times.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -135,44 +146,127 @@ def _tune_default_threads(X, y, max_iter: int):
     return TuningResult(float(r.x[0]), float(r.x[1]), float(r.fun), "loo_mae", "cpso", int(r.nfev), int(r.nit))
 
 
-def wall(cmd: list[str], cwd: Path) -> float:
+def child(cmd: list[str], cwd: Path) -> tuple[float, float]:
+    """Wall and CPU (user + system of the child) seconds of one command."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     done = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, env=os.environ.copy())
     dt = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if done.returncode != 0:
         print(f"   FAILED ({done.returncode}): {' '.join(cmd)}: {done.stderr.strip().splitlines()[-1:]}")
-    return dt
+    return dt, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+
+
+def target_line(cmd: list[str], cwd: Path, target_s: float | None) -> None:
+    """Run ``cmd`` and print its CPU and wall time beside its target (wall, quiet machine)."""
+    wall, cpu = child(cmd, cwd)
+    verdict = "(reference)" if target_s is None else f"target <= {target_s:g} s wall"
+    shown = " ".join(["python" if cmd[0] == sys.executable else cmd[0], *(repr(a) if " " in a else a for a in cmd[1:])])
+    print(f"   {shown:<92s} CPU {cpu:6.2f}  wall {wall:6.2f}  {verdict}")
+
+
+IMPORTS = "import gyrodrift.cli, gyrodrift.learn.model_io, gyrodrift.learn.interval"
+"""The imports every learning command pays: the command line, the model file and interval modules (numpy, scipy,
+scikit-learn)."""
 
 
 def cli(sizes: list[int], model_runs: int) -> None:
     from gyrodrift.learn.model_io import load_model
     from gyrodrift.runs.datasets import load_paper
 
-    print("3. the CLI, wall time [s] (Python start-up and imports included)")
+    print("3. the CLI: command, CPU and wall time [s] (Python start-up and imports included), issue 20's target")
     with tempfile.TemporaryDirectory(prefix="bench_learning_scale_") as tmp:
         d = Path(tmp)
         load_paper().runs.to_csv(d / "paper.csv")
-        t = wall(["gyrodrift", "fit", "paper.csv", "--split", "train", "--out", "paper.json", "--quiet"], d)
-        print(f"   fit, defaults, the paper's 22 training runs: {t:7.2f}")
+        target_line(["gyrodrift", "fit", "paper.csv", "--split", "train", "--out", "paper.json", "--quiet"], d, 1.5)
         for n in sizes:
             synthetic_runs(n, np.random.default_rng(1)).to_csv(d / f"runs{n}.csv")
-            t = wall(["gyrodrift", "fit", f"runs{n}.csv", "--out", f"m{n}.json", "--quiet"], d)
-            print(f"   fit, defaults, {n} synthetic runs: {t:7.2f}")
-        t = wall(["gyrodrift", "reproduce", "--out", "repro", "--quiet"], d)
-        print(f"   reproduce (seed 0): {t:7.2f}")
+            target = 10.0 if n <= 200 else 60.0 if n <= 1000 else None
+            target_line(["gyrodrift", "fit", f"runs{n}.csv", "--out", f"m{n}.json", "--quiet"], d, target)
+        target_line(["gyrodrift", "reproduce", "--out", "repro", "--quiet"], d, 5.0)
         synthetic_runs(model_runs, np.random.default_rng(2)).to_csv(d / "big.csv")
-        t = wall(["gyrodrift", "fit", "big.csv", "--out", "big.json", "--gamma", "100", "--sigma", "0.7", "--quiet"], d)
-        print(f"   (fit --gamma 100 --sigma 0.7 on {model_runs} runs, to make the model: {t:.1f})")
+        wall, _ = child(
+            ["gyrodrift", "fit", "big.csv", "--out", "big.json", "--gamma", "100", "--sigma", "0.7", "--quiet"], d
+        )
+        print(f"   (fit --gamma 100 --sigma 0.7 on {model_runs} runs, to make the model: {wall:.1f} s wall)")
         synthetic_runs(20, np.random.default_rng(3)).to_csv(d / "new.csv")
-        t = wall(["gyrodrift", "predict", "new.csv", "--model", "big.json", "--coverage", "0.9", "--out", "p.csv"], d)
-        print(f"   predict 20 runs with the {model_runs}-run model: {t:7.2f}")
-        t = wall(["gyrodrift", "export", "--model", "big.json", "--lang", "c", "--out", "c", "--quiet"], d)
-        print(f"   export --lang c of the {model_runs}-run model: {t:7.2f}")
-        t = wall([sys.executable, "-c", "pass"], d)
-        print(f"   (python -c pass: {t:.2f})")
-        t0 = time.perf_counter()
+        predict = ["gyrodrift", "predict", "new.csv", "--model", "big.json", "--coverage", "0.9", "--out", "p.csv"]
+        target_line(predict, d, 2.0)
+        target_line(["gyrodrift", "export", "--model", "big.json", "--lang", "c", "--out", "c", "--quiet"], d, 2.0)
+        target_line([sys.executable, "-c", "pass"], d, None)
+        target_line([sys.executable, "-c", IMPORTS], d, None)
+        t0, c0 = time.perf_counter(), time.process_time()
         load_model(d / "big.json")
-        print(f"   load_model of the {model_runs}-run model, in this process: {time.perf_counter() - t0:7.2f}")
+        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+        print(
+            f"   {f'load_model of the {model_runs}-run model, in this process':<92s} CPU {cpu:6.2f}  wall {wall:6.2f}"
+        )
+
+
+@contextlib.contextmanager
+def cpu_of(owner, names: tuple[str, ...], seconds: dict[str, float], key: str):
+    """Add the CPU time spent in ``owner``'s attributes ``names`` (calls not nested in each other) to
+    ``seconds[key]`` while inside."""
+    saved = {name: getattr(owner, name) for name in names}
+
+    def timed(fn):
+        def wrapper(*args, **kwargs):
+            c0 = time.process_time()
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                seconds[key] += time.process_time() - c0
+
+        return wrapper
+
+    for name, fn in saved.items():
+        setattr(owner, name, timed(fn))
+    try:
+        yield
+    finally:
+        for name, fn in saved.items():
+            setattr(owner, name, fn)
+
+
+def calibration_against_tune(sizes: list[int]) -> None:
+    import warnings
+
+    import gyrodrift.learn.learner as learner
+    from gyrodrift.choices import default_encoding
+    from gyrodrift.learn.drift_model import DEFAULT_MAX_LABEL_STD_DEG_H, DriftModel, fit_drift_model
+    from gyrodrift.learn.interval import DriftInterval
+    from gyrodrift.runs.datasets import load_paper
+
+    print(
+        "4. calibrating the interval against the one tune it calibrates: fit_drift_model with defaults, CPU [s] "
+        "of the tune (tune_lssvr) and of the interval (spread fit, LOO spreads, calibration, out-of-fold refits)"
+    )
+    cases = [("the paper's 22 training runs", load_paper().train)]
+    cases += [(f"{n} synthetic runs", synthetic_runs(n, np.random.default_rng(1))) for n in sizes if n != 22]
+    for name, runs in cases:
+        seconds = {"tune": 0.0, "interval": 0.0}
+        interval_parts = ("fit_spread", "loo_spreads", "calibrate")
+        with (
+            cpu_of(learner, ("tune_lssvr",), seconds, "tune"),
+            cpu_of(DriftInterval, interval_parts, seconds, "interval"),
+            cpu_of(DriftModel, ("_out_of_fold",), seconds, "interval"),
+            warnings.catch_warnings(),
+        ):
+            warnings.simplefilter("ignore")
+            c0 = time.process_time()
+            fit_drift_model(  # as `gyrodrift fit` with its defaults
+                runs,
+                target="residual",
+                encoding=default_encoding("residual"),
+                max_label_std_deg_h=DEFAULT_MAX_LABEL_STD_DEG_H,
+                rng=0,
+            )
+            whole = time.process_time() - c0
+        print(
+            f"   {name:28s}: fit {whole:7.2f}, tune {seconds['tune']:7.2f}, interval {seconds['interval']:7.2f}; "
+            f"interval / tune {seconds['interval'] / seconds['tune']:.3f} (issue 20: <= 1)"
+        )
 
 
 def main() -> None:
@@ -184,12 +278,15 @@ def main() -> None:
     )
     parser.add_argument("--model-runs", type=int, default=1500, help="training runs of the model predict/export load")
     parser.add_argument("--no-cli", action="store_true", help="skip section 3")
+    parser.add_argument("--no-calibration", action="store_true", help="skip section 4")
     args = parser.parse_args()
     sizes = [int(v) for v in args.sizes.split(",")]
     loo_evaluation(sizes)
     tuning_runs([int(v) for v in args.tune_sizes.split(",") if v], args.exact_max)
     if not args.no_cli:
         cli([n for n in sizes if n != 22], args.model_runs)
+    if not args.no_calibration:
+        calibration_against_tune(sizes)
 
 
 if __name__ == "__main__":
