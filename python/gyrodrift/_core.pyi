@@ -91,6 +91,9 @@ class SimulatorConfig:
         temp_start_c: float | None = None,
         temp_end_c: float | None = None,
         temp_tau_s: float | None = None,
+        temp_swing_amplitude_c: float | None = None,
+        temp_swing_period_s: float | None = None,
+        temp_swing_phase_rad: float | None = None,
         temp_series_t_s: list[float] | None = None,
         temp_series_c: list[float] | None = None,
         drift_t0_c: float | None = None,
@@ -159,6 +162,12 @@ class SimulatorConfig:
     def temp_end_c(self) -> float: ...
     @property
     def temp_tau_s(self) -> float: ...
+    @property
+    def temp_swing_amplitude_c(self) -> float: ...
+    @property
+    def temp_swing_period_s(self) -> float: ...
+    @property
+    def temp_swing_phase_rad(self) -> float: ...
     @property
     def temp_series_t_s(self) -> list[float] | None: ...
     @property

@@ -74,18 +74,19 @@ def process_run(campaign: Campaign, index: int, *, chunk_samples: int = 100_000)
 
 
 def trial_drift_deg_h(scenario, timeline) -> float:
-    """Where a run's truth is linearised [deg/h]: the scenario's z drift (constant + temperature law) averaged over
-    the truth span. A numerical choice only (the truth is still found by navigating and minimising): a trial
-    within about 5e-4 deg/h of the answer makes the first linearisation exact to about 1e-7 deg/h, so the
-    truth needs no verification read. 0.001 deg/h (`find_true_drift`'s default) when that average is within
-    1e-4 deg/h of 0 or not finite."""
+    """Where a run's truth is linearised [deg/h]: the scenario's z drift (constant + temperature law, the warm-up
+    with its daily swing) averaged over the truth span. A numerical choice only (the truth is still found by
+    navigating and minimising): a trial within about 5e-4 deg/h of the answer makes the first linearisation exact
+    to about 1e-7 deg/h, so the truth needs no verification read. 0.001 deg/h (`find_true_drift`'s default) when
+    that average is within 1e-4 deg/h of 0 or not finite."""
     t = scenario.temperature
     t_h = np.linspace(timeline.align_h, timeline.align_h + timeline.truth_h, 1001)
     with np.errstate(all="ignore"):
         if t.series_t_h is not None and t.series_temp_c is not None:
             temp = np.interp(t_h, np.asarray(t.series_t_h, float), np.asarray(t.series_temp_c, float))
         else:
-            temp = t.end_c + (t.start_c - t.end_c) * np.exp(-t_h / t.tau_h)
+            swing = t.swing_amplitude_c * np.sin(2.0 * np.pi * t_h / t.swing_period_h + np.deg2rad(t.swing_phase_deg))
+            temp = t.end_c + (t.start_c - t.end_c) * np.exp(-t_h / t.tau_h) + swing
         dtemp = temp - t.t0_c
         law = t.k1_deg_h_per_c * dtemp + t.k2_deg_h_per_c2 * dtemp**2 + t.k3_deg_h_per_c_per_h * np.gradient(temp, t_h)
         d = float(scenario.gyro.bias_deg_h[2] + np.mean(law))

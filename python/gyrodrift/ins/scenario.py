@@ -145,8 +145,10 @@ class Accel:
 class Temperature:
     """System temperature and the axial (z) gyro drift it causes.
 
-    Temperature: a warm-up T(t) = end_c + (start_c - end_c) exp(-t / tau_h) [deg C, h], or a measured
-    series (series_t_h [h], series_temp_c [deg C], linearly interpolated) which overrides the warm-up.
+    Temperature: a warm-up with a daily swing,
+    T(t) = end_c + (start_c - end_c) exp(-t / tau_h) + swing_amplitude_c sin(360 t / swing_period_h + swing_phase_deg)
+    [deg C, h, deg] (no swing by default), or a measured series (series_t_h [h], series_temp_c [deg C], linearly
+    interpolated) which overrides the warm-up and takes no swing.
     Axial drift [deg/h], added to the z gyro:
     k1 (T - t0_c) + k2 (T - t0_c)^2 + k3 dT/dt, with k1 [deg/h/degC], k2 [deg/h/degC^2],
     k3 [deg/h per degC/h] and dT/dt in degC/h.
@@ -155,6 +157,9 @@ class Temperature:
     start_c: float = 20.0
     end_c: float = 20.0
     tau_h: float = 1.0
+    swing_amplitude_c: float = 0.0
+    swing_period_h: float = 24.0
+    swing_phase_deg: float = 0.0
     series_t_h: tuple[float, ...] | None = None
     series_temp_c: tuple[float, ...] | None = None
     t0_c: float = 20.0
@@ -291,6 +296,9 @@ class Scenario:
             temp_start_c=float(t.start_c),
             temp_end_c=float(t.end_c),
             temp_tau_s=t.tau_h * HOUR,
+            temp_swing_amplitude_c=float(t.swing_amplitude_c),
+            temp_swing_period_s=t.swing_period_h * HOUR,
+            temp_swing_phase_rad=t.swing_phase_deg * DEG,
             temp_series_t_s=None if series_t is None else [x * HOUR for x in series_t],
             temp_series_c=None if series_c is None else [float(x) for x in series_c],
             drift_t0_c=float(t.t0_c),
@@ -395,6 +403,9 @@ TEMPERATURE_FIELDS: dict[str, Field] = {  # the series (inline or series_csv) ar
     "start_c": _TEMP_C,
     "end_c": _TEMP_C,
     "tau_h": Number.positive(),
+    "swing_amplitude_c": Number.non_negative(),
+    "swing_period_h": Number.positive(),
+    "swing_phase_deg": Number(),
     "t0_c": _TEMP_C,
     "k1_deg_h_per_c": Number(),
     "k2_deg_h_per_c2": Number(),
@@ -501,6 +512,8 @@ def _temperature(root: Scope, data: Mapping[str, Any], base_dir: Path) -> Temper
         if any(b <= a for a, b in zip(series_t, series_t[1:], strict=False)):
             raise scope.fail(key, "times must be strictly increasing")
     values = scope.fields(t, TEMPERATURE_FIELDS, Temperature())
+    if series_t is not None and values["swing_amplitude_c"] != 0.0:
+        raise scope.fail("swing_amplitude_c", "expected 0 with a temperature series (the series carries its swings)")
     return Temperature(series_t_h=series_t, series_temp_c=series_c, **values)
 
 
@@ -590,6 +603,9 @@ _CORE_KEYS = {
     "temp_start_c": ("temperature", "start_c"),
     "temp_end_c": ("temperature", "end_c"),
     "temp_tau_s": ("temperature", "tau_h"),
+    "temp_swing_amplitude_c": ("temperature", "swing_amplitude_c"),
+    "temp_swing_period_s": ("temperature", "swing_period_h"),
+    "temp_swing_phase_rad": ("temperature", "swing_phase_deg"),
     "temp_series_t_s": ("temperature", "series_t_h"),
     "temp_series_c": ("temperature", "series_temp_c"),
     "drift_t0_c": ("temperature", "t0_c"),
