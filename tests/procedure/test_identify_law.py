@@ -138,3 +138,19 @@ def test_identify_command_reports_the_law_of_a_warming_log(fleet_model, tmp_path
     law = res.drift_law
     assert f"eps(T) = {law.eps_ref_deg_h:.6f} +- {res.drift_law_std_deg_h:.6f} + {law.k1_deg_h_per_c:.3e}" in line
     assert f"(T - {law.t_ref_c:.2f} degC)" in line and f"replacing the constant {res.drift_deg_h:.6f} deg/h" in line
+
+
+def test_a_fleet_model_file_written_before_the_law_gives_the_law():
+    """Model files carry what the law needs already (the fleet prior, the training runs): the fleet model file
+    pinned in tests/data (written at ad28759) loads and gives a law whose k1 is its fleet posterior's."""
+    from pathlib import Path
+
+    from gyrodrift.learn.model_io import load_model
+
+    model = load_model(Path(__file__).parents[1] / "data" / "model_schema4_fleet_before_parts.json")
+    assert model.physics_column_ == FLEET_BASE
+    rec = _run(np.random.default_rng(3), 3, 2e-4)
+    res = identify(_Log(), model, features=_features(rec))
+    _, _, k, _, _, vk = _posterior(rec, model.coefficient_prior_)
+    assert res.drift_law.k1_deg_h_per_c == float(k) and res.drift_law.cov[1][1] == float(vk)
+    assert res.drift_law.eps_ref_deg_h == res.drift_deg_h and math.isfinite(res.drift_law_std_deg_h)
