@@ -13,6 +13,7 @@ NaN). Tolerance: the same bits (``==``) on every row and temperature. A model wi
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 
@@ -259,3 +260,19 @@ def test_rust_gives_the_bits_of_the_law(law_case, tmp_path_factory):
     )
     assert run.returncode == 0, run.stderr[-4000:]
     _check(run.stdout, rows, exp, "Rust")
+
+
+def test_export_json_says_the_laws_temperature_range(law_case, tmp_path):
+    from click.testing import CliRunner
+
+    from gyrodrift.cli import main
+    from gyrodrift.learn.model_io import save_model
+
+    model, _, _, _ = law_case
+    save_model(model, tmp_path / "m.json")
+    r = CliRunner().invoke(
+        main, ["export", "--model", str(tmp_path / "m.json"), "--lang", "c", "--out", str(tmp_path / "c"), "--json"]
+    )
+    assert r.exit_code == 0, r.output
+    train = model.training_["runs"]
+    assert json.loads(r.stdout)["law_temp_range_c"] == [train.temp_min_c.min(), train.temp_max_c.max()]

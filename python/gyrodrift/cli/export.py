@@ -39,7 +39,7 @@ def export_command(model_file: Path, lang: str, out_dir: Path, as_json: bool, qu
     import hashlib
 
     from gyrodrift.export.languages import export_model, output_names
-    from gyrodrift.export.spec import physics_column
+    from gyrodrift.export.spec import export_spec, physics_column
     from gyrodrift.files.atomic import OutputFolder
     from gyrodrift.learn.model_io import load_model
 
@@ -55,6 +55,7 @@ def export_command(model_file: Path, lang: str, out_dir: Path, as_json: bool, qu
     physics = physics_column(model)
     prior = getattr(model, "coefficient_prior_", None)
     if as_json:
+        temp_range = export_spec(model).temp_range_c
         print_json(
             {
                 "files": [str(p) for p in paths],
@@ -64,6 +65,8 @@ def export_command(model_file: Path, lang: str, out_dir: Path, as_json: bool, qu
                 "physics_column": physics,
                 # the fleet-prior base's k_z prior baked into the code: [mean, 1-sigma] deg/h/degC, else null
                 "coefficient_prior_deg_h_per_c": None if prior is None else list(prior),
+                # the drift law's temperature range (the training runs' temperatures) [deg C], else null
+                "law_temp_range_c": None if temp_range is None else list(temp_range),
             }
         )
     detail = f"{model.encoding}, {model.lssvr.kernel}" + ("" if physics is None else f", hybrid on {physics}")
