@@ -5,7 +5,7 @@ the core's error kind (`CoreSettingError`, `CoreShapeError`, `CoreSampleError`, 
 default (documented in the contracts; each config shows it resolved as an attribute)."""
 
 from collections.abc import Sequence
-from typing import Any, ClassVar, Final
+from typing import Any, ClassVar, Final, TypedDict, Unpack
 
 import numpy as np
 import numpy.typing as npt
@@ -222,27 +222,25 @@ class NavigatorConfig:
     @property
     def vertical(self) -> str: ...
 
-class AlignerConfig:
-    """Validated settings of a static-base alignment (docs/alignment-contract.md)."""
+class FilterKeywords(TypedDict, total=False):
+    """The ``**filter`` keywords of `AlignerConfig` and `SmootherConfig` (SI; None or left out: the config's default,
+    gyrodrift-core `FilterSettings::aligner` or `FilterSettings::smoother`, whose module `filter_prior` says why they
+    differ). Typing only: not in the extension."""
 
-    def __init__(
-        self,
-        *,
-        lat_rad: float,
-        lon_rad: float,
-        height_m: float,
-        rate_hz: float,
-        coarse_s: float | None = None,
-        fine_s: float | None = None,
-        update_s: float | None = None,
-        att_sigma_rad: list[float] | None = None,
-        gyro_bias_sigma_rad_s: list[float] | None = None,
-        accel_bias_sigma_m_s2: list[float] | None = None,
-        gyro_arw_rad_rts: float | None = None,
-        accel_vrw_m_s_rts: float | None = None,
-        zupt_sigma_m_s: float | None = None,
-        history_s: float | None = None,
-    ) -> None: ...
+    coarse_s: float | None
+    update_s: float | None
+    att_sigma_rad: Sequence[float] | None
+    gyro_bias_sigma_rad_s: Sequence[float] | None
+    accel_bias_sigma_m_s2: Sequence[float] | None
+    gyro_arw_rad_rts: float | None
+    accel_vrw_m_s_rts: float | None
+    zupt_sigma_m_s: float | None
+    history_s: float | None
+
+class FilterConfig:
+    """What `AlignerConfig` and `SmootherConfig` share, resolved: the static site, the sample rate and the filter
+    settings (`FilterKeywords`). The base class of both; not built on its own."""
+
     @property
     def lat_rad(self) -> float: ...
     @property
@@ -253,8 +251,6 @@ class AlignerConfig:
     def rate_hz(self) -> float: ...
     @property
     def coarse_s(self) -> float: ...
-    @property
-    def fine_s(self) -> float: ...
     @property
     def update_s(self) -> float: ...
     @property
@@ -271,6 +267,22 @@ class AlignerConfig:
     def zupt_sigma_m_s(self) -> float: ...
     @property
     def history_s(self) -> float: ...
+
+class AlignerConfig(FilterConfig):
+    """Validated settings of a static-base alignment (docs/alignment-contract.md)."""
+
+    def __init__(
+        self,
+        *,
+        lat_rad: float,
+        lon_rad: float,
+        height_m: float,
+        rate_hz: float,
+        fine_s: float | None = None,
+        **filter: Unpack[FilterKeywords],
+    ) -> None: ...
+    @property
+    def fine_s(self) -> float: ...
 
 class ImuSimulator:
     def __init__(self, config: SimulatorConfig) -> None: ...
@@ -315,7 +327,7 @@ class Aligner:
     def process(self, dtheta_rad: ArrayLike, dv_m_s: ArrayLike) -> int: ...
     def result(self) -> dict[str, Any]: ...
 
-class SmootherConfig:
+class SmootherConfig(FilterConfig):
     """Validated settings of the full-information smoother (gyrodrift-core `smoother`; docs/identification.md)."""
 
     def __init__(
@@ -325,49 +337,19 @@ class SmootherConfig:
         lon_rad: float,
         height_m: float,
         rate_hz: float,
-        coarse_s: float | None = None,
         span_s: float | None = None,
-        update_s: float | None = None,
-        att_sigma_rad: list[float] | None = None,
-        gyro_bias_sigma_rad_s: list[float] | None = None,
-        accel_bias_sigma_m_s2: list[float] | None = None,
-        gyro_arw_rad_rts: float | None = None,
-        accel_vrw_m_s_rts: float | None = None,
         gyro_bias_instability_rad_s: float | None = None,
         gyro_correlation_s: float | None = None,
         gyro_rrw_rad_s_rts: float | None = None,
-        zupt_sigma_m_s: float | None = None,
         position_sigma_m: float | None = None,
-        history_s: float | None = None,
         thermal: bool | None = None,
         thermal_sigma_rad_s_per_c: float | None = None,
         temp_ref_c: float | None = None,
         thermal_min_range_c: float | None = None,
+        **filter: Unpack[FilterKeywords],
     ) -> None: ...
     @property
-    def lat_rad(self) -> float: ...
-    @property
-    def lon_rad(self) -> float: ...
-    @property
-    def height_m(self) -> float: ...
-    @property
-    def rate_hz(self) -> float: ...
-    @property
-    def coarse_s(self) -> float: ...
-    @property
     def span_s(self) -> float: ...
-    @property
-    def update_s(self) -> float: ...
-    @property
-    def att_sigma_rad(self) -> list[float] | None: ...
-    @property
-    def gyro_bias_sigma_rad_s(self) -> list[float]: ...
-    @property
-    def accel_bias_sigma_m_s2(self) -> list[float]: ...
-    @property
-    def gyro_arw_rad_rts(self) -> float: ...
-    @property
-    def accel_vrw_m_s_rts(self) -> float: ...
     @property
     def gyro_bias_instability_rad_s(self) -> float: ...
     @property
@@ -375,11 +357,7 @@ class SmootherConfig:
     @property
     def gyro_rrw_rad_s_rts(self) -> float: ...
     @property
-    def zupt_sigma_m_s(self) -> float: ...
-    @property
     def position_sigma_m(self) -> float: ...
-    @property
-    def history_s(self) -> float: ...
     @property
     def thermal(self) -> bool: ...
     @property

@@ -251,6 +251,36 @@ def test_the_filters_noise_priors_are_declared_once():
     assert smoother.accel_bias_sigma_m_s2 == aligner.accel_bias_sigma_m_s2 == pytest.approx([100 * MICRO_G] * 3)
 
 
+def test_the_aligner_and_the_smoother_read_their_shared_filter_keywords_alike():
+    # One FilterConfig (gyrodrift-core FilterSettings) under both configs: the same keywords, read by one helper.
+    site = dict(lat_rad=0.5, lon_rad=0.0, height_m=0.0, rate_hz=RATE_HZ)
+    given = dict(
+        coarse_s=120.0,
+        update_s=5.0,
+        att_sigma_rad=[1e-4, 2e-4, 3e-3],
+        gyro_bias_sigma_rad_s=[1e-8, 2e-8, 3e-8],
+        accel_bias_sigma_m_s2=[1e-4, 2e-4, 3e-4],
+        gyro_arw_rad_rts=1e-6,
+        accel_vrw_m_s_rts=1e-5,
+        zupt_sigma_m_s=2e-3,
+        history_s=100.0,
+    )
+    assert sorted(k for k in dir(_core.FilterConfig) if not k.startswith("_")) == sorted([*site, *given])
+    for cls in (_core.AlignerConfig, _core.SmootherConfig):
+        config, default = cls(**site, **given), cls(**site)
+        assert isinstance(config, _core.FilterConfig)
+        assert {k: getattr(config, k) for k in given} == given
+        for key in given:  # None takes the config's own default
+            assert getattr(cls(**site, **{key: None}), key) == getattr(default, key), key
+        with pytest.raises(TypeError, match=rf"^{cls.__name__}\(\) got an unexpected keyword argument 'fine'$"):
+            cls(**site, fine=1.0)
+        with pytest.raises(TypeError, match="^argument 'update_s': "):
+            cls(**site, update_s="1")
+        with pytest.raises(CoreSettingError, match="^zupt_sigma_m_s: "):
+            cls(**site, zupt_sigma_m_s=0.0)
+    assert _core.AlignerConfig(**site).update_s == 1.0 and _core.SmootherConfig(**site).update_s == 10.0
+
+
 def test_configs_resolve_the_core_defaults():
     # The defaults live in the core only; the typed configs show them resolved.
     c = _sim_config(rotation_scheme="reciprocating")
@@ -300,11 +330,12 @@ def test_the_type_stub_names_what_the_extension_has():
 
     stub = (Path(_core.__file__).parent / "_core.pyi").read_text()
     names = re.findall(r"^(?:class |def )?([A-Za-z_][A-Za-z_0-9]*)(?:: Final|\(|:)", stub, re.M)
-    names = [n for n in names if n not in ("ArrayLike", "FloatArray")]
+    names = [n for n in names if n not in ("ArrayLike", "FloatArray", "FilterKeywords")]  # typing only
     assert len(names) > 25
     assert [n for n in names if not hasattr(_core, n)] == []
-    for cls in ("SimulatorConfig", "NavigatorConfig", "AlignerConfig", "ImuSimulator", "Navigator", "Aligner"):
-        block = stub.split(f"class {cls}:")[1].split("\nclass ")[0]
+    classes = ("SimulatorConfig", "NavigatorConfig", "FilterConfig", "AlignerConfig", "SmootherConfig", "ImuSimulator")
+    for cls in (*classes, "Navigator", "Aligner", "Smoother"):
+        block = re.split(rf"^class {cls}\b.*:$", stub, flags=re.M)[1].split("\nclass ")[0]
         for attr in re.findall(r"def ([a-z_0-9]+)\(", block):
             assert hasattr(getattr(_core, cls), attr), f"{cls}.{attr}"
 

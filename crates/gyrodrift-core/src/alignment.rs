@@ -19,10 +19,10 @@
 use crate::attitude::{dcm_to_euler, quat_mul, quat_to_dcm, Euler, Mat3, Vec3};
 use crate::coarse_alignment::InertialCoarseAlignment;
 use crate::earth;
-use crate::error::{check, CoreError};
-use crate::filter_prior::FilterPrior;
+use crate::error::{check, in_range, CoreError, Unit};
+use crate::filter_prior::FilterSettings;
 use crate::kalman::{self, ErrorModel, ErrorStateFilter, StateMatrix, DV, EPS, NABLA, N_STATES, PHI};
-use crate::limits::{check_arw, check_increments, check_site, check_vrw};
+use crate::limits::{check_increments, check_site};
 use crate::strapdown::{Navigator, NavigatorConfig, Vertical};
 use crate::units::ARCSEC;
 
@@ -38,48 +38,29 @@ pub struct AlignerConfig {
     pub height: f64,
     /// IMU sample rate \[Hz\] (`rate_hz`).
     pub rate_hz: f64,
-    /// Coarse alignment span \[s\] (`coarse_s`, default 300).
-    pub coarse_s: f64,
     /// Fine alignment span after the coarse one \[s\] (`fine_s`, default 14400 - coarse_s).
     pub fine_s: f64,
-    /// Zero-velocity measurement interval \[s\] (`update_s`, default 1).
-    pub update_s: f64,
-    /// Initial attitude error 1-sigma E, N, U \[rad\] (`att_sigma_rad`); None: `coarse_attitude_sigma`.
-    pub att_sigma: Option<Vec3>,
-    /// Initial gyro bias 1-sigma, body x y z [rad/s] (`gyro_bias_sigma_rad_s`, default 0.01 deg/h; the defaults of
-    /// the prior and the noise are [`FilterPrior::ALIGNER`], which says why they differ from the smoother's).
-    pub gyro_bias_sigma: Vec3,
-    /// Initial accelerometer bias 1-sigma, body x y z [m/s^2] (`accel_bias_sigma_m_s2`, default 100 ug).
-    pub accel_bias_sigma: Vec3,
-    /// Gyro angle random walk [rad/sqrt(s)] (`gyro_arw_rad_rts`, default 0.001 deg/sqrt(h)).
-    pub gyro_arw: f64,
-    /// Accelerometer velocity random walk [m/s/sqrt(s)] (`accel_vrw_m_s_rts`, default 10 ug/sqrt(Hz)).
-    pub accel_vrw: f64,
-    /// Zero-velocity measurement noise 1-sigma [m/s] (`zupt_sigma_m_s`, default 0.001).
-    pub zupt_sigma: f64,
-    /// Interval of the covariance history \[s\] (`history_s`, default 60).
-    pub history_s: f64,
+    /// The coarse span, the update interval, the prior, the noise, the zero-velocity sigma and the history interval
+    /// the smoother shares (default [`FilterSettings::aligner`]: 300 s, 1 s, 0.01 deg/h, 100 ug, 0.001 deg/sqrt(h),
+    /// 10 ug/sqrt(Hz), 0.001 m/s, 60 s; `filter_prior` says why they differ from the smoother's).
+    pub filter: FilterSettings,
 }
 
 impl AlignerConfig {
     /// The defaults of the contract at a site.
     pub fn new(lat: f64, lon: f64, height: f64, rate_hz: f64) -> Self {
-        let coarse_s = 300.0;
+        Self::with_filter(lat, lon, height, rate_hz, FilterSettings::aligner())
+    }
+
+    /// The given filter settings at a site, with the default fine span after their coarse span.
+    pub fn with_filter(lat: f64, lon: f64, height: f64, rate_hz: f64, filter: FilterSettings) -> Self {
         AlignerConfig {
             lat,
             lon,
             height,
             rate_hz,
-            coarse_s,
-            fine_s: Self::default_fine_s(coarse_s),
-            update_s: 1.0,
-            att_sigma: None,
-            gyro_bias_sigma: FilterPrior::ALIGNER.gyro_bias_sigma(),
-            accel_bias_sigma: FilterPrior::ALIGNER.accel_bias_sigma(),
-            gyro_arw: FilterPrior::ALIGNER.gyro_arw(),
-            accel_vrw: FilterPrior::ALIGNER.accel_vrw(),
-            zupt_sigma: 0.001,
-            history_s: 60.0,
+            fine_s: Self::default_fine_s(filter.coarse_s),
+            filter,
         }
     }
 
@@ -90,39 +71,15 @@ impl AlignerConfig {
 
     /// Range checks; errors name the contract key.
     pub fn validate(&self) -> Result<(), CoreError> {
-        use crate::error::{all_positive_at_most, in_range, sig, Unit, ARCSEC, MICRO_G};
         check_site(self.lat, self.lon, self.height, self.rate_hz)?;
-        let s = Unit::Si("s");
-        in_range("coarse_s", "coarse span", self.coarse_s, 10.0, 86_400.0, s)?;
-        in_range("fine_s", "fine span", self.fine_s, 0.0, 604_800.0, s)?;
-        all_positive_at_most("update_s", "update interval", &[self.update_s], 60.0, s)?;
-        check(
-            (self.update_s * self.rate_hz).round() >= 1.0,
-            "update_s",
-            format!(
-                "update interval {} s holds no sample at {} Hz",
-                sig(self.update_s),
-                sig(self.rate_hz)
-            ),
-        )?;
-        if let Some(a) = self.att_sigma {
-            all_positive_at_most("att_sigma_rad", "initial attitude sigma", &a, 0.2, ARCSEC)?;
-        }
-        let gyro = &self.gyro_bias_sigma;
-        all_positive_at_most("gyro_bias_sigma_rad_s", "gyro bias sigma", gyro, 0.1, Unit::DegPerH)?;
-        let acc = &self.accel_bias_sigma;
-        all_positive_at_most("accel_bias_sigma_m_s2", "accelerometer bias sigma", acc, 10.0, MICRO_G)?;
-        check_arw(self.gyro_arw)?;
-        check_vrw(self.accel_vrw)?;
-        let zupt = [self.zupt_sigma];
-        all_positive_at_most("zupt_sigma_m_s", "zero-velocity sigma", &zupt, 10.0, Unit::Si("m/s"))?;
-        all_positive_at_most("history_s", "history interval", &[self.history_s], 1e6, s)
+        self.filter.validate(self.rate_hz)?;
+        in_range("fine_s", "fine span", self.fine_s, 0.0, 604_800.0, Unit::Si("s"))
     }
 
     /// Samples of the coarse span, of the fine span, and per update.
     fn sample_counts(&self) -> (u64, u64, u64) {
         let n = |s: f64| (s * self.rate_hz).round() as u64;
-        (n(self.coarse_s), n(self.fine_s), n(self.update_s))
+        (n(self.filter.coarse_s), n(self.fine_s), n(self.filter.update_s))
     }
 }
 
@@ -130,16 +87,16 @@ impl AlignerConfig {
 /// budget without the help of the rotation (so conservative): levelling ~ horizontal accelerometer bias / g
 /// plus VRW averaged over the span, heading ~ (horizontal gyro bias + ARW averaged over the span)
 /// / (w_ie cos lat), each noise term tripled for the two-epoch (not least-squares) solution, with floors of
-/// 10 arcsec (level) and 1 arcmin (heading).
-pub fn coarse_attitude_sigma(cfg: &AlignerConfig) -> Vec3 {
-    let g = earth::normal_gravity(cfg.lat, cfg.height);
-    let span = cfg.coarse_s;
-    let acc = cfg.accel_bias_sigma[0].max(cfg.accel_bias_sigma[1]);
-    let gyro = cfg.gyro_bias_sigma[0].max(cfg.gyro_bias_sigma[1]);
+/// 10 arcsec (level) and 1 arcmin (heading). At latitude `lat` \[rad\] and height `height` \[m\].
+pub fn coarse_attitude_sigma(lat: f64, height: f64, filter: &FilterSettings) -> Vec3 {
+    let g = earth::normal_gravity(lat, height);
+    let span = filter.coarse_s;
+    let acc = filter.accel_bias_sigma[0].max(filter.accel_bias_sigma[1]);
+    let gyro = filter.gyro_bias_sigma[0].max(filter.gyro_bias_sigma[1]);
     let level = (acc / g)
-        .hypot(3.0 * cfg.accel_vrw / (g * span.sqrt()))
+        .hypot(3.0 * filter.accel_vrw / (g * span.sqrt()))
         .max(10.0 * ARCSEC);
-    let heading = (gyro.hypot(3.0 * cfg.gyro_arw / span.sqrt()) / (earth::OMEGA_IE * cfg.lat.cos())).max(60.0 * ARCSEC);
+    let heading = (gyro.hypot(3.0 * filter.gyro_arw / span.sqrt()) / (earth::OMEGA_IE * lat.cos())).max(60.0 * ARCSEC);
     [level, level, heading]
 }
 
@@ -329,12 +286,15 @@ impl Aligner {
             t_s,
             message: format!("the coarse attitude is outside the navigator's range: {e}"),
         })?;
-        let att = cfg.att_sigma.unwrap_or_else(|| coarse_attitude_sigma(cfg));
+        let f = &cfg.filter;
+        let att = f
+            .att_sigma
+            .unwrap_or_else(|| coarse_attitude_sigma(cfg.lat, cfg.height, f));
         let mut sigma = [0.0; N_STATES];
         sigma[PHI..PHI + 3].copy_from_slice(&att);
-        sigma[DV..DV + 3].copy_from_slice(&[cfg.zupt_sigma; 3]);
-        sigma[EPS..EPS + 3].copy_from_slice(&cfg.gyro_bias_sigma);
-        sigma[NABLA..NABLA + 3].copy_from_slice(&cfg.accel_bias_sigma);
+        sigma[DV..DV + 3].copy_from_slice(&[f.zupt_sigma; 3]);
+        sigma[EPS..EPS + 3].copy_from_slice(&f.gyro_bias_sigma);
+        sigma[NABLA..NABLA + 3].copy_from_slice(&f.accel_bias_sigma);
         let update_t = self.n_update as f64 / cfg.rate_hz;
         let fine = FineAlignment {
             nav,
@@ -345,7 +305,7 @@ impl Aligner {
             c_sum: [[0.0; 3]; 3],
             n_interval: 0,
             updates: 0,
-            updates_per_history: ((cfg.history_s / update_t).round() as u64).max(1),
+            updates_per_history: ((f.history_s / update_t).round() as u64).max(1),
         };
         self.record_history(&fine.filter);
         self.fine = Some(fine);
@@ -363,11 +323,11 @@ impl Aligner {
         let t = n / cfg.rate_hz;
         let c_mean: Mat3 = std::array::from_fn(|i| std::array::from_fn(|j| fine.c_sum[i][j] / n));
         let phi = fine.model.transition(&c_mean, t);
-        let q = kalman::process_noise(&phi, cfg.gyro_arw, cfg.accel_vrw, t);
+        let q = kalman::process_noise(&phi, cfg.filter.gyro_arw, cfg.filter.accel_vrw, t);
         fine.filter.predict(&phi, &q);
         let state = fine.nav.state();
         fine.filter
-            .update_zero_velocity(state.vel, cfg.zupt_sigma)
+            .update_zero_velocity(state.vel, cfg.filter.zupt_sigma)
             .map_err(|message| CoreError::Diverged {
                 key: "dv_m_s",
                 t_s,

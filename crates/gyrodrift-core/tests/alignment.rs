@@ -3,6 +3,7 @@
 use gyrodrift_core::alignment::{attitude_error, Aligner, AlignerConfig, AlignmentResult};
 use gyrodrift_core::attitude::{euler_to_dcm, mat_vec, Euler};
 use gyrodrift_core::earth;
+use gyrodrift_core::filter_prior::FilterSettings;
 use gyrodrift_core::imu_error::ImuErrorParams;
 use gyrodrift_core::kalman::N_STATES;
 use gyrodrift_core::simulator::{ImuChunk, ImuSimulator, ImuSimulatorConfig};
@@ -57,7 +58,7 @@ struct Run {
 }
 
 fn run(sim_cfg: ImuSimulatorConfig, cfg: AlignerConfig) -> Run {
-    let n_coarse = (cfg.coarse_s * cfg.rate_hz).round() as usize;
+    let n_coarse = (cfg.filter.coarse_s * cfg.rate_hz).round() as usize;
     let mut sim = ImuSimulator::new(sim_cfg).unwrap();
     let mut al = Aligner::new(cfg).unwrap();
     let mut ch = ImuChunk::default();
@@ -88,6 +89,13 @@ fn run(sim_cfg: ImuSimulatorConfig, cfg: AlignerConfig) -> Run {
 
 fn cfg_4h() -> AlignerConfig {
     AlignerConfig::new(lat0(), 0.0, 0.0, RATE_HZ)
+}
+
+/// `cfg_4h` with its filter settings changed by `change`.
+fn cfg_with(change: impl FnOnce(&mut FilterSettings)) -> AlignerConfig {
+    let mut cfg = cfg_4h();
+    change(&mut cfg.filter);
+    cfg
 }
 
 #[test]
@@ -275,9 +283,8 @@ fn filter_stds_are_consistent_with_the_errors_over_seeds() {
 #[test]
 fn streaming_in_any_chunks_gives_the_same_result_and_stops_at_the_span() {
     let cfg = AlignerConfig {
-        coarse_s: 60.0,
         fine_s: 120.0,
-        ..cfg_4h()
+        ..cfg_with(|f| f.coarse_s = 60.0)
     };
     let mut sim = ImuSimulator::new(ImuSimulatorConfig {
         duration_s: 200.0,
@@ -296,25 +303,13 @@ fn streaming_in_any_chunks_gives_the_same_result_and_stops_at_the_span() {
     }
     assert_eq!(used, 3600);
     assert_eq!(a.result(), b.result());
-    assert!(Aligner::new(AlignerConfig {
-        coarse_s: 60.0,
-        ..cfg_4h()
-    })
-    .unwrap()
-    .result()
-    .is_err());
+    assert!(Aligner::new(cfg_with(|f| f.coarse_s = 60.0)).unwrap().result().is_err());
 }
 
 #[test]
 fn bad_settings_name_their_key() {
     let bad = |c: AlignerConfig| Aligner::new(c).unwrap_err().key();
-    assert_eq!(
-        bad(AlignerConfig {
-            coarse_s: 1.0,
-            ..cfg_4h()
-        }),
-        "coarse_s"
-    );
+    assert_eq!(bad(cfg_with(|f| f.coarse_s = 1.0)), "coarse_s");
     assert_eq!(
         bad(AlignerConfig {
             fine_s: -1.0,
@@ -322,62 +317,23 @@ fn bad_settings_name_their_key() {
         }),
         "fine_s"
     );
+    assert_eq!(bad(cfg_with(|f| f.update_s = 0.0)), "update_s");
     assert_eq!(
-        bad(AlignerConfig {
-            update_s: 0.0,
-            ..cfg_4h()
-        }),
-        "update_s"
-    );
-    assert_eq!(
-        bad(AlignerConfig {
-            att_sigma: Some([0.0, 1e-4, 1e-3]),
-            ..cfg_4h()
-        }),
+        bad(cfg_with(|f| f.att_sigma = Some([0.0, 1e-4, 1e-3]))),
         "att_sigma_rad"
     );
     assert_eq!(
-        bad(AlignerConfig {
-            gyro_bias_sigma: [f64::NAN; 3],
-            ..cfg_4h()
-        }),
+        bad(cfg_with(|f| f.gyro_bias_sigma = [f64::NAN; 3])),
         "gyro_bias_sigma_rad_s"
     );
     assert_eq!(
-        bad(AlignerConfig {
-            accel_bias_sigma: [0.0; 3],
-            ..cfg_4h()
-        }),
+        bad(cfg_with(|f| f.accel_bias_sigma = [0.0; 3])),
         "accel_bias_sigma_m_s2"
     );
-    assert_eq!(
-        bad(AlignerConfig {
-            gyro_arw: -1.0,
-            ..cfg_4h()
-        }),
-        "gyro_arw_rad_rts"
-    );
-    assert_eq!(
-        bad(AlignerConfig {
-            accel_vrw: 2.0,
-            ..cfg_4h()
-        }),
-        "accel_vrw_m_s_rts"
-    );
-    assert_eq!(
-        bad(AlignerConfig {
-            zupt_sigma: 0.0,
-            ..cfg_4h()
-        }),
-        "zupt_sigma_m_s"
-    );
-    assert_eq!(
-        bad(AlignerConfig {
-            history_s: 0.0,
-            ..cfg_4h()
-        }),
-        "history_s"
-    );
+    assert_eq!(bad(cfg_with(|f| f.gyro_arw = -1.0)), "gyro_arw_rad_rts");
+    assert_eq!(bad(cfg_with(|f| f.accel_vrw = 2.0)), "accel_vrw_m_s_rts");
+    assert_eq!(bad(cfg_with(|f| f.zupt_sigma = 0.0)), "zupt_sigma_m_s");
+    assert_eq!(bad(cfg_with(|f| f.history_s = 0.0)), "history_s");
     assert_eq!(
         bad(AlignerConfig {
             rate_hz: 0.0,
@@ -392,11 +348,12 @@ fn bad_settings_name_their_key() {
 fn a_partial_last_update_interval_still_ends_the_alignment() {
     // 100 s of fine alignment with 7 s updates: 14 whole intervals and a last one of 2 s; history every 21 s.
     let cfg = AlignerConfig {
-        coarse_s: 60.0,
         fine_s: 100.0,
-        update_s: 7.0,
-        history_s: 21.0,
-        ..cfg_4h()
+        ..cfg_with(|f| {
+            f.coarse_s = 60.0;
+            f.update_s = 7.0;
+            f.history_s = 21.0;
+        })
     };
     let r = run(
         ImuSimulatorConfig {

@@ -3,6 +3,7 @@
 use gyrodrift_core::alignment::{Aligner, AlignerConfig};
 use gyrodrift_core::coarse_alignment::InertialCoarseAlignment;
 use gyrodrift_core::error::CoreError;
+use gyrodrift_core::filter_prior::FilterSettings;
 use gyrodrift_core::kalman::{ErrorStateFilter, N_STATES};
 use gyrodrift_core::simulator::{ImuChunkSlices, ImuSimulator, ImuSimulatorConfig, MAX_CHUNK_SAMPLES};
 use gyrodrift_core::strapdown::{Navigator, NavigatorConfig};
@@ -19,7 +20,6 @@ fn constant_force(f: [f64; 3], n: usize) -> (Vec<f64>, Vec<f64>) {
 
 fn short_aligner() -> Aligner {
     Aligner::new(AlignerConfig {
-        coarse_s: 300.0,
         fine_s: 320.0,
         ..AlignerConfig::new(0.5, 0.0, 0.0, RATE_HZ)
     })
@@ -182,19 +182,32 @@ fn filter_and_coarse_alignment_refuse_instead_of_panicking() {
 fn aligner_settings_are_refused_in_user_units() {
     let base = AlignerConfig::new(0.5, 0.0, 0.0, RATE_HZ);
     let e = Aligner::new(AlignerConfig {
-        gyro_bias_sigma: [1.0; 3],
+        filter: FilterSettings {
+            gyro_bias_sigma: [1.0; 3],
+            ..base.filter.clone()
+        },
         ..base.clone()
     })
     .unwrap_err();
     assert_eq!(e.key(), "gyro_bias_sigma_rad_s");
     assert!(e.to_string().contains("deg/h"), "{e}");
     let e = Aligner::new(AlignerConfig {
-        accel_bias_sigma: [f64::NAN, 1e-4, 1e-4],
+        filter: FilterSettings {
+            accel_bias_sigma: [f64::NAN, 1e-4, 1e-4],
+            ..base.filter.clone()
+        },
         ..base.clone()
     })
     .unwrap_err();
     assert!(e.to_string().contains("ug"), "{e}");
-    let e = Aligner::new(AlignerConfig { update_s: 0.01, ..base }).unwrap_err();
+    let e = Aligner::new(AlignerConfig {
+        filter: FilterSettings {
+            update_s: 0.01,
+            ..base.filter
+        },
+        ..base
+    })
+    .unwrap_err();
     assert!(e.to_string().contains("holds no sample at 10 Hz"), "{e}");
 }
 

@@ -1,4 +1,5 @@
-//! Typed, validated configurations of the core objects: `SimulatorConfig`, `NavigatorConfig`, `AlignerConfig`.
+//! Typed, validated configurations of the core objects: `SimulatorConfig`, `NavigatorConfig`, `AlignerConfig` and
+//! the `FilterConfig` it shares with `SmootherConfig`.
 //! Keyword-only constructors (SI names); an omitted keyword (or None) takes the core's default, which lives only
 //! in gyrodrift-core. Each class validates at construction (a `gyrodrift.errors.CoreError` naming the key) and
 //! exposes every resolved value as a read-only attribute.
@@ -6,6 +7,7 @@
 use super::core_err;
 use gyrodrift_core::alignment::AlignerConfig as CoreAlignerConfig;
 use gyrodrift_core::attitude::Euler;
+use gyrodrift_core::filter_prior::FilterSettings;
 use gyrodrift_core::imu_error::ImuErrorParams;
 use gyrodrift_core::simulator::ImuSimulatorConfig;
 use gyrodrift_core::strapdown::{NavigatorConfig as CoreNavigatorConfig, Vertical};
@@ -15,7 +17,9 @@ use gyrodrift_core::turntable::{
     default_indexing_positions, scheme_from_settings, RotationScheme, DEFAULT_RECIPROCATING_SPAN_RAD,
     DEFAULT_TABLE_ACCEL_RAD_S2, DEFAULT_TABLE_RATE_RAD_S,
 };
+use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
 /// Everything that defines a simulated static run (SI; docs/ins-binding-contract.md).
 #[pyclass(module = "gyrodrift._core", frozen)]
@@ -415,98 +419,125 @@ impl NavigatorConfig {
     }
 }
 
-/// Settings of a static-base alignment (SI; docs/alignment-contract.md).
-#[pyclass(module = "gyrodrift._core", frozen)]
+/// What `AlignerConfig` and `SmootherConfig` share, resolved (SI): the known static site, the sample rate and
+/// gyrodrift-core's `filter_prior::FilterSettings` (the coarse span, the update interval, the prior, the process
+/// noise, the zero-velocity sigma, the history interval). The base class of both; not built on its own.
+#[pyclass(module = "gyrodrift._core", frozen, subclass, get_all)]
+pub struct FilterConfig {
+    lat_rad: f64,
+    lon_rad: f64,
+    height_m: f64,
+    rate_hz: f64,
+    coarse_s: f64,
+    update_s: f64,
+    att_sigma_rad: Option<[f64; 3]>,
+    gyro_bias_sigma_rad_s: [f64; 3],
+    accel_bias_sigma_m_s2: [f64; 3],
+    gyro_arw_rad_rts: f64,
+    accel_vrw_m_s_rts: f64,
+    zupt_sigma_m_s: f64,
+    history_s: f64,
+}
+
+impl FilterConfig {
+    /// The filter settings of a config's `**filter` keywords (`owner` names the config in the messages): each
+    /// keyword of a `FilterConfig` attribute but the site's, None or left out for the value in `defaults`; any other
+    /// keyword is refused as Python refuses an unexpected one.
+    pub(crate) fn settings(
+        owner: &str,
+        keywords: Option<&Bound<'_, PyDict>>,
+        defaults: FilterSettings,
+    ) -> PyResult<FilterSettings> {
+        let mut f = defaults;
+        for (key, value) in keywords.into_iter().flat_map(|d| d.iter()) {
+            let key: String = key.extract()?;
+            let v = &value;
+            match key.as_str() {
+                "coarse_s" => f.coarse_s = keyword(&key, v, f.coarse_s)?,
+                "update_s" => f.update_s = keyword(&key, v, f.update_s)?,
+                "att_sigma_rad" => f.att_sigma = keyword(&key, v, None)?,
+                "gyro_bias_sigma_rad_s" => f.gyro_bias_sigma = keyword(&key, v, f.gyro_bias_sigma)?,
+                "accel_bias_sigma_m_s2" => f.accel_bias_sigma = keyword(&key, v, f.accel_bias_sigma)?,
+                "gyro_arw_rad_rts" => f.gyro_arw = keyword(&key, v, f.gyro_arw)?,
+                "accel_vrw_m_s_rts" => f.accel_vrw = keyword(&key, v, f.accel_vrw)?,
+                "zupt_sigma_m_s" => f.zupt_sigma = keyword(&key, v, f.zupt_sigma)?,
+                "history_s" => f.history_s = keyword(&key, v, f.history_s)?,
+                _ => {
+                    return Err(PyTypeError::new_err(format!(
+                        "{owner}() got an unexpected keyword argument '{key}'"
+                    )))
+                }
+            }
+        }
+        Ok(f)
+    }
+
+    /// The attributes of validated settings at a site: latitude, longitude [rad], height [m], rate [Hz].
+    pub(crate) fn resolved(site: [f64; 4], f: &FilterSettings) -> Self {
+        let [lat_rad, lon_rad, height_m, rate_hz] = site;
+        FilterConfig {
+            lat_rad,
+            lon_rad,
+            height_m,
+            rate_hz,
+            coarse_s: f.coarse_s,
+            update_s: f.update_s,
+            att_sigma_rad: f.att_sigma,
+            gyro_bias_sigma_rad_s: f.gyro_bias_sigma,
+            accel_bias_sigma_m_s2: f.accel_bias_sigma,
+            gyro_arw_rad_rts: f.gyro_arw,
+            accel_vrw_m_s_rts: f.accel_vrw,
+            zupt_sigma_m_s: f.zupt_sigma,
+            history_s: f.history_s,
+        }
+    }
+}
+
+/// A keyword's `value` as a `T`, None for `default`; a value of another type is a `TypeError` naming `key`, as
+/// for a declared argument.
+fn keyword<'a, 'py, T: FromPyObject<'a, 'py>>(key: &str, value: &'a Bound<'py, PyAny>, default: T) -> PyResult<T> {
+    if value.is_none() {
+        return Ok(default);
+    }
+    value.extract::<T>().map_err(|e| {
+        let e: PyErr = e.into();
+        PyTypeError::new_err(format!("argument '{key}': {}", e.value(value.py())))
+    })
+}
+
+/// Settings of a static-base alignment (SI; docs/alignment-contract.md): a `FilterConfig` (its `**filter`
+/// keywords; defaults gyrodrift-core `FilterSettings::aligner`) and the fine span.
+#[pyclass(module = "gyrodrift._core", frozen, extends = FilterConfig)]
 pub struct AlignerConfig {
     pub(crate) inner: CoreAlignerConfig,
     #[pyo3(get)]
-    lat_rad: f64,
-    #[pyo3(get)]
-    lon_rad: f64,
-    #[pyo3(get)]
-    height_m: f64,
-    #[pyo3(get)]
-    rate_hz: f64,
-    #[pyo3(get)]
-    coarse_s: f64,
-    #[pyo3(get)]
     fine_s: f64,
-    #[pyo3(get)]
-    update_s: f64,
-    #[pyo3(get)]
-    att_sigma_rad: Option<[f64; 3]>,
-    #[pyo3(get)]
-    gyro_bias_sigma_rad_s: [f64; 3],
-    #[pyo3(get)]
-    accel_bias_sigma_m_s2: [f64; 3],
-    #[pyo3(get)]
-    gyro_arw_rad_rts: f64,
-    #[pyo3(get)]
-    accel_vrw_m_s_rts: f64,
-    #[pyo3(get)]
-    zupt_sigma_m_s: f64,
-    #[pyo3(get)]
-    history_s: f64,
 }
 
 #[pymethods]
 impl AlignerConfig {
     #[new]
-    #[pyo3(signature = (
-        *, lat_rad, lon_rad, height_m, rate_hz, coarse_s = None, fine_s = None, update_s = None,
-        att_sigma_rad = None, gyro_bias_sigma_rad_s = None, accel_bias_sigma_m_s2 = None, gyro_arw_rad_rts = None,
-        accel_vrw_m_s_rts = None, zupt_sigma_m_s = None, history_s = None
-    ))]
-    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (*, lat_rad, lon_rad, height_m, rate_hz, fine_s = None, **filter))]
     fn new(
         lat_rad: f64,
         lon_rad: f64,
         height_m: f64,
         rate_hz: f64,
-        coarse_s: Option<f64>,
         fine_s: Option<f64>,
-        update_s: Option<f64>,
-        att_sigma_rad: Option<[f64; 3]>,
-        gyro_bias_sigma_rad_s: Option<[f64; 3]>,
-        accel_bias_sigma_m_s2: Option<[f64; 3]>,
-        gyro_arw_rad_rts: Option<f64>,
-        accel_vrw_m_s_rts: Option<f64>,
-        zupt_sigma_m_s: Option<f64>,
-        history_s: Option<f64>,
-    ) -> PyResult<Self> {
-        let base = CoreAlignerConfig::new(lat_rad, lon_rad, height_m, rate_hz);
-        let coarse_s = coarse_s.unwrap_or(base.coarse_s);
+        filter: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<PyClassInitializer<Self>> {
+        let settings = FilterConfig::settings("AlignerConfig", filter, FilterSettings::aligner())?;
+        let base = CoreAlignerConfig::with_filter(lat_rad, lon_rad, height_m, rate_hz, settings);
         let inner = CoreAlignerConfig {
-            coarse_s,
-            fine_s: fine_s.unwrap_or_else(|| CoreAlignerConfig::default_fine_s(coarse_s)),
-            update_s: update_s.unwrap_or(base.update_s),
-            att_sigma: att_sigma_rad,
-            gyro_bias_sigma: gyro_bias_sigma_rad_s.unwrap_or(base.gyro_bias_sigma),
-            accel_bias_sigma: accel_bias_sigma_m_s2.unwrap_or(base.accel_bias_sigma),
-            gyro_arw: gyro_arw_rad_rts.unwrap_or(base.gyro_arw),
-            accel_vrw: accel_vrw_m_s_rts.unwrap_or(base.accel_vrw),
-            zupt_sigma: zupt_sigma_m_s.unwrap_or(base.zupt_sigma),
-            history_s: history_s.unwrap_or(base.history_s),
+            fine_s: fine_s.unwrap_or(base.fine_s),
             ..base
         };
         inner.validate().map_err(core_err)?;
-        Ok(AlignerConfig {
-            lat_rad,
-            lon_rad,
-            height_m,
-            rate_hz,
-            coarse_s: inner.coarse_s,
+        let shared = FilterConfig::resolved([lat_rad, lon_rad, height_m, rate_hz], &inner.filter);
+        Ok(PyClassInitializer::from(shared).add_subclass(AlignerConfig {
             fine_s: inner.fine_s,
-            update_s: inner.update_s,
-            att_sigma_rad: inner.att_sigma,
-            gyro_bias_sigma_rad_s: inner.gyro_bias_sigma,
-            accel_bias_sigma_m_s2: inner.accel_bias_sigma,
-            gyro_arw_rad_rts: inner.gyro_arw,
-            accel_vrw_m_s_rts: inner.accel_vrw,
-            zupt_sigma_m_s: inner.zupt_sigma,
-            history_s: inner.history_s,
             inner,
-        })
+        }))
     }
 
     fn __repr__(&self) -> String {

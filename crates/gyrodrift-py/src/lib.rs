@@ -554,6 +554,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(balanced_reciprocating_span_rad, m)?)?;
     m.add_class::<SimulatorConfig>()?;
     m.add_class::<NavigatorConfig>()?;
+    m.add_class::<config::FilterConfig>()?;
     m.add_class::<AlignerConfig>()?;
     m.add_class::<ImuSimulator>()?;
     m.add_class::<Navigator>()?;

@@ -1,40 +1,21 @@
 //! Binding of `gyrodrift_core::smoother` as `_core.SmootherConfig` and `_core.Smoother` (docs/identification.md,
 //! "The 16 h smoother"). It converts types and releases the GIL, nothing else.
 
+use super::config::FilterConfig;
 use super::{arg_err, core_err, flat, increments};
+use gyrodrift_core::filter_prior::FilterSettings;
 use gyrodrift_core::smoother::{state_names, Smoother as CoreSmoother, SmootherConfig as CoreSmootherConfig};
 use numpy::{PyArray1, PyReadonlyArray1};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-/// Validated settings of the full-information smoother (SI; keyword-only; None takes the core's default).
-#[pyclass(module = "gyrodrift._core", frozen)]
+/// Validated settings of the full-information smoother (SI; keyword-only; None takes the core's default): a
+/// `FilterConfig` (its `**filter` keywords; defaults gyrodrift-core `FilterSettings::smoother`) and the smoother's own.
+#[pyclass(module = "gyrodrift._core", frozen, extends = FilterConfig)]
 pub struct SmootherConfig {
     pub(crate) inner: CoreSmootherConfig,
     #[pyo3(get)]
-    lat_rad: f64,
-    #[pyo3(get)]
-    lon_rad: f64,
-    #[pyo3(get)]
-    height_m: f64,
-    #[pyo3(get)]
-    rate_hz: f64,
-    #[pyo3(get)]
-    coarse_s: f64,
-    #[pyo3(get)]
     span_s: f64,
-    #[pyo3(get)]
-    update_s: f64,
-    #[pyo3(get)]
-    att_sigma_rad: Option<[f64; 3]>,
-    #[pyo3(get)]
-    gyro_bias_sigma_rad_s: [f64; 3],
-    #[pyo3(get)]
-    accel_bias_sigma_m_s2: [f64; 3],
-    #[pyo3(get)]
-    gyro_arw_rad_rts: f64,
-    #[pyo3(get)]
-    accel_vrw_m_s_rts: f64,
     #[pyo3(get)]
     gyro_bias_instability_rad_s: f64,
     #[pyo3(get)]
@@ -42,11 +23,7 @@ pub struct SmootherConfig {
     #[pyo3(get)]
     gyro_rrw_rad_s_rts: f64,
     #[pyo3(get)]
-    zupt_sigma_m_s: f64,
-    #[pyo3(get)]
     position_sigma_m: f64,
-    #[pyo3(get)]
-    history_s: f64,
     #[pyo3(get)]
     thermal: bool,
     #[pyo3(get)]
@@ -61,11 +38,9 @@ pub struct SmootherConfig {
 impl SmootherConfig {
     #[new]
     #[pyo3(signature = (
-        *, lat_rad, lon_rad, height_m, rate_hz, coarse_s = None, span_s = None, update_s = None,
-        att_sigma_rad = None, gyro_bias_sigma_rad_s = None, accel_bias_sigma_m_s2 = None, gyro_arw_rad_rts = None,
-        accel_vrw_m_s_rts = None, gyro_bias_instability_rad_s = None, gyro_correlation_s = None,
-        gyro_rrw_rad_s_rts = None, zupt_sigma_m_s = None, position_sigma_m = None, history_s = None,
-        thermal = None, thermal_sigma_rad_s_per_c = None, temp_ref_c = None, thermal_min_range_c = None
+        *, lat_rad, lon_rad, height_m, rate_hz, span_s = None, gyro_bias_instability_rad_s = None,
+        gyro_correlation_s = None, gyro_rrw_rad_s_rts = None, position_sigma_m = None, thermal = None,
+        thermal_sigma_rad_s_per_c = None, temp_ref_c = None, thermal_min_range_c = None, **filter
     ))]
     #[allow(clippy::too_many_arguments)]
     fn new(
@@ -73,41 +48,25 @@ impl SmootherConfig {
         lon_rad: f64,
         height_m: f64,
         rate_hz: f64,
-        coarse_s: Option<f64>,
         span_s: Option<f64>,
-        update_s: Option<f64>,
-        att_sigma_rad: Option<[f64; 3]>,
-        gyro_bias_sigma_rad_s: Option<[f64; 3]>,
-        accel_bias_sigma_m_s2: Option<[f64; 3]>,
-        gyro_arw_rad_rts: Option<f64>,
-        accel_vrw_m_s_rts: Option<f64>,
         gyro_bias_instability_rad_s: Option<f64>,
         gyro_correlation_s: Option<f64>,
         gyro_rrw_rad_s_rts: Option<f64>,
-        zupt_sigma_m_s: Option<f64>,
         position_sigma_m: Option<f64>,
-        history_s: Option<f64>,
         thermal: Option<bool>,
         thermal_sigma_rad_s_per_c: Option<f64>,
         temp_ref_c: Option<f64>,
         thermal_min_range_c: Option<f64>,
-    ) -> PyResult<Self> {
-        let base = CoreSmootherConfig::new(lat_rad, lon_rad, height_m, rate_hz);
+        filter: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<PyClassInitializer<Self>> {
+        let settings = FilterConfig::settings("SmootherConfig", filter, FilterSettings::smoother())?;
+        let base = CoreSmootherConfig::with_filter(lat_rad, lon_rad, height_m, rate_hz, settings);
         let inner = CoreSmootherConfig {
-            coarse_s: coarse_s.unwrap_or(base.coarse_s),
             span_s: span_s.unwrap_or(base.span_s),
-            update_s: update_s.unwrap_or(base.update_s),
-            att_sigma: att_sigma_rad,
-            gyro_bias_sigma: gyro_bias_sigma_rad_s.unwrap_or(base.gyro_bias_sigma),
-            accel_bias_sigma: accel_bias_sigma_m_s2.unwrap_or(base.accel_bias_sigma),
-            gyro_arw: gyro_arw_rad_rts.unwrap_or(base.gyro_arw),
-            accel_vrw: accel_vrw_m_s_rts.unwrap_or(base.accel_vrw),
             gyro_bias_instability: gyro_bias_instability_rad_s.unwrap_or(base.gyro_bias_instability),
             gyro_correlation: gyro_correlation_s.unwrap_or(base.gyro_correlation),
             gyro_rrw: gyro_rrw_rad_s_rts.unwrap_or(base.gyro_rrw),
-            zupt_sigma: zupt_sigma_m_s.unwrap_or(base.zupt_sigma),
             position_sigma: position_sigma_m.unwrap_or(base.position_sigma),
-            history_s: history_s.unwrap_or(base.history_s),
             thermal: thermal.unwrap_or(base.thermal),
             thermal_sigma: thermal_sigma_rad_s_per_c.unwrap_or(base.thermal_sigma),
             temp_ref: temp_ref_c,
@@ -115,31 +74,19 @@ impl SmootherConfig {
             ..base
         };
         inner.validate().map_err(core_err)?;
-        Ok(SmootherConfig {
-            lat_rad,
-            lon_rad,
-            height_m,
-            rate_hz,
-            coarse_s: inner.coarse_s,
+        let shared = FilterConfig::resolved([lat_rad, lon_rad, height_m, rate_hz], &inner.filter());
+        Ok(PyClassInitializer::from(shared).add_subclass(SmootherConfig {
             span_s: inner.span_s,
-            update_s: inner.update_s,
-            att_sigma_rad: inner.att_sigma,
-            gyro_bias_sigma_rad_s: inner.gyro_bias_sigma,
-            accel_bias_sigma_m_s2: inner.accel_bias_sigma,
-            gyro_arw_rad_rts: inner.gyro_arw,
-            accel_vrw_m_s_rts: inner.accel_vrw,
             gyro_bias_instability_rad_s: inner.gyro_bias_instability,
             gyro_correlation_s: inner.gyro_correlation,
             gyro_rrw_rad_s_rts: inner.gyro_rrw,
-            zupt_sigma_m_s: inner.zupt_sigma,
             position_sigma_m: inner.position_sigma,
-            history_s: inner.history_s,
             thermal: inner.thermal,
             thermal_sigma_rad_s_per_c: inner.thermal_sigma,
             temp_ref_c: inner.temp_ref,
             thermal_min_range_c: inner.thermal_min_range,
             inner,
-        })
+        }))
     }
 
     /// Names of the states, in order (14; 17 with the Gauss-Markov states; 20 with the rate random walk too; one

@@ -1,9 +1,8 @@
 //! The smoother's settings ([`SmootherConfig`]), their range checks and the state layout they give.
 
 use super::{DEFAULT_THERMAL_MIN_RANGE_C, DEFAULT_THERMAL_SIGMA_DEG_H_PER_C, MAX_UPDATES, POS};
-use crate::alignment::AlignerConfig;
 use crate::error::{check, CoreError};
-use crate::filter_prior::FilterPrior;
+use crate::filter_prior::FilterSettings;
 use crate::kalman::{N_STATES as N_BASE, STATE_NAMES as BASE_NAMES};
 use crate::limits::{check_site, check_slow_bias};
 use crate::units::DEG_PER_H;
@@ -25,8 +24,8 @@ pub struct SmootherConfig {
     /// Initial attitude 1-sigma E N U \[rad\] (`att_sigma_rad`); None: the aligner's `coarse_attitude_sigma`.
     pub att_sigma: Option<[f64; 3]>,
     /// Prior 1-sigma of the constant gyro biases [rad/s] (`gyro_bias_sigma_rad_s`, default 0.1 deg/h: wide, so the
-    /// prior pulls a 0.05 deg/h drift by less than 1e-7 deg/h; the defaults of the prior and the noise are
-    /// [`FilterPrior::SMOOTHER`], which says why they differ from the aligner's).
+    /// prior pulls a 0.05 deg/h drift by less than 1e-7 deg/h; the defaults of this and every setting the aligner
+    /// shares are [`FilterSettings::smoother`], whose module says why they differ from the aligner's).
     pub gyro_bias_sigma: [f64; 3],
     /// Prior 1-sigma of the accelerometer biases [m/s^2] (`accel_bias_sigma_m_s2`, default 100 ug).
     pub accel_bias_sigma: [f64; 3],
@@ -62,25 +61,30 @@ pub struct SmootherConfig {
 impl SmootherConfig {
     /// The defaults at a site.
     pub fn new(lat: f64, lon: f64, height: f64, rate_hz: f64) -> Self {
+        Self::with_filter(lat, lon, height, rate_hz, FilterSettings::smoother())
+    }
+
+    /// The given filter settings at a site, every other setting at its default.
+    pub fn with_filter(lat: f64, lon: f64, height: f64, rate_hz: f64, filter: FilterSettings) -> Self {
         SmootherConfig {
             lat,
             lon,
             height,
             rate_hz,
-            coarse_s: 300.0,
+            coarse_s: filter.coarse_s,
             span_s: 57_600.0,
-            update_s: 10.0,
-            att_sigma: None,
-            gyro_bias_sigma: FilterPrior::SMOOTHER.gyro_bias_sigma(),
-            accel_bias_sigma: FilterPrior::SMOOTHER.accel_bias_sigma(),
-            gyro_arw: FilterPrior::SMOOTHER.gyro_arw(),
-            accel_vrw: FilterPrior::SMOOTHER.accel_vrw(),
+            update_s: filter.update_s,
+            att_sigma: filter.att_sigma,
+            gyro_bias_sigma: filter.gyro_bias_sigma,
+            accel_bias_sigma: filter.accel_bias_sigma,
+            gyro_arw: filter.gyro_arw,
+            accel_vrw: filter.accel_vrw,
             gyro_bias_instability: 0.0,
             gyro_correlation: 3600.0,
             gyro_rrw: 0.0,
-            zupt_sigma: 1e-4,
+            zupt_sigma: filter.zupt_sigma,
             position_sigma: 0.01,
-            history_s: 600.0,
+            history_s: filter.history_s,
             thermal: false,
             thermal_sigma: DEFAULT_THERMAL_SIGMA_DEG_H_PER_C * DEG_PER_H,
             temp_ref: None,
@@ -92,8 +96,8 @@ impl SmootherConfig {
     pub fn validate(&self) -> Result<(), CoreError> {
         use crate::error::{all_positive_at_most, in_range, sig, Unit, DEG_H_PER_C};
         check_site(self.lat, self.lon, self.height, self.rate_hz)?;
-        // The aligner's checks of the shared settings (one set of limits).
-        self.aligner_config().validate()?;
+        // The shared settings have one set of limits, the aligner's.
+        self.filter().validate(self.rate_hz)?;
         let s = Unit::Si("s");
         // Without process noise the covariance of the long span collapses and the filter stops listening.
         check(
@@ -152,11 +156,11 @@ impl SmootherConfig {
         )
     }
 
-    /// The aligner settings these share (the coarse alignment, the priors and the noise).
-    pub(crate) fn aligner_config(&self) -> AlignerConfig {
-        AlignerConfig {
+    /// The settings the aligner shares (flat here: `FilterSettings` names them once; `new` and `with_filter` take
+    /// them from it).
+    pub fn filter(&self) -> FilterSettings {
+        FilterSettings {
             coarse_s: self.coarse_s,
-            fine_s: 0.0,
             update_s: self.update_s,
             att_sigma: self.att_sigma,
             gyro_bias_sigma: self.gyro_bias_sigma,
@@ -165,7 +169,6 @@ impl SmootherConfig {
             accel_vrw: self.accel_vrw,
             zupt_sigma: self.zupt_sigma,
             history_s: self.history_s,
-            ..AlignerConfig::new(self.lat, self.lon, self.height, self.rate_hz)
         }
     }
 

@@ -119,7 +119,7 @@ pub(crate) fn initial_sigma(cfg: &SmootherConfig, t_s: f64) -> Vec<f64> {
     let n = cfg.n_states();
     let att = cfg
         .att_sigma
-        .unwrap_or_else(|| coarse_attitude_sigma(&cfg.aligner_config()));
+        .unwrap_or_else(|| coarse_attitude_sigma(cfg.lat, cfg.height, &cfg.filter()));
     let mut sigma = vec![0.0; n];
     sigma[PHI..PHI + 3].copy_from_slice(&att);
     sigma[DV..DV + 3].copy_from_slice(&[cfg.zupt_sigma; 3]);
