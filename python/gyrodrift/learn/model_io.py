@@ -39,7 +39,8 @@ checked against the record to 1e-9. The same code and data give the same floats,
 saved model's predictions to the bit (tested). Three more entries are taken as given: ``spread_theta`` (the log
 hyperparameters of the interval's Gaussian process, `gyrodrift.learn.spread.SpreadGP`: no likelihood is maximised
 again), ``interval_residuals_deg_h`` and ``interval_spreads_deg_h`` (the interval's calibration: nothing is
-recomputed, and the Gaussian process skips its leave-one-out inverse) and ``interval_disagreement_deg_h`` (the
+recomputed, the Gaussian process skips its leave-one-out inverse and factorises its covariance only when an interval
+or spread is first asked for: `export` never does) and ``interval_disagreement_deg_h`` (the
 largest LSSVR/GP disagreement over the training runs, ``DriftModel.interval_.disagreement_deg_h_``: no prediction on the
 training runs). Files without them (written before) get them recomputed, the calibration with leave-one-out scores
 (``calibration_folds`` 0). Floats are written with ``repr`` precision.

@@ -172,7 +172,9 @@ class SpreadGP:
     L_, alpha_ : ndarray
         Lower Cholesky factor of the training covariance (noise included) and its solve with the standardised
         targets: the predictive mean and variance (R&W 2006 algorithm 2.1) without scikit-learn's
-        ``GaussianProcessRegressor`` (whose fit computes the likelihood again: a second factorisation).
+        ``GaussianProcessRegressor`` (whose fit computes the likelihood again: a second factorisation). With
+        ``theta`` given and ``loo=False`` (a model file's) they are computed on the first prediction: loading a
+        model to export it never factorises the n x n covariance.
     loo_std_ : ndarray, shape (n_runs,)
         Leave-one-out predictive 1-sigma of each training label, label noise included [unit of y].
     """
@@ -200,6 +202,13 @@ class SpreadGP:
         self.y_scale_ = float(y.std()) or float(np.max(s)) or 1.0
         alpha = (s / self.y_scale_) ** 2 + _JITTER
         Zs, ys = self._z(Z), (y - self.y_mean_) / self.y_scale_
+        self.Z_train_ = Zs
+        self.n_runs_ = n
+        self.z_max_sq_ = float(np.max(np.sum(Zs**2, axis=1)))
+        self._labels = (ys, alpha)  # standardised targets and label noise, for `_factorise`
+        if self.theta is not None and not loo:  # a model file's: factorised on the first prediction (never by export)
+            self.theta_ = np.array(self.theta, float)
+            return self
         # one BLAS thread (as `gyrodrift.learn.tuning.tune_lssvr`): the likelihood search's small solves and L-BFGS-B's
         # vector operations waited on OpenBLAS's threads, 2-3x slower on a quiet 2-core machine, 10-50x loaded
         with threadpool_limits(limits=1, user_api="blas"):
@@ -207,19 +216,21 @@ class SpreadGP:
                 theta = _maximise_likelihood(Zs, ys, alpha, self.n_restarts, self.random_state)
             else:
                 theta = np.asarray(self.theta, float)
-            K = _cross_kernel(theta, Zs, Zs)
-            K[np.diag_indices(n)] += math.exp(theta[-1]) + alpha
-            self.L_ = cholesky(K, lower=True, check_finite=False)
-            self.alpha_ = cho_solve((self.L_, True), ys, check_finite=False)
+            self.theta_ = np.array(theta, float)
+            self._factorise()
             if loo:
                 inv_diag = np.diag(cho_solve((self.L_, True), np.eye(n), check_finite=False))
-        self.Z_train_ = Zs
-        self.n_runs_ = n
-        self.z_max_sq_ = float(np.max(np.sum(Zs**2, axis=1)))
-        self.theta_ = np.array(theta, float)
         if loo:
             self.loo_std_ = self.y_scale_ / np.sqrt(inv_diag)
         return self
+
+    def _factorise(self) -> None:
+        """``L_`` and ``alpha_`` at ``theta_`` (call with the BLAS on one thread, as `fit` does: the same floats)."""
+        ys, alpha = self._labels
+        K = _cross_kernel(self.theta_, self.Z_train_, self.Z_train_)
+        K[np.diag_indices(self.n_runs_)] += math.exp(self.theta_[-1]) + alpha
+        self.L_ = cholesky(K, lower=True, check_finite=False)
+        self.alpha_ = cho_solve((self.L_, True), ys, check_finite=False)
 
     def _z(self, Z) -> np.ndarray:
         return (np.asarray(Z, float) - self.z_mean_) / self.z_scale_
@@ -232,6 +243,8 @@ class SpreadGP:
         Zs = self._z(Z)
         c0, c1, tau2 = np.exp(self.theta_[[0, 1, -1]])
         with threadpool_limits(limits=1, user_api="blas"):
+            if not hasattr(self, "L_"):
+                self._factorise()
             V = solve_triangular(self.L_, _cross_kernel(self.theta_, self.Z_train_, Zs), lower=True, check_finite=False)
         var = c0 + c1 + tau2 + np.sum(Zs**2, axis=1) - np.sum(V**2, axis=0)  # the prior includes tau^2
         return self.y_scale_ * np.sqrt(np.maximum(var, 0.0))
@@ -245,6 +258,9 @@ class SpreadGP:
 
     def predict_mean(self, Z) -> np.ndarray:
         """The Gaussian process's predictive mean of the target at each row of ``Z`` [unit of y]."""
+        if not hasattr(self, "alpha_"):
+            with threadpool_limits(limits=1, user_api="blas"):
+                self._factorise()
         mean = _cross_kernel(self.theta_, self._z(Z), self.Z_train_) @ self.alpha_
         return self.y_mean_ + self.y_scale_ * mean
 
