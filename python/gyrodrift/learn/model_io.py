@@ -111,7 +111,19 @@ def _parse_int(text: str) -> int | _HugeInt:
 def _refuse_huge_ints(doc: Any, where: str) -> None:
     """Raise ModelFileError naming the key of the first integer of more than ``_MAX_INT_DIGITS`` digits.
 
-    Iterative (a deeply nested document must not exhaust the stack twice)."""
+    Iterative (a deeply nested document must not exhaust the stack twice). The keys are spelt out only for a
+    document that has such an integer (a second walk): a model file's thousands of numbers cost no strings."""
+    values: list[Any] = [doc]
+    while values:
+        value = values.pop()
+        if isinstance(value, _HugeInt):
+            break
+        if isinstance(value, dict):
+            values.extend(value.values())
+        elif isinstance(value, list):
+            values.extend(value)
+    else:
+        return
     stack: list[tuple[str, Any]] = [("", doc)]
     while stack:
         path, value = stack.pop()
