@@ -312,6 +312,7 @@ class Navigator:
         dv_m_s: ArrayLike,
         decimation: int = 1,
         reference_height_m: ArrayLike | None = None,
+        axial_bias_rad_s: ArrayLike | None = None,
     ) -> dict[str, FloatArray]: ...
     def state(self) -> dict[str, Any]: ...
 

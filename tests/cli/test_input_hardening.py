@@ -11,7 +11,8 @@ import pytest
 from click.testing import CliRunner
 
 from gyrodrift.cli import main
-from gyrodrift.errors import OptionError
+from gyrodrift.drift_law import DriftLaw
+from gyrodrift.errors import InputError, OptionError
 from gyrodrift.learn.cpso import CPSOSolver, check_seed
 
 
@@ -270,9 +271,11 @@ def test_the_library_refuses_a_drift_beyond_the_bound_by_the_options_name(tmp_pa
     scenario = tmp_path / "t.toml"
     scenario.write_text("[run]\nduration_h = 0.01\nrate_hz = 10.0\n")
     assert _run(["simulate", scenario, "--out", tmp_path / "sim", "--quiet"]).exit_code == 0
-    for bad in (1e308, -100.5, float("nan")):
-        with pytest.raises(OptionError, match=r"--drift-deg-h must be a finite drift within \+-100 deg/h"):
-            navigate(tmp_path / "sim" / "imu.parquet", compensate_drift_deg_h=bad)
+    for bad in (1e308, -100.5):
+        with pytest.raises(OptionError, match=r"eps_ref_deg_h \(--drift-deg-h\) must be a finite drift within \+-100"):
+            navigate(tmp_path / "sim" / "imu.parquet", drift_law=DriftLaw.constant(bad))
+    with pytest.raises(InputError, match="drift law: eps_ref_deg_h must be a finite number, got nan"):
+        DriftLaw.constant(float("nan"))
 
 
 @pytest.mark.parametrize("kind", ["fifo", "dev/zero", "socket"])

@@ -19,6 +19,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 import pytest
 
+from gyrodrift.drift_law import DriftLaw
 from gyrodrift.earth import NMI_M, OMEGA_IE_RAD_S
 from gyrodrift.ins import Scenario, simulate
 from gyrodrift.ins.nav_errors import radii_of_curvature
@@ -132,8 +133,8 @@ def test_compensating_the_axial_drift_removes_it_and_the_sign_is_measured_minus_
     )
     good, wrong = run_all(
         [
-            (scn, {"compensate_drift_deg_h": 0.003, "decimation_s": 600.0}),
-            (scn, {"compensate_drift_deg_h": -0.003, "decimation_s": 600.0}),
+            (scn, {"drift_law": DriftLaw.constant(0.003), "decimation_s": 600.0}),
+            (scn, {"drift_law": DriftLaw.constant(-0.003), "decimation_s": 600.0}),
         ]
     )
     peak = 2.0 * 0.003 * DEG_PER_H * math.cos(LAT_DEG * DEG) / W / ARCSEC

@@ -7,7 +7,7 @@ use gyrodrift_core::attitude::{
 };
 use gyrodrift_core::earth::{self, NMI};
 use gyrodrift_core::simulator::{ImuChunk, ImuSimulator, ImuSimulatorConfig};
-use gyrodrift_core::strapdown::{Navigator, NavigatorConfig, Vertical};
+use gyrodrift_core::strapdown::{Navigator, NavigatorConfig, SampleInputs, Vertical};
 use gyrodrift_core::trajectory::{Segment, TrajectoryConfig};
 use gyrodrift_core::turntable::RotationScheme;
 use gyrodrift_core::units::{DEG, HOUR};
@@ -385,7 +385,11 @@ fn navigate_hills(reference: bool) -> (f64, f64, f64, f64) {
     while sim.next_chunk(50_000, &mut ch) > 0 {
         let mut states = Vec::new();
         if reference {
-            nav.process_with_reference(&ch.dtheta, &ch.dv, &ch.height, 10, |s| states.push(*s))
+            let heights = SampleInputs {
+                reference_height_m: Some(&ch.height),
+                ..Default::default()
+            };
+            nav.process_with(&ch.dtheta, &ch.dv, heights, 10, |s| states.push(*s))
                 .unwrap();
         } else {
             nav.process(&ch.dtheta, &ch.dv, 10, |s| states.push(*s)).unwrap();

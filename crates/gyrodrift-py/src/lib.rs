@@ -14,7 +14,7 @@ use errors::{arg_err, core_err};
 
 use gyrodrift_core::earth;
 use gyrodrift_core::simulator::{ImuChunk, ImuChunkSlices, ImuSimulator as CoreSimulator, TruthSlices};
-use gyrodrift_core::strapdown::{NavState, Navigator as CoreNavigator};
+use gyrodrift_core::strapdown::{NavState, Navigator as CoreNavigator, SampleInputs};
 use gyrodrift_core::turntable::{balanced_reciprocating_span, RotationScheme};
 use numpy::{
     IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadwriteArray1,
@@ -366,6 +366,18 @@ fn flat<'a>(a: &'a PyReadonlyArray2<'_, f64>, key: &'static str) -> PyResult<&'a
     a.as_slice().map_err(|_| arg_err(key, "expected a C-contiguous array"))
 }
 
+/// An optional per-sample argument of `Navigator.process` (see `array_1`).
+fn per_sample<'py>(obj: Option<&Bound<'py, PyAny>>, key: &'static str) -> PyResult<Option<PyReadonlyArray1<'py, f64>>> {
+    obj.map(|x| array_1(x, key)).transpose()
+}
+
+/// The values of an optional array from `per_sample`.
+fn contiguous<'a>(a: &'a Option<PyReadonlyArray1<'_, f64>>, key: &'static str) -> PyResult<Option<&'a [f64]>> {
+    a.as_ref()
+        .map(|x| x.as_slice().map_err(|_| arg_err(key, "expected a contiguous array")))
+        .transpose()
+}
+
 /// Strapdown navigator (see gyrodrift-core `strapdown`). `Navigator(config: NavigatorConfig)`.
 #[pyclass(module = "gyrodrift._core")]
 struct Navigator {
@@ -410,9 +422,11 @@ impl Navigator {
     }
 
     /// Navigate the samples; returns the state after every `decimation`-th sample counted from the run start.
-    /// `reference_height_m` (n,) [m], optional: the damped vertical channel's reference height at the end of
-    /// every sample (the last one stays the reference afterwards).
-    #[pyo3(signature = (dtheta_rad, dv_m_s, decimation = 1, reference_height_m = None))]
+    /// Optional, one value per sample: `reference_height_m` (n,) [m], the damped vertical channel's reference height
+    /// at the end of every sample; `axial_bias_rad_s` (n,) [rad/s], the z gyro bias estimate subtracted from every
+    /// sample instead of `set_gyro_bias`'s z (a drift law on the measured temperature). The last value of each stays
+    /// in force afterwards.
+    #[pyo3(signature = (dtheta_rad, dv_m_s, decimation = 1, reference_height_m = None, axial_bias_rad_s = None))]
     fn process<'py>(
         &mut self,
         py: Python<'py>,
@@ -420,6 +434,7 @@ impl Navigator {
         dv_m_s: &Bound<'py, PyAny>,
         decimation: i64,
         reference_height_m: Option<&Bound<'py, PyAny>>,
+        axial_bias_rad_s: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyDict>> {
         if decimation < 1 {
             return Err(arg_err(
@@ -431,27 +446,21 @@ impl Navigator {
         let (a, b) = increments(dtheta_rad, dv_m_s)?;
         let (dth, dv) = (flat(&a, "dtheta_rad")?, flat(&b, "dv_m_s")?);
         let n = dth.len() / 3;
-        let href = reference_height_m
-            .map(|h| array_1(h, "reference_height_m"))
-            .transpose()?;
-        let href = href
-            .as_ref()
-            .map(|h| {
-                h.as_slice()
-                    .map_err(|_| arg_err("reference_height_m", "expected a contiguous array"))
-            })
-            .transpose()?;
+        let href = per_sample(reference_height_m, "reference_height_m")?;
+        let bias = per_sample(axial_bias_rad_s, "axial_bias_rad_s")?;
+        let inputs = SampleInputs {
+            reference_height_m: contiguous(&href, "reference_height_m")?,
+            axial_bias_rad_s: contiguous(&bias, "axial_bias_rad_s")?,
+        };
         let inner = &mut self.inner;
         let cols = py
             .detach(|| {
                 let done = inner.samples_done();
                 let n_out = ((done + n as u64) / decimation - done / decimation) as usize;
                 let mut cols = NavColumns::with_capacity(n_out);
-                match href {
-                    None => inner.process(dth, dv, decimation, |s| cols.push(s)),
-                    Some(h) => inner.process_with_reference(dth, dv, h, decimation, |s| cols.push(s)),
-                }
-                .map(|()| cols)
+                inner
+                    .process_with(dth, dv, inputs, decimation, |s| cols.push(s))
+                    .map(|()| cols)
             })
             .map_err(core_err)?;
         let m = cols.t.len();

@@ -17,7 +17,31 @@ from gyrodrift.cli.options import (
 )
 from gyrodrift.cli.types import DRIFT_DEG_H, FiniteFloat, InputPath, Seed
 
-__all__ = ["simulate_command", "navigate_command"]
+__all__ = ["simulate_command", "navigate_command", "drift_law_option", "compensation_of"]
+
+drift_law_option = click.option(
+    "--drift-law",
+    "drift_law_path",
+    metavar="FILE",
+    type=InputPath(path_type=Path),
+    default=None,
+    help="Drift law to compensate instead of a constant: a JSON file holding a drift_law object (identification.json "
+    "of `gyrodrift identify`, or the law alone), eps_ref + k1 (T - t_ref) + k3 dT/dt [deg/h] evaluated sample by "
+    "sample on the log's temp_c. Not with --drift-deg-h. Default: none.",
+)
+
+
+def compensation_of(drift_deg_h: float | None, drift_law_path: Path | None):
+    """The `gyrodrift.drift_law.DriftLaw` of ``--drift-deg-h`` (a constant) or ``--drift-law`` (read from its file),
+    or None when neither is given; both is a usage error."""
+    from gyrodrift.drift_law import DriftLaw
+    from gyrodrift.ins.compensation import load_drift_law
+
+    if drift_deg_h is not None and drift_law_path is not None:
+        raise click.UsageError("give --drift-deg-h (a constant) or --drift-law (a law), not both")
+    if drift_law_path is not None:
+        return load_drift_law(drift_law_path)
+    return None if drift_deg_h is None else DriftLaw.constant(drift_deg_h)
 
 
 @click.command(
@@ -125,8 +149,9 @@ _INITIAL_WORDS = {
     "--drift-deg-h",
     type=DRIFT_DEG_H,
     default=None,
-    help="Axial drift estimate [deg/h] subtracted from the z gyro (measured - estimate). Default: 0.",
+    help="Axial drift estimate [deg/h] subtracted from the z gyro (measured - estimate). Default: none.",
 )
+@drift_law_option
 @click.option(
     "--compensate-drift-deg-h",
     "old_drift_deg_h",
@@ -160,6 +185,7 @@ def navigate_command(
     log: Path,
     hours: float | None,
     drift_deg_h: float | None,
+    drift_law_path: Path | None,
     old_drift_deg_h: float | None,
     initial: str,
     site: dict | None,
@@ -172,9 +198,11 @@ def navigate_command(
     """Navigate LOG (any IMU log: Parquet or CSV) and report the position error against the static site.
 
     The initial state comes from the log's truth (simulated logs), else from an alignment of the log; the
-    summary line and summary.json (initial_source) say which.
+    summary line and summary.json (initial_source) say which, and which axial drift was compensated (compensation,
+    drift_law).
     """
     from gyrodrift.errors import OptionError
+    from gyrodrift.ins.compensation import compensation_words
     from gyrodrift.procedure.navigate import nav_files, navigate
 
     if old_drift_deg_h is not None:
@@ -182,6 +210,7 @@ def navigate_command(
             raise OptionError("give --drift-deg-h only (--compensate-drift-deg-h is its deprecated name)")
         click.echo("warning: --compensate-drift-deg-h is deprecated; use --drift-deg-h", err=True)
         drift_deg_h = old_drift_deg_h
+    law = compensation_of(drift_deg_h, drift_law_path)
     from gyrodrift.logs import ImuLog, open_log
 
     imu: Path | ImuLog = log
@@ -190,7 +219,7 @@ def navigate_command(
     result = navigate(
         imu,
         hours=hours,
-        compensate_drift_deg_h=0.0 if drift_deg_h is None else drift_deg_h,
+        drift_law=law,
         initial=initial,
         site=site,
         out_dir=out_dir,
@@ -204,6 +233,7 @@ def navigate_command(
     source = f"initial state from {_INITIAL_WORDS[s['initial_source']]}"
     if s.get("vertical") == "damped":
         source += f", vertical channel damped to the {s['vertical_reference']}"
+    source += ", no axial drift compensated" if law is None else f", compensating the {compensation_words(law)}"
     if s["final_pos_err_nmi"] is not None:
         detail = (
             f"{s['hours_navigated']:.3f} h, {source}: final position error {s['final_pos_err_nmi']:.4f} nmi, "

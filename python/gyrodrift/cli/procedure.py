@@ -7,6 +7,7 @@ from pathlib import Path
 
 import click
 
+from gyrodrift.cli.navigation import compensation_of, drift_law_option
 from gyrodrift.cli.options import (
     choice_option,
     connect_timeout_option,
@@ -207,15 +208,17 @@ def truth_command(log, criterion, hours, site, log_format, out_dir, noise, as_js
     "--drift-deg-h",
     type=DRIFT_DEG_H,
     default=None,
-    help="Axial drift estimate [deg/h] to compensate (subtracted from the z gyro). Default: none; give it or --model.",
+    help="Axial drift estimate [deg/h] to compensate (subtracted from the z gyro). Default: none; give it, "
+    "--drift-law or --model.",
 )
+@drift_law_option
 @click.option(
     "--model",
     "model_path",
     type=InputPath(path_type=Path),
     default=None,
-    help="Drift model file (JSON, from `gyrodrift fit`) identifying the drift to compensate. Default: none; give it "
-    "or --drift-deg-h.",
+    help="Drift model file (JSON, from `gyrodrift fit`) identifying the drift to compensate (the drift law `identify` "
+    "reports). Default: none; give it, --drift-deg-h or --drift-law.",
 )
 @out_folder_option(
     "for evaluation.json, position_error.png and its curves position_error.parquet (before/after, t_h, lat/lon "
@@ -234,27 +237,36 @@ def truth_command(log, criterion, hours, site, log_format, out_dir, noise, as_js
 @log_options
 @json_option
 @quiet_option
-def evaluate_command(log, drift_deg_h, model_path, out_dir, hours, reference, site, log_format, as_json, quiet):
-    """Navigate LOG 72 h after alignment without and with compensating the axial drift; plot both errors."""
+def evaluate_command(
+    log, drift_deg_h, drift_law_path, model_path, out_dir, hours, reference, site, log_format, as_json, quiet
+):
+    """Navigate LOG 72 h after alignment without and with compensating the axial drift; plot both errors.
+
+    The drift is a constant (--drift-deg-h), a law of the log's temperature (--drift-law), or the law `identify`
+    reports with the model (--model); evaluation.json (compensation, drift_law) and the closing line say which.
+    """
     from gyrodrift.files.atomic import OutputFolder
+    from gyrodrift.ins.compensation import compensation_words
     from gyrodrift.ins.track import route_of
     from gyrodrift.procedure.evaluate import evaluate_compensation
     from gyrodrift.procedure.identify import identify
     from gyrodrift.procedure.writers import evaluation_files, write_evaluation
 
-    if (drift_deg_h is None) == (model_path is None):
-        raise click.UsageError("give exactly one of --drift-deg-h or --model")
+    if sum(x is not None for x in (drift_deg_h, drift_law_path, model_path)) != 1:
+        raise click.UsageError("give exactly one of --drift-deg-h, --drift-law or --model")
+    law = compensation_of(drift_deg_h, drift_law_path)
     moving = reference is not None or route_of(log) is not None
-    inputs = [p for p in (log, model_path, reference) if p is not None]
+    inputs = [p for p in (log, drift_law_path, model_path, reference) if p is not None]
     out = OutputFolder(out_dir, "evaluate", evaluation_files(moving), inputs=inputs)
     imu = _open(log, site, log_format)
     alignment = None
-    source = "given"
+    source = "given" if drift_law_path is None else str(drift_law_path)
     if model_path is not None:
         ident = identify(imu, model_path, quiet=quiet)
-        drift_deg_h, alignment, source = ident.drift_deg_h, ident.features.alignment, str(model_path)
+        law, alignment, source = ident.drift_law, ident.features.alignment, str(model_path)
+    assert law is not None  # exactly one source was given
     ev = evaluate_compensation(
-        imu, drift_deg_h, hours=hours, alignment=alignment, source=source, quiet=quiet, reference=reference
+        imu, law, hours=hours, alignment=alignment, source=source, quiet=quiet, reference=reference
     )
     paths = write_evaluation(ev, out)
     if as_json:
@@ -263,7 +275,7 @@ def evaluate_command(log, drift_deg_h, model_path, out_dir, hours, reference, si
         list(paths.values()),
         quiet=quiet,
         as_json=as_json,
-        detail=f"{ev.run}: compensating {ev.drift_deg_h:.6f} deg/h: {hours:g} h position error "
+        detail=f"{ev.run}: compensating the {compensation_words(law)}: {hours:g} h position error "
         f"{ev.before.final_nmi:.3f} -> {ev.after.final_nmi:.3f} nmi (final), "
         f"{ev.before.max_nmi:.3f} -> {ev.after.max_nmi:.3f} nmi (max)",
     )

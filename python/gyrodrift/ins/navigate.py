@@ -1,7 +1,8 @@
 """Free navigation of a recorded or simulated IMU run from a given initial state, with errors against the truth.
 
 `navigate_from` runs the Rust strapdown navigator over a log from an `InitialState` (the log's truth, given values
-or an alignment's result) with given bias estimates subtracted (`NavSettings`) and returns the nav.parquet columns
+or an alignment's result) with given bias estimates and an axial drift law subtracted (`NavSettings`; the law sample by
+sample on the log's temperature, `gyrodrift.ins.compensation`) and returns the nav.parquet columns
 (`gyrodrift.ins.nav_columns`) and the summary; `gyrodrift.procedure.navigate` is the job that chooses the initial
 state (aligning the log when it carries no truth) and writes the files.
 """
@@ -21,7 +22,9 @@ import pyarrow as pa
 
 from gyrodrift import _core
 from gyrodrift.choices import MAX_DRIFT_DEG_H
+from gyrodrift.drift_law import DriftLaw
 from gyrodrift.errors import OptionError
+from gyrodrift.ins.compensation import axial_bias, compensation_record
 from gyrodrift.ins.nav_columns import (
     ATTITUDE_ERROR_COLUMNS,
     NAV_COLUMNS,
@@ -136,8 +139,10 @@ class NavSettings:
         Navigation length [h] from the initial state (None: to the end of the log).
     decimation_s : float
         Keep the state every `decimation_s` [s] (rounded to whole samples, counted from the navigation start).
-    compensate_drift_deg_h : float
-        The axial drift estimate [deg/h] included in ``gyro_bias_deg_h[2]`` (reported by the summary).
+    drift_law : DriftLaw or None
+        The axial drift to subtract (None: none). Its ``eps_ref_deg_h`` is included in ``gyro_bias_deg_h[2]``; a
+        law that reads the temperature adds k1 (T - T_ref) + k3 dT/dt sample by sample on the log's ``temp_c``
+        (`gyrodrift.ins.compensation`).
     gyro_bias_deg_h, accel_bias_ug : list of 3 float
         Gyro [deg/h] and accelerometer [ug] bias estimates, body x y z, subtracted from the measurements
         (compensated = measured - estimate).
@@ -151,7 +156,7 @@ class NavSettings:
 
     hours: float | None
     decimation_s: float
-    compensate_drift_deg_h: float
+    drift_law: DriftLaw | None
     gyro_bias_deg_h: list[float]
     accel_bias_ug: list[float]
     vertical: str | None
@@ -164,7 +169,7 @@ class NavSettings:
         *,
         hours: float | None,
         decimation_s: float,
-        compensate_drift_deg_h: float,
+        drift_law: DriftLaw | None,
         gyro_bias_deg_h: Sequence[float] | None,
         accel_bias_ug: Sequence[float] | None,
         vertical: str | None,
@@ -172,8 +177,8 @@ class NavSettings:
         quiet: bool,
     ) -> NavSettings:
         """The settings of `gyrodrift.procedure.navigate`'s keywords (whose defaults they are), each checked
-        (`OptionError` naming it); a bias left None is zero, and the axial drift estimate `compensate_drift_deg_h` is
-        added to the z gyro bias estimate."""
+        (`OptionError` naming it); a bias left None is zero, and the drift law's ``eps_ref_deg_h`` is added to the z
+        gyro bias estimate."""
         if not (isinstance(chunk_samples, int) and chunk_samples >= 1):
             raise OptionError(f"navigate: chunk_samples must be a positive integer, got {chunk_samples!r}")
         if not (decimation_s > 0 and math.isfinite(decimation_s)):
@@ -183,19 +188,23 @@ class NavSettings:
         if hours is not None and not math.isfinite(hours):
             raise OptionError(f"navigate: --hours must be a finite number of hours, got {hours!r}")
         gyro_est = _vector3("gyro_bias_deg_h", gyro_bias_deg_h)
-        if not (math.isfinite(compensate_drift_deg_h) and abs(compensate_drift_deg_h) <= MAX_DRIFT_DEG_H):
-            raise OptionError(
-                f"navigate: --drift-deg-h must be a finite drift within +-{MAX_DRIFT_DEG_H:g} deg/h (an RLG's is of "
-                f"order 0.001-0.01 deg/h), got {compensate_drift_deg_h!r}"
-            )
-        gyro_est[2] += float(compensate_drift_deg_h)
+        if drift_law is not None:
+            if not isinstance(drift_law, DriftLaw):
+                raise TypeError(f"navigate: drift_law must be a DriftLaw, got {type(drift_law).__name__}")
+            if not abs(drift_law.eps_ref_deg_h) <= MAX_DRIFT_DEG_H:
+                raise OptionError(
+                    f"navigate: the drift law's eps_ref_deg_h (--drift-deg-h) must be a finite drift within "
+                    f"+-{MAX_DRIFT_DEG_H:g} deg/h (an RLG's is of order 0.001-0.01 deg/h), got "
+                    f"{drift_law.eps_ref_deg_h!r}"
+                )
+            gyro_est[2] += drift_law.eps_ref_deg_h
         accel_est = _vector3("accel_bias_ug", accel_bias_ug)
         if vertical is not None and vertical not in VERTICAL_CHANNELS:
             raise OptionError(f"navigate: vertical must be one of {', '.join(VERTICAL_CHANNELS)}, got {vertical!r}")
         return cls(
             hours=hours,
             decimation_s=decimation_s,
-            compensate_drift_deg_h=float(compensate_drift_deg_h),
+            drift_law=drift_law,
             gyro_bias_deg_h=gyro_est,
             accel_bias_ug=accel_est,
             vertical=vertical,
@@ -305,7 +314,8 @@ def navigate_from(
     initial : InitialState
         The state at the navigation start (`true_start`, `given_start`, or an alignment's result).
     settings : NavSettings
-        Length, output step, bias estimates subtracted, vertical channel, chunking.
+        Length, output step, bias estimates and drift law subtracted, vertical channel, chunking. A drift law
+        reading the temperature needs the log's ``temp_c`` (`gyrodrift.logs.LogError` otherwise).
     source : path, ImuData or Scenario, optional
         What `log` was opened from: a moving-base source's simulated route is the default reference and its table
         angle gives the vehicle's attitude (`VEHICLE_COLUMNS`).
@@ -360,6 +370,9 @@ def navigate_from(
     )
     nav.set_gyro_bias([b * DEG_PER_H for b in settings.gyro_bias_deg_h])
     nav.set_accel_bias([b * MICRO_G for b in settings.accel_bias_ug])
+    law = settings.drift_law
+    # A law reading the temperature: the z bias per sample (the other z estimate is the given one, exact to rounding).
+    law_bias = None if law is None else axial_bias(law, log, settings.gyro_bias_deg_h[2] - law.eps_ref_deg_h)
 
     true_deg = np.empty((n_total // dec, 3)) if log.has_truth_columns else None
     # A scenario navigated on the fly carries its table angle in the chunks: kept for the vehicle attitude.
@@ -384,6 +397,7 @@ def navigate_from(
         decimation=dec,
         observe=keep if true_deg is not None or table_kept is not None else None,
         reference=heights,
+        axial_bias=None if law_bias is None else [law_bias],
         chunk_samples=settings.chunk_samples,
         quiet=settings.quiet,
     )
@@ -520,6 +534,7 @@ def _summary(
     """The content of summary.json (user units)."""
     site = run.log.site
     rate = run.log.rate_hz
+    law = run.settings.drift_law
 
     def point(state: Mapping[str, Any], extra: dict[str, Any]) -> dict[str, Any]:
         lat, lon = float(state["lat_rad"]), float(state["lon_rad"])
@@ -547,7 +562,8 @@ def _summary(
         "start_s": run.initial.start / rate,
         "vertical": run.vertical,
         "vertical_reference": run.vertical_reference,
-        "compensate_drift_deg_h": run.settings.compensate_drift_deg_h,
+        "compensate_drift_deg_h": 0.0 if law is None else law.eps_ref_deg_h,
+        **compensation_record(law),
         "gyro_bias_deg_h": run.settings.gyro_bias_deg_h,
         "accel_bias_ug": run.settings.accel_bias_ug,
         "initial": run.initial.state(),

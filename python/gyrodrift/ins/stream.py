@@ -12,7 +12,8 @@ beyond those outputs and nothing keeps a chunk of the log alive.
 The navigators are built by the caller (`gyrodrift.ins.navigate`, `gyrodrift.procedure.passes`): anything with
 ``process(dtheta_rad, dv_m_s, decimation) -> dict`` and ``state() -> dict`` (`gyrodrift._core.Navigator`; with
 ``reference``, ``process(dtheta_rad, dv_m_s, decimation, reference_height_m)``: the damped vertical channel's
-reference height per sample).
+reference height per sample; with an ``axial_bias`` for the navigator, ``process(dtheta_rad, dv_m_s, decimation,
+reference_height_m or None, axial_bias_rad_s)``: its z gyro bias per sample, `gyrodrift.ins.compensation`).
 """
 
 from __future__ import annotations
@@ -118,6 +119,7 @@ def run_navigators(
     keys: Sequence[str] = STATE_KEYS,
     observe: Callable[[LogChunk, int], None] | None = None,
     reference: Callable[[LogChunk], np.ndarray] | None = None,
+    axial_bias: Sequence[Callable[[LogChunk], np.ndarray] | None] | None = None,
     threads: int | None = None,
     chunk_samples: int = DEFAULT_CHUNK_SAMPLES,
     quiet: bool = True,
@@ -143,6 +145,10 @@ def run_navigators(
     reference : callable, optional
         ``reference(chunk)``: the reference height [m] at the end of each sample of a piece, handed to every
         navigator's ``process`` (the damped vertical channel's reference: a log column, a route's height).
+    axial_bias : sequence, optional
+        One per navigator: ``axial_bias(chunk)``, the z gyro bias [rad/s] of each sample of a piece for that
+        navigator (a drift law on the temperature, `gyrodrift.ins.compensation.AxialBias`: called once per piece,
+        in order), or None for a navigator keeping its own constant bias.
     threads : int, optional
         Threads running the navigators of one piece side by side (default: one per navigator, at most the
         number of CPUs, and the log read ahead on one more thread). 1 = everything on the calling thread:
@@ -155,6 +161,8 @@ def run_navigators(
     list of Track
         One per navigator, in order.
     """
+    if axial_bias is not None and len(axial_bias) != len(navigators):
+        raise ValueError(f"run_navigators: {len(axial_bias)} axial biases for {len(navigators)} navigators")
     per_hour = max(1, log.samples_for(HOUR))
     dec = int(decimation)
     m = n_samples // dec
@@ -177,12 +185,11 @@ def run_navigators(
                 piece = chunk.slice(a, b)
                 if observe is not None:
                     observe(piece, done)
-                dth, dv = piece.dtheta_rad, piece.dv_m_s
-                args = (dth, dv, dec) if reference is None else (dth, dv, dec, reference(piece))
+                args = _process_args(piece, dec, reference, axial_bias, len(navigators))
                 if pool is None:
-                    outs = [nav.process(*args) for nav in navigators]
+                    outs = [nav.process(*a) for nav, a in zip(navigators, args, strict=True)]
                 else:
-                    outs = list(pool.map(lambda nav, args=args: nav.process(*args), navigators))
+                    outs = list(pool.map(lambda nav, a: nav.process(*a), navigators, args))
                 k = (done + b - a) // dec - done // dec  # kept states in this piece
                 for track, out in zip(tracks, outs, strict=True):
                     for key in keys:
@@ -200,3 +207,27 @@ def run_navigators(
     for track, nav in zip(tracks, navigators, strict=True):
         track.final = nav.state()
     return tracks
+
+
+def _process_args(
+    piece: LogChunk,
+    dec: int,
+    reference: Callable[[LogChunk], np.ndarray] | None,
+    axial_bias: Sequence[Callable[[LogChunk], np.ndarray] | None] | None,
+    n_navigators: int,
+) -> list[tuple[Any, ...]]:
+    """Each navigator's ``process`` arguments for `piece` (the per-sample inputs computed once per piece, in
+    order: an `AxialBias` carries its temperature-rate state from piece to piece)."""
+    args: tuple[Any, ...] = (piece.dtheta_rad, piece.dv_m_s, dec)
+    heights = None if reference is None else reference(piece)
+    if heights is not None:
+        args += (heights,)
+    if axial_bias is None:
+        return [args] * n_navigators
+    out = []
+    for bias in axial_bias:
+        if bias is None:
+            out.append(args)
+        else:
+            out.append((piece.dtheta_rad, piece.dv_m_s, dec, heights, bias(piece)))
+    return out

@@ -315,6 +315,7 @@ def position_error_72h(data, chosen: dict, claims: dict) -> dict:
     run's true axial drift: nothing compensated, the selected model's identified drift compensated, the paper's
     Table 3 drift compensated. Errors computed minus true; position error in nmi (1852 m).
     """
+    from gyrodrift.drift_law import DriftLaw
     from gyrodrift.ins.scenario import Scenario
     from gyrodrift.procedure.navigate import navigate
 
@@ -348,7 +349,7 @@ def position_error_72h(data, chosen: dict, claims: dict) -> dict:
         "navigation from the true initial state (no alignment)",
     }
     for name, drift in passes.items():
-        nav = navigate(scenario, compensate_drift_deg_h=drift, decimation_s=FIG45_DECIMATION_S)
+        nav = navigate(scenario, drift_law=DriftLaw.constant(drift), decimation_s=FIG45_DECIMATION_S)
         curves["t_h"] = (np.asarray(nav["t_s"]) / 3600.0).tolist()
         curves[f"{name}_pos_err_nmi"] = np.asarray(nav["pos_err_nmi"]).tolist()
         out[f"{name}_final_pos_err_nmi"] = float(nav.summary["final_pos_err_nmi"])

@@ -7,7 +7,7 @@ Public API (plain functions returning dataclasses; the CLI in `gyrodrift.cli.pro
 --------------------------------------------------------------------------------------------------------
 align_log(log, ...) -> Alignment; write_alignment(alignment, out_dir)
 navigate_after_alignment(log, alignment, drifts_deg_h, hours, ...) -> PassResult
-navigate(imu, *, hours=None, compensate_drift_deg_h=0.0, initial="auto", ..., out_dir=None, plot=False) -> NavResult
+navigate(imu, *, hours=None, drift_law=None, initial="auto", ..., out_dir=None, plot=False) -> NavResult
     (the ``navigate`` command: from the log's truth or its alignment; nav.parquet, summary.json)
 extract_features(log, ..., with_truth=False) -> RunFeatures
 write_features_csv(rows, path, curves=None)

@@ -1,7 +1,8 @@
 """Evaluation of a drift compensation: 72 h of navigation after alignment without and with it.
 
 Both navigations run side by side in one read of the log, from the same alignment: "before" subtracts no
-z drift, "after" subtracts ``drift_deg_h`` from the z gyro (measured - estimate). Errors are computed minus
+z drift, "after" subtracts the compensation from the z gyro (measured - estimate): a constant drift, or a drift law
+evaluated sample by sample on the log's temperature (`gyrodrift.ins.compensation`). Errors are computed minus
 true; position error in nmi (1852 m). On a moving base the truth is a reference track
 (`gyrodrift.ins.track`): the simulated route of a moving-base imu.parquet by default, or a GNSS file.
 """
@@ -12,7 +13,9 @@ import math
 import os
 from typing import Any
 
+from gyrodrift.drift_law import DriftLaw
 from gyrodrift.errors import OptionError
+from gyrodrift.ins.compensation import require_temperature_for
 from gyrodrift.logs import ImuLog
 from gyrodrift.procedure.align import align_log
 from gyrodrift.procedure.passes import check_navigation_hours, navigate_after_alignment
@@ -25,7 +28,7 @@ __all__ = ["evaluate_compensation"]
 
 def evaluate_compensation(
     log: ImuLog,
-    drift_deg_h: float,
+    drift: float | DriftLaw,
     *,
     hours: float | None = None,
     timeline: Timeline = DEFAULT_TIMELINE,
@@ -42,8 +45,9 @@ def evaluate_compensation(
     ----------
     log : ImuLog
         Opened log with a known site, at least ``align_h + hours`` long.
-    drift_deg_h : float
-        Axial drift [deg/h] subtracted from the z gyro in the "after" navigation.
+    drift : float or DriftLaw
+        Axial drift subtracted from the z gyro in the "after" navigation: a constant [deg/h] or a drift law (a law
+        reading the temperature needs the log's ``temp_c``). The result's ``drift_law`` says which.
     hours, timeline, alignment, decimation_s, chunk_samples, quiet
         As in `find_true_drift`.
     source : str
@@ -58,8 +62,13 @@ def evaluate_compensation(
     Evaluation
     """
     hours = check_navigation_hours(timeline.truth_h if hours is None else hours, decimation_s)
-    if not math.isfinite(drift_deg_h):
-        raise OptionError(f"--drift-deg-h: expected a finite drift in deg/h, got {drift_deg_h!r}")
+    if isinstance(drift, DriftLaw):
+        law = drift
+    elif not math.isfinite(drift):
+        raise OptionError(f"--drift-deg-h: expected a finite drift in deg/h, got {drift!r}")
+    else:
+        law = DriftLaw.constant(float(drift))
+    require_temperature_for(law, log)
     log.require_duration(
         timeline.log_hours_for(hours) * HOUR,
         f"the evaluation ({timeline.align_h:g} h alignment + {hours:g} h navigation)",
@@ -72,7 +81,7 @@ def evaluate_compensation(
     res = navigate_after_alignment(
         log,
         alignment,
-        [0.0, float(drift_deg_h)],
+        [0.0, law],
         hours,
         decimation_s=decimation_s,
         chunk_samples=chunk_samples,
@@ -82,7 +91,8 @@ def evaluate_compensation(
     )
     return Evaluation(
         run=log.name,
-        drift_deg_h=float(drift_deg_h),
+        drift_deg_h=law.eps_ref_deg_h,
+        drift_law=law,
         hours=hours,
         before=res.curves[0],
         after=res.curves[1],

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 import pyarrow.parquet as pq
 
+from gyrodrift.drift_law import DriftLaw
 from gyrodrift.errors import OptionError
 from gyrodrift.files.atomic import OutputFolder, Stage, output_folder, staged, write_json
 from gyrodrift.ins.nav_columns import NAV_FORMAT, nav_table
@@ -60,7 +61,7 @@ def navigate(
     imu: str | os.PathLike[str] | ImuLog | ImuData | Scenario,
     *,
     hours: float | None = None,
-    compensate_drift_deg_h: float = 0.0,
+    drift_law: DriftLaw | None = None,
     gyro_bias_deg_h: Sequence[float] | None = None,
     accel_bias_ug: Sequence[float] | None = None,
     initial: str | Mapping[str, Any] = "auto",
@@ -85,9 +86,11 @@ def navigate(
     hours : float, optional
         Navigate only the first `hours` [h] of navigation (default: to the end of the log). Must cover at
         least one output step (`decimation_s`).
-    compensate_drift_deg_h : float
-        Axial (z) gyro drift estimate [deg/h], subtracted from the measured z rate
-        (compensated = measured - estimate). Added to ``gyro_bias_deg_h[2]``.
+    drift_law : gyrodrift.drift_law.DriftLaw, optional
+        The axial (z) gyro drift estimate [deg/h] subtracted from the measured z rate (compensated = measured -
+        estimate); a constant is ``DriftLaw.constant(d)`` (its drift added to ``gyro_bias_deg_h[2]``, as the summary
+        reports it). A law reading the temperature is evaluated on the log's ``temp_c`` sample by sample
+        (`gyrodrift.ins.compensation`; a log without it is a `LogError`). Default: none.
     gyro_bias_deg_h, accel_bias_ug : 3 numbers, optional
         Gyro [deg/h] and accelerometer [ug] bias estimates, body x y z, subtracted from the measurements
         (added to the alignment's own estimates when the state comes from an alignment).
@@ -139,13 +142,15 @@ def navigate(
         per whole hour of navigation ``{t_h, lat_deg, lon_deg, lat_err_arcsec, lon_err_arcsec, pos_err_nmi}``,
         ``final_pos_err_nmi`` and ``max_pos_err_nmi`` (over kept samples, checkpoints and the final state),
         ``initial_source`` and ``start_s`` (log time of the navigation start [s]), ``vertical`` and
-        ``vertical_reference``. On a moving base with the table angle (an imu.parquet, an in-memory run or a
-        scenario navigated on the fly) also the vehicle's attitude (``vehicle_{pitch,roll,yaw}_deg``).
+        ``vertical_reference``, ``compensation`` ("none", "constant" or "law"), ``drift_law`` (its
+        `DriftLaw.to_dict`) and ``compensate_drift_deg_h`` (its ``eps_ref_deg_h``). On a moving base with the
+        table angle (an imu.parquet, an in-memory run or a scenario navigated on the fly) also the vehicle's
+        attitude (``vehicle_{pitch,roll,yaw}_deg``).
     """
     settings = NavSettings.checked(
         hours=hours,
         decimation_s=decimation_s,
-        compensate_drift_deg_h=compensate_drift_deg_h,
+        drift_law=drift_law,
         gyro_bias_deg_h=gyro_bias_deg_h,
         accel_bias_ug=accel_bias_ug,
         vertical=vertical,

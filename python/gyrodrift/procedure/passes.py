@@ -2,7 +2,8 @@
 
 Every pass starts at the end of alignment (sample ``alignment.samples_used``) from the aligned attitude and
 velocity at the known static site, with the alignment's x/y gyro and x/y/z accelerometer bias estimates
-subtracted, and the pass's own z-gyro drift (deg/h) subtracted from the z gyro (measured - estimate). All
+subtracted, and the pass's own z-gyro drift (deg/h) subtracted from the z gyro (measured - estimate): a constant, or a
+`gyrodrift.drift_law.DriftLaw` evaluated sample by sample on the log's temperature (`gyrodrift.ins.compensation`). All
 navigators of a call see the same chunks (`gyrodrift.ins.stream.run_navigators`, the engine `navigate` uses
 too), so N trial drifts cost one read of the log.
 
@@ -19,7 +20,9 @@ from typing import Any
 import numpy as np
 
 from gyrodrift import _core
+from gyrodrift.drift_law import DriftLaw
 from gyrodrift.errors import OptionError
+from gyrodrift.ins.compensation import axial_bias
 from gyrodrift.ins.nav_errors import position_errors
 from gyrodrift.ins.navigate import vertical_reference
 from gyrodrift.ins.stream import run_navigators
@@ -52,7 +55,7 @@ def check_navigation_hours(hours: float, decimation_s: float) -> float:
 def navigate_after_alignment(
     log: ImuLog,
     alignment: Alignment,
-    drifts_deg_h: Sequence[float],
+    drifts_deg_h: Sequence[float | DriftLaw],
     hours: float,
     *,
     decimation_s: float = 60.0,
@@ -71,8 +74,9 @@ def navigate_after_alignment(
         The log that was aligned (its site is the truth).
     alignment : Alignment
         Result of `align_log` on that log.
-    drifts_deg_h : sequence of float
-        z-gyro drifts [deg/h] subtracted in each navigator (0 = uncompensated).
+    drifts_deg_h : sequence of float or DriftLaw
+        The z-gyro drift subtracted in each navigator: a constant [deg/h] (0 = uncompensated), or a drift law (its
+        ``eps_ref_deg_h`` the curve's ``drift_deg_h``; a law reading the temperature needs the log's ``temp_c``).
     hours : float
         Navigation length [h] after the alignment; the log must hold ``align + hours``.
     decimation_s : float
@@ -129,12 +133,15 @@ def navigate_after_alignment(
     # the reference track's height (moving base); held fixed on a static base without a height column.
     channel = "damped" if log.has_reference_height or reference is not None else "fixed"
     heights, vertical_ref = vertical_reference(channel, log, reference)
+    laws = [d if isinstance(d, DriftLaw) else DriftLaw.constant(float(d)) for d in drifts_deg_h]
     navs = []
-    for d in drifts_deg_h:
+    for law in laws:
         nav = _core.Navigator(alignment.navigator_config(vertical=channel))
-        nav.set_gyro_bias(alignment.gyro_compensation_rad_s(float(d)))
+        nav.set_gyro_bias(alignment.gyro_compensation_rad_s(law.eps_ref_deg_h))
         nav.set_accel_bias(alignment.accel_compensation_m_s2())
         navs.append(nav)
+    # The alignment estimates no z gyro bias: a law's per-sample bias is the law alone.
+    biases = [axial_bias(law, log) for law in laws]
     if reference is not None:
         reference.require_cover(start / rate, stop / rate, f"navigating {log.label} after the alignment")
     tracks = run_navigators(
@@ -146,6 +153,7 @@ def navigate_after_alignment(
         keys=("lat_rad", "lon_rad"),
         observe=temperature,
         reference=heights,
+        axial_bias=None if all(b is None for b in biases) else biases,
         threads=threads,
         chunk_samples=chunk_samples,
         quiet=quiet,
@@ -163,7 +171,7 @@ def navigate_after_alignment(
         lat0, lon0, _ = reference.at(start / rate + t_h * HOUR)
         hourly_true = reference.at(start / rate + hours_done * HOUR)[0]
     curves = []
-    for d, track in zip(drifts_deg_h, tracks, strict=True):
+    for law, track in zip(laws, tracks, strict=True):
         lat, lon = track.kept["lat_rad"], track.kept["lon_rad"]
         if exact_end:
             lat = np.append(lat, float(track.final["lat_rad"]))
@@ -172,7 +180,7 @@ def navigate_after_alignment(
         h = np.array([hourly_true[0]] + [float(st["lat_rad"]) for _, st in track.hourly])
         curves.append(
             NavCurve(
-                drift_deg_h=float(d),
+                drift_deg_h=law.eps_ref_deg_h,
                 t_h=t_h,
                 north_m=pe["north_err_m"],
                 east_m=pe["east_err_m"],

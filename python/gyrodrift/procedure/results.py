@@ -21,6 +21,7 @@ import numpy as np
 
 from gyrodrift.drift_law import DriftLaw
 from gyrodrift.earth import NMI_M
+from gyrodrift.ins.compensation import compensation_record
 from gyrodrift.learn.fleet_prior import drift_with_coefficient_prior
 from gyrodrift.runs.columns import FEATURES_COLUMNS, LABEL_COLUMNS, SMOOTHER_THERMAL_COLUMNS
 from gyrodrift.site import Site
@@ -414,7 +415,7 @@ class Evaluation:
     ----------
     run : str
     drift_deg_h : float
-        The compensated z drift [deg/h].
+        The compensated z drift [deg/h] (a drift law's ``eps_ref_deg_h``).
     hours : float
     before, after : NavCurve
         Error curves (``t_h`` since the end of alignment).
@@ -441,6 +442,9 @@ class Evaluation:
     start_s: float = 0.0
     vertical: str = "fixed"
     vertical_reference: str | None = None
+    drift_law: DriftLaw | None = None
+    """The compensated drift law (`gyrodrift.procedure.evaluate_compensation`: a constant's too); None: the constant
+    `drift_deg_h`."""
 
     @property
     def before_final_nmi(self) -> float:
@@ -456,6 +460,7 @@ class Evaluation:
             "format": "gyrodrift-evaluation/1",
             "run": self.run,
             "drift_deg_h": self.drift_deg_h,
+            **compensation_record(self.drift_law or DriftLaw.constant(self.drift_deg_h)),
             "drift_source": self.source,
             "reference": None if self.reference is None else self.reference.label,
             "vertical": self.vertical,

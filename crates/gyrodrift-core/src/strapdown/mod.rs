@@ -25,12 +25,16 @@
 //! from the current position (they change by < 1e-12 relative over that time even at aircraft speed);
 //! the transport rate w_en^n is recomputed every sample from the current velocity.
 //!
+//! Per-sample axial bias: `process_with` can take the z gyro bias estimate of every sample [rad/s] (a drift law
+//! evaluated on the measured temperature); it replaces `gyro_bias[2]` for that sample (dtheta_z - b_z,k dt) and the
+//! last one stays the estimate. A constant per-sample bias gives the bits of `set_gyro_bias` with that bias.
+//!
 //! Feedback of an error-state filter: `Navigator::correct(phi, dv)` (q <- q(phi) o q, v <- v - dv; the phi-angle
 //! sign of `kalman`), which keeps the coning/sculling memory, so the alignment never restarts the navigator.
 //!
 //! Vertical channel: `Fixed` holds h at its initial value and v_U = 0 (static base). `Damped` is a
 //! second-order loop towards a reference height h_ref: the initial height unless the caller gives one
-//! (`set_reference_height`, or one per sample with `process_with_reference`: a barometric or known height, the
+//! (`set_reference_height`, or one per sample with `process_with`: a barometric or known height, the
 //! route's height):
 //!    v_U += (a_U - k2 (h - h_ref)) dt,   h += (v_U - k1 (h - h_ref)) dt,
 //! with k1 = 2 zeta_v w_v, k2 = w_v^2 + 2 g / R (cancelling the free-inertial instability 2 g / R),
@@ -198,20 +202,52 @@ pub fn coning_sculling(dtheta: Vec3, dv: Vec3, dtheta_prev: Vec3, dv_prev: Vec3)
     (phi, add(dv, add(rot, scul)))
 }
 
-/// Check reference heights \[m\]: finite and within the height limits of `limits` (the first bad one is named by
-/// its 0-based sample index).
-fn check_reference_heights(h: &[f64]) -> Result<(), CoreError> {
-    match h.iter().position(|x| !(MIN_HEIGHT_M..=MAX_HEIGHT_M).contains(x)) {
+/// Check per-sample values: each finite and within `[lo, hi]` (the first bad one is named by its 0-based sample
+/// index and `key`).
+fn check_per_sample(key: &'static str, what: &str, x: &[f64], lo: f64, hi: f64, unit: Unit) -> Result<(), CoreError> {
+    match x.iter().position(|v| !(lo..=hi).contains(v)) {
         None => Ok(()),
         Some(index) => Err(CoreError::Sample {
-            key: "reference_height_m",
+            key,
             index,
             message: format!(
-                "reference height {} m must be finite and within [{MIN_HEIGHT_M}, {MAX_HEIGHT_M}] m",
-                crate::error::sig(h[index])
+                "{what} {} must be finite and within [{}, {}]",
+                unit.show(x[index]),
+                unit.show(lo),
+                unit.show(hi)
             ),
         }),
     }
+}
+
+/// Check reference heights \[m\]: finite and within the height limits of `limits`.
+fn check_reference_heights(h: &[f64]) -> Result<(), CoreError> {
+    check_per_sample(
+        "reference_height_m",
+        "reference height",
+        h,
+        MIN_HEIGHT_M,
+        MAX_HEIGHT_M,
+        Unit::Si("m"),
+    )
+}
+
+/// The per-sample values `x[first..first + n]` of a block of samples when `given`, else none.
+fn block_of(x: &[f64], given: bool, first: usize, n: usize) -> &[f64] {
+    if given {
+        &x[first..first + n]
+    } else {
+        &x[..0]
+    }
+}
+
+/// Per-sample inputs of `Navigator::process_with`, one value per sample when given.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SampleInputs<'a> {
+    /// Reference height of the damped vertical channel at the end of each sample \[m\].
+    pub reference_height_m: Option<&'a [f64]>,
+    /// Axial (z) gyro bias estimate subtracted from each sample [rad/s] (replaces `gyro_bias[2]`).
+    pub axial_bias_rad_s: Option<&'a [f64]>,
 }
 
 /// The strapdown navigator (see the module docs).
@@ -464,39 +500,58 @@ impl Navigator {
         decimation: u64,
         sink: F,
     ) -> Result<(), CoreError> {
-        self.process_impl::<false, F>(dtheta, dv, &[], decimation, sink)
+        self.process_impl::<false, false, F>(dtheta, dv, &[], &[], decimation, sink)
     }
 
-    /// `process` with the reference height \[m\] of the damped vertical channel at the end of every sample
-    /// (`reference_m` holds one value per sample; each must be finite and within the height limits of `limits`,
-    /// else the error names `reference_height_m` and the sample, and the navigator is left as it was). The last
-    /// value stays the reference for later calls of `process`.
-    pub fn process_with_reference<F: FnMut(&NavState)>(
+    /// `process` with per-sample inputs (`SampleInputs`, one value per sample each):
+    /// - `reference_height_m` \[m\]: the damped vertical channel's reference height at the end of every sample,
+    ///   finite and within the height limits of `limits`; the last one stays the reference for later calls;
+    /// - `axial_bias_rad_s` [rad/s]: the z gyro bias estimate subtracted from every sample (replacing
+    ///   `gyro_bias[2]`), finite and within the gyro bias limit; the last one stays the estimate.
+    ///
+    /// A wrong length or a bad value is an error naming the key (and the sample), and leaves the navigator as it
+    /// was. A constant `axial_bias_rad_s` gives the same bits as `set_gyro_bias` with that z bias and `process`.
+    pub fn process_with<F: FnMut(&NavState)>(
         &mut self,
         dtheta: &[f64],
         dv: &[f64],
-        reference_m: &[f64],
+        inputs: SampleInputs<'_>,
         decimation: u64,
         sink: F,
     ) -> Result<(), CoreError> {
-        check(
-            3 * reference_m.len() == dtheta.len(),
-            "reference_height_m",
-            format!(
-                "{} reference heights for {} samples",
-                reference_m.len(),
-                dtheta.len() / 3
+        let given = |key: &'static str, x: Option<&[f64]>| match x {
+            Some(x) => check(
+                3 * x.len() == dtheta.len(),
+                key,
+                format!("{} values for {} samples", x.len(), dtheta.len() / 3),
             ),
-        )?;
-        check_reference_heights(reference_m)?;
-        self.process_impl::<true, F>(dtheta, dv, reference_m, decimation, sink)
+            None => Ok(()),
+        };
+        given("reference_height_m", inputs.reference_height_m)?;
+        given("axial_bias_rad_s", inputs.axial_bias_rad_s)?;
+        if let Some(h) = inputs.reference_height_m {
+            check_reference_heights(h)?;
+        }
+        if let Some(b) = inputs.axial_bias_rad_s {
+            let m = MAX_GYRO_BIAS_RAD_S;
+            check_per_sample("axial_bias_rad_s", "axial gyro bias", b, -m, m, Unit::DegPerH)?;
+        }
+        let (h, b) = (inputs.reference_height_m, inputs.axial_bias_rad_s);
+        let (hs, bs) = (h.unwrap_or(&[]), b.unwrap_or(&[]));
+        match (h.is_some(), b.is_some()) {
+            (false, false) => self.process_impl::<false, false, F>(dtheta, dv, hs, bs, decimation, sink),
+            (true, false) => self.process_impl::<true, false, F>(dtheta, dv, hs, bs, decimation, sink),
+            (false, true) => self.process_impl::<false, true, F>(dtheta, dv, hs, bs, decimation, sink),
+            (true, true) => self.process_impl::<true, true, F>(dtheta, dv, hs, bs, decimation, sink),
+        }
     }
 
-    fn process_impl<const REF: bool, F: FnMut(&NavState)>(
+    fn process_impl<const REF: bool, const BIAS: bool, F: FnMut(&NavState)>(
         &mut self,
         dtheta: &[f64],
         dv: &[f64],
         reference_m: &[f64],
+        axial_bias: &[f64],
         decimation: u64,
         mut sink: F,
     ) -> Result<(), CoreError> {
@@ -514,20 +569,21 @@ impl Navigator {
             .enumerate()
         {
             let mut bad = false;
-            let block_h = if REF {
-                let first = i * CHECK_BLOCK;
-                &reference_m[first..first + block_a.len() / 3]
-            } else {
-                &[]
-            };
-            let mut rest = (block_a, block_b, block_h);
+            let (first, n) = (i * CHECK_BLOCK, block_a.len() / 3);
+            let mut rest = (
+                block_a,
+                block_b,
+                block_of(reference_m, REF, first, n),
+                block_of(axial_bias, BIAS, first, n),
+            );
             while !rest.0.is_empty() {
                 let m = (rest.0.len() / 3).min(usize::try_from(left).unwrap_or(usize::MAX));
                 let (a, a_rest) = rest.0.split_at(3 * m);
                 let (b, b_rest) = rest.1.split_at(3 * m);
-                let (h, h_rest) = if REF { rest.2.split_at(m) } else { (rest.2, rest.2) };
-                bad |= self.run::<REF>(a, b, h);
-                rest = (a_rest, b_rest, h_rest);
+                let (h, h_rest) = rest.2.split_at(if REF { m } else { 0 });
+                let (z, z_rest) = rest.3.split_at(if BIAS { m } else { 0 });
+                bad |= self.run::<REF, BIAS>(a, b, h, z);
+                rest = (a_rest, b_rest, h_rest, z_rest);
                 left -= m as u64;
                 if left == 0 {
                     sink(&self.state());
@@ -543,6 +599,11 @@ impl Navigator {
                     index: i * CHECK_BLOCK,
                     message: "a value in this block of samples is not finite or beyond the sensor limits".into(),
                 });
+            }
+        }
+        if BIAS {
+            if let Some(&last) = axial_bias.last() {
+                self.gyro_bias[2] = last;
             }
         }
         self.check_state()
@@ -575,9 +636,15 @@ impl Navigator {
     /// comparisons run beside the update at no measurable cost, where a separate pass cost 6 %); the caller
     /// then restores its saved state.
     /// With `REF`, `reference_m` holds the reference height of each sample (already checked), set before its
-    /// update.
+    /// update; with `BIAS`, `axial_bias` holds the z gyro bias of each sample [rad/s] (already checked).
     #[inline(never)]
-    fn run<const REF: bool>(&mut self, dtheta: &[f64], dv: &[f64], reference_m: &[f64]) -> bool {
+    fn run<const REF: bool, const BIAS: bool>(
+        &mut self,
+        dtheta: &[f64],
+        dv: &[f64],
+        reference_m: &[f64],
+        axial_bias: &[f64],
+    ) -> bool {
         // A local copy lets the state stay in registers for the whole loop.
         let mut nav = self.clone();
         let (lim_a, lim_b) = (self.max_dtheta, self.max_dv);
@@ -588,6 +655,10 @@ impl Navigator {
                 | !((b[0].abs() <= lim_b) & (b[1].abs() <= lim_b) & (b[2].abs() <= lim_b));
             if REF {
                 nav.h_ref = reference_m[k];
+            }
+            if BIAS {
+                // The product `set_gyro_bias` forms (`scale`), so a constant bias gives the same bits.
+                nav.gyro_bias_dt[2] = axial_bias[k] * nav.dt;
             }
             nav.step_inline([a[0], a[1], a[2]], [b[0], b[1], b[2]]);
         }

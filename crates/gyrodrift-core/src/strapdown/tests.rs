@@ -239,6 +239,22 @@ fn process_equals_step_by_step_bit_for_bit() {
     assert_eq!(a.state(), b.state());
 }
 
+/// Per-sample reference heights only.
+fn heights(h: &[f64]) -> SampleInputs<'_> {
+    SampleInputs {
+        reference_height_m: Some(h),
+        ..Default::default()
+    }
+}
+
+/// Per-sample axial biases only.
+fn axial(b: &[f64]) -> SampleInputs<'_> {
+    SampleInputs {
+        axial_bias_rad_s: Some(b),
+        ..Default::default()
+    }
+}
+
 #[test]
 fn reference_heights_per_sample_or_set_once_and_refused_values() {
     let cfg = NavigatorConfig {
@@ -249,7 +265,7 @@ fn reference_heights_per_sample_or_set_once_and_refused_values() {
     let (dth, dv) = tumbling(500);
     let mut a = Navigator::new(cfg.clone()).unwrap();
     let mut b = Navigator::new(cfg).unwrap();
-    a.process_with_reference(&dth, &dv, &[25.0; 500], 50, |_| {}).unwrap();
+    a.process_with(&dth, &dv, heights(&[25.0; 500]), 50, |_| {}).unwrap();
     b.set_reference_height(25.0).unwrap();
     b.process(&dth, &dv, 50, |_| {}).unwrap();
     assert_eq!(a.state(), b.state());
@@ -258,14 +274,14 @@ fn reference_heights_per_sample_or_set_once_and_refused_values() {
     let before = a.state();
     let mut h = vec![25.0; 500];
     h[321] = f64::NAN;
-    let err = a.process_with_reference(&dth, &dv, &h, 50, |_| {}).unwrap_err();
+    let err = a.process_with(&dth, &dv, heights(&h), 50, |_| {}).unwrap_err();
     assert_eq!(
         (err.key(), err.to_string().contains("sample 321")),
         ("reference_height_m", true)
     );
     h[321] = 30_000.0;
-    assert!(a.process_with_reference(&dth, &dv, &h, 50, |_| {}).is_err());
-    let err = a.process_with_reference(&dth, &dv, &h[..10], 50, |_| {}).unwrap_err();
+    assert!(a.process_with(&dth, &dv, heights(&h), 50, |_| {}).is_err());
+    let err = a.process_with(&dth, &dv, heights(&h[..10]), 50, |_| {}).unwrap_err();
     assert_eq!(err.key(), "reference_height_m");
     assert_eq!(a.state(), before);
     assert!(a.set_reference_height(f64::INFINITY).is_err());
@@ -303,4 +319,108 @@ fn chunking_and_decimation() {
     assert_eq!(out_a, out_b);
     assert_eq!(out_a.len(), 1000 / 7);
     assert!((out_a[0].t - 0.07).abs() < 1e-15);
+}
+
+/// 0.004 deg/h in rad/s: an RLG's axial drift.
+const DRIFT: f64 = 0.004 * std::f64::consts::PI / 180.0 / 3600.0;
+
+#[test]
+fn a_constant_axial_bias_per_sample_gives_the_bits_of_the_constant_bias() {
+    let cfg = NavigatorConfig {
+        attitude: Euler {
+            pitch: 0.01,
+            roll: 0.02,
+            yaw: 1.0,
+        },
+        ..Default::default()
+    };
+    // 10 000 samples: more than two check blocks, with a decimation that does not divide them.
+    let (dth, dv) = tumbling(10_000);
+    let mut a = Navigator::new(cfg.clone()).unwrap();
+    let mut b = Navigator::new(cfg).unwrap();
+    a.set_gyro_bias([1e-6, -2e-6, DRIFT]).unwrap();
+    b.set_gyro_bias([1e-6, -2e-6, 0.0]).unwrap();
+    let (mut out_a, mut out_b) = (Vec::new(), Vec::new());
+    a.process(&dth, &dv, 37, |s| out_a.push(*s)).unwrap();
+    b.process_with(&dth, &dv, axial(&[DRIFT; 10_000]), 37, |s| out_b.push(*s))
+        .unwrap();
+    assert_eq!(out_a, out_b);
+    assert_eq!(a.quaternion(), b.quaternion());
+    assert_eq!(a.state(), b.state());
+    // The last per-sample bias stays the estimate: both go on alike.
+    assert_eq!(b.gyro_bias(), [1e-6, -2e-6, DRIFT]);
+    a.process(&dth[..300], &dv[..300], 1, |_| {}).unwrap();
+    b.process(&dth[..300], &dv[..300], 1, |_| {}).unwrap();
+    assert_eq!(a.state(), b.state());
+}
+
+#[test]
+fn a_step_in_the_axial_bias_is_two_runs_spliced_and_reaches_the_update() {
+    let cfg = NavigatorConfig::default();
+    let (dth, dv) = tumbling(6000);
+    let split = 2500;
+    let mut bias = vec![DRIFT; 6000];
+    bias[split..].iter_mut().for_each(|b| *b = -3.0 * DRIFT);
+    let mut stepped = Navigator::new(cfg.clone()).unwrap();
+    let mut out_stepped = Vec::new();
+    stepped
+        .process_with(&dth, &dv, axial(&bias), 100, |s| out_stepped.push(*s))
+        .unwrap();
+    // The same with the bias set before each part (the state carried from the first part to the second).
+    let mut spliced = Navigator::new(cfg.clone()).unwrap();
+    let mut out_spliced = Vec::new();
+    spliced.set_gyro_bias([0.0, 0.0, DRIFT]).unwrap();
+    spliced
+        .process(&dth[..3 * split], &dv[..3 * split], 100, |s| out_spliced.push(*s))
+        .unwrap();
+    spliced.set_gyro_bias([0.0, 0.0, -3.0 * DRIFT]).unwrap();
+    spliced
+        .process(&dth[3 * split..], &dv[3 * split..], 100, |s| out_spliced.push(*s))
+        .unwrap();
+    assert_eq!(out_stepped, out_spliced);
+    assert_eq!(stepped.state(), spliced.state());
+    // And it reaches the attitude: on a body at rest (no body rotation to turn the error), the attitude differs
+    // from the constant bias's by the bias step times the time after it, about the z axis.
+    let (still_a, still_b) = ([0.0; 3 * 6000], [0.0, 0.0, 0.0981].repeat(6000));
+    let mut with_step = Navigator::new(cfg.clone()).unwrap();
+    with_step
+        .process_with(&still_a, &still_b, axial(&bias), 100, |_| {})
+        .unwrap();
+    let mut constant = Navigator::new(cfg).unwrap();
+    constant.set_gyro_bias([0.0, 0.0, DRIFT]).unwrap();
+    constant.process(&still_a, &still_b, 100, |_| {}).unwrap();
+    let expected = 4.0 * DRIFT * (6000 - split) as f64 / 100.0;
+    let seen = angle_between(with_step.quaternion(), constant.quaternion());
+    assert!((seen - expected).abs() < 1e-6 * expected, "{seen} vs {expected}");
+}
+
+#[test]
+fn axial_biases_refused_by_length_or_value_leave_the_navigator_as_it_was() {
+    let (dth, dv) = tumbling(500);
+    let mut a = Navigator::new(NavigatorConfig::default()).unwrap();
+    a.set_gyro_bias([0.0, 0.0, DRIFT]).unwrap();
+    a.process(&dth, &dv, 50, |_| {}).unwrap();
+    let before = a.state();
+    let err = a.process_with(&dth, &dv, axial(&[DRIFT; 499]), 50, |_| {}).unwrap_err();
+    assert_eq!(err.key(), "axial_bias_rad_s");
+    assert!(err.to_string().contains("499 values for 500 samples"), "{err}");
+    let mut b = vec![DRIFT; 500];
+    for bad in [f64::NAN, f64::INFINITY, 0.2] {
+        b[123] = bad;
+        let err = a.process_with(&dth, &dv, axial(&b), 50, |_| {}).unwrap_err();
+        assert_eq!(err.key(), "axial_bias_rad_s");
+        assert!(err.to_string().contains("sample 123"), "{err}");
+    }
+    // Both inputs at once: each checked.
+    let h = [0.0; 500];
+    let both = SampleInputs {
+        reference_height_m: Some(&h),
+        axial_bias_rad_s: Some(&b),
+    };
+    assert_eq!(
+        a.process_with(&dth, &dv, both, 50, |_| {}).unwrap_err().key(),
+        "axial_bias_rad_s"
+    );
+    assert_eq!(a.state(), before);
+    assert_eq!(a.gyro_bias(), [0.0, 0.0, DRIFT]);
 }
