@@ -51,6 +51,7 @@ from gyrodrift.learn.lssvr import LSSVR
 from gyrodrift.learn.physics_base import PhysicsBase
 from gyrodrift.learn.ranges import InputCheck, InputRanges
 from gyrodrift.learn.tuning import SearchBoundWarning, TuningOptions, TuningResult
+from gyrodrift.learn.user_warning import warn_user
 from gyrodrift.progress import progress
 from gyrodrift.runs.table import RunTable, as_run_table
 
@@ -202,7 +203,7 @@ class DriftModel(RegressorMixin, BaseEstimator):
         )
         if interval_calibration is None:  # a loaded model's file carries the warning already
             for text in self.interval_warnings():
-                warnings.warn(text, IntervalOutlierWarning, stacklevel=2)
+                warn_user(text, IntervalOutlierWarning)
         return self
 
     def _out_of_fold(self, trained: RunTable, spread_theta) -> tuple[np.ndarray, np.ndarray]:

@@ -14,7 +14,6 @@ The drift model (`gyrodrift.learn.drift_model.DriftModel`) joins this learner wi
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Callable
 from typing import Any
 
@@ -39,6 +38,7 @@ from gyrodrift.learn.tuning import (
     search_bound_message,
     tune_lssvr,
 )
+from gyrodrift.learn.user_warning import warn_user
 from gyrodrift.runs.table import as_run_table
 
 __all__ = ["RunEncoder", "TunedLSSVR", "make_learner", "make_scaler", "scaling_name"]
@@ -220,9 +220,7 @@ class TunedLSSVR(RegressorMixin, BaseEstimator):
             gamma, sigma = tuning.gamma, tuning.sigma
             on_bound = on_search_bound(gamma, sigma, check_bounds(tuning.bounds))
             if on_bound:
-                warnings.warn(
-                    search_bound_message(on_bound, gamma, sigma, tuning.bounds), SearchBoundWarning, stacklevel=2
-                )
+                warn_user(search_bound_message(on_bound, gamma, sigma, tuning.bounds), SearchBoundWarning)
         positive = sample_weight is None or bool(np.all(np.asarray(sample_weight, float) > 0))
         if solution is not None and positive:
             self.lssvr_ = LSSVR.from_solution(X, y, gamma=gamma, sigma=sigma, sample_weight=sample_weight, **solution)

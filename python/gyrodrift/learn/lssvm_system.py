@@ -46,13 +46,13 @@ tuner survives.
 from __future__ import annotations
 
 import math
-import warnings
 
 import numpy as np
 from scipy.linalg import lapack
 
 from gyrodrift.errors import GyrodriftError, InputError
 from gyrodrift.learn.kernels import check_positive
+from gyrodrift.learn.user_warning import warn_user
 
 __all__ = [
     "COND_REFUSE",
@@ -154,7 +154,7 @@ def check_condition(cond: float, what: str) -> None:
         )
     message = condition_warning_message(cond, what)
     if message:
-        warnings.warn(message, IllConditionedWarning, stacklevel=3)
+        warn_user(message, IllConditionedWarning)
 
 
 def not_positive_definite(what: str, hint: str) -> IllConditionedError:
