@@ -8,14 +8,18 @@ from tqdm import tqdm
 
 __all__ = ["progress"]
 
+SCALED_FROM = 10_000
+"""Totals from this count on show with SI prefixes (``1.2M/8.6M sample``), smaller ones as integers (``1/4 run``)."""
 
-def progress(total: int | float | None, desc: str, quiet: bool = False, *, unit: str = "sample") -> tqdm:
+
+def progress(total: int | None, desc: str, quiet: bool = False, *, unit: str = "sample") -> tqdm:
     """Return a tqdm bar writing to stderr; use as a context manager and call ``bar.update(n)``.
 
     Parameters
     ----------
-    total : int, float or None
-        Expected total of the `update` increments (None: unknown, the bar only counts).
+    total : int or None
+        Expected total of the `update` increments (None: unknown, the bar only counts). Counts below
+        `SCALED_FROM` show as integers, larger ones with SI prefixes.
     desc : str
         Label shown before the bar.
     quiet : bool
@@ -33,7 +37,7 @@ def progress(total: int | float | None, desc: str, quiet: bool = False, *, unit:
         total=total,
         desc=desc,
         unit=unit,
-        unit_scale=True,
+        unit_scale=total is not None and total >= SCALED_FROM,
         disable=disable,
         file=sys.stderr,
         dynamic_ncols=True,

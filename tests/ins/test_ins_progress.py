@@ -30,3 +30,16 @@ def test_bar_shows_on_a_terminal(monkeypatch):
         assert not bar.disable
         bar.update(10)
     assert "simulate" in sys.stderr.getvalue()
+
+
+def test_counts_are_integers_and_large_totals_scaled(monkeypatch):
+    """Issue 22: a campaign's bar read ``1.00/4.00 run``; counts are integers, large totals take SI prefixes."""
+    from gyrodrift.progress import SCALED_FROM
+
+    monkeypatch.setattr(sys, "stderr", _Tty())
+    with progress(4, "campaign", unit="run") as bar:
+        bar.update(1)
+        assert "| 1/4 [" in str(bar) and "1.00" not in str(bar)
+    with progress(8 * SCALED_FROM, "simulate") as bar:
+        bar.update(2 * SCALED_FROM)
+        assert "| 20.0k/80.0k [" in str(bar)

@@ -259,7 +259,7 @@ def fit(
             {
                 "model": str(out),
                 "n_runs": training["n_runs"],
-                "encoding": encoding,
+                "encoding": model.encoding,
                 "target": target,
                 "physics_column": model.physics_column_,
                 "coefficient_prior_deg_h_per_c": None
@@ -276,7 +276,7 @@ def fit(
         [out],
         quiet=quiet,
         as_json=as_json,
-        detail=f"fitted on {training['n_runs']} runs, {encoding}, target {target}: gamma = {est.gamma:.6g}, "
+        detail=f"fitted on {training['n_runs']} runs, {model.encoding}, target {target}: gamma = {est.gamma:.6g}, "
         f"sigma = {est.sigma:.6g}, LOO MAE = {loo_mae:.3e} deg/h",
     )
     # after the model and the summary are written: a failed write stays the command's one line
