@@ -6,9 +6,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
+from gyrodrift.files.columns import markdown_table
 from gyrodrift.ins import Scenario
 from gyrodrift.ins.nav_columns import (
     NAV_COLUMNS,
@@ -17,7 +19,6 @@ from gyrodrift.ins.nav_columns import (
     NAV_OUTPUT,
     POSITION_ERROR_COLUMNS,
     TRACK_COLUMNS,
-    markdown_table,
     nav_table,
 )
 from gyrodrift.ins.track import TrackError, load_track
@@ -42,7 +43,7 @@ def test_every_declared_column_is_named_once_with_a_unit_and_a_dtype():
     assert len(names) == len(set(names))
     for c in NAV_OUTPUT:
         assert c.unit and c.meaning, c
-        assert np.dtype(c.dtype) == np.float64, c
+        assert c.arrow_type == pa.float64(), c
 
 
 def test_a_written_navigation_holds_the_declared_columns_in_order_with_their_dtypes(tmp_path):
@@ -52,7 +53,7 @@ def test_a_written_navigation_holds_the_declared_columns_in_order_with_their_dty
     by_name = {c.name: c for c in NAV_OUTPUT}
     assert table.column_names == list(res.columns)
     for field in table.schema:
-        assert field.type.to_pandas_dtype() == np.dtype(by_name[field.name].dtype), field
+        assert field.type == by_name[field.name].arrow_type, field
     assert table.schema.metadata[b"gyrodrift.format"].decode() == NAV_FORMAT
     assert res.table().equals(table.replace_schema_metadata(None))
     for checkpoint in res.summary["checkpoints"] + [res.summary["final"]]:

@@ -9,6 +9,7 @@ from pathlib import Path
 import pyarrow as pa
 import pytest
 
+from gyrodrift.files.columns import names
 from gyrodrift.ins import Scenario
 from gyrodrift.ins.simulate import imu_schema, simulate
 from gyrodrift.logs import columns as C
@@ -43,13 +44,13 @@ def _documented(doc: str, heading: str) -> list[tuple[str, str]]:
 
 def test_the_reader_tuples_come_from_the_declaration():
     assert C.INCREMENT_COLUMNS == ("dtheta_x_rad", "dtheta_y_rad", "dtheta_z_rad", "dv_x_m_s", "dv_y_m_s", "dv_z_m_s")
-    assert C.RATE_COLUMNS == C.names(C.RATES) and C.TRUTH_COLUMNS == C.names(C.TRUTH)
+    assert C.RATE_COLUMNS == names(C.RATES) and C.TRUTH_COLUMNS == names(C.TRUTH)
     assert C.REF_HEIGHT_COLUMN == C.REF_HEIGHT.name == "ref_height_m"
     assert C.ROUTE_COLUMNS[3:] == ("true_vel_e_m_s", "true_vel_n_m_s", "true_vel_u_m_s")
     assert len({c.name for c in C.LOG_COLUMNS}) == len(C.LOG_COLUMNS) == 18
     for column in (*C.LOG_COLUMNS, C.TABLE_ANGLE, *C.ROUTE):
         assert column.name.endswith(("_s", "_rad", "_m_s", "_rad_s", "_m_s2", "_c", "_deg", "_m")), column
-        assert column.dtype == pa.float64() and column.unit and column.meaning
+        assert column.arrow_type == pa.float64() and column.unit and column.meaning
 
 
 def test_the_docs_tables_list_the_declared_columns_and_units():

@@ -26,7 +26,7 @@ from gyrodrift.runs.columns import (
     SMOOTHER_DRIFT_COLUMNS,
     SMOOTHER_THERMAL_COLUMNS,
     STD_COLUMNS,
-    Column,
+    RunColumn,
 )
 from gyrodrift.runs.table import (
     RunTable,
@@ -40,7 +40,7 @@ from gyrodrift.runs.table import (
 OUTPUTS_MD = Path(__file__).resolve().parents[2] / "docs" / "outputs.md"
 
 
-def _markdown(table: tuple[Column, ...], *, written: bool) -> str:
+def _markdown(table: tuple[RunColumn, ...], *, written: bool) -> str:
     """The docs table of `table`: one row per column, in declaration order."""
     if written:
         head = "| column | unit | type | needed | written by | meaning |\n|---|---|---|---|---|---|\n"
@@ -92,7 +92,9 @@ def test_the_derived_groups():
 
 def test_a_column_is_checked_when_declared():
     with pytest.raises(ValueError, match="column x: dtype 'int' is not one of text, float, bool"):
-        Column("x", "", "int", "", "", "extra", "nothing")
+        RunColumn("x", "", "nothing", dtype="int", kept="extra")
+    with pytest.raises(ValueError, match="column x: kept 'kept' is not one of attribute, extra, read"):
+        RunColumn("x", "", "nothing", kept="kept")
 
 
 def _rows():

@@ -1,22 +1,22 @@
 """The columns of a navigation output declared once: ``nav.parquet`` (`NavResult.columns`) and the reference-track
 file a moving base is checked against.
 
-Each column has its name, unit, dtype and meaning here; the navigator's column lists, the Parquet schema
-(`nav_table`) and the table of docs/scenarios.md (`markdown_table`, checked by tests/ins/test_nav_columns.py) are
-derived from them. Frames and signs: velocity in ENU, attitude pitch/roll/yaw (yaw positive counter-clockwise about
-Up), every error computed minus true.
+Each column (`gyrodrift.files.columns.Column`) has its name, unit, dtype and meaning here; the navigator's column
+lists, the Parquet schema (`nav_table`) and the table of docs/scenarios.md (`gyrodrift.files.columns.markdown_table`,
+checked by tests/ins/test_nav_columns.py) are derived from them. Frames and signs: velocity in ENU, attitude
+pitch/roll/yaw (yaw positive counter-clockwise about Up), every error computed minus true.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping
 
 import numpy as np
 import pyarrow as pa
 
+from gyrodrift.files.columns import Column, family, names
+
 __all__ = [
-    "Column",
     "NAV_STATE",
     "NAV_POSITION_ERRORS",
     "NAV_ATTITUDE_ERRORS",
@@ -32,43 +32,20 @@ __all__ = [
     "TRACK_VELOCITY",
     "TRACK_COLUMNS",
     "TRACK_VELOCITY_COLUMNS",
-    "names",
     "nav_table",
-    "markdown_table",
 ]
-
-
-@dataclass(frozen=True)
-class Column:
-    """One column of a navigation table: its name, unit (as the docs print it), numpy dtype and meaning."""
-
-    name: str
-    unit: str
-    meaning: str
-    dtype: str = "float64"
-
-
-def _family(names: Sequence[str], units: str | Sequence[str], meaning: str) -> tuple[Column, ...]:
-    """Columns that share one meaning (one row of the docs table); `units` one for all or one per column."""
-    per_column = [units] * len(names) if isinstance(units, str) else list(units)
-    return tuple(Column(n, u, meaning) for n, u in zip(names, per_column, strict=True))
-
-
-def names(columns: Sequence[Column]) -> tuple[str, ...]:
-    """The names of `columns`, in order."""
-    return tuple(c.name for c in columns)
 
 
 NAV_STATE = (
     Column("t_s", "s", "time since the start of navigation (`start_s` in the summary: 0 for the scenario's truth)"),
-    *_family(("lat_deg", "lon_deg", "height_m"), ("deg", "deg", "m"), "position"),
-    *_family(("vel_e_m_s", "vel_n_m_s", "vel_u_m_s"), "m/s", "velocity, ENU"),
-    *_family(("pitch_deg", "roll_deg", "yaw_deg"), "deg", "attitude"),
+    *family(("lat_deg", "lon_deg", "height_m"), ("deg", "deg", "m"), "position"),
+    *family(("vel_e_m_s", "vel_n_m_s", "vel_u_m_s"), "m/s", "velocity, ENU"),
+    *family(("pitch_deg", "roll_deg", "yaw_deg"), "deg", "attitude"),
 )
 """The navigated state after each kept sample: always in nav.parquet."""
 
 NAV_POSITION_ERRORS = (
-    *_family(
+    *family(
         ("lat_err_arcsec", "lon_err_arcsec"), "arcsec", "position error, computed minus true (when the site is known)"
     ),
     Column("pos_err_nmi", "nmi", "horizontal position error, 1 nmi = 1852 m"),
@@ -76,14 +53,14 @@ NAV_POSITION_ERRORS = (
 """Position errors against the static site or the reference track (`gyrodrift.ins.nav_errors.position_errors`):
 present when the truth is known; the summary's checkpoints carry them too."""
 
-NAV_ATTITUDE_ERRORS = _family(
+NAV_ATTITUDE_ERRORS = family(
     ("pitch_err_arcsec", "roll_err_arcsec", "yaw_err_arcsec"),
     "arcsec",
     "Euler-angle differences, computed minus true, yaw wrapped to +-180 deg (logs with `true_*_deg` columns)",
 )
 """Attitude errors (`gyrodrift.ins.nav_errors.attitude_errors_arcsec`): present when the log has the true attitude."""
 
-NAV_VEHICLE = _family(
+NAV_VEHICLE = family(
     ("vehicle_pitch_deg", "vehicle_roll_deg", "vehicle_yaw_deg"),
     "deg",
     "moving base, when the table angle is known (an imu.parquet or an in-memory run with `table_angle_deg`, or a "
@@ -107,12 +84,12 @@ NAV_FORMAT = "gyrodrift-nav/1"
 
 TRACK_REQUIRED = (
     Column("t_s", "s", "time stamp on the IMU log's time base (the end time of its samples), strictly increasing"),
-    *_family(("lat_deg", "lon_deg", "height_m"), ("deg", "deg", "m"), "geodetic position (WGS-84)"),
+    *family(("lat_deg", "lon_deg", "height_m"), ("deg", "deg", "m"), "geodetic position (WGS-84)"),
 )
 """Required columns of a reference-track file (`gyrodrift.ins.track.load_track`). The names are nav.parquet's, so a
 navigation output can serve as a track once its ``t_s`` is on the log's time base."""
 
-TRACK_VELOCITY = _family(("vel_e_m_s", "vel_n_m_s", "vel_u_m_s"), "m/s", "velocity, ENU (all three or none)")
+TRACK_VELOCITY = family(("vel_e_m_s", "vel_n_m_s", "vel_u_m_s"), "m/s", "velocity, ENU (all three or none)")
 """Optional velocity columns of a reference-track file."""
 
 TRACK_COLUMNS = names(TRACK_REQUIRED)
@@ -129,23 +106,4 @@ def nav_table(columns: Mapping[str, np.ndarray]) -> pa.Table:
         unknown = [n for n in columns if n not in _BY_NAME]
         what = f"undeclared column(s) {unknown}" if unknown else f"columns out of the declared order: {list(columns)}"
         raise ValueError(f"nav table: {what} (gyrodrift.ins.nav_columns)")
-    return pa.Table.from_pydict(
-        {n: pa.array(v, pa.from_numpy_dtype(np.dtype(_BY_NAME[n].dtype))) for n, v in columns.items()}
-    )
-
-
-def markdown_table(columns: Sequence[Column]) -> str:
-    """The docs table of `columns`: one row per run of consecutive columns sharing a meaning, their units joined
-    (one unit when they all share it)."""
-    rows = ["| column | unit | meaning |", "|---|---|---|"]
-    groups: list[list[Column]] = []
-    for c in columns:
-        if groups and groups[-1][0].meaning == c.meaning:
-            groups[-1].append(c)
-        else:
-            groups.append([c])
-    for group in groups:
-        units = [c.unit for c in group]
-        unit = units[0] if len(set(units)) == 1 else ", ".join(units)
-        rows.append(f"| {', '.join(f'`{c.name}`' for c in group)} | {unit} | {group[0].meaning} |")
-    return "\n".join(rows)
+    return pa.Table.from_pydict({n: pa.array(v, _BY_NAME[n].arrow_type) for n, v in columns.items()})

@@ -1,8 +1,8 @@
 """The IMU log columns and the ``imu.parquet`` format, declared once: name, unit, dtype and meaning of each column.
 
 Every column tuple of the readers (`INCREMENT_COLUMNS`, `RATE_COLUMNS`, ...), the header checks, the Parquet schema
-the simulator writes (`imu_file_schema`) come from the `Column`s below; tests/logs/test_log_columns.py checks the
-column tables of docs/procedure.md and docs/scenarios.md against them.
+the simulator writes (`imu_file_schema`) come from the `Column`s below (`gyrodrift.files.columns`);
+tests/logs/test_log_columns.py checks the column tables of docs/procedure.md and docs/scenarios.md against them.
 
 Body frame x right, y forward, z up (z = the turntable's axis); every name carries its unit.
 """
@@ -11,15 +11,14 @@ from __future__ import annotations
 
 import json
 from collections.abc import Mapping
-from dataclasses import dataclass
 from typing import Any
 
 import pyarrow as pa
 
+from gyrodrift.files.columns import Column, family, names
 from gyrodrift.site import Site
 
 __all__ = [
-    "Column",
     "TIME",
     "INCREMENTS",
     "RATES",
@@ -40,29 +39,13 @@ __all__ = [
     "SCENARIO_KEY",
     "SITE_KEY",
     "RATE_KEY",
-    "names",
     "imu_file_schema",
 ]
 
 
-@dataclass(frozen=True)
-class Column:
-    """One column of an IMU log: its name (the unit in it), unit, Arrow dtype and meaning."""
-
-    name: str
-    unit: str
-    meaning: str
-    dtype: pa.DataType = pa.float64()
-
-
 def _axes(template: str, unit: str, meaning: str, axes: str = "xyz") -> tuple[Column, ...]:
     """The columns of one three-axis quantity: `template` with ``{}`` replaced by each of `axes`."""
-    return tuple(Column(template.format(axis), unit, meaning) for axis in axes)
-
-
-def names(columns: tuple[Column, ...]) -> tuple[str, ...]:
-    """The names of `columns`, in order."""
-    return tuple(c.name for c in columns)
+    return family([template.format(axis) for axis in axes], unit, meaning)
 
 
 TIME = Column("t_s", "s", "end time of the sample, strictly increasing")
@@ -132,4 +115,4 @@ def imu_file_schema(*, scenario: Mapping[str, Any], site: Site, rate_hz: float, 
         RATE_KEY: json.dumps(rate_hz),
     }
     columns = _IMU_FILE + (ROUTE if moving else ())
-    return pa.schema([pa.field(c.name, c.dtype) for c in columns], metadata=meta)
+    return pa.schema([pa.field(c.name, c.arrow_type) for c in columns], metadata=meta)

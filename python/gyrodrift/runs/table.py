@@ -362,7 +362,7 @@ def _check_run_values(
 
 
 def _check_required(header: set[str], where: str, *, caller_gives: set[str], require_truth: bool) -> None:
-    """The columns a header must have, as each `gyrodrift.runs.columns.Column.required` says: ``always``, ``for
+    """The columns a header must have, as each `gyrodrift.runs.columns.RunColumn.required` says: ``always``, ``for
     fit`` (with `require_truth`), ``unless OTHER`` (the column OTHER replaces it and its group) or ``unless
     --OPTION`` (unless the caller gives its value: a name in `caller_gives`)."""
     for column in RUN_TABLE:
@@ -382,7 +382,7 @@ def _check_required(header: set[str], where: str, *, caller_gives: set[str], req
 
 def _check_optional(where: str, key: str, value: float) -> None:
     """An optional column's value: NaN (unknown) or a drift-sized number (|value| <= 10 in its unit); a 1-sigma
-    (`gyrodrift.runs.columns.Column.sigma`) must be > 0."""
+    (`gyrodrift.runs.columns.RunColumn.sigma`) must be > 0."""
     if math.isnan(value):
         return
     unit = COLUMNS[key].unit
