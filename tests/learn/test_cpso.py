@@ -342,6 +342,30 @@ def test_guard_keeps_good_values_and_replaces_traps():
     assert np.all(np.abs(z[[0, 1, 2, 3, 4, 6]] - np.array([0.0, 0.25, 0.5, 0.75, 1.0, 1e-12])) > 1e-10)
 
 
+def _reseed_with_numpy(z, gen, mu):
+    """The guard written with numpy masks (the reference of `reseed_chaos`'s Python-float test)."""
+    traps = np.array([0.0, 0.25, 0.5, 0.75, 1.0, 1.0 - 1.0 / mu, 1.0 / mu])
+    z = np.array(z, dtype=float)
+    while True:
+        near = np.any(np.abs(z[:, None] - traps[None, :]) <= 1e-10, axis=1)
+        bad = ~np.isfinite(z) | (z <= 0.0) | (z >= 1.0) | near
+        if not bad.any():
+            return z
+        z[bad] = gen.random(int(bad.sum()))
+
+
+def test_guard_is_the_numpy_mask_bit_for_bit():
+    rng = np.random.default_rng(4)
+    for mu in (2.5, 3.2, 4.0):
+        z = np.r_[rng.random(40), 0.0, 0.25, 0.5 + 5e-11, 0.75, 1.0, 1.0 - 1.0 / mu, 1.0 / mu, 1e-12, -0.1, 1.5]
+        z = np.r_[z, np.nan, np.inf, -np.inf, 0.5 + 2e-10]
+        for seed in range(5):
+            got = reseed_chaos(z, np.random.default_rng(seed), mu)
+            want = _reseed_with_numpy(z, np.random.default_rng(seed), mu)
+            np.testing.assert_array_equal(got, want)  # the same draws in the same places
+            assert got[-1] == 0.5 + 2e-10  # beyond the guard: kept
+
+
 @pytest.mark.parametrize("mu", [2.5, 2.9, 4.0])
 def test_chaos_search_does_not_collapse_onto_a_fixed_point(mu):
     # For mu < 3 the map converges onto 1 - 1/mu; the guard reseeds, so chaos points keep varying.
