@@ -99,19 +99,33 @@ def test_noise_file_and_options(tmp_path):
     assert (noise.arw_deg_rth, noise.vrw_ug_rthz, noise.source) == (0.001, 8.0, str(good))
     missing = tmp_path / "missing.toml"
     missing.write_text("[gyro]\narw_deg_rth = 0.001\n")
-    with pytest.raises(InputError, match=r"missing\.toml: missing key \[accel\] vrw_ug_rthz"):
+    with pytest.raises(InputError, match=r"missing\.toml: \[accel\] vrw_ug_rthz: missing \(a noise file needs"):
         load_noise_file(missing)
     text = tmp_path / "text.toml"
     text.write_text('[gyro]\narw_deg_rth = "small"\n[accel]\nvrw_ug_rthz = 5\n')
-    with pytest.raises(InputError, match=r"text\.toml: key \[gyro\] arw_deg_rth: expected a number"):
+    with pytest.raises(InputError, match=r"text\.toml: \[gyro\] arw_deg_rth: expected a number, got string 'small'$"):
         load_noise_file(text)
+    for body, message in (
+        (
+            "[gyro]\narw_deg_rth = 0.001\ncorrelation_s = 0\n[accel]\nvrw_ug_rthz = 5\n",
+            r"\[gyro\] correlation_s: must be > 0",
+        ),
+        ("gyro = 1\n[accel]\nvrw_ug_rthz = 5\n", r"bad\.toml: \[gyro\] must be a table, got number$"),
+        ("[gyro]\narw_deg_rth = 0.001\n[accel]\nvrw_ug_rthz = -5\n", r"\[accel\] vrw_ug_rthz: must be >= 0, got -5$"),
+    ):
+        bad = tmp_path / "bad.toml"
+        bad.write_text(body)
+        with pytest.raises(InputError, match=message):
+            load_noise_file(bad)
     runner = CliRunner()
     for command in ("truth", "identify", "features"):
         extra = {"identify": ["--model", "m.json"], "features": ["--out", str(tmp_path / "t.csv")]}.get(command, [])
         r = runner.invoke(main, [command, "nothing.parquet", *extra, "--gyro-arw-deg-rth", "0.001"])
         assert r.exit_code == 2 and "give --gyro-arw-deg-rth and --accel-vrw-ug-rthz together" in r.output
         r = runner.invoke(main, [command, "nothing.parquet", *extra, "--noise", str(missing)])
-        assert r.exit_code == 1 and r.output.count("\n") == 1 and "missing.toml: missing key" in r.output, r.output
+        assert (
+            r.exit_code == 1 and r.output.count("\n") == 1 and "missing.toml: [accel] vrw_ug_rthz: missing" in r.output
+        ), r.output
         r = runner.invoke(main, [command, "nothing.parquet", *extra, "--accel-vrw-ug-rthz", "-1"])
         assert r.exit_code == 2 and "--accel-vrw-ug-rthz" in r.output
 

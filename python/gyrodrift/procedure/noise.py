@@ -27,6 +27,7 @@ import numpy as np
 from gyrodrift import _core
 from gyrodrift.errors import InputError
 from gyrodrift.files.toml_input import read_toml
+from gyrodrift.files.toml_schema import Field, Number, Scope, type_name
 from gyrodrift.logs import ImuLog
 from gyrodrift.units import DEG, DEG_PER_H, DEG_PER_SQRT_H, HOUR, MICRO_G
 
@@ -127,27 +128,38 @@ class SensorNoise:
         return asdict(self)
 
 
+_NOISE_FILE: dict[str, dict[str, Field]] = {
+    "gyro": {
+        "arw_deg_rth": Number.non_negative(),
+        "bias_instability_deg_h": Number.non_negative(),
+        "correlation_s": Number(gt=0.0),
+        "rrw_deg_h_rth": Number.non_negative(),
+    },
+    "accel": {"vrw_ug_rthz": Number.non_negative()},
+}
+"""The noise keys of a scenario file's ``[gyro]`` and ``[accel]`` tables (docs/scenarios.md), as `load_noise_file`
+reads them."""
+
+
 def load_noise_file(path) -> SensorNoise:
     """A `SensorNoise` from a TOML file with ``[gyro]`` and ``[accel]`` tables (a scenario file, or the
     ``scenario_noise`` block of `gyrodrift allan` saved as TOML); other keys of those tables (biases, ...) are
-    ignored. ``arw_deg_rth`` and ``vrw_ug_rthz`` are required. Errors (`InputError`) name the file and the key.
+    ignored. ``[gyro] arw_deg_rth`` and ``[accel] vrw_ug_rthz`` are required. Errors (`InputError`, one line
+    ``<file>: [table] key: ...``, `gyrodrift.files.toml_schema`) name the file and the key.
     """
     p = Path(path)
     data = read_toml(p, InputError, expected="a TOML noise file with [gyro] and [accel] tables")
-    block = {part: data[part] for part in ("gyro", "accel") if isinstance(data.get(part), Mapping)}
-    for key, part in (("arw_deg_rth", "gyro"), ("vrw_ug_rthz", "accel")):
-        if key not in block.get(part, {}):
-            raise InputError(
-                f"{p}: missing key [{part}] {key} (expected a [gyro] arw_deg_rth and an [accel] vrw_ug_rthz)"
-            )
-    for part, sub in block.items():
-        for key, value in sub.items():
-            if key in _KEYS and (isinstance(value, bool) or not isinstance(value, int | float)):
-                raise InputError(f"{p}: key [{part}] {key}: expected a number, got {value!r}")
-    try:
-        return SensorNoise.from_block(block, source=str(p))
-    except InputError as exc:
-        raise InputError(f"{p}: {exc}") from None
+    root = Scope(str(p), InputError)
+    values: dict[str, Any] = {}
+    for (part, specs), required in zip(_NOISE_FILE.items(), ("arw_deg_rth", "vrw_ug_rthz"), strict=True):
+        table = data.get(part, {})
+        if not isinstance(table, Mapping):
+            raise root.fail(None, f"[{part}] must be a table, got {type_name(table)}")
+        scope = root.section(part)
+        if required not in table:
+            raise scope.fail(required, "missing (a noise file needs [gyro] arw_deg_rth and [accel] vrw_ug_rthz)")
+        values.update({k: v for k, v in scope.fields(table, specs).items() if v is not None})
+    return SensorNoise(**values, source=str(p))
 
 
 def _robust_sigma(d2: np.ndarray) -> np.ndarray:
