@@ -46,7 +46,7 @@ class _OneLineErrors(click.Group):
 
 @click.group(
     cls=_OneLineErrors,
-    epilog="Example: gyrodrift simulate examples/scenarios/tour.toml --out sim && gyrodrift truth sim/imu.parquet "
+    epilog="Example: gyrodrift simulate --example tour --out sim && gyrodrift truth sim/imu.parquet "
     "(the whole tour: README.md; the conventions shared by every command: docs/cli.md)",
 )
 @click.version_option(__version__, prog_name="gyrodrift")

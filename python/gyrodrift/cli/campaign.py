@@ -7,6 +7,7 @@ from pathlib import Path
 
 import click
 
+from gyrodrift.cli.examples import example_option, file_or_example
 from gyrodrift.cli.options import connect_timeout_option, json_option, print_json, quiet_option, say_wrote
 from gyrodrift.cli.types import FiniteFloat, InputPath, Seed
 
@@ -15,10 +16,11 @@ __all__ = ["COMMANDS", "campaign_command", "study_command"]
 
 @click.command(
     "campaign",
-    epilog="Examples: gyrodrift campaign examples/campaigns/default.toml --out fleet --workers 2 ; "
+    epilog="Examples: gyrodrift campaign --example default --out fleet --workers 2 ; "
     "gyrodrift campaign fleet --run-table runs.csv ; gyrodrift campaign fleet --export-log 7 --out run7",
 )
-@click.argument("source", type=InputPath(exists=True, dir_okay=True, path_type=Path))
+@click.argument("source", required=False, type=InputPath(exists=True, dir_okay=True, path_type=Path))
+@example_option("campaign")
 @click.option(
     "--out",
     type=click.Path(path_type=Path),
@@ -47,8 +49,11 @@ __all__ = ["COMMANDS", "campaign_command", "study_command"]
 )
 @json_option
 @quiet_option
-def campaign_command(source, out, workers, scheduler, connect_timeout_s, limit, run_table, export_run, as_json, quiet):
-    """Simulate and process a campaign of runs (SOURCE: a campaign TOML file), or read a campaign folder.
+def campaign_command(
+    source, example, out, workers, scheduler, connect_timeout_s, limit, run_table, export_run, as_json, quiet
+):
+    """Simulate and process a campaign of runs (SOURCE: a campaign TOML file, or a shipped --example), or read a
+    campaign folder.
 
     Each run is simulated in the worker (no log written), aligned, navigated for the 12 h features and the 72 h
     truth, its 12 h curve fit, 16 h smoother estimate and linear 72 h error curves computed, and its noise-free
@@ -65,6 +70,7 @@ def campaign_command(source, out, workers, scheduler, connect_timeout_s, limit, 
     from gyrodrift.fleet.store import CampaignStore, read_runs
     from gyrodrift.runs.table import write_run_table
 
+    source = file_or_example(source, example, "campaign", "SOURCE")
     if source.is_dir():
         store = CampaignStore(source)
         if run_table is None and export_run is None:
@@ -198,7 +204,7 @@ def study_command(folder, out, test_fraction, seed, max_iter, as_json, quiet):
     elif not quiet:
         for line in summary_lines(doc):
             click.echo(line)
-    say_wrote([out / "report.html"], quiet=quiet, as_json=as_json)
+    say_wrote([out / name for name in STUDY_FILES], quiet=quiet, as_json=as_json)
 
 
 COMMANDS = (campaign_command, study_command)

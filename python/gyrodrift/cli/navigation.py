@@ -6,6 +6,7 @@ from pathlib import Path
 
 import click
 
+from gyrodrift.cli.examples import example_option, file_or_example
 from gyrodrift.cli.options import (
     choice_option,
     json_option,
@@ -46,9 +47,10 @@ def compensation_of(drift_deg_h: float | None, drift_law_path: Path | None):
 
 @click.command(
     "simulate",
-    epilog="Example: gyrodrift simulate examples/scenarios/tour.toml --seed 2 --duration-h 20 --out sim",
+    epilog="Example: gyrodrift simulate --example tour --seed 2 --duration-h 20 --out sim",
 )
-@click.argument("scenario_toml", metavar="SCENARIO.toml", type=InputPath(path_type=Path))
+@click.argument("scenario_toml", metavar="[SCENARIO.toml]", required=False, type=InputPath(path_type=Path))
+@example_option("scenario")
 @out_folder_option("receiving imu.parquet and scenario.resolved.toml")
 @click.option(
     "--duration-h",
@@ -71,7 +73,8 @@ def compensation_of(drift_deg_h: float | None, drift_law_path: Path | None):
 @json_option
 @quiet_option
 def simulate_command(
-    scenario_toml: Path,
+    scenario_toml: Path | None,
+    example: str | None,
     out_dir: Path,
     duration_h: float | None,
     seed: int | None,
@@ -79,7 +82,7 @@ def simulate_command(
     as_json: bool,
     quiet: bool,
 ) -> None:
-    """Simulate the IMU of a static-base rotation INS described by SCENARIO.toml.
+    """Simulate the IMU of a rotation INS described by SCENARIO.toml (or by a shipped --example).
 
     --duration-h, --seed and --rate-hz replace the scenario's [run] values; they are checked as the file's keys
     are and recorded in scenario.resolved.toml.
@@ -88,6 +91,7 @@ def simulate_command(
     from gyrodrift.ins.scenario import Scenario, ScenarioError, load_scenario
     from gyrodrift.ins.simulate import SIMULATION_FILES, rotation_summary, simulate
 
+    scenario_toml = file_or_example(scenario_toml, example, "scenario", "SCENARIO.toml")
     out = OutputFolder(out_dir, "simulate", SIMULATION_FILES, inputs=[scenario_toml])
     scenario = load_scenario(scenario_toml)
     overrides = {"duration_h": duration_h, "seed": seed, "rate_hz": rate_hz}
