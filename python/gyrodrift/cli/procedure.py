@@ -196,6 +196,8 @@ def truth_command(log, criterion, hours, site, log_format, out_dir, noise, as_js
         f"{res.verify_drift_deg_h[2] - res.drift_deg_h:.4g} deg/h"
         f" -> {'verified' if res.verified else 'NOT verified'}"
     )
+    if res.law is not None:
+        click.echo(f"  {res.law.summary()}")
     click.echo(
         f"  alignment z estimate {res.alignment.z_drift_deg_h:.5f} +- {res.alignment.z_drift_std_deg_h:.5f} "
         f"deg/h (1-sigma, not used)"

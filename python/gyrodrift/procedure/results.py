@@ -29,6 +29,7 @@ from gyrodrift.units import DEG, DEG_PER_H, MICRO_G
 
 if TYPE_CHECKING:  # pragma: no cover
     from gyrodrift import _core
+    from gyrodrift.procedure.truth_law import BestLaw
 
 __all__ = [
     "Alignment",
@@ -259,6 +260,8 @@ class TrueDrift:
     flag_reason : str
     noise : dict or None
         The noise model of the covariance analysis (`SensorNoise.to_dict`).
+    law : BestLaw or None
+        The best drift law (`gyrodrift.procedure.truth_law`); None without a temperature or when not asked.
     """
 
     run: str
@@ -285,6 +288,7 @@ class TrueDrift:
     flagged: bool = False
     flag_reason: str = ""
     noise: dict | None = field(default=None, repr=False)
+    law: BestLaw | None = field(default=None, repr=False)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary (user units)."""
@@ -315,6 +319,7 @@ class TrueDrift:
                 "drift_deg_h": [float(x) for x in self.grid_drift_deg_h],
                 "criterion_nmi": [float(x) for x in self.grid_nmi],
             },
+            "best_law": None if self.law is None else self.law.to_dict(),
         }
 
 

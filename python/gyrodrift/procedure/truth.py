@@ -63,6 +63,7 @@ from gyrodrift.procedure.noise import SensorNoise, estimate_white_noise
 from gyrodrift.procedure.passes import check_navigation_hours, navigate_after_alignment
 from gyrodrift.procedure.results import Alignment, PassResult, TrueDrift
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
+from gyrodrift.procedure.truth_law import LawModel, law_basis
 from gyrodrift.units import ARCSEC, DEG, DEG_PER_H, HOUR
 
 __all__ = [
@@ -179,6 +180,7 @@ def find_true_drift(
     temperature_hours: float | None = None,
     noise: SensorNoise | Mapping[str, Any] | None = None,
     verify: bool = True,
+    law: bool = True,
     threads: int | None = None,
     chunk_samples: int = 100_000,
     quiet: bool = True,
@@ -216,6 +218,11 @@ def find_true_drift(
     verify : bool
         Navigate ``d*`` and its neighbours in a second read (and refine); False: one read, ``d*`` from the first
         linearisation, and ``optimum`` None, ``verify_drift_deg_h`` / ``verify_nmi`` empty, ``verified`` False.
+    law : bool
+        Also find the best drift law (`gyrodrift.procedure.truth_law`; ``TrueDrift.law``) when the log has a
+        temperature: one more navigator in the first read (and in each verification read, the law at its
+        optimum); T_ref the temperature at the end of the features window (``timeline.features_h``, at most
+        `hours`).
     threads : int, optional
         Threads of each read (`navigate_after_alignment`; 1 = all on the calling thread).
     chunk_samples, quiet
@@ -237,10 +244,13 @@ def find_true_drift(
     )
     if alignment is None:
         alignment = align_log(log, timeline=timeline, chunk_samples=chunk_samples, quiet=quiet)
+    law = law and log.has_temperature
+    if law and temperature_hours is None:
+        temperature_hours = min(float(timeline.features_h), hours)  # T_ref: the end of the features window
     first: PassResult = navigate_after_alignment(
         log,
         alignment,
-        [0.0, trial_deg_h],
+        [0.0, trial_deg_h, law_basis()] if law else [0.0, trial_deg_h],
         hours,
         decimation_s=decimation_s,
         temperature_hours=temperature_hours,
@@ -249,9 +259,18 @@ def find_true_drift(
         quiet=quiet,
         desc="truth pass 1",
     )
-    c0, c1 = first.curves
+    c0, c1 = first.curves[:2]
     gn = (c1.north_m - c0.north_m) / trial_deg_h
     ge = (c1.east_m - c0.east_m) / trial_deg_h
+    law_model = None
+    if law:
+        assert first.temperature is not None  # asked for
+        basis = first.curves[2]
+        law_model = LawModel.from_basis(
+            basis.north_m, basis.east_m, c0.north_m, c0.east_m, gn, ge, first.temperature.end_c, criterion
+        )
+    law_at = (0.0, c0.north_m, c0.east_m, gn, ge)  # the linearisation of the law navigated last (or the first)
+    law_navigated_nmi = math.nan
     sensitivity = float(np.hypot(gn[-1], ge[-1]) / NMI_M)
     ref_d, ref_n, ref_e = 0.0, c0.north_m, c0.east_m  # the linearisation point and its curves
     d_star = minimise_linear_criterion(ref_n, ref_e, gn, ge, criterion)
@@ -261,10 +280,14 @@ def find_true_drift(
     second: PassResult | None = None
     while verify:
         verify_d = np.array([d_star - step_deg_h, d_star, d_star + step_deg_h])
+        navigated_law = []
+        if law_model is not None and law_model.determined:
+            law_at = (ref_d, ref_n, ref_e, gn, ge)
+            navigated_law = [law_model.law(*law_at)]
         second = navigate_after_alignment(
             log,
             alignment,
-            list(verify_d),
+            [*verify_d, *navigated_law],
             hours,
             decimation_s=decimation_s,
             threads=threads,
@@ -272,7 +295,10 @@ def find_true_drift(
             quiet=quiet,
             desc="truth verify",
         )
-        lo, mid, hi = second.curves
+        lo, mid, hi = second.curves[:3]
+        if navigated_law:
+            law_curve = second.curves[3]
+            law_navigated_nmi = float(criterion_value(law_curve.north_m, law_curve.east_m, criterion))
         # Re-linearise at d* with the central difference of the verification passes (a secant step).
         gn_c = (hi.north_m - lo.north_m) / (2.0 * step_deg_h)
         ge_c = (hi.east_m - lo.east_m) / (2.0 * step_deg_h)
@@ -284,7 +310,7 @@ def find_true_drift(
         refinements += 1
     verified = False
     if second is not None:
-        verify_nmi = np.array([float(criterion_value(c.north_m, c.east_m, criterion)) for c in second.curves])
+        verify_nmi = np.array([float(criterion_value(c.north_m, c.east_m, criterion)) for c in second.curves[:3]])
         verified = bool(verify_nmi[1] <= verify_nmi[0] and verify_nmi[1] <= verify_nmi[2])
     grid = d_star + np.linspace(-grid_half_width_deg_h, grid_half_width_deg_h, grid_points)
     off = grid - ref_d
@@ -304,6 +330,15 @@ def find_true_drift(
         decimation_s=decimation_s,
         align_h=timeline.align_h,
     )
+    best_law = None
+    if law_model is not None:
+        best_law = law_model.result(
+            *law_at,
+            constant_deg_h=float(d_star),
+            constant_std_deg_h=sigma,
+            constant_nmi=predicted,
+            navigated_nmi=law_navigated_nmi,
+        )
     budget = label_budget_deg_h(hours, decimation_s)
     flagged = bool(sigma > budget) or not math.isfinite(sigma)
     reason = (
@@ -331,6 +366,7 @@ def find_true_drift(
         alignment=alignment,
         base=c0,
         optimum=None if second is None else second.curves[1],
+        law=best_law,
         trial=c1,
         temperature=first.temperature,
         drift_std_deg_h=sigma,
