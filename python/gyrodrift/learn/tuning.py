@@ -55,7 +55,7 @@ from gyrodrift.choices import METHODS, OBJECTIVES
 from gyrodrift.errors import OptionError
 from gyrodrift.learn.cpso import CPSOSettings, CPSOSolver
 from gyrodrift.learn.kernels import SIGMA_MAX, SIGMA_MIN, available_memory_bytes, check_matrix_memory, squared_distances
-from gyrodrift.learn.lssvm_batch import STACKED_MAX_N, EigenCache, rbf_batch_errors
+from gyrodrift.learn.lssvm_batch import STACKED_MAX_N, BatchErrors, EigenCache
 from gyrodrift.learn.lssvm_system import check_sample_weight, lssvr_solve
 
 DEFAULT_BOUNDS = ((1e-2, 1e5), (1e-3, 1e2))
@@ -311,17 +311,18 @@ def make_objective(
     w = check_sample_weight(sample_weight, len(y))
     # sigmas the swarm asks for again (particles on a sigma bound)
     cache = EigenCache(sqdist, w, size=cache_size) if cache_size else None
+    kind = "train" if objective == "train_mae" else "loo"
+    batch = None if objective == "kfold_mae" else BatchErrors(sqdist, y, kind, w, threads, cache)
 
     def fitness(params: np.ndarray) -> np.ndarray:
         params = np.atleast_2d(np.asarray(params, float))
         gammas, sigmas = params[:, 0], params[:, 1]
         if sigma_snap is not None:
             sigmas = snap_sigmas(sigmas, *sigma_snap)
-        if objective == "kfold_mae":
+        if batch is None:
             errors = _kfold_errors(sqdist, y, gammas, sigmas, n_folds, w)
         else:
-            kind = "train" if objective == "train_mae" else "loo"
-            errors = rbf_batch_errors(sqdist, y, gammas, sigmas, kind, w, threads, cache)
+            errors = batch(gammas, sigmas)
         out = np.mean(np.abs(errors), axis=1) if w is None else np.abs(errors) @ w / w.sum()
         return np.where(np.isfinite(out), out, np.inf)
 
