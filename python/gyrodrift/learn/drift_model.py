@@ -140,7 +140,15 @@ class DriftModel(RegressorMixin, BaseEstimator):
             raise OptionError(f"calibration_folds must be 0 (leave-one-out) or an integer >= 2, got {folds!r}")
 
     def fit(
-        self, X, y=None, *, spread_theta=None, interval_calibration=None, interval_disagreement=None, **fit_params
+        self,
+        X,
+        y=None,
+        *,
+        spread_theta=None,
+        interval_calibration=None,
+        interval_disagreement=None,
+        training_sha256=None,
+        **fit_params,
     ) -> DriftModel:
         """Fit on runs (RunTable or structured array) and drifts ``y`` [deg/h] (default: the runs' own).
 
@@ -149,9 +157,10 @@ class DriftModel(RegressorMixin, BaseEstimator):
         weighted by `label_weights`), then the learner (``fit_params`` go to its ``fit``, e.g.
         ``lssvr__tuning``), the input ranges, and the interval's spread model and calibration scores
         (`gyrodrift.learn.interval`). ``spread_theta``, ``interval_calibration`` (out-of-sample residuals and
-        spreads) and ``interval_disagreement`` (``interval_.disagreement_deg_h_``), a model file's record, are used as
-        given: no likelihood is maximised, no fold refitted, no leave-one-out spread or training prediction
-        computed: how a saved model is rebuilt.
+        spreads), ``interval_disagreement`` (``interval_.disagreement_deg_h_``) and ``training_sha256`` (the
+        training runs' `training_digest`, which the caller checked), a model file's record, are used as given: no
+        likelihood is maximised, no fold refitted, no leave-one-out spread or training prediction computed, the runs
+        not hashed again: how a saved model is rebuilt.
         """
         self.check_options()
         runs = as_run_table(X)
@@ -170,7 +179,7 @@ class DriftModel(RegressorMixin, BaseEstimator):
         self.learner_: Pipeline = clone(self.learner).fit(runs, target, **fit_params)
         self.training_: dict[str, Any] = {
             "n_runs": len(trained),
-            "sha256": training_digest(trained),
+            "sha256": training_digest(trained) if training_sha256 is None else training_sha256,
             "source": trained.source,
             "weighted": base.sample_weight_ is not None,
             "runs": trained,

@@ -381,7 +381,7 @@ def model_from_dict(doc: dict, where: str = "<model>") -> DriftModel:
             # the file's "warnings" already say so; a loaded model does not repeat them
             warnings.simplefilter("ignore", SearchBoundWarning)
             warnings.simplefilter("ignore", IllConditionedWarning)
-            model.fit(runs, lssvr__tuning=tuning, lssvr__solution=solution, **spread)
+            model.fit(runs, lssvr__tuning=tuning, lssvr__solution=solution, training_sha256=sha, **spread)
             model.training_["left_out"] = list(left_out)
     except GyrodriftError as exc:
         raise ModelFileError(
