@@ -29,6 +29,8 @@ def file_or_example(path: Path | None, example: str | None, kind: str, argument:
     from gyrodrift.errors import OptionError
     from gyrodrift.files.examples import example_path
 
-    if (path is None) == (example is None):
+    if example is not None and path is None:
+        return example_path(kind, example)
+    if path is None or example is not None:
         raise OptionError(f"give {argument} or --example NAME (a {kind} shipped with gyrodrift), exactly one")
-    return path if example is None else example_path(kind, example)
+    return path

@@ -16,7 +16,7 @@ from typing import Any
 from gyrodrift.files.atomic import Stage, write_json
 from gyrodrift.fleet.study import FLEET_ROW
 
-__all__ = ["FIGURES", "STUDY_FILES", "summary_lines", "write_study_report"]
+__all__ = ["FIGURES", "STUDY_FILES", "make_figures", "method_colours", "summary_lines", "write_study_report"]
 
 FIGURES = ("methods.png", "train_size.png", "noise_grade.png", "latitude.png")
 STUDY_FILES = ("study.json", "report.html", *FIGURES)
@@ -74,7 +74,7 @@ def summary_lines(doc: dict) -> list[str]:
 def _png(fig) -> bytes:
     buf = io.BytesIO()
     fig.tight_layout()
-    fig.savefig(buf, format="png", dpi=110)
+    fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")  # legends beside or below the axes included
     return buf.getvalue()
 
 
@@ -85,36 +85,66 @@ def _subplots(figsize):
     return fig, fig.subplots()
 
 
-def make_figures(doc: dict) -> dict[str, bytes]:
-    """The four figures as PNG bytes."""
+def method_colours(doc: dict) -> dict[str, str]:
+    """One colour per method (hex), the same in every figure of the report: the methods in ``doc["methods"]``'s
+    order take tab10's colours, then Dark2's; black is kept for the smoother's 1-sigma line."""
+    from matplotlib import colormaps
+    from matplotlib.colors import to_hex
+
+    palette = [to_hex(colormaps[name](k)) for name, n in (("tab10", 10), ("Dark2", 8)) for k in range(n)]
+    return {name: palette[k % len(palette)] for k, name in enumerate(doc["methods"])}
+
+
+def _log_ticks(axis) -> None:
+    """Readable ticks on a log axis spanning less than a few decades: 1, 2 and 5 of each decade, labelled."""
+    import matplotlib.ticker
+
+    axis.set_major_locator(matplotlib.ticker.LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
+    axis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _pos: f"{v:.0e}".replace("e-0", "e-")))
+    axis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+
+
+def study_figures(doc: dict) -> dict:
+    """The four figures (matplotlib `Figure`s, no pyplot state), keyed by their ``FIGURES`` file names."""
     import matplotlib.ticker
     import numpy as np
+    from matplotlib.patches import Patch
 
-    out: dict[str, bytes] = {}
+    out: dict = {}
     methods = doc["methods"]
+    colour = method_colours(doc)
     names = sorted(methods, key=lambda n: methods[n]["metrics"]["rms_eff"] or math.inf)
-    fig, ax = _subplots((8, 0.38 * len(names) + 1.6))
+    fig, ax = _subplots((8, 0.38 * len(names) + 1.8))
     y = np.arange(len(names))
-    ax.barh(y - 0.2, [methods[n]["metrics"]["rms_eff"] for n in names], 0.4, label="RMS vs effective drift")
-    ax.barh(y + 0.2, [methods[n]["metrics"]["max_eff"] for n in names], 0.4, label="max vs effective drift", alpha=0.5)
+    ax.barh(y - 0.2, [methods[n]["metrics"]["rms_eff"] for n in names], 0.4, color=[colour[n] for n in names])
+    ax.barh(
+        y + 0.2, [methods[n]["metrics"]["max_eff"] for n in names], 0.4, color=[colour[n] for n in names], alpha=0.4
+    )
+    handles = [
+        Patch(color="0.3", label="RMS vs effective drift (upper bar)"),
+        Patch(color="0.3", alpha=0.4, label="max vs effective drift (lower bar)"),
+    ]
     if doc["physical_limit_deg_h"] is not None:
-        ax.axvline(doc["physical_limit_deg_h"], color="C3", ls="--", label="smoother 1-sigma (physical limit)")
+        handles.append(ax.axvline(doc["physical_limit_deg_h"], color="k", ls="--", label="smoother 1-sigma"))
     ax.set_yticks(y, names)
+    for label, name in zip(ax.get_yticklabels(), names, strict=True):
+        label.set_color(colour[name])
     ax.invert_yaxis()
     ax.set_xscale("log")
-    ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+    _log_ticks(ax.xaxis)
     ax.set_xlabel("identification error on held-out runs [deg/h]")
-    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2)
+    ax.legend(handles=handles, fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=3)
     ax.grid(True, axis="x", which="both", alpha=0.3)
-    out["methods.png"] = _png(fig)
+    out["methods.png"] = fig
 
     def curve_figure(x, series: dict, xlabel: str, limit=None, xlog=False):
-        fig, ax = _subplots((7, 4))
-        for k, (name, vals) in enumerate(series.items()):
-            ax.plot(x, vals, marker="o", ms=4, label=name, color=f"C{k % 10}")
+        fig, ax = _subplots((7, 4.6))
+        for name, vals in series.items():
+            ax.plot(x, vals, marker="o", ms=4, label=name, color=colour[name])
         if limit is not None and any(v is not None for v in limit):
             ax.plot(x, [math.nan if v is None else v for v in limit], "k--", label="smoother 1-sigma")
         ax.set_yscale("log")
+        _log_ticks(ax.yaxis)
         if xlog:
             ax.set_xscale("log")
             ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
@@ -122,8 +152,8 @@ def make_figures(doc: dict) -> dict[str, bytes]:
         ax.set_xlabel(xlabel)
         ax.set_ylabel("RMS error vs effective drift [deg/h]")
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7)
-        return _png(fig)
+        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))  # beside the axes: covers no curve
+        return fig
 
     ts = doc["train_size"]
     out["train_size.png"] = curve_figure(
@@ -161,6 +191,11 @@ def make_figures(doc: dict) -> dict[str, bytes]:
         limit=bl.get("limit_deg_h"),
     )
     return out
+
+
+def make_figures(doc: dict) -> dict[str, bytes]:
+    """The four figures of `study_figures` as PNG bytes."""
+    return {name: _png(fig) for name, fig in study_figures(doc).items()}
 
 
 def _table(head: list[str], rows: list[list[str]]) -> str:
