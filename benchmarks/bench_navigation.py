@@ -10,6 +10,11 @@
    separately and its time subtracted; the navigation time is measured around `process` only).
 3. The numpy `ReferenceNavigator` (python/gyrodrift/testing/reference_nav.py, the same equations, one sample
    per Python iteration) on the first `--reference-s` seconds of the same data.
+4. Drift-law compensation (issue 21): the Rust `Navigator` given the axial bias per sample (a `DriftLaw` with k1 and
+   k3 on the simulated temperature, `gyrodrift.ins.compensation.AxialBias`) against the same navigator with today's
+   constant bias, on the same chunks, the two calls alternating in order chunk by chunk; the ratio of their times
+   (target <= 1.05) and, apart, the Python cost of evaluating the law and its `TemperatureRate` per chunk. With
+   ``--law-only`` only this part runs.
 
 Prints samples/s of each, the ratios Rust / numpy (navigator, and each simulator against the numpy
 navigator as a common yardstick) and against the issue's target of 20 M samples/s (72 h at 100 Hz in
@@ -31,9 +36,12 @@ import tracemalloc
 import numpy as np
 
 from gyrodrift import _core
+from gyrodrift.drift_law import DriftLaw
 from gyrodrift.ins import Scenario
+from gyrodrift.ins.compensation import AxialBias
+from gyrodrift.logs import LogChunk
 from gyrodrift.testing.reference_nav import ReferenceNavigator
-from gyrodrift.units import DEG
+from gyrodrift.units import DEG, DEG_PER_H
 
 
 def _scenario(hours: float, rate_hz: float) -> Scenario:
@@ -113,6 +121,54 @@ def _nav_config(s: Scenario) -> dict:
     }
 
 
+LAW_TARGET_RATIO = 1.05
+"""Issue 21: the per-sample law at most 5 % slower than the constant bias in the core."""
+
+
+def _time_law_compensation(scn: Scenario, chunk: int) -> None:
+    """Part 4 (module docs): print the per-sample law's core time against the constant bias's, and the Python cost."""
+    law = DriftLaw(eps_ref_deg_h=0.003, t_ref_c=20.0, k1_deg_h_per_c=1e-4, k3_deg_h_per_c_per_h=0.01)
+    cfg = _core.NavigatorConfig(**_nav_config(scn))
+    constant, per_sample = _core.Navigator(cfg), _core.Navigator(cfg)
+    constant.set_gyro_bias([0.0, 0.0, law.eps_ref_deg_h * DEG_PER_H])
+    axial = AxialBias(law, scn.run.rate_hz)
+    # Warm-up (scipy.signal's import, numpy's first calls) on a throwaway estimate: not part of the per-chunk cost.
+    AxialBias(law, scn.run.rate_hz)(LogChunk(0, np.zeros(2), np.zeros((2, 3)), np.zeros((2, 3)), temp_c=np.zeros(2)))
+    sim = _core.ImuSimulator(scn.to_core_config())
+    dec = int(round(scn.run.rate_hz))
+    t_const = t_law = t_py = 0.0
+    ratios = []
+    done = 0
+    while (c := sim.next_chunk(chunk)) is not None:
+        dth, dv = np.ascontiguousarray(c["dtheta_rad"]), np.ascontiguousarray(c["dv_m_s"])
+        t0 = time.perf_counter()
+        bias = axial(LogChunk(done, c["t_s"], dth, dv, temp_c=c["temp_c"]))
+        t_py += time.perf_counter() - t0
+        calls = {"constant": (constant, (dth, dv, dec)), "law": (per_sample, (dth, dv, dec, None, bias))}
+        times = {}
+        for name in ("constant", "law") if len(ratios) % 2 == 0 else ("law", "constant"):
+            nav, nav_args = calls[name]
+            t0 = time.perf_counter()
+            nav.process(*nav_args)
+            times[name] = time.perf_counter() - t0
+        t_const += times["constant"]
+        t_law += times["law"]
+        ratios.append(times["law"] / times["constant"])
+        done += len(dth)
+    print(
+        f"law compensation  : constant bias {done / t_const:14,.0f} samples/s ({t_const:.2f} s), per-sample law "
+        f"{done / t_law:,.0f} samples/s ({t_law:.2f} s)"
+    )
+    print(
+        f"ratio law/constant: {t_law / t_const:14.3f} (total times; median of {len(ratios)} chunks "
+        f"{float(np.median(ratios)):.3f}); target <= {LAW_TARGET_RATIO:g}"
+    )
+    print(
+        f"law in Python     : {t_py:14.2f} s for the run ({done / t_py:,.0f} samples/s: DriftLaw.drift_deg_h and "
+        f"TemperatureRate per chunk of {chunk:,}), {100.0 * t_py / t_const:.1f} % of the constant navigation"
+    )
+
+
 def _rss_mb() -> float:
     """Peak resident set size of this process [MB] (Linux reports kB, macOS bytes)."""
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
@@ -126,11 +182,15 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--reference-s", type=float, default=60.0)
     ap.add_argument("--chunk", type=int, default=100_000)
     ap.add_argument("--repeat", type=int, default=1, help="simulator runs to time; the best is reported")
+    ap.add_argument("--law-only", action="store_true", help="only part 4, the drift-law compensation")
     args = ap.parse_args(argv)
 
     scn = _scenario(args.hours, args.rate_hz)
     n = scn.n_samples
     print(f"run: {args.hours:g} h at {args.rate_hz:g} Hz = {n:,} samples, chunks of {args.chunk:,}")
+    if args.law_only:
+        _time_law_compensation(scn, args.chunk)
+        return
     rss0 = _rss_mb()
 
     # 1. simulator alone
@@ -181,6 +241,9 @@ def main(argv: list[str] | None = None) -> None:
     print(f"ratio Rust/numpy  : {ideal_rate / ref_rate:14,.0f} x (ideal simulator against the numpy navigator)")
     for name, rate in (("navigator", rust_rate), ("noisy simulator", noisy_rate), ("ideal simulator", ideal_rate)):
         print(f"vs 20 M/s target  : {rate / TARGET_SAMPLES_S:14.2f} x ({name}; {n:,} samples in {n / rate:.2f} s)")
+
+    # 4. drift-law compensation
+    _time_law_compensation(scn, args.chunk)
 
 
 if __name__ == "__main__":

@@ -16,10 +16,12 @@ from __future__ import annotations
 
 import json
 import os
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
+from gyrodrift.choices import MAX_DRIFT_DEG_H
 from gyrodrift.drift_law import DriftLaw, TemperatureRate
 from gyrodrift.errors import InputError
 from gyrodrift.files.input_files import read_limited
@@ -54,19 +56,34 @@ class AxialBias:
     other_z_deg_h : float
         Any other z gyro bias estimate subtracted as well [deg/h] (0 after an alignment, which does not estimate
         the axial drift).
+    where : callable, optional
+        ``where(index)``: the log's file and row of 0-based sample `index`, for the message when the law leaves
+        +-`MAX_DRIFT_DEG_H` (a wrong coefficient or temperature; `InputError`).
     """
 
-    def __init__(self, law: DriftLaw, rate_hz: float, other_z_deg_h: float = 0.0) -> None:
+    def __init__(
+        self, law: DriftLaw, rate_hz: float, other_z_deg_h: float = 0.0, where: Callable[[int], str] | None = None
+    ) -> None:
         self.law = law
         self.other_z_deg_h = float(other_z_deg_h)
         self._rate = TemperatureRate(law.rate_tau_s, 1.0 / rate_hz) if law.uses_rate else None
+        self._where = where or (lambda index: f"sample {index}")
 
     def __call__(self, piece: LogChunk) -> np.ndarray:
         """The z gyro bias [rad/s] of every sample of `piece` (which must carry ``temp_c``)."""
         temp = piece.temp_c
         assert temp is not None  # `axial_bias` required the column
         rate = 0.0 if self._rate is None else self._rate.update(temp)
-        return (self.other_z_deg_h + self.law.drift_deg_h(temp, rate)) * DEG_PER_H
+        drift = self.law.drift_deg_h(temp, rate)
+        bad = np.flatnonzero(~(np.abs(drift) <= MAX_DRIFT_DEG_H))
+        if bad.size:
+            k = int(bad[0])
+            raise InputError(
+                f"{self._where(piece.first_index + k)}: the drift law gives {float(drift[k]):.6g} deg/h at temp_c "
+                f"{float(temp[k]):.6g} degC; a drift to compensate must be within +-{MAX_DRIFT_DEG_H:g} deg/h "
+                "(check the law's coefficients and the temperature column)"
+            )
+        return (self.other_z_deg_h + drift) * DEG_PER_H
 
 
 def require_temperature_for(law: DriftLaw, log: ImuLog) -> None:
@@ -83,7 +100,7 @@ def axial_bias(law: DriftLaw, log: ImuLog, other_z_deg_h: float = 0.0) -> AxialB
     """The per-sample compensation of `law` on `log` (`AxialBias`), or None when the law is constant (then its
     ``eps_ref_deg_h`` is the constant z gyro bias estimate); `require_temperature_for` first."""
     require_temperature_for(law, log)
-    return None if law.is_constant else AxialBias(law, log.rate_hz, other_z_deg_h)
+    return None if law.is_constant else AxialBias(law, log.rate_hz, other_z_deg_h, log.source.where)
 
 
 def compensation_record(law: DriftLaw | None) -> dict[str, Any]:
