@@ -103,6 +103,21 @@ def test_the_noise_floor_is_the_arw_walk():
     assert np.all((0.25 < per_axis) & (per_axis < 0.37)), per_axis
 
 
+def test_the_alignments_leftovers_join_the_floor_and_fade_at_whole_days():
+    # The aligner's leftover heading and tilts drive the Earth-rate (24 h) mode of the free navigation: hundreds of
+    # metres after 60 h of mission, back to a few metres after 72 h (three sidereal days and 12 min).
+    at = {h: identification_curve(RLG, [16.0], lat_deg=40.0, mission_h=h).alignment_cov_m2 for h in (60.0, 72.0)}
+    assert np.sqrt(np.max(np.diag(at[60.0]))) > 100.0 > 20.0 > np.sqrt(np.max(np.diag(at[72.0])))
+    assert np.all(np.linalg.eigvalsh(at[60.0]) >= 0.0)
+    with_alignment = mission_error_model(40.0, RLG, hours=60.0, alignment_cov_m2=at[60.0])
+    without = mission_error_model(40.0, RLG, hours=60.0)
+    got = np.asarray(with_alignment.floor_cov_m2) - np.asarray(without.floor_cov_m2)
+    assert np.allclose(got, at[60.0], rtol=1e-9, atol=1e-9)
+    assert np.asarray(with_alignment.alignment_cov_m2) == pytest.approx(at[60.0], rel=1e-12)
+    with pytest.raises(InputError, match="alignment_cov_m2: expected a finite 2 x 2"):
+        mission_error_model(40.0, RLG, alignment_cov_m2=[1.0, 2.0])
+
+
 def test_the_shortest_span_is_the_first_to_meet_the_budget():
     plan = plan_identification(RLG, lat_deg=40.0, min_span_h=6.0, max_span_h=30.0, step_h=0.5)
     i = int(np.nonzero(plan.spans_h == plan.shortest_span_h)[0][0])
@@ -118,7 +133,7 @@ def test_the_shortest_span_is_the_first_to_meet_the_budget():
 def test_a_budget_below_the_noise_floor_has_no_span_and_says_why():
     plan = plan_identification(RLG, lat_deg=40.0, budget=MissionBudget(error_nmi=0.3), max_span_h=12.0, step_h=1.0)
     assert plan.shortest_span_h is None and plan.max_drift_std_deg_h is None
-    assert "noise floor" in plan.reason
+    assert "error floor" in plan.reason
 
 
 def test_the_thermal_term_can_rule_out_every_span():

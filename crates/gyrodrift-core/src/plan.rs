@@ -11,23 +11,41 @@
 //! averaged over each update interval at the sample rate as the smoother averages its navigator's. The thermal
 //! state is not part of it (the planner adds the thermal term apart; `thermal` must be off).
 //!
-//! The same pass carries the covariance of the drift error with the mission's noise floor. The mission navigates
-//! freely from the end of the alignment (`mission_start_s`) while the span may still run: over the hours both
-//! cover, the same gyro noise drives the smoother's estimation error x~ (true minus estimate) and the mission's
-//! error y. With y started at zero and the same model (its bias states stay zero, so the table does not matter),
-//! E[x~ y'] is propagated as Phi C Phi' + Q once the mission runs and (I - K H) C at each update, then carried
-//! freely to the mission's end: `cross` = E[(d - d_hat) p_end] (north, east).
+//! The same pass gives the covariance of the drift error with the mission's floor, the 72 h error the mission would
+//! have with the exact drift. The mission navigates freely from the end of the fine alignment (`mission_start_s`),
+//! starting from the aligner's attitude and velocity: its error y starts as the aligner's leftover errors (attitude
+//! and velocity; the horizontal sensor biases it leaves are modulated away by the table and left out) and then
+//! grows with the noise. Both the aligner's leftovers and the smoother's drift error come from the same data: the
+//! same initial errors after the one coarse alignment, the same gyro and accelerometer noise over the hours both
+//! filters run, and after the alignment the same noise drives the smoother's error and the mission's. The aligner
+//! is taken as the filter it is (`aligner`: its prior, noise model, 1 s zero-velocity updates, from the end of the
+//! coarse span to the mission's start) on the smoother's error model, and the truth as the smoother's model with
+//! the given noise and the aligner's prior (the navigation-grade biases, which the smoother's wide prior bounds).
+//! Carried jointly, every aligner step (x~ the errors, true minus estimate, K the filters' own gains):
+//!
+//! - the aligner's true error covariance A <- (I - K_a H_a)(Phi A Phi' + Q)(I - K_a H_a)' + K_a R K_a' (R the
+//!   truth's zero-velocity noise, the smoother's; the aligner's gain is from its own Riccati pass);
+//! - J = E[x~_s x~_a'] <- (Phi J Phi' + Q)(I - K_a H_a)', and (I - K_s H_s) J at each smoother update (the two
+//!   filters' zero-velocity noise taken independent);
+//!
+//! then at the mission's start y0 = E x~_a (attitude and velocity), E[x~_s y'] = J E' is carried as Phi C Phi' + Q
+//! (the mission and the smoother's error share the noise) and (I - K_s H_s) C at each update, and E[y y'] freely to
+//! the mission's end (`alignment_cov`: the part of the floor from y0). A span that ends before the mission starts
+//! carries E[x~_a (a'x~_s)] on through the aligner's steps (no new shared noise) to the start. Each span's `cross`
+//! = E[(d - d_hat) p_end] (north, east), p_end the floor's position error at the mission's end (the noise's part,
+//! [`mission_covariance`], and the alignment's).
 //!
 //! [`mission_covariance`]: the north/east position error after a free navigation of `span_s` (72 h) from the
 //! smoother's error model with no measurements: its covariance from the angle and velocity random walks and the
 //! initial attitude and velocity errors, and the deterministic response g to a unit z drift (the level body: the
 //! axial column of C_b^n is Up whatever the table does; the horizontal sensor biases are modulated away by the
 //! table and left out). With an identified drift of 1-sigma s, the error after compensation is the Gaussian with
-//! covariance `pos_cov + s^2 g g' + g c' + c g'`, c the `cross` of [`drift_std_curve`].
+//! covariance `pos_cov + alignment_cov + s^2 g g' + g c' + c g'`, c the `cross` of [`drift_std_curve`].
 
 use crate::attitude::{euler_to_dcm, mat_mul, rot_z, Euler, Mat3};
 use crate::error::{check, CoreError};
-use crate::kalman::EPS;
+use crate::filter_prior::FilterSettings;
+use crate::kalman::{DV, EPS, PHI};
 use crate::label::FreeNavigation;
 use crate::smoother::model::{initial_sigma, measurement_model, symmetrise, Model};
 use crate::smoother::{SmootherConfig, POS};
@@ -40,42 +58,136 @@ pub struct PlanConfig {
     /// The smoother's settings (site, sample rate, coarse span, update interval, priors, noise); its `span_s` is
     /// the longest span asked for (the smoother's limits apply to it); `thermal` must be false.
     pub smoother: SmootherConfig,
+    /// The fine alignment's filter settings (its prior, noise model and update interval; the procedure's aligner
+    /// runs on [`FilterSettings::aligner`]); its coarse span must be the smoother's (one coarse alignment).
+    pub aligner: FilterSettings,
     /// The table's rotation scheme and the IMU's attitude at table angle zero.
     pub scheme: RotationScheme,
     pub attitude: Euler,
     /// Spans from the first sample \[s\], ascending, each after the first update and at most `smoother.span_s`.
     pub spans_s: Vec<f64>,
-    /// Start of the mission's free navigation from the first sample \[s\] (the end of the alignment, 4 h) and its
-    /// length \[s\] (72 h); the mission must end after the longest span.
+    /// Start of the mission's free navigation from the first sample \[s\] (the end of the fine alignment, 4 h;
+    /// taken at the smoother's update nearest to it) and its length \[s\] (72 h); the mission must end after the
+    /// longest span.
     pub mission_start_s: f64,
     pub mission_s: f64,
 }
 
-/// What [`drift_std_curve`] gives at each span.
+/// What [`drift_std_curve`] gives.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DriftCurve {
-    /// 1-sigma of the z drift carried into navigation [rad/s].
+    /// 1-sigma of the z drift carried into navigation at each span [rad/s].
     pub drift_std: Vec<f64>,
-    /// E[(d - d_hat) p], p the north, east position error at the mission's end from the noise alone (the
-    /// mission's noise floor) [rad/s m]: the drift error and the floor share the noise of the hours the span and the
-    /// mission overlap.
+    /// At each span, E[(d - d_hat) p] [rad/s m], p the north, east position error at the mission's end with the
+    /// exact drift (the mission's floor: the noise's part and the aligner's leftovers').
     pub cross: Vec<[f64; 2]>,
+    /// Covariance of the floor's part from the aligner's leftover attitude and velocity errors at the mission's
+    /// end \[m^2\] (north, east); the noise's part is [`mission_covariance`]'s.
+    pub alignment_cov: [[f64; 2]; 2],
+}
+
+/// The aligner's own Riccati pass and the true covariances it carries (module docs).
+struct AlignerPass {
+    /// Its own covariance (for its gain), its true error covariance, and E[x~_s x~_a'].
+    own: DMatrix<f64>,
+    truth: DMatrix<f64>,
+    joint: DMatrix<f64>,
+    /// Its zero-velocity measurement matrix and noise, the truth's zero-velocity noise.
+    h: DMatrix<f64>,
+    r_own: DMatrix<f64>,
+    r_true: DMatrix<f64>,
+    model: Model,
+    /// E[x~_a (a'x~_s)] of the spans taken before the mission's start (index, vector).
+    pending: Vec<(usize, DVector<f64>)>,
+}
+
+impl AlignerPass {
+    /// One aligner step of `dt` \[s\] with the mean attitude `c` (`truth`: the true model's Phi and Q).
+    fn step(&mut self, c: &Mat3, dt: f64, truth: &Model) -> Result<(), CoreError> {
+        let (phi, q) = truth.discretise(c, 0.0, dt);
+        let (_, q_own) = self.model.discretise(c, 0.0, dt);
+        let own = symmetrise(&phi * &self.own * phi.transpose() + q_own);
+        let s_inv = (&self.h * &own * self.h.transpose() + &self.r_own)
+            .try_inverse()
+            .ok_or(CoreError::Setting {
+                key: "aligner",
+                message: "the aligner's innovation covariance is singular".to_string(),
+            })?;
+        let gain = &own * self.h.transpose() * s_inv;
+        let i_kh = DMatrix::<f64>::identity(own.nrows(), own.ncols()) - &gain * &self.h;
+        self.own = symmetrise(&i_kh * &own * i_kh.transpose() + &gain * &self.r_own * gain.transpose());
+        let truth_pred = &phi * &self.truth * phi.transpose() + &q;
+        self.truth = symmetrise(&i_kh * truth_pred * i_kh.transpose() + &gain * &self.r_true * gain.transpose());
+        self.joint = (&phi * &self.joint * phi.transpose() + &q) * i_kh.transpose();
+        let carry = &i_kh * &phi;
+        for (_, u) in self.pending.iter_mut() {
+            *u = &carry * &*u;
+        }
+        Ok(())
+    }
+}
+
+/// The aligner's settings on the smoother's model (the same site, rate and slow-bias states).
+fn aligner_on_smoother_model(sc: &SmootherConfig, al: &FilterSettings) -> SmootherConfig {
+    SmootherConfig {
+        update_s: al.update_s,
+        att_sigma: al.att_sigma,
+        gyro_bias_sigma: al.gyro_bias_sigma,
+        accel_bias_sigma: al.accel_bias_sigma,
+        gyro_arw: al.gyro_arw,
+        accel_vrw: al.accel_vrw,
+        zupt_sigma: al.zupt_sigma,
+        ..sc.clone()
+    }
+}
+
+/// The selector of the aligner's leftovers the mission starts from (attitude and velocity).
+fn mission_start_selector(n: usize) -> DMatrix<f64> {
+    let mut e = DMatrix::zeros(n, n);
+    for i in (PHI..PHI + 3).chain(DV..DV + 3) {
+        e[(i, i)] = 1.0;
+    }
+    e
+}
+
+/// The free (no measurement) transition of the mission's error over `t` \[s\] (level body).
+fn free_transition(model: &Model, t: f64) -> DMatrix<f64> {
+    let level: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    let steps = (t.max(0.0) / MISSION_STEP_S).ceil() as usize;
+    let mut out = DMatrix::identity(model.n, model.n);
+    if steps > 0 {
+        let (phi, _) = model.discretise(&level, 0.0, t / steps as f64);
+        for _ in 0..steps {
+            out = &phi * out;
+        }
+    }
+    out
 }
 
 /// The smoother's 1-sigma of the z drift carried into navigation at each of `cfg.spans_s`, and its covariance with
-/// the mission's noise floor (module docs).
+/// the mission's floor (module docs).
 pub fn drift_std_curve(cfg: &PlanConfig) -> Result<DriftCurve, CoreError> {
     let sc = &cfg.smoother;
     sc.validate()?;
+    cfg.aligner.validate(sc.rate_hz)?;
     check(
         !sc.thermal,
         "thermal",
         "the planner has no thermal state (the thermal term is added apart)",
     )?;
+    check(
+        cfg.aligner.coarse_s == sc.coarse_s,
+        "aligner",
+        format!(
+            "the aligner's coarse span ({} s) must be the smoother's ({} s): one coarse alignment",
+            cfg.aligner.coarse_s, sc.coarse_s
+        ),
+    )?;
     let table = Turntable::new(cfg.scheme.clone())?;
     let rate = sc.rate_hz;
     let n_coarse = (sc.coarse_s * rate).round() as u64;
     let n_update = ((sc.update_s * rate).round() as u64).max(1);
+    let n_align_update = ((cfg.aligner.update_s * rate).round() as u64).max(1);
     let t_first = (n_coarse + n_update) as f64 / rate;
     check(!cfg.spans_s.is_empty(), "spans_s", "no span given")?;
     let mut last = f64::NEG_INFINITY;
@@ -91,9 +203,9 @@ pub fn drift_std_curve(cfg: &PlanConfig) -> Result<DriftCurve, CoreError> {
         last = s;
     }
     check(
-        cfg.mission_start_s.is_finite() && cfg.mission_start_s >= 0.0,
+        cfg.mission_start_s.is_finite() && cfg.mission_start_s >= t_first,
         "mission_start_s",
-        "must be a finite time >= 0 s",
+        format!("must be a finite time >= the first update ({t_first} s): the alignment ends there at the earliest"),
     )?;
     check(
         cfg.mission_s.is_finite() && cfg.mission_s >= 60.0 && cfg.mission_start_s + cfg.mission_s >= last,
@@ -108,6 +220,28 @@ pub fn drift_std_curve(cfg: &PlanConfig) -> Result<DriftCurve, CoreError> {
         n,
         initial_sigma(sc, n_coarse as f64 / rate).iter().map(|s| s * s),
     ));
+    // The aligner on the smoother's model (its prior, noise and update interval; the same slow-bias states).
+    let al = &cfg.aligner;
+    let acfg = aligner_on_smoother_model(sc, al);
+    let prior = DMatrix::from_diagonal(&DVector::from_iterator(
+        n,
+        initial_sigma(&acfg, n_coarse as f64 / rate).iter().map(|s| s * s),
+    ));
+    let h_zupt = h.rows(0, 3).into_owned();
+    let mut aligner = AlignerPass {
+        own: prior.clone(),
+        truth: prior.clone(),
+        joint: prior,
+        r_own: DMatrix::from_diagonal_element(3, 3, al.zupt_sigma * al.zupt_sigma),
+        r_true: r.view((0, 0), (3, 3)).into_owned(),
+        h: h_zupt,
+        model: Model::new(&acfg),
+        pending: Vec::new(),
+    };
+    // The mission starts at the smoother's update nearest to `mission_start_s` (the update grid's k).
+    let k_start =
+        n_coarse + ((cfg.mission_start_s * rate - n_coarse as f64) / n_update as f64).round() as u64 * n_update;
+    let mission_end = cfg.mission_start_s + cfg.mission_s;
     // Selector of the total z drift carried into navigation.
     let mut a = DVector::zeros(n);
     a[EPS + 2] = 1.0;
@@ -115,37 +249,46 @@ pub fn drift_std_curve(cfg: &PlanConfig) -> Result<DriftCurve, CoreError> {
         a[first + 2] = 1.0;
     }
     let identity = DMatrix::<f64>::identity(n, n);
-    // E[x~ y'], x~ the filter's estimation error (true minus estimate) and y the free mission navigation's error
-    // from the noise alone, started at zero at `mission_start_s`: the same model, the same noise w_k in both
-    // (predict: Phi C Phi' + Q once the mission runs), the measurements only on x~ (update: (I - K H) C).
-    let mut cross = DMatrix::<f64>::zeros(n, n);
-    // The free mission's transition (level body: the bias states of y stay zero, so the table does not matter).
-    let level: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-    let mission_end = cfg.mission_start_s + cfg.mission_s;
+    let select = mission_start_selector(n);
+    // E[x~_s y'] once the mission runs (module docs).
+    let mut cross: Option<DMatrix<f64>> = None;
+    let whole_mission = free_transition(&model, cfg.mission_s);
     let mut out = DriftCurve {
         drift_std: Vec::with_capacity(cfg.spans_s.len()),
-        cross: Vec::with_capacity(cfg.spans_s.len()),
+        cross: vec![[0.0; 2]; cfg.spans_s.len()],
+        alignment_cov: [[0.0; 2]; 2],
     };
-    let mut k = n_coarse;
-    let mut want = cfg.spans_s.iter().peekable();
-    while want.peek().is_some() {
-        // One update interval: the mean attitude over its samples (each at the end of its sample).
-        let t_start = k as f64 / rate;
+    let mean_attitude = |from: u64, to: u64| -> Mat3 {
         let mut c_sum: Mat3 = [[0.0; 3]; 3];
-        for j in 1..=n_update {
-            let c = mat_mul(&c0, &rot_z(table.angle((k + j) as f64 / rate)));
+        for j in from + 1..=to {
+            let c = mat_mul(&c0, &rot_z(table.angle(j as f64 / rate)));
             for (s_row, c_row) in c_sum.iter_mut().zip(c) {
                 for (s, x) in s_row.iter_mut().zip(c_row) {
                     *s += x;
                 }
             }
         }
+        let m = (to - from) as f64;
+        std::array::from_fn(|i| std::array::from_fn(|j| c_sum[i][j] / m))
+    };
+    let mut k = n_coarse;
+    let mut next_span = 0;
+    while next_span < cfg.spans_s.len() || k < k_start {
+        // The aligner's steps over this interval while the alignment runs.
+        if k < k_start {
+            let mut j = k;
+            while j < k + n_update {
+                let to = (j + n_align_update).min(k + n_update);
+                aligner.step(&mean_attitude(j, to), (to - j) as f64 / rate, &model)?;
+                j = to;
+            }
+        }
+        // One smoother update interval: the mean attitude over its samples (each at the end of its sample).
+        let (phi, q) = model.discretise(&mean_attitude(k, k + n_update), 0.0, n_update as f64 / rate);
         k += n_update;
-        let c_mean: Mat3 = std::array::from_fn(|i| std::array::from_fn(|j| c_sum[i][j] / n_update as f64));
-        let (phi, q) = model.discretise(&c_mean, 0.0, n_update as f64 / rate);
         p = symmetrise(&phi * &p * phi.transpose() + &q);
-        if t_start >= cfg.mission_start_s - 1e-9 {
-            cross = &phi * &cross * phi.transpose() + &q;
+        if let Some(c) = cross.as_mut() {
+            *c = &phi * &*c * phi.transpose() + &q;
         }
         let s_inv = (&h * &p * h.transpose() + &r).try_inverse().ok_or(CoreError::Setting {
             key: "update_s",
@@ -154,23 +297,38 @@ pub fn drift_std_curve(cfg: &PlanConfig) -> Result<DriftCurve, CoreError> {
         let gain = &p * h.transpose() * s_inv;
         let i_kh = &identity - &gain * &h;
         p = symmetrise(&i_kh * &p * i_kh.transpose() + &gain * &r * gain.transpose());
-        cross = &i_kh * &cross;
-        let t = k as f64 / rate;
-        while want.peek().is_some_and(|&&s| t >= s - 1e-9) {
-            want.next();
-            out.drift_std.push(a.dot(&(&p * &a)).max(0.0).sqrt());
-            // E[y a'x~] carried freely to the mission's end (after t if the mission started, else from its start).
-            let mut u: DVector<f64> = cross.transpose() * &a;
-            let from = t.max(cfg.mission_start_s);
-            let rest = (mission_end - from).max(0.0);
-            let steps = (rest / MISSION_STEP_S).ceil() as usize;
-            if steps > 0 {
-                let (phi_free, _) = model.discretise(&level, 0.0, rest / steps as f64);
-                for _ in 0..steps {
-                    u = &phi_free * u;
-                }
+        if k <= k_start {
+            aligner.joint = &i_kh * &aligner.joint;
+        }
+        if let Some(c) = cross.as_mut() {
+            *c = &i_kh * &*c;
+        }
+        if k == k_start {
+            // The mission starts from the aligner's leftovers y0 = E x~_a.
+            cross = Some(&aligner.joint * &select);
+            let to_end = &whole_mission * &select;
+            let floor = &to_end * &aligner.truth * to_end.transpose();
+            out.alignment_cov = [
+                [floor[(POS, POS)], floor[(POS, POS + 1)]],
+                [floor[(POS + 1, POS)], floor[(POS + 1, POS + 1)]],
+            ];
+            for (i, u) in aligner.pending.drain(..) {
+                let v = &to_end * u;
+                out.cross[i] = [v[POS], v[POS + 1]];
             }
-            out.cross.push([u[POS], u[POS + 1]]);
+        }
+        let t = k as f64 / rate;
+        while next_span < cfg.spans_s.len() && t >= cfg.spans_s[next_span] - 1e-9 {
+            out.drift_std.push(a.dot(&(&p * &a)).max(0.0).sqrt());
+            match cross.as_ref() {
+                // E[y a'x~] carried freely to the mission's end.
+                Some(c) => {
+                    let u = free_transition(&model, mission_end - t) * (c.transpose() * &a);
+                    out.cross[next_span] = [u[POS], u[POS + 1]];
+                }
+                None => aligner.pending.push((next_span, aligner.joint.transpose() * &a)),
+            }
+            next_span += 1;
         }
     }
     Ok(out)
@@ -240,6 +398,7 @@ mod tests {
         sc.span_s = 86_400.0;
         PlanConfig {
             smoother: sc,
+            aligner: FilterSettings::aligner(),
             scheme: scheme_from_settings("reciprocating", None, None, None, false, None, None).unwrap(),
             attitude: Euler {
                 pitch: 0.0,
@@ -289,11 +448,106 @@ mod tests {
         assert!((planned / got - 1.0).abs() < 0.01, "planned {planned}, smoother {got}");
     }
 
+    /// Brute force for `the_cross_terms_match_a_monte_carlo_of_the_linear_model`: `runs` draws of the linear error
+    /// model at 1 Hz (the truth from the aligner's prior, its noise the smoother's Q sampled as
+    /// sqrt(t/2) (Phi Lc z1 + Lc z2)), the aligner and the smoother run as Kalman filters on simulated
+    /// measurements, the mission navigated from the aligner's leftovers (attitude, velocity) with the truth's noise;
+    /// returns the drift errors a'(x - x_hat_s) at each span and the mission's north, east error at its end.
+    fn monte_carlo(cfg: &PlanConfig, runs: usize, seed: u64) -> (Vec<DMatrix<f64>>, DMatrix<f64>) {
+        use rand_core::SeedableRng;
+        use rand_distr::{Distribution, StandardNormal};
+        let sc = &cfg.smoother;
+        assert_eq!(sc.rate_hz, 1.0);
+        let model = Model::new(sc);
+        let acfg = aligner_on_smoother_model(sc, &cfg.aligner);
+        let amodel = Model::new(&acfg);
+        let n = model.n;
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(seed);
+        let mut normal = |r: usize| DMatrix::<f64>::from_fn(r, runs, |_, _| StandardNormal.sample(&mut rng));
+        let lc = DMatrix::from_diagonal(&model.qc.map(f64::sqrt));
+        let table = Turntable::new(cfg.scheme.clone()).unwrap();
+        let c0 = euler_to_dcm(cfg.attitude);
+        let at = |k: u64| mat_mul(&c0, &rot_z(table.angle(k as f64)));
+        let (h, r) = measurement_model(sc, n);
+        let hv = h.rows(0, 3).into_owned();
+        let coarse = sc.coarse_s as u64;
+        let prior = |c: &SmootherConfig| DVector::from_vec(initial_sigma(c, sc.coarse_s));
+        let mut x = DMatrix::from_diagonal(&prior(&acfg)) * normal(n);
+        let (mut xa, mut xs) = (DMatrix::zeros(n, runs), DMatrix::zeros(n, runs));
+        let mut pa = DMatrix::from_diagonal(&prior(&acfg).map(|s| s * s));
+        let mut ps = DMatrix::from_diagonal(&prior(sc).map(|s| s * s));
+        let start = cfg.mission_start_s as u64;
+        let last = *cfg.spans_s.last().unwrap() as u64;
+        let mut y: Option<DMatrix<f64>> = None;
+        let mut deltas = Vec::new();
+        let mut a = DVector::zeros(n);
+        a[EPS + 2] = 1.0;
+        let kalman =
+            |p: &mut DMatrix<f64>, est: &mut DMatrix<f64>, z: DMatrix<f64>, h: &DMatrix<f64>, r: &DMatrix<f64>| {
+                let gain = &*p * h.transpose() * (h * &*p * h.transpose() + r).try_inverse().unwrap();
+                *est += &gain * (z - h * &*est);
+                let i_kh = DMatrix::identity(n, n) - &gain * h;
+                *p = &i_kh * &*p * i_kh.transpose() + &gain * r * gain.transpose();
+            };
+        for k in coarse + 1..=last.max(start) {
+            let (phi, _) = model.discretise(&at(k), 0.0, 1.0);
+            let w = (&phi * &lc * normal(n) + &lc * normal(n)) * 0.5f64.sqrt();
+            x = &phi * &x + &w;
+            if let Some(y) = y.as_mut() {
+                *y = &phi * &*y + &w;
+            }
+            if k <= start {
+                let (_, qa) = amodel.discretise(&at(k), 0.0, 1.0);
+                xa = &phi * &xa;
+                pa = &phi * &pa * phi.transpose() + qa;
+                let z = &hv * &x + normal(3) * sc.zupt_sigma;
+                let ra = DMatrix::from_diagonal_element(3, 3, cfg.aligner.zupt_sigma.powi(2));
+                kalman(&mut pa, &mut xa, z, &hv, &ra);
+            }
+            if k == start {
+                y = Some(mission_start_selector(n) * (&x - &xa));
+            }
+            if (k - coarse) % 10 == 0 {
+                let mut cm: Mat3 = [[0.0; 3]; 3];
+                for j in k - 9..=k {
+                    let c = at(j);
+                    for (i, row) in cm.iter_mut().enumerate() {
+                        for (jj, v) in row.iter_mut().enumerate() {
+                            *v += c[i][jj] / 10.0;
+                        }
+                    }
+                }
+                let (phi10, q10) = model.discretise(&cm, 0.0, 10.0);
+                xs = &phi10 * &xs;
+                ps = &phi10 * &ps * phi10.transpose() + q10;
+                let noise = DMatrix::from_diagonal(&r.diagonal().map(f64::sqrt)) * normal(5);
+                kalman(&mut ps, &mut xs, &h * &x + noise, &h, &r);
+                if cfg.spans_s.iter().any(|&s| s as u64 == k) {
+                    let d = a.transpose() * (&x - &xs);
+                    deltas.push(DMatrix::from_iterator(1, runs, d.iter().copied()));
+                }
+            }
+        }
+        // The rest of the mission, free (level body; its bias states are zero).
+        let level: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        let (phi, _) = model.discretise(&level, 0.0, 60.0);
+        let mut y = y.unwrap();
+        let steps = ((cfg.mission_start_s + cfg.mission_s - last.max(start) as f64) / 60.0).round() as usize;
+        for _ in 0..steps {
+            y = &phi * &y + (&phi * &lc * normal(n) + &lc * normal(n)) * 30f64.sqrt();
+        }
+        (deltas, y.rows(POS, 2).into_owned())
+    }
+
     #[test]
-    fn the_drift_error_shares_the_mission_noise_only_where_they_overlap() {
-        let mut cfg = plan_config(40.0, &[3.0, 16.0]);
+    fn the_cross_terms_match_a_monte_carlo_of_the_linear_model() {
+        // One span before the mission starts (the aligner's leftovers only), one after (and the shared noise).
+        let mut cfg = plan_config(40.0, &[1.0, 2.0]);
+        cfg.smoother.rate_hz = 1.0;
+        cfg.smoother.span_s = 2.0 * HOUR;
+        cfg.mission_start_s = 1.5 * HOUR;
+        cfg.mission_s = 6.0 * HOUR;
         let curve = drift_std_curve(&cfg).unwrap();
-        assert_eq!(curve.cross[0], [0.0, 0.0]); // the span ends before the mission starts
         let m = mission_covariance(&FreeNavigation::white(
             cfg.smoother.lat,
             cfg.mission_s,
@@ -302,11 +556,34 @@ mod tests {
             cfg.smoother.accel_vrw,
         ))
         .unwrap();
-        // Cauchy-Schwarz on the east axis, and a correlation that is there after 12 h of overlap (about -0.05).
-        let (c, s, floor) = (curve.cross[1][1], curve.drift_std[1], m.pos_cov[1][1].sqrt());
-        assert!(c.abs() < s * floor && c.abs() > 0.01 * s * floor, "{c} {s} {floor}");
-        cfg.mission_start_s = 20.0 * HOUR;
-        assert_eq!(drift_std_curve(&cfg).unwrap().cross[1], [0.0, 0.0]);
+        let runs = 400;
+        let (deltas, p) = monte_carlo(&cfg, runs, 11);
+        let mean = |v: &DMatrix<f64>| v.sum() / runs as f64;
+        let cov = |u: &DMatrix<f64>, v: &DMatrix<f64>| {
+            (u.add_scalar(-mean(u))).component_mul(&v.add_scalar(-mean(v))).sum() / (runs - 1) as f64
+        };
+        for axis in 0..2 {
+            let pa = p.rows(axis, 1).into_owned();
+            let floor = m.pos_cov[axis][axis] + curve.alignment_cov[axis][axis];
+            let var_p = cov(&pa, &pa);
+            // The floor's variance within 4 standard errors (sqrt(2 / N) relative), and the alignment's part
+            // more than that (so the check can fail without it).
+            let se = floor * (2.0 / runs as f64).sqrt();
+            assert!((var_p - floor).abs() < 4.0 * se, "axis {axis}: {var_p} vs {floor}");
+            for (i, d) in deltas.iter().enumerate() {
+                let (c_mc, c_plan) = (cov(d, &pa), curve.cross[i][axis]);
+                let se = ((cov(d, d) * var_p + c_mc * c_mc) / runs as f64).sqrt();
+                assert!(
+                    (c_mc - c_plan).abs() < 4.0 * se,
+                    "span {i} axis {axis}: {c_mc} vs {c_plan} (se {se})"
+                );
+            }
+        }
+        // The alignment's leftovers matter here: the span before the mission has a cross term of its own.
+        let c = curve.cross[0][1];
+        let s = curve.drift_std[0];
+        let floor = (m.pos_cov[1][1] + curve.alignment_cov[1][1]).sqrt();
+        assert!(c.abs() > 0.05 * s * floor && c.abs() < s * floor, "{c} {s} {floor}");
     }
 
     #[test]

@@ -5,16 +5,19 @@ use super::config::SimulatorConfig;
 use super::core_err;
 use super::label::FreeNavigationConfig;
 use super::smoother::SmootherConfig;
+use gyrodrift_core::filter_prior::FilterSettings;
 use gyrodrift_core::plan::{drift_std_curve as core_curve, mission_covariance as core_mission, PlanConfig};
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 /// The smoother's 1-sigma of the z drift carried into navigation at each span [s] from the first sample, and its
-/// covariance with the mission's noise floor (gyrodrift-core `plan::drift_std_curve`): the smoother's settings
+/// covariance with the mission's floor (gyrodrift-core `plan::drift_std_curve`): the smoother's settings
 /// (`span_s` the longest span, `thermal` off), the rotation scheme and attitude at table angle zero of
-/// `simulator_config` (its other settings are not used), the mission's start and length [s]. Returns a dict with
-/// `drift_std_rad_s` (per span) and `cross_rad_s_m` (per span: north, east).
+/// `simulator_config` (its other settings are not used), the mission's start and length [s]; the fine alignment
+/// before the mission is the procedure's (`FilterSettings::aligner` after the smoother's coarse span). Returns a
+/// dict with `drift_std_rad_s` (per span), `cross_rad_s_m` (per span: north, east) and `alignment_cov_m2`
+/// (2 x 2: the floor's part from the aligner's leftover attitude and velocity errors).
 #[pyfunction]
 #[pyo3(signature = (smoother_config, simulator_config, spans_s, *, mission_start_s, mission_s))]
 pub fn drift_std_curve<'py>(
@@ -27,6 +30,10 @@ pub fn drift_std_curve<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let cfg = PlanConfig {
         smoother: smoother_config.inner.clone(),
+        aligner: FilterSettings {
+            coarse_s: smoother_config.inner.coarse_s,
+            ..FilterSettings::aligner()
+        },
         scheme: simulator_config.inner.scheme.clone(),
         attitude: simulator_config.inner.attitude,
         spans_s,
@@ -38,6 +45,8 @@ pub fn drift_std_curve<'py>(
     d.set_item("drift_std_rad_s", PyArray1::from_vec(py, out.drift_std))?;
     let cross: Vec<Vec<f64>> = out.cross.iter().map(|c| c.to_vec()).collect();
     d.set_item("cross_rad_s_m", PyArray2::from_vec2(py, &cross)?)?;
+    let floor = vec![out.alignment_cov[0].to_vec(), out.alignment_cov[1].to_vec()];
+    d.set_item("alignment_cov_m2", PyArray2::from_vec2(py, &floor)?)?;
     Ok(d)
 }
 

@@ -109,8 +109,8 @@ def plan_command(
 ) -> None:
     """Plan the static identification: the 1-sigma of the identified axial drift against the observation span
     (alignment + static navigation), the predicted quantile of the mission's position error after compensating it
-    (noise floor included), and the shortest span meeting the budget. A covariance analysis with the 16 h
-    smoother's error model: no simulation, a few seconds.
+    (the error floor included: the noise over the mission and the alignment's leftovers), and the shortest span
+    meeting the budget. A covariance analysis with the 16 h smoother's error model: no simulation, a few seconds.
     """
     import dataclasses
 

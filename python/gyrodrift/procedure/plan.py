@@ -24,13 +24,16 @@ The model (docs/procedure.md, "Planning the static time"):
    free navigation from the end of the alignment), is a zero-mean 2-D Gaussian with covariance
    ``Sigma = Sigma_floor + s^2 g g' + g c' + c g'``: ``g`` the response to a unit drift error (close to the closed forms
    dL(t) = (eps cos L / w)(1 - cos w t) north and dlon(t) = eps sin L (t - sin(w t) / w) east, Schuler terms
-   aside), ``Sigma_floor`` the noise floor, the error the angle and velocity random walks leave over the mission
-   even with the exact drift (`_core.mission_covariance`), and ``c = E[(d - d_hat) p]`` the covariance of the
-   drift error with that floor p: the mission navigates from the end of the alignment while the span may still
-   run, and over the hours both cover the same gyro noise drives both (the smoother partly reads the noise's
-   walk as drift, which then cancels part of it in the mission); the same Riccati pass carries it
-   (`_core.drift_std_curve`). The mission starts from the alignment with no attitude error (its noise-driven part
-   is small beside the mission's), and the horizontal
+   aside), ``Sigma_floor`` the floor, the error the mission keeps even with the exact drift: the angle and velocity
+   random walks over the mission (`_core.mission_covariance`) plus the aligner's leftover attitude and velocity
+   errors it starts from, carried over the mission (`_core.drift_std_curve`'s ``alignment_cov_m2``); and
+   ``c = E[(d - d_hat) p]`` the covariance of the drift error with that floor p. Both come from the same data:
+   the aligner and the smoother start from the one coarse alignment and read the same noise over the 4 h
+   alignment (the smoother's drift error and the aligner's leftover heading and tilts move together), and after
+   it the same noise drives the smoother's error and the mission's (the smoother partly reads the noise's walk as
+   drift, which then cancels part of it in the mission). One Riccati pass carries the aligner (its own prior,
+   noise model and 1 s zero-velocity updates, on the smoother's error model) beside the smoother and gives both
+   (`_core.drift_std_curve`; gyrodrift-core ``plan``'s docs hold the recursion). The horizontal
    sensor biases are modulated away by the table. The share of runs within a radius r is
    ``P(|e| <= r) = (1 / 2 pi) int_0^{2 pi} (1 - exp(-r^2 / (2 s(theta)))) dtheta``, s(theta) = l1 cos^2 theta +
    l2 sin^2 theta (l1, l2 the eigenvalues of Sigma; polar coordinates of the whitened error), integrated by the
@@ -158,7 +161,10 @@ class MissionErrorModel:
     lat_deg, hours : float
         Site latitude [deg] and mission length [h] (free navigation from the end of the alignment).
     floor_cov_m2 : tuple of 2 tuples
-        Covariance of the north, east noise floor [m^2].
+        Covariance of the north, east floor [m^2] (the error with the exact drift: the noise's part and the
+        alignment's).
+    alignment_cov_m2 : tuple of 2 tuples
+        The part of `floor_cov_m2` from the aligner's leftover attitude and velocity errors [m^2].
     response_m_per_deg_h : tuple of 2 floats
         North, east position error per deg/h of uncompensated drift [m/(deg/h)] (computed minus true).
     """
@@ -166,6 +172,7 @@ class MissionErrorModel:
     lat_deg: float
     hours: float
     floor_cov_m2: tuple[tuple[float, float], tuple[float, float]]
+    alignment_cov_m2: tuple[tuple[float, float], tuple[float, float]]
     response_m_per_deg_h: tuple[float, float]
 
     def covariance_m2(self, drift_std_deg_h: float, cross_m_deg_h=(0.0, 0.0)) -> np.ndarray:
@@ -186,7 +193,7 @@ class MissionErrorModel:
 
     def max_drift_std_deg_h(self, budget: MissionBudget, cross_per_std_m=(0.0, 0.0)) -> float | None:
         """The largest drift 1-sigma s [deg/h] meeting `budget`, the covariance with the floor scaling with it
-        (c = s `cross_per_std_m` [m]); None when the noise floor alone misses it."""
+        (c = s `cross_per_std_m` [m]); None when the floor alone misses it."""
         if self.share_within(0.0, budget.error_nmi) < budget.share:
             return None
         rho = np.asarray(cross_per_std_m, dtype=float).reshape(2)
@@ -200,11 +207,11 @@ class MissionErrorModel:
 
 
 def mission_error_model(
-    lat_deg: float, noise: SensorNoise, *, hours: float = 72.0, height_m: float = 0.0
+    lat_deg: float, noise: SensorNoise, *, hours: float = 72.0, height_m: float = 0.0, alignment_cov_m2=None
 ) -> MissionErrorModel:
-    """The `MissionErrorModel` of a site and a noise model (`_core.mission_covariance`: the ARW and VRW over the
-    mission, no initial attitude or velocity error: a compensated run starts from its alignment, whose
-    noise-driven errors are small beside the mission's)."""
+    """The `MissionErrorModel` of a site and a noise model: the floor is the ARW's and VRW's over the mission
+    (`_core.mission_covariance`, from no initial error) plus `alignment_cov_m2` [m^2] (2 x 2, north, east), the
+    alignment's leftovers carried over the mission (`IdentificationCurve.alignment_cov_m2`; default none)."""
     from gyrodrift import _core
 
     lat = _finite("lat_deg", lat_deg, low=-90.0, high=90.0)
@@ -221,7 +228,10 @@ def mission_error_model(
             vel_sigma_m_s=0.0,
         )
     )
-    c = np.asarray(r["pos_cov_m2"], dtype=float)
+    a = np.zeros((2, 2)) if alignment_cov_m2 is None else np.asarray(alignment_cov_m2, dtype=float)
+    if a.shape != (2, 2) or not np.all(np.isfinite(a)):
+        raise InputError(f"alignment_cov_m2: expected a finite 2 x 2 matrix, got shape {a.shape}")
+    c = np.asarray(r["pos_cov_m2"], dtype=float) + a
     g = np.asarray(r["response_m_per_rad_s"], dtype=float) * DEG_PER_H
     if not float(np.hypot(g[0], g[1])) > 0:
         raise InputError(f"lat_deg: the {h:g} h position error does not depend on the axial drift at {lat:g} deg")
@@ -229,6 +239,7 @@ def mission_error_model(
         lat_deg=lat,
         hours=h,
         floor_cov_m2=((float(c[0, 0]), float(c[0, 1])), (float(c[1, 0]), float(c[1, 1]))),
+        alignment_cov_m2=((float(a[0, 0]), float(a[0, 1])), (float(a[1, 0]), float(a[1, 1]))),
         response_m_per_deg_h=(float(g[0]), float(g[1])),
     )
 
@@ -254,12 +265,16 @@ class IdentificationCurve:
     drift_std_deg_h : ndarray
         The smoother's 1-sigma of the drift carried into navigation [deg/h].
     cross_m_deg_h : ndarray, shape (spans, 2)
-        E[(d - d_hat) p] [m deg/h], p the north, east noise floor at the mission's end (module docs, point 3).
+        E[(d - d_hat) p] [m deg/h], p the north, east floor at the mission's end (module docs, point 3).
+    alignment_cov_m2 : ndarray, shape (2, 2)
+        The floor's part from the aligner's leftover attitude and velocity errors [m^2] (north, east), the same
+        for every span (`mission_error_model`'s `alignment_cov_m2`).
     """
 
     spans_h: np.ndarray
     drift_std_deg_h: np.ndarray
     cross_m_deg_h: np.ndarray
+    alignment_cov_m2: np.ndarray
 
 
 def identification_curve(
@@ -271,9 +286,9 @@ def identification_curve(
     timeline: Timeline = DEFAULT_TIMELINE,
     mission_h: float = 72.0,
 ) -> IdentificationCurve:
-    """The smoother's drift 1-sigma after each span [h] from the first sample and its covariance with the noise
-    floor of a mission of `mission_h` [h] from the end of the alignment (``timeline.align_h``) (module docs,
-    points 1 and 3; `_core.drift_std_curve`).
+    """The smoother's drift 1-sigma after each span [h] from the first sample, its covariance with the floor of
+    a mission of `mission_h` [h] from the end of the alignment (``timeline.align_h``), and the floor's part from
+    the alignment (module docs, points 1 and 3; `_core.drift_std_curve`).
 
     `scenario` (a `gyrodrift.ins.scenario.Scenario`) gives the site, the sample rate, the rotation scheme and the
     attitude; without it the default scenario at `lat_deg`. The smoother's settings are `smooth_log`'s: its
@@ -312,6 +327,7 @@ def identification_curve(
         spans_h=spans,
         drift_std_deg_h=np.asarray(out["drift_std_rad_s"], dtype=float) / DEG_PER_H,
         cross_m_deg_h=np.asarray(out["cross_rad_s_m"], dtype=float).reshape(-1, 2) / DEG_PER_H,
+        alignment_cov_m2=np.asarray(out["alignment_cov_m2"], dtype=float).reshape(2, 2),
     )
 
 
@@ -326,13 +342,13 @@ class Plan:
     drift_std_id_deg_h, drift_std_deg_h : ndarray
         The smoother's drift 1-sigma [deg/h] at each span, and with the thermal term added (module docs).
     cross_m_deg_h : ndarray, shape (spans, 2)
-        The drift error's covariance with the mission's noise floor, north and east [m deg/h].
+        The drift error's covariance with the mission's floor, north and east [m deg/h].
     share_within : ndarray
         Predicted share of runs within the budget's error at each span.
     quantile_nmi : ndarray
         Predicted ``budget.share`` quantile of the mission error [nmi] at each span.
     floor_quantile_nmi : float
-        The same with the exact drift (the noise floor alone).
+        The same with the exact drift (the floor alone).
     max_drift_std_deg_h : float or None
         The largest drift 1-sigma meeting the budget (None: the floor misses it), with the covariance with the floor
         scaled from the shortest span meeting it (else the longest span).
@@ -381,6 +397,7 @@ class Plan:
             "floor_quantile_nmi": self.floor_quantile_nmi,
             "mission": {
                 "floor_cov_m2": [list(r) for r in self.mission.floor_cov_m2],
+                "alignment_cov_m2": [list(r) for r in self.mission.alignment_cov_m2],
                 "response_m_per_deg_h": list(self.mission.response_m_per_deg_h),
             },
             "spans_h": arr(self.spans_h),
@@ -450,7 +467,13 @@ def plan_identification(
     curve = identification_curve(noise, spans, scenario=scn, timeline=timeline, mission_h=budget.hours)
     sid, cross = curve.drift_std_deg_h, curve.cross_m_deg_h
     s = np.hypot(sid, thermal)
-    mission = mission_error_model(scn.site.lat_deg, noise, hours=budget.hours, height_m=scn.site.height_m)
+    mission = mission_error_model(
+        scn.site.lat_deg,
+        noise,
+        hours=budget.hours,
+        height_m=scn.site.height_m,
+        alignment_cov_m2=curve.alignment_cov_m2,
+    )
     share = np.array([mission.share_within(x, budget.error_nmi, c) for x, c in zip(s, cross, strict=True)])
     quant = np.array([mission.quantile_nmi(x, budget.share, c) for x, c in zip(s, cross, strict=True)])
     floor_q = mission.quantile_nmi(0.0, budget.share)
@@ -462,8 +485,8 @@ def plan_identification(
         shortest, reason = (
             None,
             (
-                f"no span meets {budget.describe()}: the noise floor alone (the exact drift) leaves the {pct} quantile "
-                f"at {floor_q:.2f} nmi"
+                f"no span meets {budget.describe()}: the error floor alone (the exact drift: the noise and the "
+                f"alignment's leftovers) leaves the {pct} quantile at {floor_q:.2f} nmi"
             ),
         )
     elif s_max <= thermal:
@@ -538,9 +561,9 @@ def mission_outlook(
     budget = budget or MissionBudget()
     s = _finite("drift_std_deg_h", drift_std_deg_h, low=0.0)
     span = _finite("span_h", span_h, low=0.5, high=_MAX_SPAN_H - 0.25)
-    mission = mission_error_model(lat_deg, noise, hours=budget.hours)
     # The planner's curve from this span on, scaled through this run's 1-sigma (and its covariance with the floor).
     curve = identification_curve(noise, np.arange(span, _MAX_SPAN_H, 0.25), lat_deg=lat_deg, mission_h=budget.hours)
+    mission = mission_error_model(lat_deg, noise, hours=budget.hours, alignment_cov_m2=curve.alignment_cov_m2)
     scale = s / curve.drift_std_deg_h[0] if curve.drift_std_deg_h[0] > 0 else 0.0
     stds, crosses = curve.drift_std_deg_h * scale, curve.cross_m_deg_h * scale
     quant = {f"{p:g}": mission.quantile_nmi(s, p, crosses[0]) for p in probs}
@@ -552,7 +575,9 @@ def mission_outlook(
     if ready:
         note = f"ready: predicted {100 * budget.share:g} % quantile {q:.2f} nmi meets {budget.describe()}"
     elif s_max is None:
-        note = f"not ready, and no static time will do: the noise floor alone misses {budget.describe()}"
+        note = (
+            f"not ready, and no static time will do: the error floor alone (the exact drift) misses {budget.describe()}"
+        )
     else:
         ok = [
             k

@@ -17,7 +17,8 @@ PLAN_FILES = ("plan.json", "plan.png")
 
 def plot_plan(plan: Plan, path: str | os.PathLike[str]) -> None:
     """Two panels against the span [h]: the drift 1-sigma [deg/h] with the largest the budget allows, and the
-    predicted quantile of the mission error [nmi] with the budget and the noise floor; the answer as the title."""
+    predicted quantile of the mission error [nmi] with the budget and the error floor (the exact drift); the answer
+    as the title."""
     from matplotlib.figure import Figure  # object API: no pyplot global state
 
     b = plan.budget
@@ -34,7 +35,7 @@ def plot_plan(plan: Plan, path: str | os.PathLike[str]) -> None:
     top.set_xlabel("observation span from the first sample [h] (alignment + static navigation)")
     bottom.plot(plan.spans_h, plan.quantile_nmi, color="C1", lw=1.5, label=f"predicted {100 * b.share:g} % quantile")
     bottom.axhline(b.error_nmi, color="C3", lw=1, ls="--", label=f"budget {b.error_nmi:g} nmi")
-    bottom.axhline(plan.floor_quantile_nmi, color="0.4", lw=1, ls=":", label="noise floor (exact drift)")
+    bottom.axhline(plan.floor_quantile_nmi, color="0.4", lw=1, ls=":", label="error floor (exact drift)")
     bottom.set_ylabel(f"{b.hours:g} h position error [nmi]")
     bottom.set_xlabel("observation span from the first sample [h]")
     for ax in (top, bottom):
