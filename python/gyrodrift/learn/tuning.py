@@ -48,7 +48,6 @@ import os
 from dataclasses import asdict, dataclass, field, fields
 
 import numpy as np
-from sklearn.model_selection import KFold
 from threadpoolctl import threadpool_limits
 
 from gyrodrift.choices import METHODS, OBJECTIVES
@@ -214,6 +213,8 @@ def _kfold_errors(sqdist: np.ndarray, y: np.ndarray, gammas, sigmas, n_folds: in
 
     With sample ``weights`` the fold's ``H = K + diag(1/(gamma w))`` (``lssvr_solve`` adds ``I/gamma``, so the
     rest of the diagonal is added to its ``K``)."""
+    from sklearn.model_selection import KFold  # here: only this objective needs it (sklearn.metrics comes with it)
+
     m, n = len(gammas), len(y)
     errors = np.full((m, n), np.inf)
     folds = list(KFold(n_splits=n_folds, shuffle=False).split(np.arange(n)))
