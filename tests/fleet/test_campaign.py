@@ -337,6 +337,9 @@ def test_cli_campaign_and_study(store, tmp_path):
         main, ["study", str(out), "--out", str(tmp_path / "study"), "--test-fraction", "0.17", "--max-iter", "8"]
     )
     assert res.exit_code == 0, res.output
+    from gyrodrift.fleet.study_report import STUDY_FILES
+
+    assert res.stdout.splitlines()[-1] == "wrote " + ", ".join(str(tmp_path / "study" / n) for n in STUDY_FILES)
     doc = json.loads((tmp_path / "study" / "study.json").read_text())
     assert doc["n_test"] == 2 and doc["n_train"] == 10
     for name in ("hybrid default", "12 h physics inversion", "GP regression", "alignment z estimate"):
