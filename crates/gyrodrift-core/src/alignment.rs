@@ -100,6 +100,44 @@ pub fn coarse_attitude_sigma(lat: f64, height: f64, filter: &FilterSettings) -> 
     [level, level, heading]
 }
 
+/// A navigator at rest at the known site (latitude, longitude \[rad\], height \[m\], rate \[Hz\]; vertical channel
+/// held) from the coarse attitude `c_bn` at `t_s` \[s\], and that attitude: where the aligner's and the smoother's
+/// fine filters start. A `Diverged` error (key `dv_m_s`) when the coarse alignment found no attitude, or one outside
+/// the navigator's range (a pitch of +-90 deg: the body y axis vertical; the site was validated with the filter).
+pub(crate) fn navigator_at_rest(
+    c_bn: &Mat3,
+    lat: f64,
+    lon: f64,
+    height: f64,
+    rate_hz: f64,
+    t_s: f64,
+) -> Result<(Euler, Navigator), CoreError> {
+    let diverged = |message: String| CoreError::Diverged {
+        key: "dv_m_s",
+        t_s,
+        message,
+    };
+    if !c_bn.iter().flatten().all(|x| x.is_finite()) {
+        return Err(diverged(
+            "the coarse alignment found no attitude: the specific force and the Earth rate give no two independent \
+             directions (no gravity in the log?)"
+                .to_string(),
+        ));
+    }
+    let attitude = dcm_to_euler(c_bn);
+    let nav = Navigator::new(NavigatorConfig {
+        lat,
+        lon,
+        height,
+        vel: [0.0; 3],
+        attitude,
+        rate_hz,
+        vertical: Vertical::Fixed,
+    })
+    .map_err(|e| diverged(format!("the coarse attitude is outside the navigator's range: {e}")))?;
+    Ok((attitude, nav))
+}
+
 /// Everything the alignment reports (SI; contract `result()`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct AlignmentResult {
@@ -258,34 +296,9 @@ impl Aligner {
         let t_s = self.k as f64 / self.cfg.rate_hz;
         // Invariant: called at sample n_coarse, when the coarse span is complete.
         let c_bn = self.coarse.attitude().expect("coarse span complete");
-        if !c_bn.iter().flatten().all(|x| x.is_finite()) {
-            return Err(CoreError::Diverged {
-                key: "dv_m_s",
-                t_s,
-                message: "the coarse alignment found no attitude: the specific force and the Earth rate give \
-                          no two independent directions (no gravity in the log?)"
-                    .to_string(),
-            });
-        }
-        let attitude = dcm_to_euler(&c_bn);
-        self.coarse_attitude = Some(attitude);
         let cfg = &self.cfg;
-        let nav_cfg = NavigatorConfig {
-            lat: cfg.lat,
-            lon: cfg.lon,
-            height: cfg.height,
-            vel: [0.0; 3],
-            attitude,
-            rate_hz: cfg.rate_hz,
-            vertical: Vertical::Fixed,
-        };
-        // The site was validated with the aligner; only the coarse attitude can be out of range (a pitch of
-        // +-90 deg: the body y axis vertical).
-        let nav = Navigator::new(nav_cfg).map_err(|e| CoreError::Diverged {
-            key: "dv_m_s",
-            t_s,
-            message: format!("the coarse attitude is outside the navigator's range: {e}"),
-        })?;
+        let (attitude, nav) = navigator_at_rest(&c_bn, cfg.lat, cfg.lon, cfg.height, cfg.rate_hz, t_s)?;
+        self.coarse_attitude = Some(attitude);
         let f = &cfg.filter;
         let att = f
             .att_sigma

@@ -59,12 +59,12 @@ mod rts;
 pub use config::{state_names, SmootherConfig};
 pub use rts::SmootherResult;
 
-use crate::attitude::{dcm_to_euler, quat_to_dcm};
+use crate::alignment::navigator_at_rest;
+use crate::attitude::quat_to_dcm;
 use crate::coarse_alignment::InertialCoarseAlignment;
 use crate::error::{check, CoreError};
 use crate::kalman::N_STATES as N_BASE;
 use crate::limits::check_increments;
-use crate::strapdown::{Navigator, NavigatorConfig, Vertical};
 use forward::{Forward, Step};
 use model::{initial_sigma, Model};
 use nalgebra::{DMatrix, DVector};
@@ -204,27 +204,8 @@ impl Smoother {
     fn start(&mut self) -> Result<(), CoreError> {
         let t_s = self.k as f64 / self.cfg.rate_hz;
         let c_bn = self.coarse.attitude().expect("coarse span complete");
-        let diverged = |message: String| CoreError::Diverged {
-            key: "dv_m_s",
-            t_s,
-            message,
-        };
-        if !c_bn.iter().flatten().all(|x| x.is_finite()) {
-            return Err(diverged(
-                "the coarse alignment found no attitude (no gravity in the log?)".to_string(),
-            ));
-        }
         let cfg = &self.cfg;
-        let nav = Navigator::new(NavigatorConfig {
-            lat: cfg.lat,
-            lon: cfg.lon,
-            height: cfg.height,
-            vel: [0.0; 3],
-            attitude: dcm_to_euler(&c_bn),
-            rate_hz: cfg.rate_hz,
-            vertical: Vertical::Fixed,
-        })
-        .map_err(|e| diverged(format!("the coarse attitude is outside the navigator's range: {e}")))?;
+        let (_, nav) = navigator_at_rest(&c_bn, cfg.lat, cfg.lon, cfg.height, cfg.rate_hz, t_s)?;
         let model = Model::new(cfg);
         let n = model.n;
         let sigma = initial_sigma(cfg, t_s);
