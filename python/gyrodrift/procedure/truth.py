@@ -36,8 +36,12 @@ velocity and north/east position errors driven by ARW and VRW over the navigatio
 Gauss-Markov bias instability and rate random walk when the noise model has them (`SensorNoise`; a noise measured
 from the log has none): d* follows their weighted average over the span, which the run's noise-free twin lacks;
 the x/y ones are modulated by the table and left out; the alignment's errors are left out: they are the same
-in the run and in its noise-free twin but for their noise-driven part, which is small; with the alignment's whole
-attitude 1-sigma the ``rms`` sigma came out 1.4 times the observed spread):
+in the run and in its noise-free twin but for their noise-driven part, whose effect on the position error nearly
+returns to zero after whole days (72 h) but not after 8 h, where the sigma is 1.4-2 times optimistic
+(docs/studies/2026-11-27-label-sigma.md); with the
+alignment's whole attitude 1-sigma the ``rms`` sigma came out 1.4 times the observed spread). What it describes is
+the label minus that of the run's noise-free twin, linear in the noise and blind to the run's deterministic errors
+(the drift's temperature law, the biases):
 ``final``: ``var = g' Cov(e(T)) g / |g|^4`` with g the position response to the drift at hour 72 and e the
 position error it does not explain; ``rms``: the same for the sums over the curve points (an accumulator
 state); ``max`` has no closed form and takes the ``rms`` value (an approximation). ARW and VRW are measured
