@@ -7,6 +7,9 @@ commands (``gyrodrift simulate examples/scenarios/tour.toml ...``) run unchanged
 repository. A bash block runs with ``bash -euo pipefail``: any failing command fails the test. The only block not
 run is one that installs the package (``pip install``), behind a ``<!-- skip: next -->`` directive: the tests run
 inside that installation; tests/test_docs.py checks that no other block is skipped or left unlabelled.
+
+It also orders the session: the files of `LONGEST_FIRST` run first (pytest_collection_modifyitems), so that
+``python -m pytest -n auto`` (each file whole on one worker) does not end with one long file running alone.
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ import subprocess
 import tempfile
 from pathlib import Path
 
+import pytest
 from sybil import Sybil
 from sybil.parsers.markdown import CodeBlockParser, PythonCodeBlockParser, SkipParser
 from sybil.parsers.rest import DocTestParser
@@ -78,3 +82,31 @@ docstring_sybil = Sybil(
 )
 
 pytest_collect_file = (markdown_sybil + docstring_sybil).pytest()
+
+LONGEST_FIRST = (
+    "tests/procedure/test_procedure.py",
+    "tests/procedure/test_smoother.py",
+    "tests/export/test_export_compiled.py",
+    "tests/procedure/test_plan.py",
+    "tests/learn/test_intervals.py",
+)
+"""The files with the most CPU time, the longest first (per-file user + sys seconds, child processes included,
+of a one-process run of each room). The rest follow in their collection order. pytest-xdist's --dist loadfile
+hands whole files to the workers in the session's order (--no-loadscope-reorder in pyproject's addopts; its
+default orders files by their number of tests, which sent the long few-test files last). A file missing from
+the tree fails tests/test_suite_order.py."""
+
+
+def longest_first_key(item: pytest.Item) -> int:
+    """The item's file's place in `LONGEST_FIRST`, or len(LONGEST_FIRST) for every other file."""
+    try:
+        name = Path(item.path).resolve().relative_to(ROOT).as_posix()
+    except ValueError:  # a file outside the repository (a test's own scratch suite)
+        return len(LONGEST_FIRST)
+    return LONGEST_FIRST.index(name) if name in LONGEST_FIRST else len(LONGEST_FIRST)
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Moves the files of `LONGEST_FIRST` to the front, in its order; a stable sort, so each file's items stay
+    together and in order (a document's blocks, a module's fixtures) and the other files keep their order."""
+    items.sort(key=longest_first_key)
