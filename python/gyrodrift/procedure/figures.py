@@ -140,13 +140,15 @@ def route_map_figure(ev: Evaluation):
     r_m, r_n = radii_of_curvature(np.array([lat0]))
     north = (lat - lat0) * r_m[0] / 1000.0
     east = (lon - lon0) * r_n[0] * np.cos(lat0) / 1000.0
-    ax.plot(east, north, color="black", lw=2.0, label=f"reference ({os.path.basename(ref.label) or ref.label})")
+    # the reference on top, dashed: the navigated tracks run within a few nmi of it and would hide it
+    source = "the scenario's true route" if ref.label == "<route>" else os.path.basename(ref.label) or ref.label
+    ax.plot(east, north, color="black", lw=1.2, ls=(0, (4, 3)), zorder=3, label=f"reference ({source})")
     for curve, colour, name in ((ev.before, BEFORE_COLOUR, "before"), (ev.after, AFTER_COLOUR, "after")):
         ax.plot(
             east[1:] + curve.east_m / 1000.0,
             north[1:] + curve.north_m / 1000.0,
             color=colour,
-            lw=0.8,
+            lw=2.0 if name == "before" else 1.4,
             label=f"navigated, {name} (max error {curve.max_nmi:.2f} nmi)",
         )
     ax.plot([0.0], [0.0], "ko")
@@ -154,7 +156,7 @@ def route_map_figure(ev: Evaluation):
     ax.set_ylabel("north [km]")
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_title(f"{ev.run}: route, {ev.hours:g} h after alignment")
-    ax.legend(fontsize="small")
+    ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.02, 1.0))  # beside the map: hides no track
     ax.grid(True, alpha=0.3)
     return fig
 
