@@ -7,6 +7,7 @@ import pytest
 from click.testing import CliRunner
 
 from gyrodrift.cli import main
+from gyrodrift.paper.report import summary_lines
 from gyrodrift.paper.reproduce import reproduce
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
@@ -61,7 +62,21 @@ def test_report_leads_with_the_result_and_marks_the_selected_model(run):
     for what in ("test MAE", "max abs error", "gamma", "sigma", "convergence", "72 h position error"):
         assert what in box, what
     chosen_entry = next(m for m in results["methods"] if m["name"] == chosen)
-    assert f"| test MAE [deg/h] | 0.000073 (Table 3) | {chosen_entry['test_mae_deg_h']:.6f} |" in box
+    assert f"| test MAE [deg/h] | - | 0.000073 | {chosen_entry['test_mae_deg_h']:.6f} |" in box
+    # the paper's claims apart from what gyrodrift computed: test run 27's simulated error is not a paper claim
+    f45 = results["position_error_72h"]
+    assert (
+        f"simulated, compensated (uncompensated: {f45['uncompensated_max_pos_err_nmi']:.2f}) [nmi, max] | - | " in box
+    )
+    # the verdict leads the terminal and the report, with the numbers computed here
+    verdict = summary_lines(results)[0]
+    true = np.array(results["data"]["test_true_deg_h"])
+    paper_mae = float(np.mean(np.abs(true - np.array(results["paper_claims"]["test_pred_deg_h"]))))
+    ratio = chosen_entry["test_mae_deg_h"] / paper_mae
+    assert verdict.startswith("Verdict: the paper's test MAE of 7.3e-05 deg/h (its Table 3) is")
+    assert ("is not reproduced" in verdict) == (ratio > 1.0) and f"({ratio:.1f} times the paper's)" in verdict
+    assert f"reaches {chosen_entry['test_mae_deg_h']:.2g} deg/h" in verdict and f"({chosen})" in verdict
+    assert md.index(verdict) < first_table and html.index(verdict.replace("'", "&#x27;")) < html.index("class='box'")
     assert f"**{chosen} (selected)**" in md  # its row of the method table
     assert html.count("class='sel'") > 20 and "class='box'" in html
     # one number format per column: every cell of a drift column has 6 decimals
