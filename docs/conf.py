@@ -26,3 +26,13 @@ autodoc_member_order = "bysource"
 numpydoc_show_class_members = False  # autodoc lists them
 numpydoc_validation_checks: set[str] = set()
 html_theme = "alabaster"
+
+
+def _plain_epilog(app, ctx, lines: list[str]) -> None:
+    """A command's epilog is plain text (``Example: gyrodrift features fleet/*/imu.parquet ...``), not reST: its
+    stars and backslashes are escaped so that they print as the terminal shows them."""
+    lines[:] = [line.replace("\\", "\\\\").replace("*", "\\*").replace("`", "\\`") for line in lines]
+
+
+def setup(app):
+    app.connect("sphinx-click-process-epilog", _plain_epilog)

@@ -137,8 +137,8 @@ def rotation_summary(scenario: Scenario) -> dict:
     """What the turntable scheme of `scenario` does to horizontal sensor errors.
 
     Returns ``{"modulation_residual": r, "span_deg": s}``: r is the fraction of a body-fixed horizontal
-    gyro or accelerometer bias left un-modulated (|time average of (cos, sin) of the table angle over one
-    period|: 1 without rotation, 0 for continuous rotation; the navigation error it causes scales with r);
+    gyro or accelerometer bias left un-modulated (the magnitude of the time average of (cos, sin) of the table angle
+    over one period: 1 without rotation, 0 for continuous rotation; the navigation error it causes scales with r);
     s is the reciprocating span actually turned [deg] (the balanced span resolved), None for other schemes.
     """
     from gyrodrift import _core

@@ -3,7 +3,7 @@
 The vehicle drives from the site through the waypoints in order, each leg on a rhumb line (constant heading: what
 a segment of constant yaw drives on the ellipsoid), at the leg's cruise speed. Around a waypoint it turns at the
 stated rate at the speed of the leg it leaves, on the arc of radius r = v / omega tangent to both legs: the turn
-starts r tan(|delta| / 2) before the waypoint and ends as far after it on the next leg (delta the heading change),
+starts r tan(abs(delta) / 2) before the waypoint and ends as far after it on the next leg (delta the heading change),
 so the vehicle rejoins the next leg's line and passes the waypoint at r (1 / cos(delta / 2) - 1). Speed changes
 (at the stated acceleration) follow the turn on the new leg; the route starts from rest (after turning on the spot
 to the first leg's heading) and ends braking to a stop on the last waypoint. A waypoint's height is reached by

@@ -84,7 +84,7 @@ def check_coverage(coverage) -> float:
 def jackknife_half_width(residuals, coverage: float) -> float:
     """Half-width of the jackknife prediction interval from leave-one-out residuals [their unit].
 
-    The ceil((n + 1) coverage)-th smallest |r_i| (Barber, Candes, Ramdas, Tibshirani 2021, "Predictive
+    The ceil((n + 1) coverage)-th smallest ``|r_i|`` (Barber, Candes, Ramdas, Tibshirani 2021, "Predictive
     inference with the jackknife+", the plain jackknife interval): for exchangeable runs the interval
     prediction +- half-width covers a new run's true value with probability of about ``coverage`` (the
     guarantee of the plain jackknife is weaker than jackknife+'s, but it needs no refit per left-out run).

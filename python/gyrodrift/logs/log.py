@@ -1,7 +1,7 @@
 """The chunked view of an IMU log (`ImuLog`, `LogChunk`): every source read through the same checks, and `open_log`.
 
 A log is one row per IMU sample, body frame x right, y forward, z up (z = turntable = axial axis). Every
-source goes through the same checks and yields the same `LogChunk`s; one reader per source:
+source goes through the same checks and yields the same `LogChunk` objects; one reader per source:
 
 * Parquet (``.parquet`` / ``.pq``, `gyrodrift.logs.parquet`): the simulator's own ``imu.parquet``
   (docs/scenarios.md) or any file with the columns below, with or without gyrodrift metadata;
@@ -31,8 +31,8 @@ over the first 1000 intervals, rounded to 9 significant digits; it must lie in [
 (`gyrodrift.logs.rows`):
 
 * time not strictly increasing (duplicated or going back), a gap (an interval off the nominal
-  1 / rate_hz by more than 1 %), NaN or empty cells, infinite values, impossible magnitudes (|rate| >
-  `MAX_RATE_DEG_S` deg/s, |specific force| > `MAX_SPECIFIC_FORCE_G` g on any axis), a temperature outside
+  1 / rate_hz by more than 1 %), NaN or empty cells, infinite values, impossible magnitudes (``|rate|`` >
+  `MAX_RATE_DEG_S` deg/s, ``|specific force|`` > `MAX_SPECIFIC_FORCE_G` g on any axis), a temperature outside
   `gyrodrift.runs.table.TEMPERATURE_LIMITS_C` (the limits of the run tables: a kelvin value is refused), a missing
   column, a CSV row with the wrong number of cells, a byte that is not UTF-8, damaged Parquet data pages.
 

@@ -5,16 +5,18 @@ the features use navigation hours 0-12, the true drift and the evaluation hours 
 
 Public API (plain functions returning dataclasses; the CLI in `gyrodrift.cli.procedure` wraps them)
 --------------------------------------------------------------------------------------------------------
-align_log(log, ...) -> Alignment; write_alignment(alignment, out_dir)
-navigate_after_alignment(log, alignment, drifts_deg_h, hours, ...) -> PassResult
-navigate(imu, *, hours=None, drift_law=None, initial="auto", ..., out_dir=None, plot=False) -> NavResult
-    (the ``navigate`` command: from the log's truth or its alignment; nav.parquet, summary.json)
-extract_features(log, ..., with_truth=False) -> RunFeatures
-write_features_csv(rows, path, curves=None)
-find_true_drift(log, criterion="final", hours=72, ...) -> TrueDrift; write_truth(truth, out_dir)
-evaluate_compensation(log, drift_deg_h, hours=72, ...) -> Evaluation; write_evaluation(ev, out_dir)
-identify(log, model, ...) -> Identification; write_identification(res, out_dir)
-smooth_log(log, noise=None, ...) -> SmootherEstimate (the 16 h smoother: drift, 1-sigma, history)
+::
+
+    align_log(log, ...) -> Alignment; write_alignment(alignment, out_dir)
+    navigate_after_alignment(log, alignment, drifts_deg_h, hours, ...) -> PassResult
+    navigate(imu, *, hours=None, drift_law=None, initial="auto", ..., out_dir=None, plot=False) -> NavResult
+        (the ``navigate`` command: from the log's truth or its alignment; nav.parquet, summary.json)
+    extract_features(log, ..., with_truth=False) -> RunFeatures
+    write_features_csv(rows, path, curves=None)
+    find_true_drift(log, criterion="final", hours=72, ...) -> TrueDrift; write_truth(truth, out_dir)
+    evaluate_compensation(log, drift_deg_h, hours=72, ...) -> Evaluation; write_evaluation(ev, out_dir)
+    identify(log, model, ...) -> Identification; write_identification(res, out_dir)
+    smooth_log(log, noise=None, ...) -> SmootherEstimate (the 16 h smoother: drift, 1-sigma, history)
 
 Layers: the result dataclasses live in `gyrodrift.procedure.results`; the algorithms import them (never
 matplotlib or the file writer); `gyrodrift.procedure.figures` draws results and `gyrodrift.procedure.writers`

@@ -127,7 +127,7 @@ def _eigen(cov: np.ndarray) -> tuple[float, float]:
 
 
 def norm_cdf(cov, radius) -> float:
-    """P(|e| <= radius) for a zero-mean 2-D Gaussian e with covariance `cov` (module docs; same units squared)."""
+    """``P(|e| <= radius)`` for a zero-mean 2-D Gaussian e with covariance `cov` (module docs; same units squared)."""
     l1, l2 = _eigen(cov)
     r = float(radius)
     if r <= 0:
@@ -141,7 +141,7 @@ def norm_cdf(cov, radius) -> float:
 
 
 def norm_quantile(cov, p: float) -> float:
-    """The radius r with P(|e| <= r) = p (0 < p < 1) for the Gaussian of `norm_cdf` (units of sqrt(cov))."""
+    """The radius r with ``P(|e| <= r) = p`` (0 < p < 1) for the Gaussian of `norm_cdf` (units of sqrt(cov))."""
     p = _finite("quantile probability", p, low=0.0, open_low=True)
     if not p < 1.0:
         raise InputError(f"quantile probability: expected a number in (0, 1), got {p:g}")

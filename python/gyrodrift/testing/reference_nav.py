@@ -16,7 +16,7 @@ Inputs per sample: angle increment dtheta [rad] and velocity increment dv [m/s] 
 Bias estimates are subtracted (compensated = measured - estimate).
 
 Per-sample update (k-1 -> k), Earth quantities evaluated at the start of the interval
-------------------------------------------------------------------------------------
+-------------------------------------------------------------------------------------
 1. Coning and sculling with the previous sample (two-sample "previous + current" form):
        phi   = dtheta_k + (1/12) dtheta_{k-1} x dtheta_k
        dv_b  = dv_k + 1/2 dtheta_k x dv_k + (1/12) (dtheta_{k-1} x dv_k + dv_{k-1} x dtheta_k)
@@ -64,7 +64,7 @@ def quat_mul(p: np.ndarray, q: np.ndarray) -> np.ndarray:
 
 
 def rotvec_to_quat(phi: np.ndarray) -> np.ndarray:
-    """Quaternion of the rotation vector `phi` [rad]: (cos(|phi|/2), phi sin(|phi|/2)/|phi|)."""
+    """Quaternion of the rotation vector `phi` [rad]: ``(cos(|phi|/2), phi sin(|phi|/2)/|phi|)``."""
     angle = float(np.linalg.norm(phi))
     if angle < 1e-12:
         return np.array([1.0, 0.5 * phi[0], 0.5 * phi[1], 0.5 * phi[2]])
