@@ -22,6 +22,7 @@ from gyrodrift.fleet.run_table import run_table_rows
 from gyrodrift.fleet.science import trial_drift_deg_h
 from gyrodrift.fleet.spec import CampaignError, load_campaign, parse_campaign
 from gyrodrift.fleet.store import CURVE_COLUMNS, CampaignStore, read_runs
+from gyrodrift.runs.columns import TRUTH_LAW_COLUMNS
 
 TINY = Path(__file__).resolve().parents[2] / "examples" / "campaigns" / "tiny.toml"
 VOLATILE = {"worker"} | {f"{k}_{s}_s" for k in ("t", "cpu") for s in ("align", "passes", "smoother", "twin", "total")}
@@ -463,9 +464,14 @@ def test_one_read_path_matches_the_verified_path(tmp_path):
         for name in ("drift_deg_h", "drift_effective_deg_h"):
             assert abs(b[name] - a[name]) < 3e-7, (i, name, b[name] - a[name])
         assert a["drift_deg_h"] != b["drift_deg_h"]  # two computations, not one
+        own = ("drift_deg_h", "drift_effective_deg_h", *TRUTH_LAW_COLUMNS)  # each path's own linearisation
         for name, v in a.items():
-            if isinstance(v, float) and name not in VOLATILE and name not in ("drift_deg_h", "drift_effective_deg_h"):
+            if isinstance(v, float) and name not in VOLATILE and name not in own:
                 assert b[name] == v or (math.isnan(v) and math.isnan(b[name])), (i, name)
+        law_sigmas = {"truth_law_eps_ref_deg_h": "truth_law_eps_ref_std_deg_h"}
+        law_sigmas["truth_law_k1_deg_h_per_c"] = "truth_law_k1_std_deg_h_per_c"
+        for name, std in law_sigmas.items():  # the best law, about each path's constant: within 3 % of its 1-sigma
+            assert abs(b[name] - a[name]) <= 0.03 * a[std] or b[name] == a[name], (i, name)
         assert a["curve_north0_m"] == b["curve_north0_m"] and a["curve_east0_m"] == b["curve_east0_m"]
         runs = [CampaignRuns({}, {k: np.array([r[k]], float) for k in CURVE_COLUMNS}) for r in (a, b)]
         for d in a["drift_deg_h"] + np.array([-0.002, 0.0, 0.002]):

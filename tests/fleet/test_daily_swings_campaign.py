@@ -36,3 +36,68 @@ def test_a_swing_that_makes_no_valid_run_is_refused_naming_the_key():
     assert (
         text.startswith("c.toml: ") and 'vary."temperature.swing_amplitude_c"' in text and "swing_amplitude_c" in text
     )
+
+
+SWING_CAMPAIGN = """
+[campaign]
+count = 2
+seed = 5
+
+[options]
+align_h = 1.0
+features_h = 6
+truth_h = 12.0
+smoother = false
+
+[base.site]
+lat_deg = 40.0
+
+[base.run]
+duration_h = 13.0
+rate_hz = 5.0
+
+[base.gyro]
+bias_deg_h = [0.0, 0.0, 0.002]
+
+[base.temperature]
+start_c = 24.0
+end_c = 30.0
+tau_h = 1.0
+swing_period_h = 6.0
+t0_c = 28.0
+k1_deg_h_per_c = 0.0002
+
+[vary."temperature.swing_amplitude_c"]
+dist = "choice"
+values = [4.0]
+"""
+
+
+def test_a_campaign_stores_the_best_law_beside_the_best_constant(tmp_path):
+    import math
+
+    import numpy as np
+
+    from gyrodrift.fleet.campaign import run_campaign
+    from gyrodrift.fleet.store import read_runs
+    from gyrodrift.runs.columns import TRUTH_LAW_COLUMNS
+
+    path = tmp_path / "swing.toml"
+    path.write_text(SWING_CAMPAIGN, encoding="utf-8")
+    run_campaign(load_campaign(path), tmp_path / "fleet", text=SWING_CAMPAIGN, workers=1, quiet=True)
+    runs = read_runs(tmp_path / "fleet")
+    assert runs.ok.all()
+    for c in TRUTH_LAW_COLUMNS:
+        assert np.isfinite(runs.numbers(c)).all(), c
+    k1 = runs.numbers("truth_law_k1_deg_h_per_c")
+    assert np.all(k1 > 0)  # the sensor's sign (its size also absorbs the 1 h alignment's errors at the 12 h end)
+    # The stored curves give the law's criterion to first order: better than the best constant's at the end.
+    c = runs.curves
+    assert c is not None
+    for i in range(len(runs)):
+        eps = runs.numbers("truth_law_eps_ref_deg_h")[i]
+        n = c["curve_north0_m"][i] + eps * c["curve_north_per_deg_h"][i] + k1[i] * c["curve_north_per_k1"][i]
+        e = c["curve_east0_m"][i] + eps * c["curve_east_per_deg_h"][i] + k1[i] * c["curve_east_per_k1"][i]
+        law_final_nmi = math.hypot(n[-1], e[-1]) / 1852.0
+        const_final_nmi = runs.errors_nmi(runs.numbers("drift_deg_h"))[i, -1]
+        assert law_final_nmi < 0.5 * const_final_nmi

@@ -181,3 +181,23 @@ def test_truth_command_prints_the_best_law(tmp_path):
     assert r.exit_code == 0, r.output
     line = next(x for x in r.output.splitlines() if "best law" in x)
     assert "deg/h/degC) (T - " in line and "nmi navigated" in line
+
+
+def test_features_with_truth_write_the_best_law(tmp_path):
+    from gyrodrift.procedure import extract_features
+    from gyrodrift.procedure.writers import features_csv_text
+    from gyrodrift.runs.columns import TRUTH_LAW_COLUMNS
+    from gyrodrift.runs.table import read_runs_csv
+
+    f = extract_features(swing_log(4.0), with_truth=True, timeline=TIMELINE, smoother=False, noise=NOISE)
+    assert f.truth is not None and f.truth.law is not None
+    (tmp_path / "runs.csv").write_text(features_csv_text([f]), encoding="utf-8")
+    runs = read_runs_csv(tmp_path / "runs.csv", require_truth=True)
+    header, row = (tmp_path / "runs.csv").read_text(encoding="utf-8").splitlines()
+    cells = dict(zip(header.split(","), row.split(","), strict=True))
+    for name, value in f.truth.law.columns().items():
+        assert name in TRUTH_LAW_COLUMNS
+        assert float(cells[name]) == pytest.approx(value, rel=1e-12)
+        if name != "truth_law_t_ref_c":  # kept by the reader (T_ref is read and left: not drift-sized)
+            assert runs.column(name)[0] == pytest.approx(value, rel=1e-12)
+    assert float(cells["truth_law_t_ref_c"]) == f.temp_end_c  # T_ref: the end of the features window

@@ -6,7 +6,8 @@ Per run (`process_run`; nothing written here): the scenario is simulated on the 
 (north/east error of the uncompensated navigation and their sensitivity per deg/h of compensated drift, the
 secant between two navigated drifts), from which the position error after compensating any drift ``d`` is
 ``hypot(n0 + d gn, e0 + d ge)`` without navigating again (`gyrodrift.fleet.store.linear_error_nmi`); the 16 h
-smoother estimate; and the simulated effective drift, the truth of the run's noise-free twin (same scenario and
+smoother estimate; the truth's best drift law beside the best constant (``TRUTH_LAW_COLUMNS``, and the error
+curves' response to its k1, ``curve_north_per_k1`` / ``curve_east_per_k1``); and the simulated effective drift, the truth of the run's noise-free twin (same scenario and
 seed, ARW/VRW/bias instability/RRW off). A run that fails is a row with its error. The row's columns are those of
 `gyrodrift.fleet.store.run_schema`.
 """
@@ -25,7 +26,7 @@ import numpy as np
 
 from gyrodrift.fleet.spec import Campaign
 from gyrodrift.fleet.store import param_column
-from gyrodrift.runs.columns import FEATURES_COLUMNS, SMOOTHER_COLUMNS
+from gyrodrift.runs.columns import FEATURES_COLUMNS, SMOOTHER_COLUMNS, TRUTH_LAW_COLUMNS
 
 __all__ = ["noise_model", "process_run", "trial_drift_deg_h"]
 
@@ -163,12 +164,16 @@ def _measure(campaign: Campaign, index: int, chunk_samples: int) -> dict[str, An
         uncompensated_final_nmi=truth.uncompensated_nmi,
         hours_truth=truth.hours,
     )
+    law = truth.law  # the best law beside the best constant (NaN and empty curves without a temperature)
+    out.update(dict.fromkeys(TRUTH_LAW_COLUMNS, math.nan) if law is None else law.columns())
     out.update(
         curve_t_h=np.asarray(base.t_h, np.float32).tolist(),
         curve_north0_m=np.asarray(n0, np.float32).tolist(),
         curve_east0_m=np.asarray(e0, np.float32).tolist(),
         curve_north_per_deg_h=np.asarray(gn, np.float32).tolist(),
         curve_east_per_deg_h=np.asarray(ge, np.float32).tolist(),
+        curve_north_per_k1=[] if law is None else np.asarray(law.north_per_k1_m, np.float32).tolist(),
+        curve_east_per_k1=[] if law is None else np.asarray(law.east_per_k1_m, np.float32).tolist(),
     )
     # --- the 16 h smoother: its own read of the first 16 h (a seventh of a run's simulation) ---
     out.update(dict.fromkeys(SMOOTHER_COLUMNS, math.nan))

@@ -25,7 +25,7 @@ import numpy as np
 
 from gyrodrift.errors import InputError, OutputError
 from gyrodrift.fleet.spec import CAMPAIGN_FORMAT, Campaign, load_campaign, run_id
-from gyrodrift.runs.columns import FLAG_COLUMNS, SMOOTHER_COLUMNS
+from gyrodrift.runs.columns import FLAG_COLUMNS, SMOOTHER_COLUMNS, TRUTH_LAW_COLUMNS
 
 __all__ = [
     "BOOL_COLUMNS",
@@ -44,9 +44,20 @@ BOOL_COLUMNS = ("truth_verified", *FLAG_COLUMNS)
 table's flags (`gyrodrift.runs.columns.FLAG_COLUMNS`)."""
 STAGES = ("align", "passes", "smoother", "twin")
 """The timed stages of a run (columns ``t_STAGE_s`` wall and ``cpu_STAGE_s`` CPU seconds, and ``_total``)."""
-CURVE_COLUMNS = ("curve_t_h", "curve_north0_m", "curve_east0_m", "curve_north_per_deg_h", "curve_east_per_deg_h")
+CURVE_COLUMNS = (
+    "curve_t_h",
+    "curve_north0_m",
+    "curve_east0_m",
+    "curve_north_per_deg_h",
+    "curve_east_per_deg_h",
+    "curve_north_per_k1",
+    "curve_east_per_k1",
+)
 """The linear 72 h error curves of a run (float32 lists): time since the end of alignment [h], uncompensated
-north/east position error [m], and their change per deg/h of compensated z drift [m/(deg/h)]."""
+north/east position error [m], their change per deg/h of compensated z drift [m/(deg/h)], and per deg/h/degC of a
+compensated k1 (T - T_ref) about the best law's T_ref ``truth_law_t_ref_c`` [m/(deg/h/degC)] (empty without a
+temperature): with them the error after compensating any law eps_ref + k1 (T - T_ref) is
+``hypot(n0 + eps_ref gn + k1 hn, e0 + eps_ref ge + k1 he)`` to first order."""
 _RUN_FILE_RE = re.compile(r"^run-(?P<index>[0-9]{6})\.parquet$")
 
 
@@ -86,6 +97,7 @@ def run_schema(campaign: Campaign):
             "hours_truth",
         )
     ]
+    fields += [(c, f64) for c in TRUTH_LAW_COLUMNS]
     fields += [(c, pa.bool_()) for c in BOOL_COLUMNS]
     fields += [(f"{k}_{c}_s", f64) for k in ("t", "cpu") for c in STAGES + ("total",)]
     fields += [("error", s), ("smoother_error", s), ("worker", s)]

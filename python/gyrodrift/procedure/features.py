@@ -179,7 +179,7 @@ def features_run_table(features: list[RunFeatures], source: str = "<features>") 
         drift_deg_h=np.array([f.drift_deg_h for f in features], dtype=float),
         source=source,
         extra={  # a flag is known only with the truth
-            name: np.array([float(getattr(f, name)) for f in features])
+            name: np.array([float(f.column(name)) for f in features])
             for name in OPTIONAL_COLUMNS
             if name not in FLAG_COLUMNS or all(f.truth is not None for f in features)
         },

@@ -23,7 +23,7 @@ from gyrodrift.drift_law import DriftLaw
 from gyrodrift.earth import NMI_M
 from gyrodrift.ins.compensation import compensation_record
 from gyrodrift.learn.fleet_prior import drift_with_coefficient_prior
-from gyrodrift.runs.columns import FEATURES_COLUMNS, LABEL_COLUMNS, SMOOTHER_THERMAL_COLUMNS
+from gyrodrift.runs.columns import FEATURES_COLUMNS, LABEL_COLUMNS, SMOOTHER_THERMAL_COLUMNS, TRUTH_LAW_COLUMNS
 from gyrodrift.site import Site
 from gyrodrift.units import DEG, DEG_PER_H, MICRO_G
 
@@ -407,9 +407,18 @@ class RunFeatures:
 
     def row(self) -> dict[str, Any]:
         """The run-table row (`gyrodrift.runs.columns.FEATURES_COLUMNS`, plus the ``LABEL_COLUMNS``
-        ``drift_deg_h``, ``drift_std_deg_h`` and ``label_flagged`` when the truth is known)."""
-        known = math.isfinite(self.drift_deg_h)
-        return {column: getattr(self, column) for column in FEATURES_COLUMNS + (LABEL_COLUMNS if known else ())}
+        ``drift_deg_h``, ``drift_std_deg_h``, ``label_flagged`` and the ``TRUTH_LAW_COLUMNS`` when the truth is
+        known)."""
+        more = LABEL_COLUMNS + TRUTH_LAW_COLUMNS if math.isfinite(self.drift_deg_h) else ()
+        return {column: self.column(column) for column in FEATURES_COLUMNS + more}
+
+    def column(self, name: str) -> Any:
+        """The value of the run-table column `name`: an attribute, or the truth's best law
+        (`gyrodrift.runs.columns.TRUTH_LAW_COLUMNS`, `gyrodrift.procedure.truth_law.BestLaw.columns`; NaN without)."""
+        if name not in TRUTH_LAW_COLUMNS:
+            return getattr(self, name)
+        law = None if self.truth is None else self.truth.law
+        return math.nan if law is None else law.columns()[name]
 
 
 @dataclass(frozen=True)

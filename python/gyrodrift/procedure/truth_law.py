@@ -101,6 +101,22 @@ class BestLaw:
     north_per_k1_m: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
     east_per_k1_m: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
 
+    def columns(self) -> dict[str, float]:
+        """The run-table columns `gyrodrift.runs.columns.TRUTH_LAW_COLUMNS` (k1 0 and its 1-sigma and covariance
+        NaN when k1 is undetermined; 1-sigmas NaN without a covariance)."""
+        law = self.law
+        c = np.full((3, 3), math.nan) if law.cov is None else np.asarray(law.cov, dtype=float)
+        if not self.determined:
+            c[1, :] = c[:, 1] = math.nan
+        return {
+            "truth_law_eps_ref_deg_h": law.eps_ref_deg_h,
+            "truth_law_eps_ref_std_deg_h": math.sqrt(c[0, 0]),
+            "truth_law_k1_deg_h_per_c": law.k1_deg_h_per_c,
+            "truth_law_k1_std_deg_h_per_c": math.sqrt(c[1, 1]),
+            "truth_law_eps_k1_cov": float(c[0, 1]),
+            "truth_law_t_ref_c": law.t_ref_c,
+        }
+
     def summary(self) -> str:
         """One line for `gyrodrift truth`: the law with its 1-sigmas and its criterion, or why it is the constant."""
         if not self.determined:

@@ -26,7 +26,13 @@ from gyrodrift.procedure.figures import (
     save_png,
 )
 from gyrodrift.procedure.results import Alignment, Evaluation, Identification, RunFeatures, TrueDrift
-from gyrodrift.runs.columns import CURVES_TABLE, EVALUATION_CURVES_TABLE, FEATURES_COLUMNS, LABEL_COLUMNS
+from gyrodrift.runs.columns import (
+    CURVES_TABLE,
+    EVALUATION_CURVES_TABLE,
+    FEATURES_COLUMNS,
+    LABEL_COLUMNS,
+    TRUTH_LAW_COLUMNS,
+)
 from gyrodrift.runs.table import run_table_target, run_table_text
 
 __all__ = [
@@ -167,11 +173,14 @@ def write_identification(res: Identification, out: str | os.PathLike[str] | Stag
 def features_csv_text(features: Sequence[RunFeatures]) -> str:
     """The run table of `features` (`gyrodrift.runs.table.run_table_text` of their `RunFeatures.row`):
     ``FEATURES_COLUMNS``, plus the ``LABEL_COLUMNS`` (``drift_deg_h``, its 1-sigma ``drift_std_deg_h`` and
-    ``label_flagged``: `truth` flagged the label) when every run has a truth. An unknown value (NaN: e.g. no curve
-    fit) is an empty cell, which `gyrodrift.runs.table.read_runs_csv` reads as unknown.
+    ``label_flagged``: `truth` flagged the label) when every run has a truth, and the truth's best law
+    (``TRUTH_LAW_COLUMNS``) when a truth has one. An unknown value (NaN: e.g. no curve fit) is an empty cell, which
+    `gyrodrift.runs.table.read_runs_csv` reads as unknown.
     """
     with_truth = bool(features) and all(math.isfinite(f.drift_deg_h) for f in features)
-    return run_table_text((f.row() for f in features), FEATURES_COLUMNS + (LABEL_COLUMNS if with_truth else ()))
+    law = with_truth and any(f.truth is not None and f.truth.law is not None for f in features)
+    columns = FEATURES_COLUMNS + (LABEL_COLUMNS if with_truth else ()) + (TRUTH_LAW_COLUMNS if law else ())
+    return run_table_text((f.row() for f in features), columns)
 
 
 def curves_csv_text(features: Sequence[RunFeatures]) -> str:

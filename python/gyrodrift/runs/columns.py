@@ -65,6 +65,7 @@ class RunColumn(Column):
 # --- the run table -----------------------------------------------------------------------------------------
 
 _SMOOTHER_THERMAL = ("smoother", "thermal")
+_TRUTH_LAW = ("truth law",)
 
 RUN_TABLE: tuple[RunColumn, ...] = (
     RunColumn("run", "", "run identifier (the log's name), unique within a table; a blank cell is numbered by its row",
@@ -102,6 +103,19 @@ RUN_TABLE: tuple[RunColumn, ...] = (
               kept="extra", tags=_SMOOTHER_THERMAL),
     RunColumn("smoother_coeff_prior_std_deg_h_per_c", "deg/h/degC", "the smoother's own prior 1-sigma of k_z (mean 0)",
               written_by="features", kept="extra", tags=_SMOOTHER_THERMAL, sigma=True),
+    RunColumn("truth_law_eps_ref_deg_h", "deg/h",
+              "truth's best drift law eps_ref + k1 (T - T_ref): eps_ref (the best constant when k1 is undetermined)",
+              written_by="features --with-truth", kept="extra", tags=_TRUTH_LAW, std="truth_law_eps_ref_std_deg_h"),
+    RunColumn("truth_law_eps_ref_std_deg_h", "deg/h", "its 1-sigma", written_by="features --with-truth",
+              kept="extra", tags=_TRUTH_LAW, sigma=True),
+    RunColumn("truth_law_k1_deg_h_per_c", "deg/h/degC", "the best law's k1 (0 when undetermined)",
+              written_by="features --with-truth", kept="extra", tags=_TRUTH_LAW, std="truth_law_k1_std_deg_h_per_c"),
+    RunColumn("truth_law_k1_std_deg_h_per_c", "deg/h/degC", "its 1-sigma (empty when k1 is undetermined)",
+              written_by="features --with-truth", kept="extra", tags=_TRUTH_LAW, sigma=True),
+    RunColumn("truth_law_eps_k1_cov", "(deg/h)^2/degC", "cov(eps_ref, k1) of the best law (empty likewise)",
+              written_by="features --with-truth", kept="extra", tags=_TRUTH_LAW),
+    RunColumn("truth_law_t_ref_c", "degC", "the best law's T_ref: the temperature at navigation hour 12",
+              written_by="features --with-truth", kept="read", tags=_TRUTH_LAW),
     RunColumn("drift_deg_h", "deg/h", "true axial drift, the training label", required="for fit",
               written_by="features --with-truth", kept="attribute", std="drift_std_deg_h"),
     RunColumn("drift_std_deg_h", "deg/h", "1-sigma of the label drift_deg_h (weights the training runs)",
@@ -143,8 +157,13 @@ STD_COLUMNS: dict[str, str] = {c.name: c.std for c in RUN_TABLE if c.std}
 FEATURES_COLUMNS = names(lambda c: c.written_by == "features")
 """The columns ``gyrodrift features`` always writes (empty cells where unknown)."""
 
-LABEL_COLUMNS = names(lambda c: c.written_by == "features --with-truth")
+LABEL_COLUMNS = names(lambda c: c.written_by == "features --with-truth" and "truth law" not in c.tags)
 """The columns ``features --with-truth`` adds: the label, its 1-sigma and the truth's flag."""
+
+TRUTH_LAW_COLUMNS = names(lambda c: "truth law" in c.tags)
+"""The truth's best drift law (`gyrodrift.procedure.truth_law.BestLaw.columns`): eps_ref and its 1-sigma [deg/h], k1
+and its 1-sigma [deg/h/degC], their covariance [(deg/h)^2/degC], T_ref [deg C]; ``features --with-truth`` writes
+them when the truth has a law (a log with a temperature)."""
 
 SMOOTHER_COLUMNS = names(lambda c: "smoother" in c.tags)
 """The 16 h smoother's columns: its drift and 1-sigma [deg/h], then `SMOOTHER_THERMAL_COLUMNS`."""
