@@ -46,7 +46,7 @@ def test_coefficients_minimise_the_criterion_like_brute_force(criterion, seed):
         u, k1 = x[0] - ref_d, x[1]
         return float(criterion_value(n0 + u * gn + k1 * hn, e0 + u * ge + k1 * he, criterion))
 
-    eps, k1 = best_law_coefficients(ref_d, n0, e0, gn, ge, hn, he, criterion)
+    eps, k1 = best_law_coefficients(ref_d, n0, e0, gn, ge, hn, he, criterion, criterion_value)
     # Brute force: Nelder-Mead from several starts on the criterion itself.
     best = min(
         (
@@ -70,7 +70,7 @@ def test_covariance_matches_monte_carlo_for_white_isotropic_error():
     draws = []
     for _ in range(4000):
         e = rng.normal(0.0, s, size=a.shape[0])
-        draws.append(best_law_coefficients(0.0, e[:60], e[60:], gn, ge, hn, he, "rms"))
+        draws.append(best_law_coefficients(0.0, e[:60], e[60:], gn, ge, hn, he, "rms", criterion_value))
     mc = np.cov(np.asarray(draws).T)
     assert np.allclose(np.sqrt(np.diag(cov)), np.sqrt(np.diag(mc)), rtol=0.05)
     corr = cov[0, 1] / math.sqrt(cov[0, 0] * cov[1, 1])
@@ -91,7 +91,9 @@ def test_k1_response_moves_the_basis_to_the_laws_t_ref():
 
 def test_flat_temperature_gives_the_constant_and_says_so():
     n0, e0, gn, ge, _, _ = curves(5)
-    model = LawModel.from_basis(n0, e0, n0, e0, gn, ge, BASIS_T_REF_C, "final")  # basis = base: no excursion
+    model = LawModel.from_basis(
+        n0, e0, n0, e0, gn, ge, BASIS_T_REF_C, "final", criterion_value
+    )  # basis = base: no excursion
     assert not model.determined and "undetermined" in model.note
     best = model.result(0.0, n0, e0, gn, ge, constant_deg_h=0.0025, constant_std_deg_h=1e-4, constant_nmi=0.2)
     assert best.law.is_constant and best.law.eps_ref_deg_h == 0.0025 and not best.determined

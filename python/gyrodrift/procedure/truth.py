@@ -271,7 +271,15 @@ def find_true_drift(
         assert first.temperature is not None  # asked for
         basis = first.curves[2]
         law_model = LawModel.from_basis(
-            basis.north_m, basis.east_m, c0.north_m, c0.east_m, gn, ge, first.temperature.end_c, criterion
+            basis.north_m,
+            basis.east_m,
+            c0.north_m,
+            c0.east_m,
+            gn,
+            ge,
+            first.temperature.end_c,
+            criterion,
+            criterion_value,
         )
     law_at = (0.0, c0.north_m, c0.east_m, gn, ge)  # the linearisation of the law navigated last (or the first)
     law_navigated_nmi = math.nan

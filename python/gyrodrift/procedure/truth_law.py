@@ -35,6 +35,7 @@ read), h [m per deg/h/degC] the response to k1: one more navigator in the truth'
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -46,6 +47,7 @@ from gyrodrift.drift_law import DriftLaw
 __all__ = [
     "BASIS_T_REF_C",
     "BestLaw",
+    "CriterionValue",
     "K1_TRIAL_DEG_H_PER_C",
     "MIN_EXCURSION_C",
     "LawModel",
@@ -64,10 +66,9 @@ MIN_EXCURSION_C = 0.5
 temperature range for its thermal model)."""
 
 
-def _criterion_value(north_m: np.ndarray, east_m: np.ndarray, criterion: str) -> float:
-    from gyrodrift.procedure.truth import criterion_value
-
-    return float(criterion_value(north_m, east_m, criterion))
+CriterionValue = Callable[[np.ndarray, np.ndarray, str], Any]
+"""The criterion [nmi] of error curves (north, east [m], the criterion's name):
+`gyrodrift.procedure.truth.criterion_value`, handed in by the truth (which imports this module, not the reverse)."""
 
 
 @dataclass(frozen=True)
@@ -167,8 +168,11 @@ def _design(gn, ge, hn, he, criterion: str) -> np.ndarray:
     return np.column_stack([g, h])
 
 
-def best_law_coefficients(ref_d: float, ref_n, ref_e, gn, ge, hn, he, criterion: str) -> tuple[float, float]:
-    """(eps_ref [deg/h], k1 [deg/h/degC]) minimising the criterion of ``ref + (eps_ref - ref_d) g + k1 h``."""
+def best_law_coefficients(
+    ref_d: float, ref_n, ref_e, gn, ge, hn, he, criterion: str, value: CriterionValue
+) -> tuple[float, float]:
+    """(eps_ref [deg/h], k1 [deg/h/degC]) minimising the criterion of ``ref + (eps_ref - ref_d) g + k1 h`` (`value`
+    computes it; ``max`` needs it)."""
     a = _design(gn, ge, hn, he, criterion)
     sl = slice(-1, None) if criterion == "final" else slice(None)
     r = np.concatenate([np.asarray(ref_n, float)[sl], np.asarray(ref_e, float)[sl]])
@@ -178,10 +182,10 @@ def best_law_coefficients(ref_d: float, ref_n, ref_e, gn, ge, hn, he, criterion:
         gn, ge, hn, he = (np.asarray(x, float) for x in (gn, ge, hn, he))
 
         def f(x: np.ndarray) -> float:
-            return _criterion_value(n + x[0] * gn + x[1] * hn, e + x[0] * ge + x[1] * he, "max")
+            return float(value(n + x[0] * gn + x[1] * hn, e + x[0] * ge + x[1] * he, "max"))
 
         # Convex: start at the rms optimum, scaled so that both coordinates are of order 1.
-        u_rms, k1_rms = best_law_coefficients(0.0, n, e, gn, ge, hn, he, "rms")
+        u_rms, k1_rms = best_law_coefficients(0.0, n, e, gn, ge, hn, he, "rms", value)
         scale = np.array([max(abs(u_rms), 1e-4), max(abs(k1_rms), 1e-5)])
         res = minimize(
             lambda y: f(y * scale),
@@ -210,6 +214,7 @@ class LawModel:
     """
 
     criterion: str
+    value: CriterionValue = field(repr=False)
     t_ref_c: float
     hn: np.ndarray = field(repr=False)
     he: np.ndarray = field(repr=False)
@@ -217,7 +222,9 @@ class LawModel:
     note: str
 
     @classmethod
-    def from_basis(cls, basis_n, basis_e, n0, e0, gn, ge, t_ref_c: float, criterion: str) -> LawModel:
+    def from_basis(
+        cls, basis_n, basis_e, n0, e0, gn, ge, t_ref_c: float, criterion: str, value: CriterionValue
+    ) -> LawModel:
         hn, he = k1_response(basis_n, basis_e, n0, e0, gn, ge, t_ref_c)
         m = _design(gn, ge, hn, he, criterion)
         m = m.T @ m
@@ -231,7 +238,7 @@ class LawModel:
             )
         elif not float(np.linalg.det(m)) > 1e-12 * g2 * h2:
             note = "the responses to eps_ref and k1 are collinear: k1 is undetermined; the best law is the constant"
-        return cls(criterion, float(t_ref_c), hn, he, excursion, note)
+        return cls(criterion, value, float(t_ref_c), hn, he, excursion, note)
 
     @property
     def determined(self) -> bool:
@@ -240,7 +247,7 @@ class LawModel:
 
     def law(self, ref_d: float, ref_n, ref_e, gn, ge) -> DriftLaw:
         """The best law's coefficients (no covariance) at this linearisation (a law to navigate)."""
-        eps_ref, k1 = best_law_coefficients(ref_d, ref_n, ref_e, gn, ge, self.hn, self.he, self.criterion)
+        eps_ref, k1 = best_law_coefficients(ref_d, ref_n, ref_e, gn, ge, self.hn, self.he, self.criterion, self.value)
         return DriftLaw(eps_ref_deg_h=eps_ref, t_ref_c=self.t_ref_c, k1_deg_h_per_c=k1)
 
     def result(
@@ -273,5 +280,5 @@ class LawModel:
             c = 0.5 * (c + c.T)
             cov = ((float(c[0, 0]), float(c[0, 1]), 0.0), (float(c[1, 0]), float(c[1, 1]), 0.0), (0.0, 0.0, 0.0))
         law = DriftLaw(eps_ref_deg_h=fit.eps_ref_deg_h, t_ref_c=self.t_ref_c, k1_deg_h_per_c=k1, cov=cov)
-        predicted = _criterion_value(n_pred, e_pred, self.criterion)
+        predicted = float(self.value(n_pred, e_pred, self.criterion))
         return BestLaw(law, True, "", predicted, navigated_nmi, self.excursion_c, self.hn, self.he)
