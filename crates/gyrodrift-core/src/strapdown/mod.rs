@@ -649,18 +649,27 @@ impl Navigator {
         let mut nav = self.clone();
         let (lim_a, lim_b) = (self.max_dtheta, self.max_dv);
         let mut bad = false;
-        for (k, (a, b)) in dtheta.chunks_exact(3).zip(dv.chunks_exact(3)).enumerate() {
+        let mut sample = |nav: &mut Navigator, k: usize, a: &[f64], b: &[f64]| {
             // |x| <= limit is false for NaN: one comparison per value checks both.
             bad |= !((a[0].abs() <= lim_a) & (a[1].abs() <= lim_a) & (a[2].abs() <= lim_a))
                 | !((b[0].abs() <= lim_b) & (b[1].abs() <= lim_b) & (b[2].abs() <= lim_b));
             if REF {
                 nav.h_ref = reference_m[k];
             }
-            if BIAS {
-                // The product `set_gyro_bias` forms (`scale`), so a constant bias gives the same bits.
-                nav.gyro_bias_dt[2] = axial_bias[k] * nav.dt;
-            }
             nav.step_inline([a[0], a[1], a[2]], [b[0], b[1], b[2]]);
+        };
+        let samples = dtheta.chunks_exact(3).zip(dv.chunks_exact(3)).enumerate();
+        if BIAS {
+            // Zipped with the samples (no index to check); the product `set_gyro_bias` forms (`scale`), so a
+            // constant bias gives the same bits.
+            for ((k, (a, b)), z) in samples.zip(axial_bias) {
+                nav.gyro_bias_dt[2] = z * nav.dt;
+                sample(&mut nav, k, a, b);
+            }
+        } else {
+            for (k, (a, b)) in samples {
+                sample(&mut nav, k, a, b);
+            }
         }
         *self = nav;
         bad
