@@ -84,17 +84,29 @@ docstring_sybil = Sybil(
 pytest_collect_file = (markdown_sybil + docstring_sybil).pytest()
 
 LONGEST_FIRST = (
+    "tests/fleet/test_campaign.py",
     "tests/procedure/test_procedure.py",
+    "tests/sensors/test_allan.py",
+    "tests/fleet/test_identification_study.py",
+    "README.md",
+    "tests/fleet/test_campaign_interrupt.py",
+    "tests/fleet/test_campaign_dask_cluster.py",
     "tests/procedure/test_smoother.py",
+    "docs/campaigns.md",
     "tests/export/test_export_compiled.py",
+    "tests/paper/test_reproduce.py",
+    "tests/ins/test_ins_navigation.py",
+    "docs/procedure.md",
+    "tests/fleet/test_dask_shutdown.py",
     "tests/procedure/test_plan.py",
+    "tests/fleet/test_campaign_store_checks.py",
     "tests/learn/test_intervals.py",
 )
-"""The files with the most CPU time, the longest first (per-file user + sys seconds, child processes included,
-of a one-process run of each room). The rest follow in their collection order. pytest-xdist's --dist loadfile
-hands whole files to the workers in the session's order (--no-loadscope-reorder in pyproject's addopts; its
-default orders files by their number of tests, which sent the long few-test files last). A file missing from
-the tree fails tests/test_suite_order.py."""
+"""The files with the most CPU time, the longest first (99 down to 15 s each, user + sys with child processes,
+in a one-process run of each room at fd4837e: `python -m pytest tests/<room> -n 0`, each test's time summed per
+file); the rest follow in their collection order. pytest-xdist's --dist loadfile hands whole files to the workers
+in the session's order (--no-loadscope-reorder in pyproject's addopts; its default orders files by their number
+of tests, which sent the long few-test files last). A file missing from the tree fails tests/test_suite_order.py."""
 
 
 def longest_first_key(item: pytest.Item) -> int:
