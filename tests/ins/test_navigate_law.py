@@ -225,8 +225,9 @@ def test_cli_navigate_and_evaluate_take_a_law_and_say_so(tmp_path, thermal_log):
     assert r.exit_code == 0, r.output
     summary = json.loads((tmp_path / "nav" / "summary.json").read_text())
     assert summary["compensation"] == "law" and summary["drift_law"] == SIMULATOR_LAW.to_dict()
-    r = _run("navigate", thermal_log, "--hours", "1", "--drift-law", law_file, "--out", tmp_path / "nav2")
+    r = _run("navigate", thermal_log, "--hours", "1", "--drift-law", law_file, "--out", tmp_path / "nav2", "--plot")
     assert "compensating the drift law 0.004000 deg/h at 20.0 degC, k1 0.0003 deg/h/degC" in r.output
+    assert (tmp_path / "nav2" / "navigation.png").stat().st_size > 0
     r = _run("navigate", thermal_log, "--hours", "1", "--drift-deg-h", "0.004", "--out", tmp_path / "nav3")
     assert r.exit_code == 0 and "compensating the constant 0.004000 deg/h" in r.output
 

@@ -112,13 +112,14 @@ def compensation_record(law: DriftLaw | None) -> dict[str, Any]:
 
 
 def compensation_words(law: DriftLaw) -> str:
-    """The compensation in words, for a command's closing line: "constant 0.004000 deg/h" or "drift law 0.004000
-    deg/h at 20.0 degC, k1 0.0001 deg/h/degC, k3 0 deg/h per degC/h"."""
+    """The compensation in words, for a command's closing line or a figure: "constant 0.004000 deg/h" or "drift law
+    0.004000 deg/h at 20.0 degC, k1 0.0001 deg/h/degC" (and ", k3 ... deg/h per degC/h" when it reads the rate)."""
     if law.is_constant:
         return f"constant {law.eps_ref_deg_h:.6f} deg/h"
+    rate = f", k3 {law.k3_deg_h_per_c_per_h:.6g} deg/h per degC/h" if law.uses_rate else ""
     return (
-        f"drift law {law.eps_ref_deg_h:.6f} deg/h at {law.t_ref_c:.1f} degC, k1 {law.k1_deg_h_per_c:.6g} deg/h/degC, "
-        f"k3 {law.k3_deg_h_per_c_per_h:.6g} deg/h per degC/h"
+        f"drift law {law.eps_ref_deg_h:.6f} deg/h at {law.t_ref_c:.1f} degC, k1 {law.k1_deg_h_per_c:.6g} deg/h/degC"
+        f"{rate}"
     )
 
 

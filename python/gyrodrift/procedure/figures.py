@@ -12,7 +12,9 @@ from typing import Any
 
 import numpy as np
 
+from gyrodrift.drift_law import DriftLaw
 from gyrodrift.earth import radii_of_curvature
+from gyrodrift.ins.compensation import compensation_words
 from gyrodrift.procedure.results import Alignment, Evaluation, TrueDrift
 
 __all__ = [
@@ -108,7 +110,7 @@ def position_error_figure(ev: Evaluation):
         a.t_h,
         a.pos_err_nmi,
         color=AFTER_COLOUR,
-        label=f"after: {ev.drift_deg_h:.5f} deg/h from {_short_source(ev.source)} "
+        label=f"after: {_compensated(ev.drift_deg_h, ev.drift_law)} from {_short_source(ev.source)} "
         f"(final {a.final_nmi:.2f} nmi, max {a.max_nmi:.2f} nmi)",
     )
     one_nmi_line(ax1)
@@ -161,6 +163,16 @@ def route_map_figure(ev: Evaluation):
     return fig
 
 
+def _compensated(drift_deg_h: float, law: DriftLaw | Mapping[str, Any] | None) -> str:
+    """The compensated drift in a legend or a title: "0.00400 deg/h" (a constant), or a law reading the temperature
+    in words (`gyrodrift.ins.compensation.compensation_words`; `law` a `DriftLaw` or its `to_dict`)."""
+    if isinstance(law, Mapping):
+        law = DriftLaw.from_dict(law)
+    if law is None or law.is_constant:
+        return f"{drift_deg_h:.5f} deg/h"
+    return compensation_words(law)
+
+
 def _short_source(source: str) -> str:
     """A drift source short enough for a legend (a model path becomes its file name)."""
     if source in ("given", ""):
@@ -176,8 +188,8 @@ def navigation_figure(columns: Mapping[str, np.ndarray], summary: Mapping[str, A
     t_h = np.asarray(columns["t_s"], dtype=float) / 3600.0
     fig, (ax1, ax2, ax3) = _figure(3)
     fig.set_size_inches(7.5, 8.4)
-    drift = summary.get("compensate_drift_deg_h", 0.0)
-    what = "no axial drift compensated" if not drift else f"{drift:.5f} deg/h compensated"
+    drift, law = summary.get("compensate_drift_deg_h", 0.0), summary.get("drift_law")
+    what = "no axial drift compensated" if not drift and law is None else f"{_compensated(drift, law)} compensated"
     title = f"{summary.get('imu', '')}: {summary.get('hours_navigated', t_h[-1] if len(t_h) else 0):.3g} h, {what}"
     ax1.set_title(title, fontsize="medium")
     if "pos_err_nmi" in columns:
