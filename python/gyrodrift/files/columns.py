@@ -11,8 +11,10 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-import pyarrow as pa
+if TYPE_CHECKING:
+    import pyarrow as pa
 
 __all__ = ["DTYPES", "Column", "family", "names", "markdown_table"]
 
@@ -20,7 +22,9 @@ DTYPES = ("text", "float", "bool")
 """Cell types: ``float`` a float64 number (in a CSV an empty cell is unknown, NaN); ``text`` a string as is;
 ``bool`` a flag (``true``/``false`` in a CSV)."""
 
-_ARROW = {"float": pa.float64(), "text": pa.string(), "bool": pa.bool_()}
+_ARROW_TYPE_NAMES = {"float": "float64", "text": "string", "bool": "bool_"}
+"""The pyarrow factory of each cell type (pyarrow is imported when a Parquet schema is built, not by every command
+that declares columns)."""
 
 
 @dataclass(frozen=True)
@@ -51,7 +55,9 @@ class Column:
     @property
     def arrow_type(self) -> pa.DataType:
         """Its type in a Parquet file."""
-        return _ARROW[self.dtype]
+        import pyarrow as pa
+
+        return getattr(pa, _ARROW_TYPE_NAMES[self.dtype])()
 
 
 def family(column_names: Sequence[str], units: str | Sequence[str], meaning: str) -> tuple[Column, ...]:
