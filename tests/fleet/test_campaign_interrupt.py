@@ -19,6 +19,9 @@ from gyrodrift.fleet.store import read_runs
 
 TINY = Path(__file__).resolve().parents[2] / "examples" / "campaigns" / "tiny.toml"
 COUNT = 8
+ABORT_COUNT = 4
+"""The second Ctrl-C test's runs: 14 h at 20 Hz (seconds each), two per worker, so that the abort meets runs in
+progress and the rerun has at most three of them left to do."""
 
 
 def _campaign(tmp_path: Path, text: str) -> Path:
@@ -27,11 +30,11 @@ def _campaign(tmp_path: Path, text: str) -> Path:
     return p
 
 
-def _tiny(rate_hz: float) -> str:
-    """`COUNT` runs of the tiny campaign (14 h) at `rate_hz`."""
+def _tiny(rate_hz: float, count: int) -> str:
+    """`count` runs of the tiny campaign (14 h) at `rate_hz`."""
     text = TINY.read_text()
     assert "count = 16" in text and "rate_hz = 5.0" in text
-    return text.replace("count = 16", f"count = {COUNT}").replace("rate_hz = 5.0", f"rate_hz = {rate_hz}")
+    return text.replace("count = 16", f"count = {count}").replace("rate_hz = 5.0", f"rate_hz = {rate_hz}")
 
 
 def _committed(out: Path) -> dict[str, int]:
@@ -62,7 +65,7 @@ def _wait_for(out: Path, n: int, proc: subprocess.Popen, timeout: float = 120.0)
     raise AssertionError("no run committed in time")
 
 
-def _rerun_completes(src: Path, out: Path, before: dict[str, int]) -> None:
+def _rerun_completes(src: Path, out: Path, before: dict[str, int], count: int) -> None:
     res = subprocess.run(
         [sys.executable, "-c", "from gyrodrift.cli import main; main()", "campaign", str(src), "--out", str(out)]
         + ["--workers", "2", "--quiet"],
@@ -72,11 +75,11 @@ def _rerun_completes(src: Path, out: Path, before: dict[str, int]) -> None:
     )
     assert res.returncode == 0, res.stderr
     after = _committed(out)
-    assert sorted(after) == [f"run-{i:06d}.parquet" for i in range(COUNT)]
+    assert sorted(after) == [f"run-{i:06d}.parquet" for i in range(count)]
     assert {k: after[k] for k in before} == before  # the committed runs were not rewritten
     assert not [e for e in os.listdir(out / "runs") if not e.startswith("run-")]  # no temporaries
     runs = read_runs(out)
-    assert list(runs["index"]) == list(range(COUNT)) and all(e is None for e in runs["error"])
+    assert list(runs["index"]) == list(range(count)) and all(e is None for e in runs["error"])
 
 
 def test_first_sigint_finishes_the_runs_in_progress_then_rerun_resumes(tmp_path):
@@ -101,12 +104,12 @@ def test_first_sigint_finishes_the_runs_in_progress_then_rerun_resumes(tmp_path)
     assert seen + in_progress <= len(before) < COUNT  # the runs in progress were committed; nothing new started
     assert not [e for e in os.listdir(out / "runs") if not e.startswith("run-")]
     assert len(read_runs(out)) == len(before)  # every committed run is a whole Parquet file
-    _rerun_completes(src, out, before)
+    _rerun_completes(src, out, before, COUNT)
 
 
 def test_second_sigint_aborts_at_once_and_stops_the_workers(tmp_path):
     psutil = pytest.importorskip("psutil")
-    src, out = _campaign(tmp_path, _tiny(20.0)), tmp_path / "out"  # runs of a second or more: the abort meets them
+    src, out = _campaign(tmp_path, _tiny(20.0, ABORT_COUNT)), tmp_path / "out"  # runs of seconds: the abort meets them
     proc = _start(src, out)
     try:
         _wait_for(out, 1, proc)
@@ -127,5 +130,5 @@ def test_second_sigint_aborts_at_once_and_stops_the_workers(tmp_path):
     _gone, alive = psutil.wait_procs(workers, timeout=10)
     assert not alive
     before = _committed(out)
-    assert len(before) < COUNT
-    _rerun_completes(src, out, before)
+    assert len(before) < ABORT_COUNT
+    _rerun_completes(src, out, before, ABORT_COUNT)
