@@ -29,7 +29,7 @@ from gyrodrift.units import DEG, DEG_PER_H, MICRO_G
 
 if TYPE_CHECKING:  # pragma: no cover
     from gyrodrift import _core
-    from gyrodrift.procedure.truth_law import BestLaw
+    from gyrodrift.procedure.best_law import BestLaw
 
 __all__ = [
     "Alignment",
@@ -414,7 +414,7 @@ class RunFeatures:
 
     def column(self, name: str) -> Any:
         """The value of the run-table column `name`: an attribute, or the truth's best law
-        (`gyrodrift.runs.columns.TRUTH_LAW_COLUMNS`, `gyrodrift.procedure.truth_law.BestLaw.columns`; NaN without)."""
+        (`gyrodrift.runs.columns.TRUTH_LAW_COLUMNS`, `gyrodrift.procedure.best_law.BestLaw.columns`; NaN without)."""
         if name not in TRUTH_LAW_COLUMNS:
             return getattr(self, name)
         law = None if self.truth is None else self.truth.law

@@ -161,7 +161,7 @@ LABEL_COLUMNS = names(lambda c: c.written_by == "features --with-truth" and "tru
 """The columns ``features --with-truth`` adds: the label, its 1-sigma and the truth's flag."""
 
 TRUTH_LAW_COLUMNS = names(lambda c: "truth law" in c.tags)
-"""The truth's best drift law (`gyrodrift.procedure.truth_law.BestLaw.columns`): eps_ref and its 1-sigma [deg/h], k1
+"""The truth's best drift law (`gyrodrift.procedure.best_law.BestLaw.columns`): eps_ref and its 1-sigma [deg/h], k1
 and its 1-sigma [deg/h/degC], their covariance [(deg/h)^2/degC], T_ref [deg C]; ``features --with-truth`` writes
 them when the truth has a law (a log with a temperature)."""
 
