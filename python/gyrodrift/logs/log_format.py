@@ -94,7 +94,8 @@ QUANTITIES = {
     "true_yaw": ("attitude",),
     "ref_height": ("height",),
 }
-"""Quantities a column can hold (``gyro_``/``accel_`` x y z are the file's axes) and the dimensions their unit may have."""
+"""Quantities a column can hold (``gyro_``/``accel_`` x y z are the file's axes) and the dimensions their unit may
+have."""
 
 _SECTIONS = ("csv", "axes", "columns")
 _COLUMN_KEYS = ("quantity", "unit", "scale", "offset", "pulse_weight", "pulse_unit")
