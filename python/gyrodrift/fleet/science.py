@@ -8,8 +8,8 @@ secant between two navigated drifts), from which the position error after compen
 ``hypot(n0 + d gn, e0 + d ge)`` without navigating again (`gyrodrift.fleet.store.linear_error_nmi`); the 16 h
 smoother estimate; the truth's best drift law beside the best constant (``TRUTH_LAW_COLUMNS``, and the error
 curves' response to its k1, ``curve_north_per_k1`` / ``curve_east_per_k1``); and the simulated effective drift,
-the truth of the run's noise-free twin (same scenario and seed, ARW/VRW/bias instability/RRW off). A run that fails is a row with its error. The row's columns are those of
-`gyrodrift.fleet.store.run_schema`.
+the truth of the run's noise-free twin (same scenario and seed, ARW/VRW/bias instability/RRW off). A run that
+fails is a row with its error. The row's columns are those of `gyrodrift.fleet.store.run_schema`.
 """
 
 from __future__ import annotations
