@@ -93,6 +93,7 @@ LONGEST_FIRST = (
     "tests/fleet/test_campaign_dask_cluster.py",
     "tests/procedure/test_smoother.py",
     "docs/campaigns.md",
+    "tests/cli/test_cli_errors.py",
     "tests/export/test_export_compiled.py",
     "tests/paper/test_reproduce.py",
     "tests/ins/test_ins_navigation.py",
