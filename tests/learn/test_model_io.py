@@ -73,6 +73,18 @@ def test_digest_changes_with_the_data(paper):
     assert training_digest(paper.train) == training_digest(load_paper().train)
 
 
+def test_a_training_column_without_a_known_value_round_trips(tmp_path, paper):
+    # a run table can carry an optional column every run leaves unknown (e.g. the truth's best law's k1 1-sigma when
+    # no run has a temperature change); the model file leaves unknown values out, so the column must not enter the
+    # digest either, or the file's own runs would not match it on load
+    train = paper.train
+    unknown = train.replace(extra={**train.extra, "truth_law_k1_std_deg_h_per_c": np.full(len(train), np.nan)})
+    assert training_digest(unknown) == training_digest(train)
+    model = fit_drift_model(unknown, gamma=50.0, sigma=1.3)
+    save_model(model, tmp_path / "m.json")
+    np.testing.assert_array_equal(load_model(tmp_path / "m.json").predict(paper.test), model.predict(paper.test))
+
+
 @pytest.fixture
 def good_doc(paper):
     return model_to_dict(fit_drift_model(paper.train, gamma=10.0, sigma=1.0))

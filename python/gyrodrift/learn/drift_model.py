@@ -80,14 +80,16 @@ def training_digest(runs: RunTable) -> str:
     """SHA-256 of the training runs' values (run, latitudes, temperatures, drift, then any optional columns
     by name), order included. A table without optional columns has the digest of gyrodrift 0.2.
 
-    The optional columns are hashed in `file_column_order`."""
+    The optional columns are hashed in `file_column_order`; a column with no finite value is hashed as absent (a
+    model file's training records leave out unknown values, so such a column does not come back on load)."""
     rows = [
         [str(r), repr(float(a)), repr(float(b)), repr(float(c)), repr(float(d)), repr(float(e))]
         for r, a, b, c, d, e in zip(
             runs.run, runs.lat_deg, runs.lat0_deg, runs.temp_min_c, runs.temp_max_c, runs.drift_deg_h, strict=False
         )
     ]
-    for name in file_column_order(runs.extra):
+    known = [name for name in runs.extra if np.isfinite(np.asarray(runs.extra[name], dtype=float)).any()]
+    for name in file_column_order(known):
         for row, v in zip(rows, runs.extra[name], strict=True):
             row.append(f"{name}={float(v)!r}")
     return hashlib.sha256(json.dumps(rows).encode()).hexdigest()
