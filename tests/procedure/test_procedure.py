@@ -226,7 +226,7 @@ def test_evaluate_command_with_a_drift_and_with_a_model(long_log, model, tmp_pat
     assert doc["drift_source"] == str(model[1])
     assert doc["after"]["final_pos_err_nmi"] < doc["before"]["final_pos_err_nmi"] / 2
     r = CliRunner().invoke(main, ["evaluate", str(long_log), "--out", str(tmp_path / "c")])
-    assert r.exit_code == 2 and "exactly one of --drift-deg-h or --model" in r.output
+    assert r.exit_code == 2 and "exactly one of --drift-deg-h, --drift-law or --model" in r.output
 
 
 # ------------------------------------------------------------------------------------------------
