@@ -34,7 +34,7 @@ class BestLaw:
     navigated_nmi : float
         The criterion of a navigation compensating the law (the truth's verification read) [nmi]; NaN without it.
     excursion_c : float
-        Effective temperature excursion sqrt(|h|^2 / |g|^2) over the criterion's samples [deg C].
+        Effective temperature excursion ``sqrt(|h|^2 / |g|^2)`` over the criterion's samples [deg C].
     north_per_k1_m, east_per_k1_m : ndarray
         h: the error curves' response to k1 about T_ref [m per deg/h/degC] (with the truth's curves, the error of
         any law eps_ref + k1 (T - T_ref) without navigating again).

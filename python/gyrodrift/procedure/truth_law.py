@@ -23,11 +23,11 @@ read), h [m per deg/h/degC] the response to k1: one more navigator in the truth'
 * Covariance at the log's noise level (`law_covariance`): the constant's label variance sigma_c^2 (the core's
   covariance analysis, `gyrodrift.procedure.truth.label_sigma_deg_h`) carried to two coefficients as least
   squares does for an error the fit does not explain that is white and isotropic over the samples used:
-  Cov = sigma_c^2 |g|^2 (A'A)^-1, A = [g h] stacked north and east. Its eps_ref variance is sigma_c^2 times the
+  ``Cov = sigma_c^2 |g|^2 (A'A)^-1``, ``A = [g h]`` stacked north and east. Its eps_ref variance is sigma_c^2 times the
   variance inflation factor of the two responses (>= 1; exactly sigma_c^2 when h is orthogonal to g). An
   approximation where the unexplained error is coloured (it is: a random walk), stated as such.
 * k1 is undetermined when the temperature hardly moves over the navigation: the effective excursion
-  sqrt(|h|^2 / |g|^2) [degC] (the rms of T - T_ref as the error curves weigh it) below
+  ``sqrt(|h|^2 / |g|^2)`` [degC] (the rms of T - T_ref as the error curves weigh it) below
   ``MIN_EXCURSION_C``, or A'A singular. The best law is then the best constant (``DriftLaw.constant``; k1 = 0,
   ``determined`` False, ``note`` says why) rather than a noisy k1.
 """
@@ -47,7 +47,6 @@ from gyrodrift.procedure.best_law import BestLaw
 
 __all__ = [
     "BASIS_T_REF_C",
-    "BestLaw",
     "CriterionValue",
     "K1_TRIAL_DEG_H_PER_C",
     "MIN_EXCURSION_C",
@@ -125,7 +124,7 @@ def best_law_coefficients(
 
 def law_covariance(gn, ge, hn, he, criterion: str, constant_std_deg_h: float) -> np.ndarray:
     """2 x 2 covariance of (eps_ref, k1) at the log's noise level from the constant's label 1-sigma (module
-    docstring): sigma_c^2 |g|^2 (A'A)^-1."""
+    docstring): ``sigma_c^2 |g|^2 (A'A)^-1``."""
     a = _design(gn, ge, hn, he, criterion)
     m = a.T @ a
     return constant_std_deg_h**2 * m[0, 0] * np.linalg.inv(m)
