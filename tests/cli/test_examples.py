@@ -6,6 +6,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
+import gyrodrift
 from gyrodrift.cli import main
 from gyrodrift.files.examples import EXAMPLE_KINDS, example_names, example_path
 
@@ -23,12 +24,14 @@ def test_every_shipped_example_loads_and_is_in_the_wheel():
         assert load_campaign(example_path("campaign", name)).name
     include = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["maturin"]["include"]
     globs = [i["path"] for i in include if i.get("format") == "wheel"]
+    package = Path(gyrodrift.__file__).parent  # the clone's python/gyrodrift, or an installed copy of it
     for kind, folder in EXAMPLE_KINDS.items():
         for name in example_names(kind):
-            rel = example_path(kind, name).relative_to(ROOT)
-            assert any(rel.match(g) for g in globs), f"{rel} is not in the wheel"
+            in_package = example_path(kind, name).relative_to(package)
+            rel = Path("python/gyrodrift") / in_package  # where the clone holds it
+            assert (ROOT / rel).is_file() and any(rel.match(g) for g in globs), f"{rel} is not in the wheel"
             # one copy: the clone's examples/<folder> is a link to the package's
-            assert (ROOT / "examples" / folder).resolve() == example_path(kind, name).parent
+            assert (ROOT / "examples" / folder).resolve() == (ROOT / rel).parent.resolve()
 
 
 def test_simulate_and_campaign_by_name_from_a_scratch_folder(tmp_path, monkeypatch):
