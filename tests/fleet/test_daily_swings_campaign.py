@@ -87,8 +87,10 @@ def test_a_campaign_stores_the_best_law_beside_the_best_constant(tmp_path):
     run_campaign(load_campaign(path), tmp_path / "fleet", text=SWING_CAMPAIGN, workers=1, quiet=True)
     runs = read_runs(tmp_path / "fleet")
     assert runs.ok.all()
+    sigmas = {"truth_law_eps_ref_std_deg_h", "truth_law_k1_std_deg_h_per_c", "truth_law_eps_k1_cov"}
     for c in TRUTH_LAW_COLUMNS:
-        assert np.isfinite(runs.numbers(c)).all(), c
+        # the campaign's runs are noise-free (no ARW, no VRW): the law is known, its 1-sigmas are not (NaN, not 0)
+        assert np.isfinite(runs.numbers(c)).all() if c not in sigmas else np.isnan(runs.numbers(c)).all(), c
     k1 = runs.numbers("truth_law_k1_deg_h_per_c")
     assert np.all(k1 > 0)  # the sensor's sign (its size also absorbs the 1 h alignment's errors at the 12 h end)
     # The stored curves give the law's criterion to first order: better than the best constant's at the end.
@@ -101,3 +103,15 @@ def test_a_campaign_stores_the_best_law_beside_the_best_constant(tmp_path):
         law_final_nmi = math.hypot(n[-1], e[-1]) / 1852.0
         const_final_nmi = runs.errors_nmi(runs.numbers("drift_deg_h"))[i, -1]
         assert law_final_nmi < 0.5 * const_final_nmi
+    # campaign --run-table writes the law beside the label, and the run-table reader takes it back
+    from gyrodrift.fleet.run_table import run_table_rows
+    from gyrodrift.runs.table import read_runs_csv, write_run_table
+
+    write_run_table(tmp_path / "runs.csv", *run_table_rows(runs))
+    table = read_runs_csv(tmp_path / "runs.csv", require_truth=True)
+    header = (tmp_path / "runs.csv").read_text(encoding="utf-8").splitlines()[0].split(",")
+    for c in TRUTH_LAW_COLUMNS:
+        assert (c in header) == (c not in sigmas), c  # a column unknown in every run is not written
+        if c in table.extra:  # the columns the reader keeps (T_ref is read and checked, not kept)
+            np.testing.assert_allclose(table.extra[c], runs.numbers(c), rtol=1e-12, err_msg=c)
+    assert {"truth_law_eps_ref_deg_h", "truth_law_k1_deg_h_per_c"} <= set(table.extra)

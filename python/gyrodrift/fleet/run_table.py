@@ -10,7 +10,14 @@ from typing import Any
 import numpy as np
 
 from gyrodrift.fleet.store import CampaignRuns
-from gyrodrift.runs.columns import ATTRIBUTE_COLUMNS, FEATURES_COLUMNS, FLAG_COLUMNS, OPTIONAL_COLUMNS
+from gyrodrift.runs.columns import (
+    ATTRIBUTE_COLUMNS,
+    COLUMNS,
+    FEATURES_COLUMNS,
+    FLAG_COLUMNS,
+    OPTIONAL_COLUMNS,
+    TRUTH_LAW_COLUMNS,
+)
 
 __all__ = ["run_table", "run_table_rows"]
 
@@ -37,11 +44,22 @@ def run_table(runs: CampaignRuns, source: str = "<campaign>"):
 
 def run_table_rows(runs: CampaignRuns) -> tuple[list[dict[str, Any]], tuple[str, ...]]:
     """The successful `runs` as run-table rows and the columns to write: those ``gyrodrift features`` writes, the
-    label ``drift_deg_h`` and, when any run has it, its 1-sigma ``drift_std_deg_h``."""
+    label ``drift_deg_h`` and, each when any run has it, its 1-sigma ``drift_std_deg_h`` and the truth's best law
+    (`gyrodrift.runs.columns.TRUTH_LAW_COLUMNS`, as ``features --with-truth`` writes them).
+
+    A 1-sigma of 0 (a noise-free run: no noise to measure) is written as unknown, as the run-table reader expects a
+    1-sigma > 0."""
     ok = runs.select(runs.ok)
-    columns = (*FEATURES_COLUMNS, "drift_deg_h")
-    if np.isfinite(ok.numbers("drift_std_deg_h")).any():
-        columns += ("drift_std_deg_h",)
+    columns: tuple[str, ...] = (*FEATURES_COLUMNS, "drift_deg_h")
     values = {c: ok.numbers(c) for c in columns if c != "run"}
+    for name in ("drift_std_deg_h", *TRUTH_LAW_COLUMNS):
+        if name not in ok.columns:
+            continue
+        v = ok.numbers(name)
+        if COLUMNS[name].sigma:
+            v = np.where(v > 0, v, np.nan)
+        if np.isfinite(v).any():
+            columns += (name,)
+            values[name] = v
     rows = [{"run": str(run), **{c: v[i] for c, v in values.items()}} for i, run in enumerate(ok["run"])]
     return rows, columns

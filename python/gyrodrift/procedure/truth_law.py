@@ -191,7 +191,8 @@ class LawModel:
         """The `BestLaw`: the law at this linearisation with its covariance from the constant's 1-sigma, or the best
         constant (`constant_deg_h`, `constant_std_deg_h`, criterion `constant_nmi` [nmi]) when k1 is undetermined;
         `navigated_nmi` the criterion of a navigation compensating `law` at the same linearisation."""
-        std = constant_std_deg_h if math.isfinite(constant_std_deg_h) else None
+        # a 1-sigma of 0 (a noise-free log: no noise measured) is no covariance: the law's 1-sigmas are unknown
+        std = constant_std_deg_h if math.isfinite(constant_std_deg_h) and constant_std_deg_h > 0 else None
         if not self.determined:
             law = DriftLaw.constant(constant_deg_h, std, t_ref_c=self.t_ref_c)
             return BestLaw(law, False, self.note, constant_nmi, math.nan, self.excursion_c, self.hn, self.he)
