@@ -298,12 +298,6 @@ def test_rbf_batch_broadcasts_scalars_and_defaults_to_train():
     assert rbf_batch_errors(D, y, [], [], "loo").shape == (0, 10)
 
 
-def test_squared_distances_is_reexported_for_the_tuner():
-    from gyrodrift.learn import kernels, lssvr
-
-    assert lssvr.squared_distances is kernels.squared_distances
-
-
 @pytest.mark.parametrize("n", [3, 40])
 def test_non_positive_definite_candidates_give_inf_rows_not_errors(n):
     # n identical points: K is the all-ones matrix exactly, and 1 + 1/gamma rounds to 1 for

@@ -7,8 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gyrodrift.learn.drift_model import fit_drift_model, training_digest
-from gyrodrift.learn.model_io import ModelFileError, load_model, model_to_dict, save_model
+from gyrodrift.learn.drift_model import fit_drift_model
+from gyrodrift.learn.training_record import training_digest
+from gyrodrift.learn.model_io import ModelFileError, load_model, load_predictor, model_to_dict, save_model
 from gyrodrift.runs.datasets import load_paper
 
 
@@ -112,12 +113,13 @@ def good_doc(paper):
         (lambda d: d["training"]["runs"][3].update(drift_deg_h=11.0), "run 4, key drift_deg_h"),
     ],
 )
-def test_bad_model_documents(tmp_path, good_doc, mutate, message):
+@pytest.mark.parametrize("load", [load_model, load_predictor])
+def test_bad_model_documents(tmp_path, good_doc, mutate, message, load):
     mutate(good_doc)
     path = tmp_path / "bad.json"
     path.write_text(json.dumps(good_doc))
     with pytest.raises(ModelFileError, match=message):
-        load_model(path)
+        load(path)
 
 
 def test_corrupted_and_missing_files(tmp_path, good_doc):

@@ -17,9 +17,9 @@ features (`FEATURE_EXPRESSIONS`, the same operations as `gyrodrift.learn.encodin
 ``(x . z / sigma^2 + coef0)^degree``), the support vectors, alpha and the intercept.
 
 `export_spec` reads these numbers from a fitted model into an `ExportSpec`, with the provenance (the training
-digest, `gyrodrift.learn.drift_model.training_digest`, the encoding, scaling, kernel and hyperparameters, the target)
-and the range of each input and feature over the training runs, so that the navigation computer can refuse to
-extrapolate. The languages write it out: `gyrodrift.export.c`, `gyrodrift.export.rust`
+digest, `gyrodrift.learn.training_record.training_digest`, the encoding, scaling, kernel and hyperparameters, the
+target) and the range of each input and feature over the training runs, so that the navigation computer can refuse
+to extrapolate. The languages write it out: `gyrodrift.export.c`, `gyrodrift.export.rust`
 (`gyrodrift.export.languages.export_model`).
 """
 
@@ -214,7 +214,8 @@ def _ranges(values: np.ndarray) -> tuple[tuple[float, float], ...]:
 
 
 def export_spec(model, *, model_sha256: str | None = None) -> ExportSpec:
-    """The numbers of a fitted `gyrodrift.learn.drift_model.DriftModel` that the generated code needs.
+    """The numbers of a fitted drift model that the generated code needs: a `gyrodrift.learn.drift_model.DriftModel`
+    or the `gyrodrift.learn.predictor.DriftPredictor` of a model file (`gyrodrift.learn.model_io.load_predictor`).
 
     ``model_sha256`` (the SHA-256 of the model file's bytes, if known) is recorded in the provenance.
     Raises `InputError` if a feature of the model's encoding has no entry in `FEATURE_EXPRESSIONS`, or a hybrid's
@@ -264,15 +265,15 @@ def export_spec(model, *, model_sha256: str | None = None) -> ExportSpec:
     alpha = np.asarray(est.alpha_, float)
     if alpha.ndim != 1:
         raise InputError(f"a model with {alpha.shape[1]} targets cannot be exported (one drift per run expected)")
-    scaler = model.learner_.named_steps["scale"]
+    scaler = model.scaler_
     runs = getattr(model, "training_", {}).get("runs")
     if runs is None:
         raise InputError("the model does not carry its training runs (needed for the input ranges); refit it")
     mean = scale = offset = None
     if model.scaling == "standard":
-        mean, scale = np.asarray(scaler.mean_, float), np.asarray(scaler.scale_, float)
+        mean, scale = np.asarray(scaler.mean, float), np.asarray(scaler.scale, float)
     elif model.scaling == "minmax":
-        scale, offset = np.asarray(scaler.scale_, float), np.asarray(scaler.min_, float)
+        scale, offset = np.asarray(scaler.scale, float), np.asarray(scaler.offset, float)
     input_ranges = []
     for name in inputs:
         values = runs.column(name) if name in PHYSICS_INPUTS else getattr(runs, name)

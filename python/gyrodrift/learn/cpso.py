@@ -22,13 +22,15 @@ from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import ExitStack
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from scipy.optimize import Bounds, OptimizeResult
 
 from gyrodrift.errors import OptionError
 from gyrodrift.learn.swarm import Swarm, chaos_region, logistic_chaos_points, pso_move, reseed_chaos
+
+if TYPE_CHECKING:  # scipy.optimize is imported where a result is made: ~0.3 s of every learning command's start
+    from scipy.optimize import OptimizeResult
 
 __all__ = ["CPSOSettings", "CPSOSolver", "check_seed", "minimize_cpso"]
 
@@ -512,6 +514,8 @@ class CPSOSolver:
         self.history.append(s.gbest_fit)
         self.x_history.append(s.gbest_nat.copy())
         if self.callback is not None:
+            from scipy.optimize import OptimizeResult
+
             interim = OptimizeResult(x=s.gbest_nat.copy(), fun=s.gbest_fit, nit=self.nit, nfev=self.nfev)
             try:
                 stop = self.callback(interim)
@@ -541,6 +545,8 @@ class CPSOSolver:
 
     def result(self) -> OptimizeResult:
         """The ``OptimizeResult`` of the generations run so far (see the class docstring)."""
+        from scipy.optimize import OptimizeResult
+
         s = self._require_swarm()
         success = math.isfinite(s.gbest_fit)
         message = self.message if success else "No finite objective value found. " + self.message
@@ -617,6 +623,8 @@ def _validate_threads(threads) -> int:
 
 
 def _validate_bounds(bounds) -> tuple[np.ndarray, np.ndarray]:
+    from scipy.optimize import Bounds
+
     if isinstance(bounds, Bounds):
         lo = np.atleast_1d(np.asarray(bounds.lb, dtype=float))
         hi = np.atleast_1d(np.asarray(bounds.ub, dtype=float))

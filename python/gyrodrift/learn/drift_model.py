@@ -25,8 +25,6 @@ Parameters of the model itself (not of a part): ``target`` (``"drift"``: the LSS
 
 from __future__ import annotations
 
-import hashlib
-import json
 import warnings
 from typing import Any
 
@@ -42,14 +40,16 @@ from gyrodrift.learn.interval import (
     MIN_FOLD_RUNS,
     DriftInterval,
     IntervalOutlierWarning,
-    check_coverage,
     tuning_inflation,
 )
 from gyrodrift.learn.learner import make_learner, scaling_name
 from gyrodrift.learn.lssvm_system import IllConditionedWarning
 from gyrodrift.learn.lssvr import LSSVR
 from gyrodrift.learn.physics_base import PhysicsBase
+from gyrodrift.learn.predictor import DriftPredictor
 from gyrodrift.learn.ranges import InputCheck, InputRanges
+from gyrodrift.learn.scaling import InputScaler
+from gyrodrift.learn.training_record import training_digest
 from gyrodrift.learn.tuning import SearchBoundWarning, TuningOptions, TuningResult
 from gyrodrift.learn.user_warning import warn_user
 from gyrodrift.progress import progress
@@ -63,36 +63,7 @@ __all__ = [
     "flagged_labels_mask",
     "make_drift_model",
     "select_labelled_runs",
-    "file_column_order",
-    "training_digest",
 ]
-
-
-def file_column_order(names) -> list[str]:
-    """Optional run-table columns ``names`` in the order a model file's training runs and `training_digest` have them:
-    their declared order (`gyrodrift.runs.columns`) but the label's 1-sigma ``drift_std_deg_h`` first, where the run
-    table had it when the model files and exported code written so far were made (they keep their bytes and
-    digests)."""
-    return sorted(names, key=lambda name: name != "drift_std_deg_h")  # a stable sort: the others keep their order
-
-
-def training_digest(runs: RunTable) -> str:
-    """SHA-256 of the training runs' values (run, latitudes, temperatures, drift, then any optional columns
-    by name), order included. A table without optional columns has the digest of gyrodrift 0.2.
-
-    The optional columns are hashed in `file_column_order`; a column with no finite value is hashed as absent (a
-    model file's training records leave out unknown values, so such a column does not come back on load)."""
-    rows = [
-        [str(r), repr(float(a)), repr(float(b)), repr(float(c)), repr(float(d)), repr(float(e))]
-        for r, a, b, c, d, e in zip(
-            runs.run, runs.lat_deg, runs.lat0_deg, runs.temp_min_c, runs.temp_max_c, runs.drift_deg_h, strict=False
-        )
-    ]
-    known = [name for name in runs.extra if np.isfinite(np.asarray(runs.extra[name], dtype=float)).any()]
-    for name in file_column_order(known):
-        for row, v in zip(rows, runs.extra[name], strict=True):
-            row.append(f"{name}={float(v)!r}")
-    return hashlib.sha256(json.dumps(rows).encode()).hexdigest()
 
 
 class DriftModel(RegressorMixin, BaseEstimator):
@@ -217,6 +188,29 @@ class DriftModel(RegressorMixin, BaseEstimator):
                 warn_user(text, IntervalOutlierWarning)
         return self
 
+    @property
+    def predictor_(self) -> DriftPredictor:
+        """The fitted parts as a `gyrodrift.learn.predictor.DriftPredictor`, built from them on each access (so it
+        follows the fitted attributes): what `predict`, `predict_interval`, `check_inputs` and the interval's
+        summaries delegate to, and what a model file is read into without scikit-learn
+        (`gyrodrift.learn.model_io.load_predictor`)."""
+        check_is_fitted(self, "interval_")
+        return DriftPredictor(
+            encoding=self.encoding,
+            scaling=self.scaling,
+            target=self.target,
+            physics_column=self.physics_column,
+            scaler=InputScaler.of_step(self.scaling, self.learner_.named_steps["scale"]),
+            lssvr=self.lssvr.expansion(),
+            base=self.base_,
+            interval=self.interval_,
+            ranges=self.ranges_,
+            training=self.training_,
+            tuning=self.tuning,
+            loo_residuals_deg_h=self.loo_residuals_deg_h,
+            warnings=self.fit_warnings(),
+        )
+
     def _out_of_fold(self, trained: RunTable, spread_theta) -> tuple[np.ndarray, np.ndarray]:
         """``(r, m)`` [deg/h]: ``r_i`` the residual of run i under a model fitted and tuned on the other folds
         (``calibration_folds`` folds, run i in fold ``i mod K``), ``m_i`` that model's spread at run i (the
@@ -240,20 +234,10 @@ class DriftModel(RegressorMixin, BaseEstimator):
                 residuals[fold == j] = held.drift_deg_h - part.predict(held)
         return residuals, spreads
 
-    def _learned(self, runs: RunTable) -> tuple[np.ndarray, np.ndarray]:
-        """``(Z, learned)``: the scaled inputs of ``runs`` and the LSSVR's output there [deg/h] (no base)."""
-        Z = self.learner_[:-1].transform(runs)
-        return Z, self.learner_.named_steps["lssvr"].predict(Z)
-
     def predict(self, X) -> np.ndarray:
-        """Identified drift [deg/h] of each run: the LSSVR's output (plus the physics estimate for a hybrid, added
-        inside the LSSVR's compensated sum: `LSSVR.predict`)."""
-        check_is_fitted(self, "learner_")
-        runs = as_run_table(X)
-        if self.target != "residual":
-            return self.learner_.predict(runs)
-        Z = self.learner_[:-1].transform(runs)
-        return self.learner_.named_steps["lssvr"].predict(Z, offset=self.base_.predict(runs))
+        """Identified drift [deg/h] of each run (`gyrodrift.learn.predictor.DriftPredictor.predict`: the LSSVR's
+        output, plus the physics estimate for a hybrid, added inside the LSSVR's compensated sum)."""
+        return self.predictor_.predict(X)
 
     def score(self, X, y=None, sample_weight=None) -> float:
         """R^2 of the identified drifts (``predict``) against ``y`` (default: the runs' drifts)."""
@@ -283,6 +267,11 @@ class DriftModel(RegressorMixin, BaseEstimator):
     def scaling(self) -> str:
         """The input scaling name (``SCALINGS``)."""
         return scaling_name(self.learner.named_steps["scale"])
+
+    @property
+    def scaler_(self) -> InputScaler:
+        """The fitted input scaling as plain numbers (`gyrodrift.learn.scaling.InputScaler`)."""
+        return InputScaler.of_step(self.scaling, self.learner_.named_steps["scale"])
 
     @property
     def lssvr(self) -> LSSVR:
@@ -337,8 +326,7 @@ class DriftModel(RegressorMixin, BaseEstimator):
     def predict_spread(self, runs) -> np.ndarray:
         """The spread model's 1-sigma of each run's drift [deg/h] (`SpreadGP.predict_std`; label noise
         excluded); grows away from the training runs on the scale of its fitted length scales."""
-        check_is_fitted(self, "interval_")
-        return self.interval_.spread_.predict_std(self.learner_[:-1].transform(as_run_table(runs)))
+        return self.predictor_.predict_spread(runs)
 
     def predict_interval(self, runs, coverage: float = 0.9) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Identified drift and its interval [deg/h]: ``(pred, lo, hi)``.
@@ -352,13 +340,7 @@ class DriftModel(RegressorMixin, BaseEstimator):
         alone plus the learned term's own uncertainty. Not a Bayesian posterior. tests/learn/test_intervals.py,
         docs/identification.md.
         """
-        coverage = check_coverage(coverage)
-        check_is_fitted(self, "interval_")
-        runs = as_run_table(runs)
-        pred = self.predict(runs)
-        Z, learned = self._learned(runs)
-        half = self.interval_.half_width(Z, learned, self.base_.predict_std(runs), coverage)
-        return pred, pred - half, pred + half
+        return self.predictor_.predict_interval(runs, coverage)
 
     def learned_std_deg_h(self, runs) -> np.ndarray:
         """The 1-sigma of each run's learned term [deg/h] (the LSSVR's output: the whole drift for
@@ -366,32 +348,21 @@ class DriftModel(RegressorMixin, BaseEstimator):
         (`gyrodrift.learn.interval.DriftInterval.sigmas`, the spread model's 1-sigma at the run, capped) times its
         calibration scale c (without the coverage's t quantile). What the identified drift law adds to the variance
         of its eps_ref (`gyrodrift.procedure.identify`); a Gaussian reading of the empirical interval."""
-        check_is_fitted(self, "interval_")
-        runs = as_run_table(runs)
-        Z, learned = self._learned(runs)
-        learned_std, _ = self.interval_.sigmas(Z, learned, None)
-        return np.asarray(learned_std, float) * float(self.interval_.scale_.scale)
+        return self.predictor_.learned_std_deg_h(runs)
 
     def interval_summary(self, coverage: float = 0.9) -> dict:
         """What the interval rests on (`gyrodrift.learn.interval.DriftInterval.summary`). O(n): no prediction."""
-        coverage = check_coverage(coverage)
-        check_is_fitted(self, "interval_")
-        return self.interval_.summary(coverage, self.training_["runs"].run)
+        return self.predictor_.interval_summary(coverage)
 
     def interval_note(self, coverage: float = 0.9) -> str:
         """`interval_summary` in one line (what ``fit`` and ``identify`` say)."""
-        coverage = check_coverage(coverage)
-        check_is_fitted(self, "interval_")
-        return self.interval_.note(coverage, self.training_["runs"].run)
+        return self.predictor_.interval_note(coverage)
 
     def check_inputs(self, runs, *, rtol: float = 1e-9) -> InputCheck:
         """Flag runs whose inputs lie outside the training runs' range, per input ([min, max] of the encoded
         inputs, with a relative tolerance ``rtol`` of the range) and jointly (Mahalanobis distance of the
         scaled inputs beyond the largest among the training runs): `gyrodrift.learn.ranges.InputRanges.check`."""
-        check_is_fitted(self, "ranges_")
-        runs = as_run_table(runs)
-        encoded = self.learner_.named_steps["encode"].transform(runs)
-        return self.ranges_.check(encoded, self.learner_[:-1].transform(runs), self.feature_names, rtol=rtol)
+        return self.predictor_.check_inputs(runs, rtol=rtol)
 
 
 def _with_drift(runs: RunTable, y) -> RunTable:

@@ -24,7 +24,6 @@ import numbers
 import os
 
 import numpy as np
-from scipy.spatial.distance import cdist, pdist, squareform
 
 from gyrodrift.choices import SIGMA_RANGE
 from gyrodrift.errors import InputError, OptionError
@@ -131,6 +130,8 @@ def squared_distances(X, Z=None) -> np.ndarray:
         matrix is exactly symmetric when ``Z`` is None, and no entry is negative (it is clipped at 0
         anyway). Units: the square of the input units.
     """
+    from scipy.spatial.distance import cdist, pdist, squareform  # here: scipy.spatial costs ~0.3 s of a start
+
     X = _as_2d(X, "X")
     if Z is None:
         if X.shape[0] < 2:

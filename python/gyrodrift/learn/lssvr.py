@@ -33,22 +33,17 @@ fitted on ``y - b`` has ``dual_coef_ == a``; LS-SVMlab 1.8 ``sig2 = sigma^2 / 2`
 
 from __future__ import annotations
 
-import itertools
-import math
-from collections.abc import Iterable
-
 import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted
 
+from gyrodrift.learn.expansion import KernelExpansion
 from gyrodrift.learn.kernels import (
     check_kernel,
     check_matrix_memory,
     check_positive,
     check_sigma,
     kernel_matrix,
-    rbf_from_squared_distances,
-    squared_distances,
 )
 from gyrodrift.learn.lssvm_system import (
     NonFiniteResultError,
@@ -269,46 +264,15 @@ class LSSVR(RegressorMixin, BaseEstimator):
         """
         check_is_fitted(self, ("alpha_", "intercept_", "X_fit_"))
         X = _validate_data(self, X, dtype=np.float64, reset=False)
-        check_matrix_memory(X.shape[0], self.X_fit_.shape[0], 3, "predicting with the LSSVR", unit="samples")
-        alpha = np.asarray(self.alpha_, float)
-        if offset is not None:
-            offset = np.asarray(offset, float)
-            if offset.shape != (X.shape[0],):
-                raise ValueError(f"offset has shape {offset.shape}, expected ({X.shape[0]},), one value per sample")
-            offset = offset.reshape((X.shape[0],) + (1,) * (alpha.ndim - 1))
-        with np.errstate(over="ignore", invalid="ignore"):  # checked below
-            out = _compensated_expansion(self._prediction_kernel(X), alpha, self.intercept_, offset)
-        if not np.all(np.isfinite(out)):
-            raise NonFiniteResultError(
-                f"LSSVR: a prediction is not finite for {self._describe()} (kernel overflow on inputs far "
-                "outside the training data?)"
-            )
-        return out
+        return self.expansion().predict(X, offset=offset)
 
-    def _prediction_kernel(self, X: np.ndarray) -> np.ndarray:
-        """``K(x_i, X[j])`` for each support vector ``x_i`` (rows) and sample (columns), shape (n_train, n_samples),
-        with the operations of the generated code (module docstring): features in order, the RBF kernel's ``exp``
-        from the C library (``math.exp``; numpy's own may differ by an ulp), an integer power multiplied out."""
-        kernel = check_kernel(self.kernel)
-        Z = self.X_fit_
-        acc = np.zeros((Z.shape[0], X.shape[0]))
-        for k in range(X.shape[1]):
-            if kernel == "rbf":
-                t = X[None, :, k] - Z[:, k, None]
-                acc += t * t
-            else:
-                acc += X[None, :, k] * Z[:, k, None]
-        if kernel == "linear":
-            return acc
-        sigma = check_sigma(self.sigma)
-        if kernel == "rbf":
-            arg = -acc / (sigma * sigma)
-            return np.fromiter(map(math.exp, arg.ravel()), float, arg.size).reshape(arg.shape)
-        base = acc / (sigma * sigma) + float(self.coef0)
-        out = base.copy()
-        for _ in range(1, int(self.degree)):  # checked by fit
-            out *= base
-        return out
+    def expansion(self) -> KernelExpansion:
+        """The fitted expansion (support vectors, dual coefficients, bias, kernel) that predicts: `predict` and
+        `gyrodrift.learn.predictor.DriftPredictor` share its arithmetic."""
+        check_is_fitted(self, ("alpha_", "intercept_", "X_fit_"))
+        return KernelExpansion(
+            self.X_fit_, self.alpha_, self.intercept_, self.gamma, self.sigma, self.kernel, self.degree, self.coef0
+        )
 
     def _fit_without_zero_weights(self, X, y, weights):
         """A zero weight leaves its sample out: fit on the others; the left-out samples' "leave-one-out"
@@ -352,30 +316,16 @@ class LSSVR(RegressorMixin, BaseEstimator):
         (scaled inputs, n x d) and ``y`` as given to ``fit``.
         """
         est = cls(gamma=gamma, sigma=sigma)
-        gamma = check_positive("gamma", gamma)
-        sigma = check_sigma(sigma)
         X, y = _validate_data(est, X, y, dtype=np.float64, y_numeric=True, ensure_min_samples=2, copy=True)
         n = X.shape[0]
         w = check_sample_weight(sample_weight, n)
-        alpha = np.asarray(alpha, dtype=float)
         loo = np.asarray(loo_residuals, dtype=float)
-        if alpha.shape != (n,) or loo.shape != (n,) or not (np.all(np.isfinite(alpha)) and np.all(np.isfinite(loo))):
+        if loo.shape != (n,) or not np.all(np.isfinite(loo)):
             raise StoredSolutionError(f"the stored solution must hold {n} finite dual coefficients and LOO residuals")
-        b = float(intercept)
-        if not abs(alpha.sum()) <= rtol * max(np.abs(alpha).sum(), np.finfo(float).tiny):
-            raise StoredSolutionError(f"the stored dual coefficients do not sum to 0 (sum {alpha.sum():.3g})")
-        rows = np.unique(np.linspace(0, n - 1, min(n, 32)).round().astype(int))
-        Kr = rbf_from_squared_distances(squared_distances(X[rows], X), sigma)
-        ridge = alpha[rows] / (gamma * (1.0 if w is None else w[rows]))
-        residual = Kr @ alpha + ridge + b - y[rows]
-        size = np.abs(Kr) @ np.abs(alpha) + np.abs(ridge) + abs(b) + np.abs(y[rows])
-        bad = np.flatnonzero(~(np.abs(residual) <= rtol * size))
-        if bad.size:
-            i = int(rows[bad[0]])
-            raise StoredSolutionError(
-                f"the stored solution does not solve the LSSVM system at sample {i}: residual {residual[bad[0]]:.3g} "
-                f"against terms of size {size[bad[0]]:.3g} (gamma {gamma!r}, sigma {sigma!r})"
-            )
+        expansion = KernelExpansion.from_stored_solution(
+            X, y, gamma=gamma, sigma=sigma, alpha=alpha, intercept=intercept, sample_weight=w, rtol=rtol
+        )
+        alpha, b = expansion.alpha_, expansion.intercept_
         est.alpha_, est.intercept_, est.X_fit_ = alpha, b, X
         est.loo_residuals_ = loo
         est.sample_weight_ = np.ones(n) if w is None else w
@@ -409,33 +359,6 @@ class LSSVR(RegressorMixin, BaseEstimator):
         """A copy of :attr:`loo_residuals_`, the exact leave-one-out residuals of the fitted model."""
         check_is_fitted(self, ("alpha_", "intercept_", "X_fit_"))
         return np.array(self.loo_residuals_, copy=True)
-
-
-def _compensated_expansion(KT: np.ndarray, alpha: np.ndarray, intercept, offset=None) -> np.ndarray:
-    """``intercept + sum_i alpha[i] * KT[i] (+ offset)``, the terms added in that order with Knuth's TwoSum
-    (``t = s + p``, ``z = t - s``, error ``(s - (t - z)) + (p - z)``, exact in binary floating point) and the
-    errors summed apart and added at the end ("Sum2", Ogita, Rump & Oishi 2005): as accurate as summing in twice
-    the working precision, then rounding. The generated C and Rust (`gyrodrift.export`) do the same operations.
-
-    ``KT`` is (n_train, n_samples); ``alpha`` (n_train,) or (n_train, n_targets); ``offset`` broadcasts against the
-    result, shape (n_samples,) or (n_samples, n_targets).
-    """
-    shape = (KT.shape[1],) + alpha.shape[1:]
-    s = np.array(np.broadcast_to(np.asarray(intercept, float), shape))
-    c = np.zeros(shape)
-    terms: Iterable[np.ndarray] = (
-        (k * a for k, a in zip(KT, alpha, strict=True))
-        if alpha.ndim == 1
-        else (k[:, None] * a for k, a in zip(KT, alpha, strict=True))
-    )
-    if offset is not None:
-        terms = itertools.chain(terms, (np.broadcast_to(offset, shape),))
-    for p in terms:
-        t = s + p
-        z = t - s
-        c += (s - (t - z)) + (p - z)
-        s = t
-    return s + c
 
 
 #: n x n float64 matrices alive at once in ``LSSVR.fit`` (distances, kernel/H, its factor, the inverse factor).

@@ -28,6 +28,13 @@ and refuses a file whose record differs (to the bit). Schema 3 files (a concrete
 ``auto`` and ``base_uncertainty``) load with ``base_uncertainty = "none"``, as they were fitted; schema 2 files
 (before the hybrid model and weighted labels) as ``target = "drift"`` models with unweighted labels.
 
+Two readers: `load_predictor` reads a file into its `gyrodrift.learn.predictor.DriftPredictor` without importing
+scikit-learn (what ``predict``, ``identify --model``, ``evaluate --model`` and ``export`` use: scikit-learn's import
+is ~1.5 s of their start), `load_model` into the estimator (`gyrodrift.learn.drift_model.DriftModel`, for library use
+and refits). Both run the checks below on the same numbers and give the same predictions to the bit
+(tests/learn/test_predictor.py); the predictor refits no scaler of scikit-learn's but computes its numbers with the
+same operations (`gyrodrift.learn.scaling`), and a file without the stored records is read by the estimator.
+
 Loading rebuilds the model with :func:`gyrodrift.learn.drift_model.make_drift_model` from the parameters and fits it on
 the training runs with the recorded tuning (no search is repeated) and the stored LSSVR solution: ``dual_coef_deg_h``
 (the dual coefficients alpha, deg/h, one per training run), ``intercept_deg_h``, ``loo_residuals_deg_h`` and
@@ -54,9 +61,9 @@ from __future__ import annotations
 import json
 import math
 import warnings
-from dataclasses import fields
+from dataclasses import dataclass, fields
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -71,13 +78,23 @@ from gyrodrift.choices import (
     SCALINGS,
     TARGETS,
 )
-from gyrodrift.errors import GyrodriftError, InputError
+from gyrodrift.errors import GyrodriftError, InputError, OptionError
 from gyrodrift.files.atomic import atomic_write_json, recognise_json_format
 from gyrodrift.files.input_files import read_limited
-from gyrodrift.learn.drift_model import DriftModel, file_column_order, make_drift_model, training_digest
+from gyrodrift.learn.encodings import encode
+from gyrodrift.learn.expansion import KernelExpansion
+from gyrodrift.learn.interval import DriftInterval, tuning_inflation
 from gyrodrift.learn.lssvm_system import IllConditionedWarning
+from gyrodrift.learn.physics_base import PhysicsBase
+from gyrodrift.learn.predictor import DriftPredictor
+from gyrodrift.learn.ranges import InputRanges
+from gyrodrift.learn.scaling import InputScaler
+from gyrodrift.learn.training_record import file_column_order, training_digest
 from gyrodrift.learn.tuning import TUNED_LSSVR_OPTIONS, SearchBoundWarning, TuningOptions, TuningResult
 from gyrodrift.runs.table import RunTable, RunTableError
+
+if TYPE_CHECKING:
+    from gyrodrift.learn.drift_model import DriftModel
 
 FORMAT = "gyrodrift-drift-model"
 SCHEMA_VERSION = 4
@@ -308,8 +325,28 @@ def _tuning(doc: Any, where: str) -> TuningResult | None:
         raise ModelFileError(f"{where}: malformed tuning record ({exc})") from None
 
 
-def model_from_dict(doc: dict, where: str = "<model>") -> DriftModel:
-    """Rebuild a model from ``model_to_dict`` output (refit on its training runs); ``where`` names the source."""
+@dataclass(frozen=True)
+class _Record:
+    """A model file's document, checked (`_record`): what the estimator and the predictor are rebuilt from."""
+
+    hybrid: dict
+    encoding: str
+    scaling: str
+    params: dict
+    tuning: TuningResult | None
+    runs: RunTable
+    sha: str
+    left_out: list
+    spread: dict
+    solution: dict | None
+    folds: int
+    fitted: Any
+    warnings: list
+
+
+def _record(doc: dict, where: str) -> _Record:
+    """Check a model file's document (format, schema, parameters, training runs and their digest, the stored
+    records); ``ModelFileError`` naming ``where`` and the key otherwise."""
     if not isinstance(doc, dict) or doc.get("format") != FORMAT:
         raise ModelFileError(f"{where}: not a gyrodrift model file (format is not {FORMAT!r})")
     _refuse_huge_ints(doc, where)
@@ -375,22 +412,139 @@ def model_from_dict(doc: dict, where: str = "<model>") -> DriftModel:
     folds = doc.get("calibration_folds", 0)  # files written before the cross-validated calibration: LOO
     if isinstance(folds, bool) or not isinstance(folds, int) or folds < 0 or folds == 1:
         raise ModelFileError(f"{where}: key 'calibration_folds' must be 0 or an integer >= 2, got {folds!r}")
+    warned = doc.get("warnings", [])
+    if not isinstance(warned, list) or not all(isinstance(w, str) for w in warned):
+        raise ModelFileError(f"{where}: key 'warnings' must be a list of messages")
+    parts = (hybrid, encoding, scaling, params, tuning, runs, sha, left_out, spread, solution, folds)
+    return _Record(*parts, fitted=doc.get("fitted"), warnings=warned)
+
+
+def model_from_dict(doc: dict, where: str = "<model>") -> DriftModel:
+    """Rebuild the estimator from ``model_to_dict`` output (refit on its training runs with the recorded tuning and
+    solution: scikit-learn is imported); ``where`` names the source."""
+    from gyrodrift.learn.drift_model import make_drift_model
+
+    rec = _record(doc, where)
+    hybrid, params, runs, folds = rec.hybrid, rec.params, rec.runs, rec.folds
     try:
-        model = make_drift_model(encoding=encoding, scaling=scaling, calibration_folds=folds, **hybrid, **params)
+        model = make_drift_model(
+            encoding=rec.encoding, scaling=rec.scaling, calibration_folds=folds, **hybrid, **params
+        )
         with warnings.catch_warnings():
             # the file's "warnings" already say so; a loaded model does not repeat them
             warnings.simplefilter("ignore", SearchBoundWarning)
             warnings.simplefilter("ignore", IllConditionedWarning)
-            model.fit(runs, lssvr__tuning=tuning, lssvr__solution=solution, training_sha256=sha, **spread)
-            model.training_["left_out"] = list(left_out)
+            model.fit(
+                runs, lssvr__tuning=rec.tuning, lssvr__solution=rec.solution, training_sha256=rec.sha, **rec.spread
+            )
+            model.training_["left_out"] = list(rec.left_out)
     except GyrodriftError as exc:
         raise ModelFileError(
             f"{where}: the model cannot be rebuilt from its parameters and training runs: {exc}"
         ) from None
     except (ValueError, TypeError) as exc:  # scikit-learn's own parameter checks
         raise ModelFileError(f"{where}: bad model parameters: {exc}") from None
-    _check_fitted(doc.get("fitted"), model, where)
+    _check_fitted(rec.fitted, model, where)
     return model
+
+
+def predictor_from_dict(doc: dict, where: str = "<model>") -> DriftPredictor:
+    """The predictor of ``model_to_dict`` output, without scikit-learn: the physics base resolved and the scaler fitted
+    on the training runs again, the stored LSSVR solution verified (`KernelExpansion.from_stored_solution`, O(32 n)),
+    the interval rebuilt from its stored hyperparameters and calibration, and the file's ``fitted`` record checked
+    against all of it (`_check_fitted`), as `model_from_dict` does. A file without the stored solution and interval
+    records (written before them) or with a zero label weight is rebuilt by `model_from_dict` (the estimator, which
+    solves what is missing) and its ``predictor_`` returned. ``where`` names the source."""
+    rec = _record(doc, where)
+    interval_keys = {"spread_theta", "interval_calibration", "interval_disagreement"}
+    if rec.solution is None or not interval_keys <= set(rec.spread):
+        return model_from_dict(doc, where).predictor_
+    try:
+        predictor = _predictor(rec)
+    except GyrodriftError as exc:
+        raise ModelFileError(
+            f"{where}: the model cannot be rebuilt from its parameters and training runs: {exc}"
+        ) from None
+    if predictor is None:
+        return model_from_dict(doc, where).predictor_
+    _check_fitted(rec.fitted, predictor, where)
+    return predictor
+
+
+def _predictor(rec: _Record) -> DriftPredictor | None:
+    """The predictor of a checked record holding the stored solution and interval (`predictor_from_dict`), built
+    as `gyrodrift.learn.drift_model.DriftModel.fit` builds its parts from the same records; None when a label weight
+    is 0 (the estimator solves such a fit again)."""
+    hybrid, params, runs, solution = rec.hybrid, rec.params, rec.runs, rec.solution
+    assert solution is not None
+    if (params["gamma"] is None) != (params["sigma"] is None):
+        raise OptionError("give both gamma and sigma, or neither (then both are tuned)")
+    tuned = params["gamma"] is None
+    if tuned:
+        assert rec.tuning is not None  # `_record` refuses a file that fixes neither
+        gamma, sigma = rec.tuning.gamma, rec.tuning.sigma
+    else:
+        gamma, sigma = params["gamma"], params["sigma"]
+    if len(runs) < 3:
+        raise InputError(f"{runs.source}: need at least 3 training runs, got {len(runs)}")
+    if not runs.has_truth:
+        raise InputError(f"{runs.source}: every training run needs drift_deg_h")
+    base = PhysicsBase(
+        target=hybrid["target"],
+        column=hybrid["physics_column"],
+        uncertainty=hybrid["base_uncertainty"],
+        label_weighting=hybrid["label_weighting"],
+    ).fit(runs)
+    weights = base.sample_weight_
+    if weights is not None and not np.all(weights > 0):
+        return None
+    target = runs.drift_deg_h - base.training_base_
+    encoded = encode(runs, rec.encoding)
+    scaler = InputScaler.fit(rec.scaling, encoded)
+    Z = scaler.transform(encoded)
+    expansion = KernelExpansion.from_stored_solution(
+        Z,
+        target,
+        gamma=gamma,
+        sigma=sigma,
+        alpha=solution["alpha"],
+        intercept=solution["intercept"],
+        sample_weight=weights,
+    )
+    interval = DriftInterval().fit_spread(Z, target, base.noise_std_, theta=rec.spread["spread_theta"], loo=False)
+    residuals, spreads = (np.asarray(v, float) for v in rec.spread["interval_calibration"])
+    interval.calibrate(
+        Z,
+        residuals,
+        spreads,
+        base.noise_var_,
+        base.label_std_rms_,
+        inflation=tuning_inflation(len(runs)) if tuned and rec.folds == 0 else 1.0,
+        learned=expansion.predict,
+        disagreement=rec.spread["interval_disagreement"],
+    )
+    return DriftPredictor(
+        encoding=rec.encoding,
+        scaling=rec.scaling,
+        target=hybrid["target"],
+        physics_column=hybrid["physics_column"],
+        scaler=scaler,
+        lssvr=expansion,
+        base=base,
+        interval=interval,
+        ranges=InputRanges().fit(encoded, Z),
+        training={
+            "n_runs": len(runs),
+            "sha256": rec.sha,
+            "source": runs.source,
+            "weighted": weights is not None,
+            "runs": runs,
+            "left_out": list(rec.left_out),
+        },
+        tuning=rec.tuning if tuned else None,
+        loo_residuals_deg_h=np.asarray(solution["loo_residuals"], float),
+        warnings=rec.warnings,
+    )
 
 
 def _solution_record(fitted: Any, n_runs: int, where: str) -> dict | None:
@@ -430,7 +584,7 @@ def _spread_record(fitted: Any, n_runs: int, where: str) -> dict:
     return out
 
 
-def _check_fitted(fitted: Any, model: DriftModel, where: str) -> None:
+def _check_fitted(fitted: Any, model: DriftModel | DriftPredictor, where: str) -> None:
     """The file's ``fitted`` record must describe the rebuilt model: gamma and sigma exactly, the intercept and
     the LOO residuals to 1e-9 relative (another BLAS may round differently); else the file was edited."""
     if fitted is None:
@@ -476,8 +630,23 @@ MAX_MODEL_BYTES = 1 << 30
 
 
 def load_model(path) -> DriftModel:
-    """Read a model file written by ``save_model``; clear ``ModelFileError`` for anything else."""
+    """Read a model file written by ``save_model`` into the estimator (`model_from_dict`: scikit-learn is imported,
+    for library use and refits); clear ``ModelFileError`` for anything else."""
     path = Path(path)
+    return model_from_dict(_read_document(path), str(path))
+
+
+def load_predictor(path) -> DriftPredictor:
+    """Read a model file written by ``save_model`` into its predictor (`predictor_from_dict`: no scikit-learn), what
+    ``predict``, ``identify --model``, ``evaluate --model`` and ``export`` use; clear ``ModelFileError`` for anything
+    else."""
+    path = Path(path)
+    return predictor_from_dict(_read_document(path), str(path))
+
+
+def _read_document(path: Path) -> Any:
+    """The JSON document of a model file (size-limited, a device or FIFO refused); ``ModelFileError`` naming the
+    file, the line and the column of bad JSON."""
     try:
         raw = read_limited(path, MAX_MODEL_BYTES)  # a device or FIFO is refused, never read or waited on
         if len(raw) > MAX_MODEL_BYTES:
@@ -495,4 +664,4 @@ def load_model(path) -> DriftModel:
         raise ModelFileError(f"{path}: JSON nested too deeply (not a model file)") from None
     except ValueError as exc:  # e.g. Python's limit on integer digits
         raise ModelFileError(f"{path}: unreadable JSON: {exc}") from None
-    return model_from_dict(doc, str(path))
+    return doc

@@ -21,8 +21,6 @@ the noise of both, ``v_i = s_i^2 + b_i^2``; ``"none"``: never (model files of sc
 from __future__ import annotations
 
 import numpy as np
-from sklearn.base import BaseEstimator
-from sklearn.utils.validation import check_is_fitted
 
 from gyrodrift.choices import BASE_UNCERTAINTIES, MIN_THERMAL_RUNS, PHYSICS_CHOICES, PHYSICS_COLUMNS, TARGETS
 from gyrodrift.errors import InputError, OptionError
@@ -188,7 +186,7 @@ def physics_estimate(runs: RunTable, column: str = "drift_inversion_deg_h", *, p
     return (estimate, None if std is None else np.asarray(std, float)) if with_std else estimate
 
 
-class PhysicsBase(BaseEstimator):
+class PhysicsBase:
     """The physics base and the label noise of a drift model, resolved on its training runs (module docstring).
 
     Parameters (keyword-only): ``target`` (``"drift"``: no base, the learner learns the drift itself;
@@ -216,6 +214,10 @@ class PhysicsBase(BaseEstimator):
         self.column = column
         self.uncertainty = uncertainty
         self.label_weighting = label_weighting
+
+    def _check_fitted(self) -> None:
+        if not hasattr(self, "column_"):
+            raise AttributeError("this PhysicsBase is not fitted yet: call fit with the training runs first")
 
     def check_options(self) -> None:
         """``OptionError`` naming an unknown target, column, uncertainty or label weighting."""
@@ -273,7 +275,7 @@ class PhysicsBase(BaseEstimator):
         """What the learner's output is added to for new runs [deg/h]: the physics estimate (residual target; a fleet
         base with the prior of every training run, ``coefficient_prior_``) or 0. ``with_std``: ``(base, its
         1-sigma or None)``."""
-        check_is_fitted(self, "column_")
+        self._check_fitted()
         if self.column_ is None:
             return (np.zeros(len(runs)), None) if with_std else np.zeros(len(runs))
         prior = self.coefficient_prior_ if self.column_ == FLEET_PHYSICS else None
@@ -282,7 +284,7 @@ class PhysicsBase(BaseEstimator):
     def predict_std(self, runs: RunTable) -> np.ndarray | None:
         """The base's 1-sigma of each run [deg/h] when it joins the interval (``std_used_``); else None. A run
         without it: ``InputError`` naming the table, the column and the runs."""
-        check_is_fitted(self, "column_")
+        self._check_fitted()
         if not self.std_used_:
             return None
         _, std = self.predict(runs, with_std=True)

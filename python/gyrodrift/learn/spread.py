@@ -54,10 +54,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import stats
 from scipy.linalg import cho_solve, cholesky, solve_triangular
-from scipy.optimize import minimize
-from scipy.spatial.distance import cdist
 from threadpoolctl import threadpool_limits
 
 from gyrodrift.errors import InputError
@@ -131,6 +128,8 @@ def _cross_kernel(theta: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray
     ``theta``, without the run-to-run term (``WhiteKernel``: on the diagonal of the training covariance only):
     ``c0 + c1 exp(-|a - b|^2_l / 2) + a'b``, the distances as scikit-learn's RBF takes them (``cdist`` of the
     inputs over their length scales)."""
+    from scipy.spatial.distance import cdist  # here: scipy.spatial costs ~0.3 s of a start
+
     c0, c1 = math.exp(theta[0]), math.exp(theta[1])
     length = np.exp(theta[2:-1])
     return c0 + c1 * np.exp(-0.5 * cdist(A / length, B / length, "sqeuclidean")) + A @ B.T
@@ -141,6 +140,8 @@ def _maximise_likelihood(Z: np.ndarray, y: np.ndarray, noise: np.ndarray, n_rest
     from `_start_and_bounds`'s start and ``n_restarts`` uniform draws in the log bounds, the best kept, as
     scikit-learn's ``GaussianProcessRegressor.fit`` with ``fmin_l_bfgs_b`` does (same start, bounds, draws and
     optimiser defaults) on `_neg_log_likelihood`, 20-30x faster on a few dozen runs."""
+    from scipy.optimize import minimize  # here: a model file's spread needs no search (scipy.optimize: ~0.1 s)
+
     sqd = (Z.T[:, :, None] - Z.T[:, None, :]) ** 2
     start, bounds = _start_and_bounds(Z.shape[1])
     starts = [start]
@@ -281,10 +282,16 @@ OUTLIER_ALPHA = 0.05
 """Family-wise level of the wild-score test of `calibration_scale` (module docstring)."""
 HUBER_K = 2.0
 """Huber's constant of `calibration_scale`'s scale (in units of the scale)."""
-_HUBER_BETA = float(
-    (2 * stats.norm.cdf(HUBER_K) - 1) - 2 * HUBER_K * stats.norm.pdf(HUBER_K) + 2 * HUBER_K**2 * stats.norm.sf(HUBER_K)
-)
-"""``E[min(Z^2, k^2)]`` for standard normal Z: Huber's scale is consistent at the normal."""
+
+
+def _huber_beta() -> float:
+    """``E[min(Z^2, k^2)]`` for standard normal Z (k = `HUBER_K`): Huber's scale is consistent at the normal. The
+    normal cdf, pdf and sf as `scipy.stats.norm` computes them, from `scipy.special` (imported here: scipy.special
+    costs ~0.2 s and scipy.stats ~1 s of a start that only predicts)."""
+    from scipy.special import ndtr
+
+    k = HUBER_K
+    return float((2 * ndtr(k) - 1) - 2 * k * math.exp(-(k**2) / 2.0) / math.sqrt(2.0 * math.pi) + 2 * k**2 * ndtr(-k))
 
 
 @dataclass(frozen=True)
@@ -320,17 +327,20 @@ class CalibrationScale:
 
     def multiplier(self, coverage: float) -> float:
         """Half-width of the interval in units of a run's 1-sigma: ``t_{n_used - 1}((1 + coverage)/2) c``."""
-        return float(stats.t.ppf(0.5 + coverage / 2.0, self.n_used - 1) * self.scale)
+        from scipy.special import stdtrit  # the Student-t quantile, scipy.stats.t.ppf's
+
+        return float(stdtrit(self.n_used - 1, 0.5 + coverage / 2.0) * self.scale)
 
 
 def _huber_scale(z: np.ndarray) -> float:
     """Huber's proposal-2 scale of ``z`` about 0 (module docstring), by fixed-point iteration from the rms."""
     z2 = z**2
+    beta = _huber_beta()
     c2 = float(np.mean(z2))
     if c2 == 0.0:
         return 0.0
     for _ in range(200):
-        new = float(np.mean(np.minimum(z2, HUBER_K**2 * c2)) / _HUBER_BETA)
+        new = float(np.mean(np.minimum(z2, HUBER_K**2 * c2)) / beta)
         if abs(new - c2) <= 1e-12 * c2:
             c2 = new
             break
@@ -342,6 +352,8 @@ def calibration_scale(scores, *, inflation: float = 1.0) -> CalibrationScale:
     """The robust scale of out-of-sample ``scores`` (dimensionless, signed) with wild ones left out (module
     docstring); ``inflation`` multiplies it (the model's correction for tuning on the same residuals). Needs at
     least 3 finite scores."""
+    from scipy.special import stdtr
+
     z = np.asarray(scores, float).ravel()
     if z.size < 3 or not np.all(np.isfinite(z)):
         raise InputError(f"the interval's calibration needs at least 3 finite scores, got {z.size}")
@@ -354,7 +366,7 @@ def calibration_scale(scores, *, inflation: float = 1.0) -> CalibrationScale:
         rms_others = math.sqrt(float(np.mean(others**2)))
         if rms_others == 0.0:
             break
-        p = 2.0 * float(stats.t.sf(abs(z[i]) / rms_others, m - 1))
+        p = 2.0 * float(stdtr(m - 1, -abs(z[i]) / rms_others))  # the t survival function (scipy.stats.t.sf's)
         if p >= OUTLIER_ALPHA / m:
             break
         kept[i] = False

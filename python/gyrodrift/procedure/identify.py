@@ -39,14 +39,15 @@ from __future__ import annotations
 
 import math
 import os
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from gyrodrift.drift_law import DriftLaw
 from gyrodrift.learn.baselines import physics_inversion
-from gyrodrift.learn.drift_model import DriftModel
 from gyrodrift.learn.fleet_prior import posterior_with_coefficient_prior
 from gyrodrift.learn.interval import min_runs_for_coverage
+from gyrodrift.learn.predictor import DriftPredictor
 from gyrodrift.logs import ImuLog
 from gyrodrift.procedure.features import extract_features, features_run_table
 from gyrodrift.procedure.noise import SensorNoise
@@ -54,6 +55,9 @@ from gyrodrift.procedure.plan import mission_outlook
 from gyrodrift.procedure.results import Identification, RunFeatures
 from gyrodrift.procedure.timeline import DEFAULT_TIMELINE, Timeline
 from gyrodrift.runs.table import drift_range_problems
+
+if TYPE_CHECKING:
+    from gyrodrift.learn.drift_model import DriftModel
 
 __all__ = [
     "identify",
@@ -76,7 +80,7 @@ INTERVAL_NOTE = (
 )
 
 
-def _training_error(model: DriftModel) -> tuple[float | None, str | None]:
+def _training_error(model: DriftModel | DriftPredictor) -> tuple[float | None, str | None]:
     try:
         return float(np.mean(np.abs(model.loo_residuals()))), "loo_mae"
     except AttributeError:  # loaded from a file without residuals: no Cholesky factor kept
@@ -86,7 +90,7 @@ def _training_error(model: DriftModel) -> tuple[float | None, str | None]:
     return None, None
 
 
-def model_physics_column(model: DriftModel) -> str | None:
+def model_physics_column(model: DriftModel | DriftPredictor) -> str | None:
     """The physics base a fitted model adds its output to (its resolved ``physics_column_``, else the option
     ``physics_column``), or None when it is fitted on the drift itself (``target="drift"``)."""
     if model.target != "residual":
@@ -115,7 +119,7 @@ def fleet_posterior(features: RunFeatures, prior: tuple[float, float]) -> tuple:
 
 
 def identified_law(
-    model: DriftModel, table, features: RunFeatures, drift_deg_h: float, fleet: tuple | None
+    model: DriftModel | DriftPredictor, table, features: RunFeatures, drift_deg_h: float, fleet: tuple | None
 ) -> DriftLaw:
     """The drift law of the run (module docstring, "The drift law"): eps_ref the identified drift `drift_deg_h`
     [deg/h] at T_ref the temperature at the end of the features window (``features.temp_end_c``, the smoother's
@@ -149,7 +153,7 @@ def identified_law(
 
 def identify(
     log: ImuLog,
-    model: DriftModel | str | os.PathLike[str],
+    model: DriftModel | DriftPredictor | str | os.PathLike[str],
     *,
     timeline: Timeline = DEFAULT_TIMELINE,
     lat0_deg: float | None = None,
@@ -165,8 +169,9 @@ def identify(
     ----------
     log : ImuLog
         Opened log with a known site, at least ``align_h + features_h`` (16 h) long.
-    model : DriftModel or path
-        A fitted model or its JSON file (`gyrodrift.learn.model_io.load_model`).
+    model : DriftModel, DriftPredictor or path
+        A fitted model, its predictor, or its JSON file (read without scikit-learn:
+        `gyrodrift.learn.model_io.load_predictor`).
     timeline, lat0_deg, chunk_samples, quiet
         As in `extract_features`.
     features : RunFeatures, optional
@@ -180,10 +185,10 @@ def identify(
     -------
     Identification
     """
-    if not isinstance(model, DriftModel):
-        from gyrodrift.learn.model_io import load_model
+    if isinstance(model, (str, os.PathLike)):
+        from gyrodrift.learn.model_io import load_predictor
 
-        model = load_model(model)
+        model = load_predictor(model)
     if features is None:
         features = extract_features(
             log, timeline=timeline, lat0_deg=lat0_deg, noise=noise, chunk_samples=chunk_samples, quiet=quiet
