@@ -406,6 +406,9 @@ def label_sigma(
     gyro_correlation_s: float = ...,
     gyro_rrw_rad_s_rts: float = ...,
     rrw_start_s: float = ...,
+    alignment: SimulatorConfig | None = ...,
+    alignment_end_s: float = ...,
+    coarse_s: float = ...,
 ) -> dict[str, Any]: ...
 def drift_std_curve(
     smoother_config: SmootherConfig,

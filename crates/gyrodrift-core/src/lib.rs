@@ -12,6 +12,8 @@
 //! - [`strapdown`]: the strapdown navigator (coning/sculling, velocity, position, attitude).
 //! - [`coarse_alignment`], [`kalman`], [`alignment`]: the static-base alignment (coarse, 12-state filter, driver).
 //! - [`smoother`]: forward filter + RTS smoother over a whole static log (the axial drift with its 1-sigma).
+//! - [`aligner_covariance`]: the fine aligner as a filter by covariance alone (its true error covariance under a
+//!   given noise), shared by [`label`] and [`plan`].
 //! - [`label`]: covariance analysis of the true-drift label (a free navigation with the smoother's error model).
 //! - [`plan`]: covariance analysis for planning an identification (the smoother's drift 1-sigma against the span,
 //!   the position error of a mission), with no IMU samples.
@@ -23,6 +25,7 @@
 //! Frames: navigation frame local-level East-North-Up (ENU); body frame Right-Forward-Up.
 //! Units: SI everywhere inside the crate (rad, rad/s, m, m/s, s).
 
+pub mod aligner_covariance;
 pub mod alignment;
 pub mod attitude;
 pub mod coarse_alignment;

@@ -20,8 +20,9 @@
 //! filters run, and after the alignment the same noise drives the smoother's error and the mission's. The aligner
 //! is taken as the filter it is (`aligner`: its prior, noise model, 1 s zero-velocity updates, from the end of the
 //! coarse span to the mission's start) on the smoother's error model, and the truth as the smoother's model with
-//! the given noise and the aligner's prior (the navigation-grade biases, which the smoother's wide prior bounds).
-//! Carried jointly, every aligner step (x~ the errors, true minus estimate, K the filters' own gains):
+//! the given noise and the aligner's prior (the navigation-grade biases, which the smoother's wide prior bounds);
+//! the aligner's pass is [`crate::aligner_covariance`]'s, which the label's sigma shares. Carried jointly, every
+//! aligner step (x~ the errors, true minus estimate, K the filters' own gains):
 //!
 //! - the aligner's true error covariance A <- (I - K_a H_a)(Phi A Phi' + Q)(I - K_a H_a)' + K_a R K_a' (R the
 //!   truth's zero-velocity noise, the smoother's; the aligner's gain is from its own Riccati pass);
@@ -42,14 +43,15 @@
 //! table and left out). With an identified drift of 1-sigma s, the error after compensation is the Gaussian with
 //! covariance `pos_cov + alignment_cov + s^2 g g' + g c' + c g'`, c the `cross` of [`drift_std_curve`].
 
-use crate::attitude::{euler_to_dcm, mat_mul, rot_z, Euler, Mat3};
+use crate::aligner_covariance::{aligner_on_smoother_model, navigation_start_selector, AlignerPass, TableAttitude};
+use crate::attitude::{Euler, Mat3};
 use crate::error::{check, CoreError};
 use crate::filter_prior::FilterSettings;
-use crate::kalman::{DV, EPS, PHI};
+use crate::kalman::EPS;
 use crate::label::FreeNavigation;
 use crate::smoother::model::{initial_sigma, measurement_model, symmetrise, Model};
 use crate::smoother::{SmootherConfig, POS};
-use crate::turntable::{RotationScheme, Turntable};
+use crate::turntable::RotationScheme;
 use nalgebra::{DMatrix, DVector};
 
 /// Settings of [`drift_std_curve`] (SI).
@@ -86,70 +88,6 @@ pub struct DriftCurve {
     pub alignment_cov: [[f64; 2]; 2],
 }
 
-/// The aligner's own Riccati pass and the true covariances it carries (module docs).
-struct AlignerPass {
-    /// Its own covariance (for its gain), its true error covariance, and E[x~_s x~_a'].
-    own: DMatrix<f64>,
-    truth: DMatrix<f64>,
-    joint: DMatrix<f64>,
-    /// Its zero-velocity measurement matrix and noise, the truth's zero-velocity noise.
-    h: DMatrix<f64>,
-    r_own: DMatrix<f64>,
-    r_true: DMatrix<f64>,
-    model: Model,
-    /// E[x~_a (a'x~_s)] of the spans taken before the mission's start (index, vector).
-    pending: Vec<(usize, DVector<f64>)>,
-}
-
-impl AlignerPass {
-    /// One aligner step of `dt` \[s\] with the mean attitude `c` (`truth`: the true model's Phi and Q).
-    fn step(&mut self, c: &Mat3, dt: f64, truth: &Model) -> Result<(), CoreError> {
-        let (phi, q) = truth.discretise(c, 0.0, dt);
-        let (_, q_own) = self.model.discretise(c, 0.0, dt);
-        let own = symmetrise(&phi * &self.own * phi.transpose() + q_own);
-        let s_inv = (&self.h * &own * self.h.transpose() + &self.r_own)
-            .try_inverse()
-            .ok_or(CoreError::Setting {
-                key: "aligner",
-                message: "the aligner's innovation covariance is singular".to_string(),
-            })?;
-        let gain = &own * self.h.transpose() * s_inv;
-        let i_kh = DMatrix::<f64>::identity(own.nrows(), own.ncols()) - &gain * &self.h;
-        self.own = symmetrise(&i_kh * &own * i_kh.transpose() + &gain * &self.r_own * gain.transpose());
-        let truth_pred = &phi * &self.truth * phi.transpose() + &q;
-        self.truth = symmetrise(&i_kh * truth_pred * i_kh.transpose() + &gain * &self.r_true * gain.transpose());
-        self.joint = (&phi * &self.joint * phi.transpose() + &q) * i_kh.transpose();
-        let carry = &i_kh * &phi;
-        for (_, u) in self.pending.iter_mut() {
-            *u = &carry * &*u;
-        }
-        Ok(())
-    }
-}
-
-/// The aligner's settings on the smoother's model (the same site, rate and slow-bias states).
-fn aligner_on_smoother_model(sc: &SmootherConfig, al: &FilterSettings) -> SmootherConfig {
-    SmootherConfig {
-        update_s: al.update_s,
-        att_sigma: al.att_sigma,
-        gyro_bias_sigma: al.gyro_bias_sigma,
-        accel_bias_sigma: al.accel_bias_sigma,
-        gyro_arw: al.gyro_arw,
-        accel_vrw: al.accel_vrw,
-        zupt_sigma: al.zupt_sigma,
-        ..sc.clone()
-    }
-}
-
-/// The selector of the aligner's leftovers the mission starts from (attitude and velocity).
-fn mission_start_selector(n: usize) -> DMatrix<f64> {
-    let mut e = DMatrix::zeros(n, n);
-    for i in (PHI..PHI + 3).chain(DV..DV + 3) {
-        e[(i, i)] = 1.0;
-    }
-    e
-}
-
 /// The free (no measurement) transition of the mission's error over `t` \[s\] (level body).
 fn free_transition(model: &Model, t: f64) -> DMatrix<f64> {
     let level: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
@@ -183,7 +121,7 @@ pub fn drift_std_curve(cfg: &PlanConfig) -> Result<DriftCurve, CoreError> {
             cfg.aligner.coarse_s, sc.coarse_s
         ),
     )?;
-    let table = Turntable::new(cfg.scheme.clone())?;
+    let attitude = TableAttitude::new(&cfg.scheme, cfg.attitude, sc.rate_hz)?;
     let rate = sc.rate_hz;
     let n_coarse = (sc.coarse_s * rate).round() as u64;
     let n_update = ((sc.update_s * rate).round() as u64).max(1);
@@ -214,30 +152,20 @@ pub fn drift_std_curve(cfg: &PlanConfig) -> Result<DriftCurve, CoreError> {
     )?;
     let model = Model::new(sc);
     let n = model.n;
-    let c0 = euler_to_dcm(cfg.attitude);
     let (h, r) = measurement_model(sc, n);
     let mut p = DMatrix::from_diagonal(&DVector::from_iterator(
         n,
         initial_sigma(sc, n_coarse as f64 / rate).iter().map(|s| s * s),
     ));
-    // The aligner on the smoother's model (its prior, noise and update interval; the same slow-bias states).
-    let al = &cfg.aligner;
-    let acfg = aligner_on_smoother_model(sc, al);
+    // The aligner on the smoother's model (its prior, noise and update interval; the same slow-bias states), the
+    // truth from its prior.
+    let coarse_end_s = n_coarse as f64 / rate;
+    let acfg = aligner_on_smoother_model(sc, &cfg.aligner);
     let prior = DMatrix::from_diagonal(&DVector::from_iterator(
         n,
-        initial_sigma(&acfg, n_coarse as f64 / rate).iter().map(|s| s * s),
+        initial_sigma(&acfg, coarse_end_s).iter().map(|s| s * s),
     ));
-    let h_zupt = h.rows(0, 3).into_owned();
-    let mut aligner = AlignerPass {
-        own: prior.clone(),
-        truth: prior.clone(),
-        joint: prior,
-        r_own: DMatrix::from_diagonal_element(3, 3, al.zupt_sigma * al.zupt_sigma),
-        r_true: r.view((0, 0), (3, 3)).into_owned(),
-        h: h_zupt,
-        model: Model::new(&acfg),
-        pending: Vec::new(),
-    };
+    let mut aligner = AlignerPass::new(sc, &cfg.aligner, coarse_end_s, prior)?;
     // The mission starts at the smoother's update nearest to `mission_start_s` (the update grid's k).
     let k_start =
         n_coarse + ((cfg.mission_start_s * rate - n_coarse as f64) / n_update as f64).round() as u64 * n_update;
@@ -249,7 +177,7 @@ pub fn drift_std_curve(cfg: &PlanConfig) -> Result<DriftCurve, CoreError> {
         a[first + 2] = 1.0;
     }
     let identity = DMatrix::<f64>::identity(n, n);
-    let select = mission_start_selector(n);
+    let select = navigation_start_selector(n);
     // E[x~_s y'] once the mission runs (module docs).
     let mut cross: Option<DMatrix<f64>> = None;
     let whole_mission = free_transition(&model, cfg.mission_s);
@@ -258,33 +186,15 @@ pub fn drift_std_curve(cfg: &PlanConfig) -> Result<DriftCurve, CoreError> {
         cross: vec![[0.0; 2]; cfg.spans_s.len()],
         alignment_cov: [[0.0; 2]; 2],
     };
-    let mean_attitude = |from: u64, to: u64| -> Mat3 {
-        let mut c_sum: Mat3 = [[0.0; 3]; 3];
-        for j in from + 1..=to {
-            let c = mat_mul(&c0, &rot_z(table.angle(j as f64 / rate)));
-            for (s_row, c_row) in c_sum.iter_mut().zip(c) {
-                for (s, x) in s_row.iter_mut().zip(c_row) {
-                    *s += x;
-                }
-            }
-        }
-        let m = (to - from) as f64;
-        std::array::from_fn(|i| std::array::from_fn(|j| c_sum[i][j] / m))
-    };
     let mut k = n_coarse;
     let mut next_span = 0;
     while next_span < cfg.spans_s.len() || k < k_start {
         // The aligner's steps over this interval while the alignment runs.
         if k < k_start {
-            let mut j = k;
-            while j < k + n_update {
-                let to = (j + n_align_update).min(k + n_update);
-                aligner.step(&mean_attitude(j, to), (to - j) as f64 / rate, &model)?;
-                j = to;
-            }
+            aligner.advance(&attitude, k, k + n_update, n_align_update, &model)?;
         }
         // One smoother update interval: the mean attitude over its samples (each at the end of its sample).
-        let (phi, q) = model.discretise(&mean_attitude(k, k + n_update), 0.0, n_update as f64 / rate);
+        let (phi, q) = model.discretise(&attitude.mean(k, k + n_update), 0.0, n_update as f64 / rate);
         k += n_update;
         p = symmetrise(&phi * &p * phi.transpose() + &q);
         if let Some(c) = cross.as_mut() {
@@ -388,9 +298,11 @@ pub fn mission_covariance(cfg: &FreeNavigation) -> Result<MissionCovariance, Cor
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::attitude::{euler_to_dcm, mat_mul, rot_z};
     use crate::earth::OMEGA_IE;
     use crate::smoother::Smoother;
     use crate::turntable::scheme_from_settings;
+    use crate::turntable::Turntable;
     use crate::units::{DEG_PER_H, HOUR};
 
     fn plan_config(lat_deg: f64, spans_h: &[f64]) -> PlanConfig {
@@ -505,7 +417,7 @@ mod tests {
                 kalman(&mut pa, &mut xa, z, &hv, &ra);
             }
             if k == start {
-                y = Some(mission_start_selector(n) * (&x - &xa));
+                y = Some(navigation_start_selector(n) * (&x - &xa));
             }
             if (k - coarse) % 10 == 0 {
                 let mut cm: Mat3 = [[0.0; 3]; 3];

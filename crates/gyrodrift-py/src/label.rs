@@ -2,7 +2,10 @@
 //! `_core.mission_covariance` share, converted once) and `_core.label_sigma`. It converts types and releases the
 //! GIL, nothing else.
 
+use super::config::SimulatorConfig;
 use super::core_err;
+use gyrodrift_core::aligner_covariance::FineAlignment;
+use gyrodrift_core::filter_prior::FilterSettings;
 use gyrodrift_core::label::{label_sigma as core_label_sigma, FreeNavigation, LabelConfig};
 use numpy::PyArray1;
 use pyo3::prelude::*;
@@ -54,10 +57,15 @@ impl FreeNavigationConfig {
 /// 1-sigma of the true-drift label (gyrodrift-core `label::label_sigma`) after the free `navigation` (its
 /// `step_s` the interval of the error curves): returns a dict with `drift_std_rad_s`, `sensitivity_m_per_rad_s`
 /// and `pos_std_m` (north, east at the end). The z gyro's Gauss-Markov bias and rate random walk (`rrw_start_s`:
-/// how long it has walked when the navigation starts) default to none.
+/// how long it has walked when the navigation starts) default to none. `alignment` (the run's sample rate, table
+/// scheme and attitude at table angle zero) with `alignment_end_s` and `coarse_s`: the navigation starts from the
+/// procedure's fine aligner's noise-driven leftovers (`FilterSettings::aligner` after that coarse span); None:
+/// they are left out.
 #[pyfunction]
 #[pyo3(signature = (navigation, *, rms, gyro_bias_instability_rad_s=0.0, gyro_correlation_s=3600.0,
-                    gyro_rrw_rad_s_rts=0.0, rrw_start_s=0.0))]
+                    gyro_rrw_rad_s_rts=0.0, rrw_start_s=0.0, alignment=None, alignment_end_s=14_400.0,
+                    coarse_s=300.0))]
+#[allow(clippy::too_many_arguments)]
 pub fn label_sigma<'py>(
     py: Python<'py>,
     navigation: &FreeNavigationConfig,
@@ -66,6 +74,9 @@ pub fn label_sigma<'py>(
     gyro_correlation_s: f64,
     gyro_rrw_rad_s_rts: f64,
     rrw_start_s: f64,
+    alignment: Option<&SimulatorConfig>,
+    alignment_end_s: f64,
+    coarse_s: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
     let cfg = LabelConfig {
         navigation: navigation.inner.clone(),
@@ -74,6 +85,16 @@ pub fn label_sigma<'py>(
         gyro_correlation: gyro_correlation_s,
         gyro_rrw: gyro_rrw_rad_s_rts,
         rrw_start_s,
+        alignment: alignment.map(|sim| FineAlignment {
+            rate_hz: sim.inner.rate_hz,
+            scheme: sim.inner.scheme.clone(),
+            attitude: sim.inner.attitude,
+            filter: FilterSettings {
+                coarse_s,
+                ..FilterSettings::aligner()
+            },
+            end_s: alignment_end_s,
+        }),
     };
     let r = py.detach(|| core_label_sigma(&cfg)).map_err(core_err)?;
     let d = PyDict::new(py);

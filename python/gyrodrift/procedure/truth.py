@@ -35,11 +35,14 @@ navigation with the core's error model (`_core.label_sigma`, gyrodrift-core ``la
 velocity and north/east position errors driven by ARW and VRW over the navigation, and by the z gyro's
 Gauss-Markov bias instability and rate random walk when the noise model has them (`SensorNoise`; a noise measured
 from the log has none): d* follows their weighted average over the span, which the run's noise-free twin lacks;
-the x/y ones are modulated by the table and left out; the alignment's errors are left out: they are the same
-in the run and in its noise-free twin but for their noise-driven part, whose effect on the position error nearly
-returns to zero after whole days (72 h) but not after 8 h, where the sigma is 1.4-2 times optimistic
-(docs/studies/2026-11-27-label-sigma.md); with the
-alignment's whole attitude 1-sigma the ``rms`` sigma came out 1.4 times the observed spread). What it describes is
+the x/y ones are modulated by the table and left out; and by the noise-driven part of the alignment's leftover
+attitude and velocity errors (the rest is the same in the run and in its noise-free twin): the core runs the
+procedure's fine aligner as the filter it is, by covariance alone, with the table turning (`alignment_geometry`:
+a simulated log's scenario, else the default scheme with the alignment's attitude; over headings and turning
+schemes the 8 h sigma moves by less than 0.2 %, a table that stands still raises it by 12 %), the planner's pass
+(gyrodrift-core ``aligner_covariance``). Their effect on the position error nearly returns to zero after whole
+days (72 h: the sigma moves by less than 0.1 %) but not after 8 h, where leaving them out made the sigma 1.4-2
+times optimistic (docs/studies/2026-11-27-label-sigma.md). What it describes is
 the label minus that of the run's noise-free twin, linear in the noise and blind to the run's deterministic errors
 (the drift's temperature law, the biases):
 ``final``: ``var = g' Cov(e(T)) g / |g|^4`` with g the position response to the drift at hour 72 and e the
@@ -61,6 +64,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from gyrodrift.earth import NMI_M
+from gyrodrift.ins.scenario import Scenario
 from gyrodrift.logs import ImuLog
 from gyrodrift.procedure.align import align_log
 from gyrodrift.procedure.noise import SensorNoise, estimate_white_noise
@@ -77,6 +81,7 @@ __all__ = [
     "minimise_linear_criterion",
     "label_sigma_deg_h",
     "label_budget_deg_h",
+    "alignment_geometry",
 ]
 
 CRITERIA = ("final", "rms", "max")
@@ -130,11 +135,15 @@ def label_sigma_deg_h(
     att_std_arcsec: tuple[float, float, float] = (0.0, 0.0, 0.0),
     decimation_s: float = 60.0,
     align_h: float = DEFAULT_TIMELINE.align_h,
+    coarse_s: float = DEFAULT_TIMELINE.coarse_s,
+    geometry: Scenario | None = None,
 ) -> tuple[float, float]:
     """(1-sigma of the label [deg/h], sensitivity of the final position error [nmi per deg/h]) from the core's
     covariance analysis (module docstring) at latitude `lat_deg` with the noise's ARW and VRW, and its z-gyro bias
     instability and rate random walk if it has them (the rate random walk has walked `align_h` hours when the
-    navigation starts)."""
+    navigation starts). With `geometry` (the run's sample rate, rotation scheme and attitude at table angle zero,
+    `alignment_geometry`) the navigation starts from the noise-driven leftovers of the procedure's fine aligner
+    (`coarse_s` [s] of coarse alignment, the fine one to `align_h` [h]); None leaves them out."""
     from gyrodrift import _core
 
     if criterion not in CRITERIA:
@@ -156,6 +165,9 @@ def label_sigma_deg_h(
         gyro_correlation_s=float(noise.correlation_s),
         gyro_rrw_rad_s_rts=noise.rrw_deg_h_rth * DEG_PER_H / math.sqrt(HOUR),
         rrw_start_s=float(align_h) * HOUR,
+        alignment=None if geometry is None else geometry.to_core_config(),
+        alignment_end_s=float(align_h) * HOUR,
+        coarse_s=float(coarse_s),
     )
     return float(r["drift_std_rad_s"]) / DEG_PER_H, float(r["sensitivity_m_per_rad_s"]) * DEG_PER_H / NMI_M
 
@@ -165,6 +177,26 @@ def label_budget_deg_h(hours: float = 72.0, decimation_s: float = 60.0) -> float
     latitude (the 1 nmi / 72 h budget where a label is best; the core's error model: 4.6e-4 deg/h for 72 h)."""
     _, sensitivity = label_sigma_deg_h(45.0, SensorNoise(), hours=hours, decimation_s=decimation_s)
     return 1.0 / sensitivity
+
+
+def alignment_geometry(log: ImuLog, alignment: Alignment) -> Scenario:
+    """The run's sample rate, rotation scheme and IMU attitude at table angle zero for the alignment's leftovers in
+    the label's sigma: a simulated log's scenario; a recorded one's, the default scheme (reciprocating) with the
+    alignment's attitude (module docstring: the sigma hardly depends on them while the table turns)."""
+    if log.scenario is not None:
+        return log.scenario
+    site = alignment.site
+    return Scenario.from_dict(
+        {
+            "site": {"lat_deg": site.lat_deg, "lon_deg": site.lon_deg, "height_m": site.height_m},
+            "run": {"rate_hz": float(log.rate_hz)},
+            "attitude": {
+                "pitch_deg": alignment.pitch_deg,
+                "roll_deg": alignment.roll_deg,
+                "yaw_deg": alignment.yaw_deg,
+            },
+        }
+    )
 
 
 def find_true_drift(
@@ -341,6 +373,8 @@ def find_true_drift(
         height_m=float(alignment.site.height_m),
         decimation_s=decimation_s,
         align_h=timeline.align_h,
+        coarse_s=timeline.coarse_s,
+        geometry=alignment_geometry(log, alignment),
     )
     best_law = None
     if law_model is not None:

@@ -1,0 +1,187 @@
+//! The fine aligner as the filter it is, by covariance alone (no IMU samples): its own Riccati pass (its prior,
+//! noise model and zero-velocity updates on the smoother's error model) and the true covariance of its errors
+//! under another noise, with the table turning. Shared by the planner (`plan::drift_std_curve`, which carries it
+//! beside the smoother) and the label's sigma (`label::label_sigma`, the noise-driven leftovers the navigation
+//! starts from).
+//!
+//! Every aligner step of `dt` with the mean attitude of its samples (x~ the errors, true minus estimate, K the
+//! aligner's gain from its own pass, Phi and Q the truth's):
+//!
+//! - its own covariance P <- (I - K H)(Phi P Phi' + Q_own)(I - K H)' + K R_own K';
+//! - its true error covariance A <- (I - K H)(Phi A Phi' + Q)(I - K H)' + K R K' (R the truth's zero-velocity
+//!   noise);
+//! - J = E[x_o x~'] <- (Phi J Phi' + Q)(I - K H)', x_o another error driven by the same noise with the same
+//!   transition (the smoother's, which applies its own updates to J; or the true state itself, no updates);
+//! - vectors u = E[x~ v] carried with the aligner's error (no new shared noise): u <- (I - K H) Phi u.
+
+use crate::attitude::{euler_to_dcm, mat_mul, rot_z, Euler, Mat3};
+use crate::error::{check, CoreError};
+use crate::filter_prior::FilterSettings;
+use crate::kalman::{DV, PHI};
+use crate::smoother::model::{initial_sigma, measurement_model, symmetrise, Model};
+use crate::smoother::SmootherConfig;
+use crate::turntable::{RotationScheme, Turntable};
+use nalgebra::{DMatrix, DVector};
+
+/// The fine alignment a navigation starts from (SI): the log's sample rate, the table's rotation scheme and the
+/// IMU's attitude at table angle zero, the aligner's filter settings (coarse span, update interval, prior, noise
+/// model, zero-velocity sigma: the procedure's are [`FilterSettings::aligner`]) and its end from the first
+/// sample \[s\] (coarse plus fine span, 4 h).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FineAlignment {
+    pub rate_hz: f64,
+    pub scheme: RotationScheme,
+    pub attitude: Euler,
+    pub filter: FilterSettings,
+    pub end_s: f64,
+}
+
+/// The body-to-nav attitude of the simulator's geometry, C_b^n(t) = C_b0^n Rz(alpha(t)), alpha the table angle.
+pub(crate) struct TableAttitude {
+    c0: Mat3,
+    table: Turntable,
+    rate: f64,
+}
+
+impl TableAttitude {
+    pub(crate) fn new(scheme: &RotationScheme, attitude: Euler, rate_hz: f64) -> Result<Self, CoreError> {
+        Ok(TableAttitude {
+            c0: euler_to_dcm(attitude),
+            table: Turntable::new(scheme.clone())?,
+            rate: rate_hz,
+        })
+    }
+
+    /// The mean C_b^n over samples `from + 1 ..= to` (each at the end of its sample).
+    pub(crate) fn mean(&self, from: u64, to: u64) -> Mat3 {
+        let mut c_sum: Mat3 = [[0.0; 3]; 3];
+        for j in from + 1..=to {
+            let c = mat_mul(&self.c0, &rot_z(self.table.angle(j as f64 / self.rate)));
+            for (s_row, c_row) in c_sum.iter_mut().zip(c) {
+                for (s, x) in s_row.iter_mut().zip(c_row) {
+                    *s += x;
+                }
+            }
+        }
+        let m = (to - from) as f64;
+        std::array::from_fn(|i| std::array::from_fn(|j| c_sum[i][j] / m))
+    }
+}
+
+/// The aligner's settings on the smoother's model (the same site, rate and slow-bias states).
+pub(crate) fn aligner_on_smoother_model(sc: &SmootherConfig, al: &FilterSettings) -> SmootherConfig {
+    SmootherConfig {
+        coarse_s: al.coarse_s,
+        update_s: al.update_s,
+        att_sigma: al.att_sigma,
+        gyro_bias_sigma: al.gyro_bias_sigma,
+        accel_bias_sigma: al.accel_bias_sigma,
+        gyro_arw: al.gyro_arw,
+        accel_vrw: al.accel_vrw,
+        zupt_sigma: al.zupt_sigma,
+        ..sc.clone()
+    }
+}
+
+/// The selector of the aligner's leftovers a navigation starts from (attitude and velocity; the horizontal sensor
+/// biases it leaves are modulated away by the table).
+pub(crate) fn navigation_start_selector(n: usize) -> DMatrix<f64> {
+    let mut e = DMatrix::zeros(n, n);
+    for i in (PHI..PHI + 3).chain(DV..DV + 3) {
+        e[(i, i)] = 1.0;
+    }
+    e
+}
+
+/// The aligner's own Riccati pass and the true covariances it carries (module docs).
+pub(crate) struct AlignerPass {
+    /// Its own covariance (for its gain), its true error covariance A, and J = E[x_o x~'].
+    own: DMatrix<f64>,
+    pub(crate) truth: DMatrix<f64>,
+    pub(crate) joint: DMatrix<f64>,
+    /// Its zero-velocity measurement matrix and noise, the truth's zero-velocity noise.
+    h: DMatrix<f64>,
+    r_own: DMatrix<f64>,
+    r_true: DMatrix<f64>,
+    model: Model,
+    /// Vectors E[x~ v] carried with the aligner's error (the caller's index, vector).
+    pub(crate) pending: Vec<(usize, DVector<f64>)>,
+}
+
+impl AlignerPass {
+    /// The aligner of `al` on the model of `sc` (the truth's: site, slow-bias states, zero-velocity noise), from
+    /// its prior at the end of the coarse span `coarse_end_s` \[s\]; A and J start at `start`.
+    pub(crate) fn new(
+        sc: &SmootherConfig,
+        al: &FilterSettings,
+        coarse_end_s: f64,
+        start: DMatrix<f64>,
+    ) -> Result<Self, CoreError> {
+        let acfg = aligner_on_smoother_model(sc, al);
+        let model = Model::new(&acfg);
+        let n = model.n;
+        check(
+            start.nrows() == n && start.ncols() == n,
+            "aligner",
+            "the aligner's starting covariance does not fit the error model",
+        )?;
+        let own = DMatrix::from_diagonal(&DVector::from_iterator(
+            n,
+            initial_sigma(&acfg, coarse_end_s).iter().map(|s| s * s),
+        ));
+        let (h, r) = measurement_model(sc, n);
+        Ok(AlignerPass {
+            own,
+            truth: start.clone(),
+            joint: start,
+            h: h.rows(0, 3).into_owned(),
+            r_own: DMatrix::from_diagonal_element(3, 3, al.zupt_sigma * al.zupt_sigma),
+            r_true: r.view((0, 0), (3, 3)).into_owned(),
+            model,
+            pending: Vec::new(),
+        })
+    }
+
+    /// One aligner step of `dt` \[s\] with the mean attitude `c` (`truth`: the true model's Phi and Q).
+    fn step(&mut self, c: &Mat3, dt: f64, truth: &Model) -> Result<(), CoreError> {
+        let (phi, q) = truth.discretise(c, 0.0, dt);
+        let (_, q_own) = self.model.discretise(c, 0.0, dt);
+        let own = symmetrise(&phi * &self.own * phi.transpose() + q_own);
+        let s_inv = (&self.h * &own * self.h.transpose() + &self.r_own)
+            .try_inverse()
+            .ok_or(CoreError::Setting {
+                key: "aligner",
+                message: "the aligner's innovation covariance is singular".to_string(),
+            })?;
+        let gain = &own * self.h.transpose() * s_inv;
+        let i_kh = DMatrix::<f64>::identity(own.nrows(), own.ncols()) - &gain * &self.h;
+        self.own = symmetrise(&i_kh * &own * i_kh.transpose() + &gain * &self.r_own * gain.transpose());
+        let truth_pred = &phi * &self.truth * phi.transpose() + &q;
+        self.truth = symmetrise(&i_kh * truth_pred * i_kh.transpose() + &gain * &self.r_true * gain.transpose());
+        self.joint = (&phi * &self.joint * phi.transpose() + &q) * i_kh.transpose();
+        let carry = &i_kh * &phi;
+        for (_, u) in self.pending.iter_mut() {
+            *u = &carry * &*u;
+        }
+        Ok(())
+    }
+
+    /// The aligner's steps over samples `from + 1 ..= to`, one per `per_update` samples (the last may be shorter),
+    /// each with the mean attitude of its samples.
+    pub(crate) fn advance(
+        &mut self,
+        attitude: &TableAttitude,
+        from: u64,
+        to: u64,
+        per_update: u64,
+        truth: &Model,
+    ) -> Result<(), CoreError> {
+        let mut j = from;
+        while j < to {
+            let end = (j + per_update).min(to);
+            self.step(&attitude.mean(j, end), (end - j) as f64 / attitude.rate, truth)?;
+            j = end;
+        }
+        Ok(())
+    }
+}
