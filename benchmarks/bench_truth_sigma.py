@@ -23,7 +23,8 @@ told the noise model (``--noise given`` implied: a log's first hour does not mea
 against the white-noise-only sigma (what `truth` reported before it took these terms).
 
 ``--twin-alignment``: every noisy run is navigated from its twin's alignment instead of its own, so the
-alignment's noise-driven errors (which the label's covariance analysis leaves out) play no part.
+alignment's noise-driven errors play no part; its sigma is then the label's without them (`label_sigma_deg_h` from
+the noise `truth` measured, no geometry), the one `truth` reported before it took them.
 
 ``--results FILE``: every truth is appended to FILE (one JSON line) as it is made, and the truths of the same
 settings already there are not made again: a long study can be cut short, its completed seeds summarised by a
@@ -37,7 +38,7 @@ move together); a new set of draws needs other seeds (``--first-seed``) or anoth
 Printed per latitude: the rms of z with its 95 % interval (n rms^2 / s^2 ~ chi-square with n degrees of freedom
 for Gaussian z of scale s: the rms of 60 z-scores has a relative standard error of about 1 / sqrt(2 n) = 9 %),
 the mean z, the observed rms deviation and the mean reported sigma (and its ratio to the sigma of the simulated ARW
-and VRW: how well the log's first hour measures them). Only reports; never fails.
+and VRW on the fixed geometry: how well the log's first hour measures them). Only reports; never fails.
 """
 
 from __future__ import annotations
@@ -138,7 +139,9 @@ def one(task: tuple) -> tuple:
         threads=1,
         noise=told if noise_mode == "given" or not noise else None,
     )
-    return task, t.drift_deg_h, t.drift_std_deg_h
+    if alignment is None:
+        return task, t.drift_deg_h, t.drift_std_deg_h
+    return task, t.drift_deg_h, label_sigma_deg_h(lat, SensorNoise.from_block(t.noise), hours=hours)[0]
 
 
 def recorded(path: Path | None) -> dict:
@@ -213,14 +216,17 @@ def main() -> None:
                 dev_mean.append(d - mean_simulated_drift(s, a.hours))
         z = np.array(dev) / np.array(sig)
         rms, lo, hi = rms_interval(z)
-        simulated = label_sigma_deg_h(lat, SensorNoise(**RLG), hours=a.hours)[0]
+        geometry = (
+            None if a.twin_alignment else scenario(lat, a.first_seed, a.rate_hz, a.hours, noise=True, thermal=False)
+        )
+        simulated = label_sigma_deg_h(lat, SensorNoise(**RLG), hours=a.hours, geometry=geometry)[0]
         print(
             f"  {lat:4.0f} deg: z rms {rms:.3f} (95 % {lo:.2f}-{hi:.2f}), mean z {np.mean(z):+.2f}; observed rms "
             f"{math.sqrt(np.mean(np.square(dev))):.3e}, mean reported sigma {np.mean(sig):.3e} deg/h "
             f"({np.mean(sig) / simulated:.4f} of the simulated white densities' {simulated:.3e})"
         )
         if a.gm_rrw:
-            white = label_sigma_deg_h(lat, SensorNoise(**RLG), hours=a.hours)[0]
+            white = label_sigma_deg_h(lat, SensorNoise(**RLG), hours=a.hours, geometry=geometry)[0]
             rms_w, lo_w, hi_w = rms_interval(np.array(dev) / white)
             print(
                 f"         against the white-noise-only sigma {white:.3e} deg/h: z rms {rms_w:.3f} "
