@@ -1,8 +1,8 @@
 """A campaign on a real dask cluster (issue 18, item 7): a ``dask scheduler`` and two ``dask worker`` processes on
-the loopback address, started by the test from the ``dask`` command line. Killing one worker with SIGKILL
-mid-run, or the client (``gyrodrift campaign --scheduler``) and resuming, leaves every run in the store exactly
-once and no temporary file. Every wait has a deadline and every process started here is killed (its whole
-process group) when the test ends, passed or not."""
+the loopback address, started once for the module from the ``dask`` command line. Killing one worker with
+SIGKILL mid-run, or the client (``gyrodrift campaign --scheduler``) and resuming, leaves every run in the store
+exactly once and no temporary file. Every wait has a deadline and every process started here is killed (its whole
+process group) when the module's tests end, passed or not."""
 
 from __future__ import annotations
 
@@ -71,7 +71,7 @@ def _wait(what: str, ready, procs=(), timeout: float = DEADLINE_S) -> None:
 class Cluster:
     address: str
     workers: list[subprocess.Popen]
-    start: Any  # start(args, log_name) -> Popen, torn down with the cluster
+    start: Any  # start(args, log, stdout=None) -> Popen (log and stdout: file paths), torn down with the cluster
     watcher: Any  # a dask Client of the test's, to see what the scheduler has the workers doing
 
     def worker(self, address: str) -> subprocess.Popen:
@@ -80,26 +80,29 @@ class Cluster:
         return self.workers[int(str(name)[1:])]
 
 
-@pytest.fixture
-def cluster(tmp_path):
+@pytest.fixture(scope="module")
+def cluster(tmp_path_factory):
     """A scheduler on a free loopback port (port 0: the system picks it; the address is read from its scheduler
-    file) and two single-thread workers with no dashboard, each in a local directory under `tmp_path`."""
+    file) and two single-thread workers with no dashboard, each in a local directory of its own. Shared by the
+    module's tests (each cluster start is three interpreters): the worker-kill test leaves one worker, which the
+    client-kill test needs (it only needs the scheduler and a worker to run on)."""
     dask = _dask()
+    tmp_path = tmp_path_factory.mktemp("cluster")
     procs: list[subprocess.Popen] = []
     logs: list[object] = []
     watcher = None
 
-    def start(args: list[str], log_name: str, stdout_name: str | None = None) -> subprocess.Popen:
-        log = open(tmp_path / log_name, "w")  # files, not pipes: dask's logging can never block on them
+    def start(args: list[str], log_path: Path, stdout_path: Path | None = None) -> subprocess.Popen:
+        log = open(log_path, "w")  # files, not pipes: dask's logging can never block on them
         logs.append(log)
         stdout = subprocess.STDOUT
-        if stdout_name is not None:
-            stdout = open(tmp_path / stdout_name, "w")
+        if stdout_path is not None:
+            stdout = open(stdout_path, "w")
             logs.append(stdout)
         proc = subprocess.Popen(
             args,
-            stdout=log if stdout_name is None else stdout,
-            stderr=subprocess.STDOUT if stdout_name is None else log,
+            stdout=log if stdout_path is None else stdout,
+            stderr=subprocess.STDOUT if stdout_path is None else log,
             stdin=subprocess.DEVNULL,
             start_new_session=True,
             env={**os.environ, "DASK_TEMPORARY_DIRECTORY": str(tmp_path / "scratch")},  # not /tmp/dask-scratch-space
@@ -112,7 +115,7 @@ def cluster(tmp_path):
         scheduler = start(
             [dask, "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard"]
             + ["--dashboard-address", "127.0.0.1:0", "--scheduler-file", str(sched_file)],
-            "scheduler.log",
+            tmp_path / "scheduler.log",
         )
 
         def address() -> str | None:
@@ -131,7 +134,7 @@ def cluster(tmp_path):
                 start(
                     [dask, "worker", addr, "--nthreads", "1", "--no-dashboard", "--no-nanny", "--host", "127.0.0.1"]
                     + ["--local-directory", str(tmp_path / f"w{k}"), "--name", f"w{k}", "--death-timeout", "60"],
-                    f"worker{k}.log",
+                    tmp_path / f"worker{k}.log",
                 )
             )
         from dask.distributed import Client
@@ -177,7 +180,7 @@ def _start_campaign(cluster: Cluster, tmp_path: Path) -> tuple[Path, Path, subpr
     """``(campaign file, store, client)``: `CAMPAIGN` started on `cluster`, once its first run is committed."""
     src, out = tmp_path / "c.toml", tmp_path / "out"
     src.write_text(CAMPAIGN)
-    client = cluster.start(_campaign_cmd(src, out, cluster.address), "client.log", "client.json")
+    client = cluster.start(_campaign_cmd(src, out, cluster.address), tmp_path / "client.log", tmp_path / "client.json")
     _wait("the first run committed", lambda: len(_files(out)) >= 1, [(client, tmp_path / "client.log")])
     return src, out, client
 
