@@ -171,3 +171,16 @@ def test_predict_and_export_leave_scikit_learn_unimported(tmp_path, command):
     line = [row for row in done.stderr.splitlines() if row.startswith("LOADED")]
     assert line == ["LOADED []"], done.stderr
     assert (tmp_path / command[command.index("--out") + 1]).exists()
+
+
+def test_the_spread_models_distances_are_cdists_to_the_bit():
+    from scipy.spatial.distance import cdist
+
+    from gyrodrift.learn.spread import scaled_squared_distances
+
+    rng = np.random.default_rng(4)
+    for _ in range(100):
+        d = int(rng.integers(1, 6))
+        A = rng.normal(size=(int(rng.integers(1, 120)), d)) * rng.uniform(0.01, 100.0, d)
+        B = rng.normal(size=(int(rng.integers(1, 40)), d)) * rng.uniform(0.01, 100.0, d)
+        _same(scaled_squared_distances(A, B), cdist(A, B, "sqeuclidean"))
