@@ -28,6 +28,11 @@ stored linear error curves (`gyrodrift.fleet.store.linear_error_nmi`: no navigat
 held-out runs (RMS of the per-run sigmas; each method's RMS is also given as a ratio to it); NaN when the
 campaign has no smoother column.
 
+Drift laws (issue 21, `gyrodrift.fleet.law_study`): the uncompensated run, the hybrid default's constant, the law
+`identify` makes of it (k1 from the smoother's k_z with the hybrid's fleet prior), the offline best constant and the
+offline best law, compared by the 72 h error of the held-out runs (all, with a daily swing, without, and at a
+steady temperature): ``StudyResult.drift_laws``, None (with a note) when the campaign has no k1 curves.
+
 Curves: RMS error vs training-set size (10 .. all training runs, refitting the learned methods on nested
 subsets), vs noise grade, vs site latitude (held-out runs grouped). The figures and the HTML report are in
 `gyrodrift.fleet.study_report`; this module computes numbers only.
@@ -43,6 +48,7 @@ from typing import Any
 import numpy as np
 
 from gyrodrift.errors import InputError, OptionError
+from gyrodrift.fleet.law_study import smoother_posterior_inputs
 from gyrodrift.runs.table import SMOOTHER_THERMAL_COLUMNS
 
 __all__ = ["COVERAGE", "FLEET_ROW", "MethodResult", "StudyResult", "run_study", "split_runs"]
@@ -90,6 +96,7 @@ class StudyResult:
     by_latitude: dict[str, Any]
     test_runs: list[str]
     notes: list[str]
+    drift_laws: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         def num(x):
@@ -120,6 +127,7 @@ class StudyResult:
                 "methods": {
                     n: {"metrics": m.metrics, "note": m.note, "pred_deg_h": m.pred} for n, m in self.methods.items()
                 },
+                "drift_laws": self.drift_laws,
                 "test_runs": self.test_runs,
                 "train_size": self.train_size,
                 "by_grade": self.by_grade,
@@ -167,23 +175,15 @@ def _with_fleet_prior(test_runs, prior: tuple[float, float]) -> tuple[np.ndarray
     """The held-out runs' smoother end drift and 1-sigma [deg/h] re-weighted by the k_z prior ``(mean, std)``."""
     from gyrodrift.learn.fleet_prior import drift_with_coefficient_prior
 
-    coeff, coeff_std, cov, prior_std = (_column(test_runs, c) for c in THERMAL)
-    d, s = drift_with_coefficient_prior(
-        test_runs.numbers("drift_smoother_deg_h"),
-        test_runs.numbers("drift_smoother_std_deg_h"),
-        coeff,
-        coeff_std,
-        cov,
-        prior_std,
-        prior[0],
-        prior[1],
-    )
+    d, s = drift_with_coefficient_prior(*smoother_posterior_inputs(test_runs), prior[0], prior[1])
     return np.atleast_1d(np.asarray(d, float)), np.atleast_1d(np.asarray(s, float))
 
 
 def _fit_learned(name: str, train, *, seed: int, max_iter: int):
-    """A fitted learned method; returns ``(predict, note)``: ``predict(table) -> (pred, lo | None, hi | None)``
-    and what the fit chose that the name does not say (the hybrid's physics base), or ""."""
+    """A fitted learned method; returns ``(predict, note, prior)``: ``predict(table) -> (pred, lo | None, hi |
+    None)``, what the fit chose that the name does not say (the hybrid's physics base), or "", and the model's fleet
+    k_z prior ``(mean, std)`` [deg/h/degC] when its physics base is the fleet one (`identify`'s law takes its k1
+    from it), else None."""
     from sklearn.gaussian_process import GaussianProcessRegressor
     from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
     from sklearn.linear_model import LinearRegression
@@ -221,12 +221,12 @@ def _fit_learned(name: str, train, *, seed: int, max_iter: int):
             if model.coefficient_prior_ is not None:
                 prior = model.coefficient_prior_
                 note += f" (pooled k_z prior {prior[0]:.3e} +- {prior[1]:.3e} deg/h/degC)"
-        return predict, note
+        return predict, note, model.coefficient_prior_
     X = encode(train, "physics")
     y = train.drift_deg_h
     if name == "linear model":
         lin = make_pipeline(StandardScaler(), LinearRegression()).fit(X, y)
-        return (lambda t: (lin.predict(encode(t, "physics")), None, None)), ""
+        return (lambda t: (lin.predict(encode(t, "physics")), None, None)), "", None
     if name == "GP regression":
         scale = float(np.std(y)) or 1e-3
         kernel = ConstantKernel(1.0) * RBF(length_scale=np.ones(X.shape[1])) + WhiteKernel(0.1)
@@ -243,7 +243,7 @@ def _fit_learned(name: str, train, *, seed: int, max_iter: int):
             mean, std = gp.predict(encode(t, "physics"), return_std=True)
             return mean * scale, (mean - Z90 * std) * scale, (mean + Z90 * std) * scale
 
-        return predict_gp, ""
+        return predict_gp, "", None
     raise ValueError(name)
 
 
@@ -311,6 +311,7 @@ def run_study(
             "ran): the smoother row and the physical-limit line are missing"
         )
     methods: dict[str, MethodResult] = {}
+    priors: dict[str, tuple[float, float] | None] = {}
     learned = [
         "CPSO-LSSVM (paper fitness)",
         "CPSO-LSSVM (LOO)",
@@ -323,7 +324,7 @@ def run_study(
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", SearchBoundWarning)
         for name in learned:
-            predict, note = _fit_learned(name, train, seed=seed, max_iter=max_iter)
+            predict, note, priors[name] = _fit_learned(name, train, seed=seed, max_iter=max_iter)
             pred, lo, hi = predict(test)
             methods[name] = MethodResult(name, np.asarray(pred, float), lo, hi, note=note)
     for w in {str(w.message) for w in caught if issubclass(w.category, SearchBoundWarning)}:
@@ -367,6 +368,17 @@ def run_study(
             fleet_metrics["rms_eff"] / fleet_metrics["own_sigma_rms"]
             if fleet_metrics["own_sigma_rms"] > 0
             else math.nan
+        )
+    drift_laws = None
+    k1_curves = test_df.curves is not None and np.any(np.isfinite(test_df.curves["curve_north_per_k1"]))
+    if k1_curves:
+        from gyrodrift.fleet.law_study import compare_laws
+
+        drift_laws = compare_laws(test_df, methods["hybrid default"].pred, priors["hybrid default"], seed=seed)
+    else:
+        notes.append(
+            "no drift-law comparison: the campaign holds no k1 error curves (stored before they existed, or runs "
+            "without a temperature)"
         )
     # --- curves ----------------------------------------------------------------------------------------
     n_train = len(tr_idx)
@@ -434,4 +446,5 @@ def run_study(
         by_latitude=by_lat,
         test_runs=[str(r) for r in test_df["run"]],
         notes=notes,
+        drift_laws=drift_laws,
     )
