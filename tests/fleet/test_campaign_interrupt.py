@@ -66,9 +66,10 @@ def _wait_for(out: Path, n: int, proc: subprocess.Popen, timeout: float = 120.0)
 
 
 def _rerun_completes(src: Path, out: Path, before: dict[str, int], count: int) -> None:
+    """The same command again completes the campaign (on one worker: an interpreter fewer to start)."""
     res = subprocess.run(
         [sys.executable, "-c", "from gyrodrift.cli import main; main()", "campaign", str(src), "--out", str(out)]
-        + ["--workers", "2", "--quiet"],
+        + ["--workers", "1", "--quiet"],
         capture_output=True,
         text=True,
         timeout=300,
