@@ -232,7 +232,8 @@ fn truth_model(cfg: &LabelConfig) -> (crate::smoother::SmootherConfig, Model) {
 /// Covariance of the navigation's error state at its start from the fine aligner's noise-driven leftovers
 /// ([`LabelConfig::alignment`]): E[y0 y0'] = S A S' (S the attitude and velocity, A the aligner's true error
 /// covariance started from zero at the end of the coarse span, but for the z gyro's slow bias, which the twin
-/// lacks), and E[b y0'] for the z gyro's slow-bias states b (the truth's, from the aligner pass's E[x x~']).
+/// lacks, with exact zero-velocity measurements), and E[b y0'] for the z gyro's slow-bias states b (the truth's,
+/// from the aligner pass's E[x x~']).
 /// `model` is the truth's (its x and y slow biases without noise); `sc` its settings.
 fn alignment_leftovers(
     cfg: &LabelConfig,
@@ -273,7 +274,13 @@ fn alignment_leftovers(
     if let Some(r) = model.rrw {
         start[(r + 2, r + 2)] = cfg.gyro_rrw * cfg.gyro_rrw * coarse_end_s;
     }
-    let mut pass = AlignerPass::new(sc, &al.filter, coarse_end_s, start)?;
+    // The run's zero-velocity measurement is exact (the navigator's velocity error is the state, the sensor noise
+    // the model's Q): a noise-free run leaves the aligner nothing of its own.
+    let exact = crate::smoother::SmootherConfig {
+        zupt_sigma: 0.0,
+        ..sc.clone()
+    };
+    let mut pass = AlignerPass::new(&exact, &al.filter, coarse_end_s, start)?;
     let attitude = TableAttitude::new(&al.scheme, al.attitude, rate)?;
     pass.advance(&attitude, n_coarse, n_end, per_update, model)?;
     let select = navigation_start_selector(n);
@@ -325,7 +332,7 @@ mod tests {
 
     /// Brute force: `runs` draws of the linear error model's noise part (the truth from zero but for the z gyro's
     /// slow bias, its noise the model's Q sampled as sqrt(t/2) (Phi Lc z1 + Lc z2)), the aligner run as a Kalman
-    /// filter on simulated zero-velocity measurements every second, the navigation from its leftover attitude and
+    /// filter on the (exact) zero-velocity measurements every second, the navigation from its leftover attitude and
     /// velocity and the true slow bias; returns d* - d = -g'e(T) / |g|^2 of each draw (criterion `final`).
     fn monte_carlo(cfg: &LabelConfig, runs: usize, seed: u64) -> Vec<f64> {
         use rand_core::SeedableRng;
@@ -361,7 +368,7 @@ mod tests {
             xa = &phi * &xa;
             pa = &phi * &pa * phi.transpose() + q_own;
             let gain = &pa * h.transpose() * (&h * &pa * h.transpose() + &r_own).try_inverse().unwrap();
-            let z = &h * &x + normal(3) * sc.zupt_sigma;
+            let z = &h * &x;
             xa += &gain * (z - &h * &xa);
             pa = (DMatrix::identity(n, n) - &gain * &h) * &pa;
         }
@@ -405,6 +412,15 @@ mod tests {
             assert!((var_mc - var).abs() < 4.0 * se, "slow {slow}: {var_mc} vs {var}");
             assert!(var - without > 4.0 * se, "slow {slow}: {var} vs {without}");
         }
+    }
+
+    #[test]
+    fn a_noise_free_run_has_no_label_error() {
+        let cfg = LabelConfig {
+            navigation: FreeNavigation::white(40.0 * DEG, 8.0 * HOUR, 60.0, 0.0, 0.0),
+            ..config(false)
+        };
+        assert_eq!(label_sigma(&cfg).unwrap().drift_std, 0.0);
     }
 
     #[test]
