@@ -12,7 +12,6 @@ import numpy as np
 from gyrodrift.fleet.store import CampaignRuns
 from gyrodrift.runs.columns import (
     ATTRIBUTE_COLUMNS,
-    COLUMNS,
     FEATURES_COLUMNS,
     FLAG_COLUMNS,
     OPTIONAL_COLUMNS,
@@ -28,10 +27,10 @@ LABELLED = tuple(c for c in ATTRIBUTE_COLUMNS if c not in ("run", "split"))
 def run_table(runs: CampaignRuns, source: str = "<campaign>"):
     """The successful `runs` as a `gyrodrift.runs.table.RunTable` (labels: the 72 h truth; optional columns when
     known)."""
-    from gyrodrift.runs.table import RunTable
+    from gyrodrift.runs.table import RunTable, known_values
 
     ok = runs.select(runs.ok)
-    num = {k: ok.numbers(k) for k in LABELLED + tuple(c for c in OPTIONAL_COLUMNS if c in ok.columns)}
+    num = {k: known_values(k, ok.numbers(k)) for k in LABELLED + tuple(c for c in OPTIONAL_COLUMNS if c in ok.columns)}
     records = []
     for i, run in enumerate(ok["run"]):
         rec: dict[str, Any] = {"run": str(run)}
@@ -47,17 +46,17 @@ def run_table_rows(runs: CampaignRuns) -> tuple[list[dict[str, Any]], tuple[str,
     label ``drift_deg_h`` and, each when any run has it, its 1-sigma ``drift_std_deg_h`` and the truth's best law
     (`gyrodrift.runs.columns.TRUTH_LAW_COLUMNS`, as ``features --with-truth`` writes them).
 
-    A 1-sigma of 0 (a noise-free run: no noise to measure) is written as unknown, as the run-table reader expects a
-    1-sigma > 0."""
+    A 1-sigma of 0 (a noise-free run: no noise to measure) is unknown (`gyrodrift.runs.table.known_values`), as the
+    run-table reader expects a 1-sigma > 0: such a column is left out."""
+    from gyrodrift.runs.table import known_values
+
     ok = runs.select(runs.ok)
     columns: tuple[str, ...] = (*FEATURES_COLUMNS, "drift_deg_h")
     values = {c: ok.numbers(c) for c in columns if c != "run"}
     for name in ("drift_std_deg_h", *TRUTH_LAW_COLUMNS):
         if name not in ok.columns:
             continue
-        v = ok.numbers(name)
-        if COLUMNS[name].sigma:
-            v = np.where(v > 0, v, np.nan)
+        v = known_values(name, ok.numbers(name))
         if np.isfinite(v).any():
             columns += (name,)
             values[name] = v

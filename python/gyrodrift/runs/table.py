@@ -637,6 +637,17 @@ def run_table_target(path, inputs: Iterable = ()) -> dict:
     return {"path": path, "inputs": tuple(inputs), "recognise": recognise_run_table, "what": "run table"}
 
 
+def known_values(name: str, values):
+    """The values of run-table column `name` as a run table holds them: a 1-sigma of 0 (`RunColumn.sigma`; a
+    noise-free run, no noise measured or given) is unknown (NaN), as a 1-sigma must be > 0; any other column's values
+    as they are. The writer (`run_table_text`) and a campaign's run table (`gyrodrift.fleet.run_table`) take them
+    from here."""
+    if not COLUMNS[name].sigma:
+        return values
+    v = np.asarray(np.nan if values is None else values, dtype=float)
+    return np.where(v == 0.0, np.nan, v)
+
+
 def _cell(value) -> str:
     """A run-table cell: text as is, a flag ``true``/``false``, a number by ``repr`` of its float (the shortest
     exact round trip), an unknown value (None, NaN) empty."""
@@ -650,8 +661,8 @@ def _cell(value) -> str:
 
 def run_table_text(rows: Iterable[Mapping[str, object]], columns: Iterable[str]) -> str:
     """The CSV text of a run table: a header of `columns`, in the order of `gyrodrift.runs.columns.RUN_TABLE`, and
-    one line per row (a mapping of column name -> value; a missing name is an empty cell). Raises ValueError for a
-    column that is not a run-table column."""
+    one line per row (a mapping of column name -> value; a missing name and a 1-sigma of 0, `known_values`, are
+    empty cells). Raises ValueError for a column that is not a run-table column."""
     wanted = set(columns)
     unknown = sorted(wanted - set(KNOWN_COLUMNS))
     if unknown:
@@ -661,7 +672,7 @@ def run_table_text(rows: Iterable[Mapping[str, object]], columns: Iterable[str])
     writer = csv.writer(buf, lineterminator="\n")
     writer.writerow(header)
     for row in rows:
-        writer.writerow([_cell(row.get(name)) for name in header])
+        writer.writerow([_cell(known_values(name, row.get(name))) for name in header])
     return buf.getvalue()
 
 
