@@ -335,7 +335,7 @@ def test_identification_on_held_out_runs(fleet, fleet_features, model):
     # the interval is centred on the prediction; its half-width is the calibration (Student-t quantile times the
     # scores' robust scale) times the run's 1-sigma (docs/identification.md, "Intervals and extrapolation")
     q = m.interval_.scale_.multiplier(0.9)
-    Z, learned = m._learned(test)
+    Z, learned = m.predictor_._learned(test)  # the scaled inputs and the LSSVR term the interval reads
     for x, v in zip(held, np.hypot(*m.interval_.sigmas(Z, learned, m.base_.predict_std(test))), strict=True):
         lo, hi = x.interval_deg_h
         assert lo < x.drift_deg_h < hi and (hi - lo) / 2 == pytest.approx(q * v, rel=1e-12)
