@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from gyrodrift.learn.drift_model import fit_drift_model
-from gyrodrift.learn.training_record import training_digest
 from gyrodrift.learn.model_io import ModelFileError, load_model, load_predictor, model_to_dict, save_model
+from gyrodrift.learn.training_record import training_digest
 from gyrodrift.runs.datasets import load_paper
 
 
