@@ -224,11 +224,13 @@ def test_two_hours_of_pure_white_noise_report_no_rate_random_walk_nor_bias_insta
 @pytest.mark.slow
 @pytest.mark.parametrize("seed", [11, 12, 13])
 def test_a_long_log_with_a_rate_random_walk_reports_it_within_its_statistics(simulated_log, seed):
-    # 48 h at 10 Hz, ARW 0.01 deg/sqrt(h), RRW 0.05 deg/h/sqrt(h): the rate random walk crosses the white noise
+    # 48 h at 1 Hz, ARW 0.01 deg/sqrt(h), RRW 0.05 deg/h/sqrt(h): the rate random walk crosses the white noise
     # at tau = sqrt(3) N / K = 1250 s, five octaves below the longest averaging time (52 000 s). Over 20 seeds of
-    # the same process (numpy, one axis each) it was reported every time, within 0.80-1.22 of the truth; the test
-    # allows 0.6-1.4 per axis and 0.75-1.25 for the mean of the three gyros (the scenario block).
-    log = _static_log(simulated_log, seed, arw=0.01, hours=48.0, rate_hz=10.0, rrw_deg_h_rth=0.05)
+    # the same process (numpy, one axis each, at 10 Hz) it was reported every time, within 0.80-1.22 of the truth;
+    # over seeds 11-30 of this log (1 Hz: the RRW lives at long tau, where the sample rate changes nothing, and the
+    # Allan fit is 2/3 of the CPU of 10 Hz) every time, within 0.73-1.16 per axis, 0.92-1.07 for the mean, ARW
+    # within 0.6 %. The test allows 0.6-1.4 per axis and 0.75-1.25 for the mean of the three gyros (the block).
+    log = _static_log(simulated_log, seed, arw=0.01, hours=48.0, rate_hz=1.0, rrw_deg_h_rth=0.05)
     result = allan_deviation(open_log(log))
     doc = result.to_dict()
     for axis in GYROS:
