@@ -15,17 +15,17 @@ and the leave-one-out predictive variance of training sample ``i`` is ``1 / ((H^
 denominator of its LOO residual. ``LSSVR.predictive_scale`` returns ``v``; ``loo_scale_`` the LOO one. Far
 from the training inputs ``k -> 0`` and ``v`` grows to its prior value: the interval widens there.
 
-Prediction arithmetic (`LSSVR.predict`, and the generated C and Rust of `gyrodrift.export`, operation for
-operation): the kernel of each support vector from the coordinate differences summed over the features in
-order (RBF ``exp(-d2 / (sigma * sigma))`` with the C library's ``exp`` through ``math.exp``; linear and
-polynomial: the dot product in feature order, an integer power by repeated multiplication), then
-``b + sum_i a_i K_i`` (+ an offset, the physics estimate of a hybrid model) accumulated in support-vector order
-with an error-free transformation (Knuth's TwoSum; the errors summed apart and added at the end, Ogita, Rump
-& Oishi 2005 "Sum2"). The result is as accurate as if summed in twice the working precision and then rounded,
-so the cancelling terms of a drift near zero lose nothing in the sum; what remains is the rounding of each
-term (about ``eps sum_i |a_i K_i|``, the condition of the sum). numpy's own ``exp`` (a SIMD version on some
-CPUs) and BLAS's ``K @ a`` (another order, fused multiply-adds) would differ from the generated code in the last
-bits (docs/export.md gives the numbers).
+Prediction arithmetic (`LSSVR.predict` through `gyrodrift.learn.expansion`, which the drift model's predictor
+shares, and the generated C and Rust of `gyrodrift.export`, operation for operation): the kernel of each support
+vector from the coordinate differences summed over the features in order (RBF ``exp(-d2 / (sigma * sigma))`` with
+the C library's ``exp`` through ``math.exp``; linear and polynomial: the dot product in feature order, an integer
+power by repeated multiplication), then ``b + sum_i a_i K_i`` (+ an offset, the physics estimate of a hybrid model)
+accumulated in support-vector order with an error-free transformation (Knuth's TwoSum; the errors summed apart and
+added at the end, Ogita, Rump & Oishi 2005 "Sum2"). The result is as accurate as if summed in twice the working
+precision and then rounded, so the cancelling terms of a drift near zero lose nothing in the sum; what remains is
+the rounding of each term (about ``eps sum_i |a_i K_i|``, the condition of the sum). numpy's own ``exp`` (a SIMD
+version on some CPUs) and BLAS's ``K @ a`` (another order, fused multiply-adds) would differ from the generated code
+in the last bits (docs/export.md gives the numbers).
 
 Conversions for cross-checks: scikit-learn ``KernelRidge(alpha=1/gamma, kernel="rbf", gamma=1/sigma^2)``
 fitted on ``y - b`` has ``dual_coef_ == a``; LS-SVMlab 1.8 ``sig2 = sigma^2 / 2`` (docs/conventions.md).
