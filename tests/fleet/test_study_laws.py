@@ -94,6 +94,11 @@ def test_the_identified_law_reaches_the_best_law_and_closes_the_whole_gap():
     doc = compare_laws(runs, constant_today, (K1, 1e-5), seed=3)
     assert doc["methods"] == list(LAW_METHODS)
     assert "law on the fleet base" not in compare_laws(runs, constant_today, None)["methods"]  # not a fleet base
+    runs.columns["truth_law_k1_deg_h_per_c"] = np.full(6, 3e-4)  # the best law's k1 is not the identified one
+    doc = compare_laws(runs, constant_today, (1e-4, 1e-4), seed=3)
+    np.testing.assert_allclose(doc["identified_k1_deg_h_per_c"], 1.5e-4, rtol=1e-9)  # (2e-4 + 1e-4) / 2
+    runs.columns["truth_law_k1_deg_h_per_c"] = np.full(6, K1)
+    doc = compare_laws(runs, constant_today, (K1, 1e-5), seed=3)
     np.testing.assert_allclose(doc["identified_k1_deg_h_per_c"], K1, rtol=1e-9)
     final = doc["final_nmi"]
     np.testing.assert_allclose(final["identified law"], 0.0, atol=1e-9)

@@ -220,8 +220,8 @@ def compare_laws(runs, constant_deg_h, prior: tuple[float, float] | None, *, see
         ),
     }
     finals, maxima = {}, {}
-    for name, (eps, k1, t_ref) in coefficients.items():
-        err = law_errors_nmi(runs, eps, k1, t_ref)
+    for name, (eps, slope, t_ref) in coefficients.items():
+        err = law_errors_nmi(runs, eps, slope, t_ref)
         finals[name], maxima[name] = err[:, -1], np.max(err, axis=1)
     groups = {g: _group_metrics(finals, maxima, np.flatnonzero(mask), seed) for g, mask in run_groups(runs).items()}
     return {
