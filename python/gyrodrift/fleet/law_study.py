@@ -124,11 +124,16 @@ def run_groups(runs) -> dict[str, np.ndarray]:
     return {"all": np.ones(n, bool), "daily swing": swing, "no swing": ~swing, "steady temperature": steady}
 
 
-def smoother_posterior_inputs(runs) -> tuple[np.ndarray, ...]:
-    """The runs' smoother end drift and its 1-sigma [deg/h], then its thermal columns (`SMOOTHER_THERMAL_COLUMNS`,
-    all NaN where the store has none): the first six arguments of `gyrodrift.learn.fleet_prior`'s re-weighting."""
-    names = ("drift_smoother_deg_h", "drift_smoother_std_deg_h", *SMOOTHER_THERMAL_COLUMNS)
-    return tuple(runs.numbers(c) if c in runs.columns else np.full(len(runs), math.nan) for c in names)
+def smoother_posterior_inputs(runs) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The runs' smoother end drift and its 1-sigma [deg/h], then its thermal columns (`SMOOTHER_THERMAL_COLUMNS`:
+    k_z, its 1-sigma, cov(end drift, k_z), its own prior 1-sigma; all NaN where the store has none): the first six
+    arguments of `gyrodrift.learn.fleet_prior`'s re-weighting."""
+
+    def column(name: str) -> np.ndarray:
+        return runs.numbers(name) if name in runs.columns else np.full(len(runs), math.nan)
+
+    coeff, coeff_std, cov, prior_std = (column(c) for c in SMOOTHER_THERMAL_COLUMNS)
+    return column("drift_smoother_deg_h"), column("drift_smoother_std_deg_h"), coeff, coeff_std, cov, prior_std
 
 
 def identified_k1(runs, prior: tuple[float, float] | None) -> np.ndarray:
