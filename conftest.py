@@ -103,13 +103,14 @@ LONGEST_FIRST = (
     "tests/fleet/test_campaign_store_checks.py",
     "tests/learn/test_intervals.py",
 )
-"""The files with the most CPU time, the longest first (99 down to 15 s each, user + sys with child processes,
-in a one-process run of each room at fd4837e: `python -m pytest tests/<room> -n 0`, each test's time summed per
-file; the first ten re-ordered by the per-file CPU measured one file at a time at 7fee3dd, after the campaign files
-got cheaper: test_procedure 91 s, test_smoother 87, test_campaign 73, test_allan 71, test_cli_errors 53, the dask
-cluster and interrupt files 35 and 34); the rest follow in their collection order. pytest-xdist's --dist loadfile hands whole files to the workers
-in the session's order (--no-loadscope-reorder in pyproject's addopts; its default orders files by their number
-of tests, which sent the long few-test files last). A file missing from the tree fails tests/test_suite_order.py."""
+"""The files with the most CPU time, the longest first (99 down to 15 s each, user + sys with child processes, in a
+one-process run of each room at fd4837e: `python -m pytest tests/<room> -n 0`, each test's time summed per file; the
+first ten re-ordered by the per-file CPU measured one file at a time at 7fee3dd, after the campaign files got
+cheaper: test_procedure 91 s, test_smoother 87, test_campaign 73, test_allan 71, test_cli_errors 53, the dask cluster
+and interrupt files 35 and 34); the rest follow in their collection order. pytest-xdist's --dist loadfile hands whole
+files to the workers in the session's order (--no-loadscope-reorder in pyproject's addopts; its default orders files
+by their number of tests, which sent the long few-test files last). A file missing from the tree fails
+tests/test_suite_order.py."""
 
 
 def longest_first_key(item: pytest.Item) -> int:
