@@ -3,6 +3,7 @@ what the log can show (constant channels, short logs, pure white noise)."""
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 import sys
@@ -57,6 +58,29 @@ def test_fit_recovers_an_exact_model_curve(white, gm, corr, rrw):
     assert fit.fit_rms_log < 0.02
     assert np.allclose(fit.model_adev(tau), np.sqrt(avar), rtol=0.05)
     assert fit.white == pytest.approx(white, rel=0.05)
+
+
+@pytest.mark.parametrize("gm", [0.0, 3e-3])
+@pytest.mark.parametrize("rrw", [0.0, 2e-7])
+def test_violation_skips_the_grid_only_when_its_full_scan_exceeds_the_threshold(gm, rrw):
+    # `violation(..., above=a)` returns inf (its all-T lower bound exceeds a) only where the scan of the whole
+    # grid (above=inf) exceeds a, and the scan's value otherwise; each set's T are scanned from the middle of
+    # the grid, as `fit_noise` starts
+    from gyrodrift.sensors.allan import _TERMS, _Fit, _intervals
+
+    tau = np.geomspace(0.01, 1e4, 18)
+    adev = np.sqrt(1e-6 / tau + rrw**2 * tau / 3 + gauss_markov_avar(tau, gm, 50.0))
+    edf = np.geomspace(1e5, 10.0, 18)
+    lo, hi = _intervals(adev, edf, CONFIDENCE)
+    sets = [frozenset(c) for k in (1, 2, 3) for c in itertools.combinations(_TERMS, k) if "gauss_markov" in c]
+    skipped = 0
+    for terms in sets:
+        full = _Fit(tau, adev**2, edf).violation(terms, lo**2, hi**2)
+        for above in (0.0, 1e-6, 0.5 * full, 2.0 * full + 1.0):
+            bounded = _Fit(tau, adev**2, edf).violation(terms, lo**2, hi**2, above=above)
+            assert bounded == full or (bounded == math.inf and full > above), (terms, above, full, bounded)
+            skipped += bounded == math.inf
+    assert skipped > 0  # Gauss-Markov alone (and with rrw) cannot follow the white noise: the bound skips it
 
 
 def test_fit_keeps_no_term_the_interval_does_not_show():

@@ -85,6 +85,8 @@ _REWEIGHTINGS = 4
 _GM_REACH = 4.0
 """A Gauss-Markov correlation time T is fitted only up to the longest averaging time / 4: its Allan deviation
 peaks near 1.9 T and only the fall beyond tells it from a rate random walk, so the log must reach past it."""
+_LP_MARGIN = 1e-4
+"""Above HiGHS' tolerance on the summed slacks: a lower bound that far over a threshold proves the LP exceeds it."""
 _TERMS = ("white", "gauss_markov", "rrw")
 # the JSON keys of white, gauss_markov, rrw and bias_instability
 _GYRO_KEYS = ("arw_deg_rth", "gauss_markov_sigma_deg_h", "rrw_deg_h_rth", "bias_instability_deg_h")
@@ -343,6 +345,9 @@ class _Fit:
     def __init__(self, tau: np.ndarray, avar: np.ndarray, edf: np.ndarray):
         self.tau, self.avar, self.shape = tau, avar, edf / 2.0
         self.rel = np.clip(np.sqrt(2.0 / edf), 0.01, None)  # relative 1-sigma of each variance
+        self.inside_at = len(self.grid()) // 2
+        """Grid index of the correlation time that last put a Gauss-Markov fit inside the band: `violation` starts
+        its scan there (a subset's feasible T is usually near its superset's), so its early exit comes sooner."""
 
     def solve(self, terms: frozenset[str], corr: float) -> tuple[float, dict[str, float]]:
         """(Gamma deviance, {term: coefficient}) for the given correlation time [s]."""
@@ -367,30 +372,48 @@ class _Fit:
         names = [t for t in _TERMS if t in terms]
         return names, np.column_stack([cols[t] for t in names])
 
-    def violation(self, terms: frozenset[str], lo2: np.ndarray, hi2: np.ndarray) -> float:
+    def violation(self, terms: frozenset[str], lo2: np.ndarray, hi2: np.ndarray, above: float = math.inf) -> float:
         """The smallest total relative distance, over all non-negative coefficients (and correlation times on the
         grid), of the Allan variance of `terms` from the band ``[lo2, hi2]``: a linear program, 0 when the terms
-        fit inside the band at every point."""
-        from scipy.optimize import linprog
+        fit inside the band at every point.
 
+        inf when it is sure to exceed `above`: one LP with the Gauss-Markov columns of every grid correlation time
+        at once (a lower bound of each single-T one) exceeding `above` + `_LP_MARGIN` skips the scan of the grid.
+        """
         if not terms:
             return float(len(lo2))
-        n = len(self.tau)
+        grid = self.grid()
+        if "gauss_markov" not in terms:
+            return self._band_distance(self.design(terms, math.nan)[1], lo2, hi2)
+        if math.isfinite(above):
+            others = self.design(terms - {"gauss_markov"}, math.nan)[1] if len(terms) > 1 else np.empty((len(lo2), 0))
+            every_t = np.column_stack([gauss_markov_avar(self.tau, 1.0, float(c)) for c in grid])
+            if self._band_distance(np.hstack([others, every_t]), lo2, hi2) > above + _LP_MARGIN:
+                return math.inf
+        # The minimum over the grid does not depend on the scan order; a feasible T (0) ends the scan, so it
+        # starts at the last feasible one and widens both ways until the whole grid is covered.
         best = math.inf
-        for corr in self.grid() if "gauss_markov" in terms else [math.nan]:
-            _, design = self.design(terms, corr)
-            scale = 1.0 / np.max(design / lo2[:, None], axis=0)  # columns of order 1
-            d = design * scale
-            # rows: -(d/lo2) c - s <= -1 (above the lower bound), (d/hi2) c - s <= 1 (below the upper one)
-            a_ub = np.block([[-d / lo2[:, None], -np.eye(n)], [d / hi2[:, None], -np.eye(n)]])
-            b_ub = np.concatenate([-np.ones(n), np.ones(n)])
-            cost = np.concatenate([np.zeros(d.shape[1]), np.ones(n)])
-            res = linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=(0, None), method="highs")
-            if res.status == 0:
-                best = min(best, float(res.fun))
+        for k in sorted(range(len(grid)), key=lambda k: (abs(k - self.inside_at), k)):
+            best = min(best, self._band_distance(self.design(terms, float(grid[k]))[1], lo2, hi2))
             if best <= 0.0:
+                self.inside_at = k
                 break
         return best
+
+    def _band_distance(self, design: np.ndarray, lo2: np.ndarray, hi2: np.ndarray) -> float:
+        """The LP of `violation` for fixed design columns: min sum(s) over c >= 0, s >= 0 with
+        lo2 (1 - s) <= design c <= hi2 (1 + s) (inf if HiGHS fails)."""
+        from scipy.optimize import linprog
+
+        n = len(self.tau)
+        scale = 1.0 / np.max(design / lo2[:, None], axis=0)  # columns of order 1
+        d = design * scale
+        # rows: -(d/lo2) c - s <= -1 (above the lower bound), (d/hi2) c - s <= 1 (below the upper one)
+        a_ub = np.block([[-d / lo2[:, None], -np.eye(n)], [d / hi2[:, None], -np.eye(n)]])
+        b_ub = np.concatenate([-np.ones(n), np.ones(n)])
+        cost = np.concatenate([np.zeros(d.shape[1]), np.ones(n)])
+        res = linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=(0, None), method="highs")
+        return float(res.fun) if res.status == 0 else math.inf
 
     def grid(self) -> np.ndarray:
         """The correlation times tried [s]: from the shortest averaging time to the longest / `_GM_REACH`."""
@@ -459,7 +482,7 @@ def fit_noise(
     while len(kept) > 1:
         trials = []
         for term in sorted(kept):
-            without = fit.violation(kept - {term}, lo**2, hi**2)
+            without = fit.violation(kept - {term}, lo**2, hi**2, above=miss + 1e-6)
             # within the LP's tolerance; parsimony first: the two-parameter Gauss-Markov term goes if it can
             if without <= miss + 1e-6:
                 trials.append((term != "gauss_markov", without, term))
