@@ -120,10 +120,11 @@ class TunedLSSVR(RegressorMixin, BaseEstimator):
     (as scikit-learn's ``GaussianProcessRegressor`` warns on kernel bounds); ill-conditioning gives the LSSVR's
     warning or error.
 
-    Parameters (all keyword-only)
-    -----------------------------
+    Parameters
+    ----------
     gamma, sigma : float or None, default=None
-        Fixed hyperparameters (sigma in the units of the scaled inputs), or None for both to tune them.
+        Keyword-only, as all the parameters. Fixed hyperparameters (sigma in the units of the scaled inputs), or
+        None for both to tune them.
     objective, method, bounds, n_particles, max_iter, w, c1, c2, chaos_steps, grid_size, n_folds
         How they are tuned: the fields of :class:`~gyrodrift.learn.tuning.TuningOptions` of the same names (their
         defaults, units and meaning; `tuning_options`), flat so that ``get_params``, ``GridSearchCV`` and model

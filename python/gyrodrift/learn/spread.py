@@ -166,19 +166,20 @@ def _maximise_likelihood(Z: np.ndarray, y: np.ndarray, noise: np.ndarray, n_rest
 class SpreadGP:
     """A Gaussian process fitted for its predictive spread (module docstring).
 
-    Parameters (keyword-only)
-    -------------------------
+    Parameters
+    ----------
     theta : array_like or None
-        Log hyperparameters of a previous fit (``theta_``): used as they are, nothing is optimised (how a
-        saved model is rebuilt). None: fitted by ML-II.
+        Keyword-only, as all the parameters. Log hyperparameters of a previous fit (``theta_``): used as they
+        are, nothing is optimised (how a saved model is rebuilt). None: fitted by ML-II.
     n_restarts : int
         Random restarts of the likelihood optimiser (seeded by ``random_state``).
     random_state : int
 
-    Attributes (after ``fit``)
-    --------------------------
+    Attributes
+    ----------
     theta_ : ndarray
-        The fitted log hyperparameters (log c0, log c1, log l_1 .. l_d, log tau^2).
+        Set by ``fit``, as the attributes below. The fitted log hyperparameters (log c0, log c1, log l_1 .. l_d,
+        log tau^2).
     L_, alpha_ : ndarray
         Lower Cholesky factor of the training covariance (noise included) and its solve with the standardised
         targets: the predictive mean and variance (R&W 2006 algorithm 2.1) without scikit-learn's
