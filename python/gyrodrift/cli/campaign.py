@@ -187,13 +187,14 @@ def _export(campaign, index: int, out, quiet: bool, as_json: bool) -> None:
 def study_command(folder, out, test_fraction, seed, max_iter, as_json, quiet):
     """Compare every identification method on the same held-out runs of a campaign FOLDER."""
     from gyrodrift.files.atomic import OutputFolder
-    from gyrodrift.fleet.store import read_runs
+    from gyrodrift.fleet.store import CampaignStore, read_runs
     from gyrodrift.fleet.study import run_study
     from gyrodrift.fleet.study_report import STUDY_FILES, summary_lines, write_study_report
 
     target = OutputFolder(out, "study", STUDY_FILES, inputs=[folder])
     runs = read_runs(folder)
-    doc = run_study(runs, test_fraction=test_fraction, seed=seed, max_iter=max_iter).to_dict()
+    campaign = CampaignStore(folder).campaign()
+    doc = run_study(runs, test_fraction=test_fraction, seed=seed, max_iter=max_iter, campaign=campaign).to_dict()
     with target.publish() as stage:
         write_study_report(doc, stage)
     if as_json:

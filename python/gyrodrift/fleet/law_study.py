@@ -57,6 +57,7 @@ __all__ = [
     "excursion_c",
     "fleet_base_deg_h",
     "identified_k1",
+    "law_covariance",
     "law_errors_nmi",
     "run_groups",
     "smoother_posterior_inputs",
@@ -198,12 +199,39 @@ def _group_metrics(finals: dict, maxima: dict, rows: np.ndarray, seed: int) -> d
     return out
 
 
-def compare_laws(runs, constant_deg_h, prior: tuple[float, float] | None, *, seed: int = 0) -> dict[str, Any]:
+def law_covariance(runs, prior: tuple[float, float], t_ref_c) -> np.ndarray:
+    """The identified law's covariance over (eps_b, k1) per run, shape (runs, 2, 2) [deg/h, deg/h/degC]: the fleet
+    posterior's (end drift, k_z) block (`gyrodrift.learn.fleet_prior.posterior_with_coefficient_prior`, as
+    `gyrodrift.procedure.identify` reports it without the learned term's variance: what the 16 h data give), the
+    end drift's variance alone under the smoother's constant model; moved from `t_ref_c` (T_a) to the truth's T_ref
+    T_b as ``A P A'``, A = [[1, T_b - T_a], [0, 1]] (`gyrodrift.fleet.law_limit`)."""
+    from gyrodrift.learn.fleet_prior import posterior_with_coefficient_prior
+
+    thermal, _, _, var_d, cov_dk, var_k = posterior_with_coefficient_prior(
+        *smoother_posterior_inputs(runs), prior[0], prior[1]
+    )
+    thermal = np.asarray(thermal, bool) & np.isfinite(runs.numbers("temp_end_c"))
+    cov_dk, var_k = np.where(thermal, cov_dk, 0.0), np.where(thermal, var_k, 0.0)
+    p = np.stack([np.stack([var_d, cov_dk], -1), np.stack([cov_dk, var_k], -1)], axis=1)
+    a = np.zeros_like(p)
+    a[:, 0, 0] = a[:, 1, 1] = 1.0
+    a[:, 0, 1] = runs.numbers("truth_law_t_ref_c") - np.asarray(t_ref_c, float)
+    return a @ p @ np.swapaxes(a, 1, 2)
+
+
+def compare_laws(
+    runs, constant_deg_h, prior: tuple[float, float] | None, *, seed: int = 0, campaign=None
+) -> dict[str, Any]:
     """The comparison on the held-out `runs` (`gyrodrift.fleet.store.CampaignRuns` with curves): `constant_deg_h`
     the hybrid default's drift per run [deg/h], `prior` its fleet k_z prior ``(mean, std)`` [deg/h/degC] or None
-    (module docstring). Returns the JSON-ready ``drift_laws`` section of ``study.json``: ``methods``, ``groups``
-    (each with ``n``, per-method metrics, ``identified_vs`` and ``gap_closed``), ``how`` (the split and the noise
-    in words), the per-run ``final_nmi`` of every method and the runs' ``excursion_c``."""
+    (module docstring); `campaign` (`gyrodrift.fleet.spec.Campaign`, optional) gives the simulated laws and the
+    time line of the physical limit. Returns the JSON-ready ``drift_laws`` section of ``study.json``: ``methods``,
+    ``groups`` (each with ``n``, per-method metrics, ``identified_vs`` and ``gap_closed``), ``how`` (the split and
+    the noise in words), the per-run ``final_nmi`` of every method, the runs' ``excursion_c`` and, with a fleet
+    prior, ``limit``: the physical limit of the identified law and of the law on the fleet base
+    (`gyrodrift.fleet.law_limit.limit_report`, the data's covariance `law_covariance`), else None."""
+    from gyrodrift.fleet.law_limit import limit_report, simulated_law
+    from gyrodrift.procedure.timeline import DEFAULT_TIMELINE
     from gyrodrift.procedure.truth_law import MIN_EXCURSION_C
 
     zeros = np.zeros(len(runs))
@@ -228,7 +256,25 @@ def compare_laws(runs, constant_deg_h, prior: tuple[float, float] | None, *, see
     for name, (eps, slope, t_ref) in coefficients.items():
         err = law_errors_nmi(runs, eps, slope, t_ref)
         finals[name], maxima[name] = err[:, -1], np.max(err, axis=1)
-    groups = {g: _group_metrics(finals, maxima, np.flatnonzero(mask), seed) for g, mask in run_groups(runs).items()}
+    masks = run_groups(runs)
+    groups = {g: _group_metrics(finals, maxima, np.flatnonzero(mask), seed) for g, mask in masks.items()}
+    limit = None
+    if prior is not None:
+        cov = law_covariance(runs, prior, t_end)
+        laws = {
+            name: (eps + slope * (runs.numbers("truth_law_t_ref_c") - t_ref), slope, cov)
+            for name, (eps, slope, t_ref) in coefficients.items()
+            if name in ("identified law", "law on the fleet base")
+        }
+        timeline = DEFAULT_TIMELINE if campaign is None else campaign.timeline
+        limit = limit_report(
+            runs,
+            laws,
+            finals,
+            masks,
+            future_hours=timeline.truth_h - timeline.features_h,
+            simulated=None if campaign is None else simulated_law(campaign, runs),
+        )
     return {
         "methods": list(coefficients),
         "groups": groups,
@@ -236,6 +282,7 @@ def compare_laws(runs, constant_deg_h, prior: tuple[float, float] | None, *, see
         "k1_prior_deg_h_per_c": None if prior is None else [float(prior[0]), float(prior[1])],
         "excursion_c": excursion_c(runs),
         "final_nmi": finals,
+        "limit": limit,
         "how": (
             "72 h errors from each run's linear error curves (no navigation); daily swing: "
             f"{SWING_COLUMN} > 0; steady temperature: no swing and an effective excursion over the navigation "

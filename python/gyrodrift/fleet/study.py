@@ -275,11 +275,14 @@ def run_study(
     max_iter: int = 60,
     train_sizes: list[int] | None = None,
     latitude_bins: int = 4,
+    campaign=None,
 ) -> StudyResult:
     """The study on a campaign's runs (`gyrodrift.fleet.store.read_runs`, curves included); see the module doc.
 
     `max_iter`: tuning iterations of every CPSO/PSO fit; `train_sizes`: the training-set sizes of the curve
-    (default 10, 20, 40, ... and all); `latitude_bins`: held-out runs grouped in this many latitude quantiles."""
+    (default 10, 20, 40, ... and all); `latitude_bins`: held-out runs grouped in this many latitude quantiles;
+    `campaign`: the runs' `gyrodrift.fleet.spec.Campaign` (its simulated drift laws for the drift laws' physical
+    limit, `gyrodrift.fleet.law_limit`), or None."""
     from gyrodrift.fleet.run_table import run_table
     from gyrodrift.learn.baselines import physics_inversion
     from gyrodrift.learn.tuning import SearchBoundWarning
@@ -374,7 +377,9 @@ def run_study(
     if k1_curves:
         from gyrodrift.fleet.law_study import compare_laws
 
-        drift_laws = compare_laws(test_df, methods["hybrid default"].pred, priors["hybrid default"], seed=seed)
+        drift_laws = compare_laws(
+            test_df, methods["hybrid default"].pred, priors["hybrid default"], seed=seed, campaign=campaign
+        )
     else:
         notes.append(
             "no drift-law comparison: the campaign holds no k1 error curves (stored before they existed, or runs "
