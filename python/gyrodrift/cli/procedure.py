@@ -355,6 +355,8 @@ def identify_command(log, model_path, site, log_format, out_dir, noise, as_json,
         f"{res.smoother_drift_deg_h:.6f} +- {res.smoother_drift_std_deg_h:.6f} deg/h (1-sigma: the Cramer-Rao "
         "line of these 16 h)"
     )
+    if res.smoother_noise_note is not None:
+        click.echo(f"    note: {res.smoother_noise_note}")
     if res.coefficient_prior_deg_h_per_c is not None:
         mean, std = res.coefficient_prior_deg_h_per_c
         click.echo(

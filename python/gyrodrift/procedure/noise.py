@@ -124,6 +124,19 @@ class SensorNoise:
             "gyro_rrw_rad_s_rts": self.rrw_deg_h_rth * DEG_PER_H / math.sqrt(HOUR),
         }
 
+    @property
+    def white_only_note(self) -> str | None:
+        """A one-line caveat when this model was measured from a log (``source="log"``: white noise only), else
+        None: a 1-sigma computed under it leaves out any gyro bias instability or rate random walk of the sensor,
+        which the second differences cannot see and 16 h cannot resolve."""
+        if self.source != "log" or self.bias_instability_deg_h > 0 or self.rrw_deg_h_rth > 0:
+            return None
+        return (
+            "the 1-sigma assumes white sensor noise only (ARW and VRW measured from the log); a gyro bias "
+            "instability or rate random walk is not in it: give the sensor's noise with --noise FILE (a scenario "
+            "file, or gyrodrift allan's scenario_noise)"
+        )
+
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
 

@@ -582,6 +582,13 @@ class Identification:
         sm = self.features.smoother
         return None if sm is None else sm.model
 
+    @property
+    def smoother_noise_note(self) -> str | None:
+        """The caveat on the smoother's 1-sigma when its noise was measured from the log (white noise only,
+        `SensorNoise.white_only_note`); None when the noise was given or the smoother did not run."""
+        sm = self.features.smoother
+        return None if sm is None or sm.noise is None else sm.noise.white_only_note
+
     def to_dict(self) -> dict[str, Any]:
         f = self.features
         return {
@@ -594,6 +601,7 @@ class Identification:
             "smoother_drift_deg_h": self.smoother_drift_deg_h,
             "smoother_drift_std_deg_h": self.smoother_drift_std_deg_h,
             "smoother_model": self.smoother_model,
+            "smoother_noise_note": self.smoother_noise_note,
             "model_physics_column": self.model_physics_column,
             "smoother_fleet_drift_deg_h": self.smoother_fleet_drift_deg_h,
             "smoother_fleet_drift_std_deg_h": self.smoother_fleet_drift_std_deg_h,
@@ -635,9 +643,10 @@ class SmootherEstimate:
         Cramer-Rao line of the linear-Gaussian model without a thermal term (with the thermal state: conditioned
         on k_z = 0, exactly that model's posterior).
     drift_end_deg_h, drift_end_std_deg_h : float
-        The total z-gyro bias at the end of the span under the reported `model` (constant + Gauss-Markov + random
-        walk, + k_z (T_end - T_ref) under the thermal model) and its 1-sigma [deg/h]; equal to the constant
-        without bias-drift terms under the constant model.
+        The z-gyro bias at the end of the span carried into navigation under the reported `model` (constant +
+        random walk, + k_z (T_end - T_ref) under the thermal model) and its 1-sigma [deg/h]; equal to the constant
+        without bias-drift terms under the constant model. A Gauss-Markov bias is left out (its mean over a
+        mission of many correlation times is near zero; the history holds the total).
     model : {"thermal", "constant"}
         The model of the reported end drift and history: ``thermal`` when the thermal state ran and the
         temperature spanned at least its ``thermal_min_range_c``.

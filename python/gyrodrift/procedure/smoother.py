@@ -8,7 +8,12 @@ uses every sample the identification may use, and its 1-sigma is the Cramer-Rao 
 error model: no method identifying the drift from these 16 h can do better on average.
 
 The noise model (`SensorNoise`) is given (a scenario's or `gyrodrift allan`'s ``[gyro]``/``[accel]`` keys) or
-measured from the log (ARW and VRW from the second differences of the increments; no bias drift).
+measured from the log (ARW and VRW from the second differences of the increments; no bias drift, so the 1-sigma
+leaves out a bias instability the sensor has: `SensorNoise.white_only_note`, which `identify` prints).
+
+A Gauss-Markov bias (``bias_instability_deg_h``) is three more states; the drift carried into navigation leaves
+its end value out (it forgets that value within its correlation time, so its mean over a mission of many
+correlation times is near zero), and the history is the total.
 
 Thermal model: when the log has a temperature column the z drift is modelled as eps_z + k_z (T - T_ref), k_z a
 random constant [deg/h/degC] and T the log's temperature (T_ref: the temperature at the end of the coarse

@@ -44,7 +44,9 @@
 //!   P_{k|N} = P_{k|k} + C_k (P_{k+1|N} - P_{k+1|k}) C_k'
 //! (the usual RTS recursion; the known input shifts the prediction and the smoothed mean alike). The total z
 //! drift at update k is the navigator's z bias before that update plus the smoothed eps_z (+ b_gm,z + b_rrw,z;
-//! plus k_z (T_k - T_ref) under the thermal model).
+//! plus k_z (T_k - T_ref) under the thermal model): the history. The drift carried into navigation (`drift_end`)
+//! is the same at the last update without b_gm,z: a Gauss-Markov bias forgets its value within its correlation
+//! time, so its mean over a mission of many correlation times is near zero.
 //! P_{k+1|k}^-1 is applied through a Cholesky factor of its correlation matrix (states span 1e-24 to 1e-6 in
 //! their SI variances).
 //!

@@ -18,8 +18,11 @@ pub struct SmootherResult {
     /// posterior of the model without that state).
     pub drift: f64,
     pub drift_std: f64,
-    /// The total z-gyro bias at the end of the span under the reported model (constant + Gauss-Markov + random
-    /// walk, + k_z (T_end - T_ref) when `thermal`) and its 1-sigma: the drift carried into navigation.
+    /// The z-gyro bias at the end of the span carried into navigation under the reported model (constant + random
+    /// walk, + k_z (T_end - T_ref) when `thermal`) and its 1-sigma. The Gauss-Markov state is left out: it forgets
+    /// its value within its correlation time, so over a mission of many correlation times its mean is near zero
+    /// and a constant compensation that carried its end value would be wrong by that value all mission long (the
+    /// history below is the total, Gauss-Markov included).
     pub drift_end: f64,
     pub drift_end_std: f64,
     /// True when the thermal model is the reported one (`drift_end`, the history, the biases): the thermal state
@@ -32,7 +35,7 @@ pub struct SmootherResult {
     pub drift_ref_std: f64,
     pub thermal_coeff: f64,
     pub thermal_coeff_std: f64,
-    /// Covariance of the thermal model's end drift eps_z + k_z (T_end - T_ref) (+ b_gm,z + b_rrw,z) with k_z
+    /// Covariance of the thermal model's end drift eps_z + k_z (T_end - T_ref) (+ b_rrw,z) with k_z
     /// [rad^2/s^2/degC] (NaN without the state): with `drift_end_std` under the thermal model and
     /// `thermal_coeff_std`, the joint covariance of the two, e.g. to condition the end drift on another prior of
     /// k_z.
@@ -89,22 +92,25 @@ impl Forward {
             a[i] = 1.0;
             a
         };
-        // Selector of the total z drift: eps_z + gm_z + rrw_z (+ k_z (T - T_ref) under the thermal model).
-        let mut e_total = unit(EPS + 2);
+        // Selectors of the carried z drift, eps_z + rrw_z, and of the total, + gm_z (each + k_z (T - T_ref) under
+        // the thermal model).
+        let mut e_carried = unit(EPS + 2);
+        if let Some(r) = self.model.rrw {
+            e_carried[r + 2] = 1.0;
+        }
+        let mut e_total = e_carried.clone();
         if let Some(g) = self.model.gm {
             e_total[g + 2] = 1.0;
         }
-        if let Some(r) = self.model.rrw {
-            e_total[r + 2] = 1.0;
-        }
-        let total = |step: &Step, x: &DVector<f64>, p: &DMatrix<f64>| {
-            let mut a = e_total.clone();
+        let drift_of = |e: &DVector<f64>, step: &Step, x: &DVector<f64>, p: &DMatrix<f64>| {
+            let mut a = e.clone();
             if let (Some(k), true) = (k_th, thermal) {
                 a[k] = step.dtemp;
             }
             let (d, s) = linear(&a, x, p, !thermal);
             (step.gyro_bias[2] + d, s)
         };
+        let total = |step: &Step, x: &DVector<f64>, p: &DMatrix<f64>| drift_of(&e_total, step, x, p);
         let every = ((cfg.history_s / cfg.update_s).round() as usize).max(1);
         let mut hist = Vec::new();
         let record =
@@ -116,10 +122,10 @@ impl Forward {
                 }
             };
         record(m - 1, last, &xs, &ps, &mut hist);
-        let (drift_end, drift_end_std) = total(last, &xs, &ps);
+        let (drift_end, drift_end_std) = drift_of(&e_carried, last, &xs, &ps);
         // Covariance of the thermal model's end drift with k_z (unconditioned; the last step's smoothed = filtered P).
         let end_coeff_cov = k_th.map_or(f64::NAN, |k| {
-            let mut a = e_total.clone();
+            let mut a = e_carried.clone();
             a[k] = last.dtemp;
             (&ps * a)[k]
         });
