@@ -142,3 +142,38 @@ def test_simulated_law_reads_the_campaigns_scenarios():
         assert k1[i] == t.k1_deg_h_per_c == 2e-4
         assert eps[i] == pytest.approx(scn.gyro.bias_deg_h[2] + 2e-4 * (t_b[i] - t.t0_c), rel=1e-12)
     assert len(set(eps - 2e-4 * t_b)) == 3  # each run its own bias
+
+
+def test_compare_laws_reports_the_limit_and_the_summary_says_it():
+    from gyrodrift.fleet.law_study import compare_laws
+    from gyrodrift.fleet.study_report import law_lines
+
+    runs, theta, _ = monte_carlo_runs(np.random.default_rng(9))
+    n = 300
+    runs = runs.select(np.arange(n))
+    theta = theta[:n]
+    runs.columns |= {
+        "error": np.array([None] * n, dtype=object),
+        "temp_end_c": np.full(n, 30.0),
+        "drift_deg_h": np.full(n, THETA0[0]),
+        "truth_law_eps_ref_deg_h": np.full(n, THETA0[0]),
+        "truth_law_k1_deg_h_per_c": np.full(n, THETA0[1]),
+        "drift_smoother_deg_h": theta[:, 0],
+        "drift_smoother_std_deg_h": np.full(n, math.sqrt(P[0, 0])),
+        "smoother_coeff_deg_h_per_c": theta[:, 1],
+        "smoother_coeff_std_deg_h_per_c": np.full(n, math.sqrt(P[1, 1])),
+        "smoother_end_coeff_cov": np.full(n, P[0, 1]),
+        "smoother_coeff_prior_std_deg_h_per_c": np.full(n, 1e30),
+    }
+    laws = compare_laws(runs, theta[:, 0], (THETA0[1], 1e3), seed=0)  # a prior that adds nothing
+    limit = laws["limit"]["groups"]["all"]
+    row = limit["laws"]["identified law"]
+    assert limit["n"] == n and "n_simulated" not in limit  # no campaign: no simulated law
+    assert row["predicted_identification_rms_nmi"] == pytest.approx(math.sqrt(np.trace(J @ P @ J.T)) / NMI_M, rel=1e-6)
+    assert row["observed_rms_nmi"] == pytest.approx(laws["groups"]["all"]["methods"]["identified law"]["rms_final_nmi"])
+    assert row["ratio"] == pytest.approx(1.0, abs=0.15)  # 300 draws
+    doc = {"drift_laws": laws}
+    (line,) = [s for s in law_lines(doc) if s.startswith("Physical limit of the identified law, all:")]
+    assert f"predicted RMS {row['predicted_rms_nmi']:.3g} nmi" in line
+    laws["limit"] = None  # a study.json written before the limit: no line
+    assert not [s for s in law_lines(doc) if s.startswith("Physical limit")]
