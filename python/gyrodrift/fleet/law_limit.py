@@ -28,10 +28,10 @@ linear-Gaussian model of the two terms:
   ``2 s_future^2`` is a lower bound of E|e|^2 for every law identified from the 16 h, however good.
 
 So E|e|^2 = tr(J P J') + 2 s^2 (`predicted_mean_square_nmi2`), and the probability that |e| < 1 nmi is that of a
-zero-mean 2-D Gaussian with covariance J P J' + s^2 I (`share_within`). Where the simulated law is known
-(`simulated_law`: the campaign's scenario of each run, its z-gyro bias plus k1 (T_b - t0_c), with no k2, k3, bias
-instability or rate random walk) the observed parts are reported beside the predicted ones: |J (theta - theta_0)|,
-|w|, and the z-scores of eps_b's and k1's errors against P (`limit_report`).
+zero-mean 2-D Gaussian with covariance J P J' + s^2 I (the planner's `gyrodrift.procedure.plan.norm_cdf`). Where the
+simulated law is known (`simulated_law`: the campaign's scenario of each run, its z-gyro bias plus k1 (T_b - t0_c),
+with no k2, k3, bias instability or rate random walk) the observed parts are reported beside the predicted ones:
+|J (theta - theta_0)|, |w|, and the z-scores of eps_b's and k1's errors against P (`limit_report`).
 """
 
 from __future__ import annotations
@@ -47,12 +47,8 @@ __all__ = [
     "limit_report",
     "noise_floor_std_nmi",
     "predicted_mean_square_nmi2",
-    "share_within",
     "simulated_law",
 ]
-
-_NODES = 64
-"""Gauss-Legendre nodes of `share_within`'s one-dimensional integral (smooth after the sine substitution)."""
 
 
 def _column(runs, name: str) -> np.ndarray:
@@ -105,28 +101,6 @@ def predicted_mean_square_nmi2(sensitivity, cov, floor_std_nmi) -> np.ndarray:
     return np.einsum("nij,njk,nik->n", j, np.asarray(cov, float), j) + 2.0 * np.asarray(floor_std_nmi, float) ** 2
 
 
-def share_within(cov_nmi2, radius_nmi: float = 1.0) -> np.ndarray:
-    """P(|e| < `radius_nmi`) for e ~ N(0, C) in the plane, C `cov_nmi2` of shape (..., 2, 2) [nmi^2].
-
-    With C's eigenvalues l1 >= l2, |e|^2 = l1 z1^2 + l2 z2^2 (z standard normal), so the probability is
-    ``int phi(x) erf(sqrt((r^2 - l1 x^2) / (2 l2))) dx`` over |x| < r / sqrt(l1); x = (r / sqrt(l1)) sin(u) makes the
-    integrand smooth for Gauss-Legendre. l2 = 0 is the one-dimensional ``erf(r / sqrt(2 l1))``."""
-    from scipy.special import erf
-
-    lam = np.linalg.eigvalsh(np.asarray(cov_nmi2, float))  # ascending
-    l2, l1 = np.maximum(lam[..., 0], 0.0)[..., None], np.maximum(lam[..., 1], 0.0)[..., None]
-    r = float(radius_nmi)
-    u, w = np.polynomial.legendre.leggauss(_NODES)
-    u, w = 0.5 * math.pi * u, 0.5 * math.pi * w
-    with np.errstate(divide="ignore", invalid="ignore"):
-        a = r / np.sqrt(l1)
-        x = a * np.sin(u)
-        inner = np.where(l2 > 0.0, erf(r * np.cos(u) / np.sqrt(2.0 * l2)), 1.0)
-        p = np.sum(w * np.exp(-0.5 * x * x) / math.sqrt(2.0 * math.pi) * inner * a * np.cos(u), axis=-1)
-        p = np.where(l1[..., 0] > 0.0, p, 1.0)
-    return np.clip(p, 0.0, 1.0)
-
-
 def simulated_law(campaign, runs) -> tuple[np.ndarray, np.ndarray]:
     """The simulated law of each run about the truth's T_ref T_b (``truth_law_t_ref_c``): (eps_b [deg/h], k1
     [deg/h/degC]) from its scenario in `campaign` (`gyrodrift.fleet.spec.Campaign`): the z-gyro bias plus
@@ -160,6 +134,7 @@ def limit_report(runs, laws: dict, finals: dict, groups: dict, *, future_hours: 
     predicted and observed shares under 1 nmi at 72 h, and with the simulated law the observed identification RMS
     and the z-scores (rms and mean) of eps_b's and k1's errors."""
     from gyrodrift.earth import NMI_M
+    from gyrodrift.procedure.plan import norm_cdf
 
     sens = final_sensitivity(runs)
     s = noise_floor_std_nmi(runs)
@@ -172,7 +147,9 @@ def limit_report(runs, laws: dict, finals: dict, groups: dict, *, future_hours: 
         theta = np.stack([np.asarray(eps, float), np.asarray(k1, float)], axis=-1)
         ident = predicted_mean_square_nmi2(sens, cov, np.zeros(len(runs)))
         j = sens / NMI_M
-        per_law[name] = (theta, np.asarray(cov, float), ident, share_within(j @ cov @ np.swapaxes(j, 1, 2) + floor_cov))
+        total = j @ cov @ np.swapaxes(j, 1, 2) + floor_cov
+        share = np.array([norm_cdf(c, 1.0) if np.all(np.isfinite(c)) else math.nan for c in total])
+        per_law[name] = (theta, np.asarray(cov, float), ident, share)
     out: dict[str, Any] = {"groups": {}}
     for group, mask in groups.items():
         m = np.asarray(mask, bool) & np.isfinite(s)
