@@ -13,6 +13,7 @@ import operator
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
+from scipy.linalg import lapack
 
 from gyrodrift.learn.kernels import check_sigma, rbf_from_squared_distances
 from gyrodrift.learn.lssvm_system import (
@@ -92,11 +93,14 @@ def rbf_batch_errors(
     500 loo     159 ms (loop)       201 ms           193 ms                524 ms
     ==========  ==================  ===============  ====================  ========================
 
-    * n <= 32 (the paper has n = 22): the candidates are stacked into an (m, n, n) array and
-      factorised by ``np.linalg.cholesky``, then ``np.linalg.inv`` of the triangular factors; this
-      removes the per-candidate Python and LAPACK-wrapper overhead (about 15 us per candidate), which
-      dominates at this size. One non-PD candidate makes the stacked Cholesky raise for all of them;
-      the function then falls back to the loop below, which flags candidates individually.
+    * n <= 32 (the paper has n = 22): the candidates' kernels, products and reductions are computed on
+      one (m, n, n) stack, which removes the per-candidate Python overhead of the public functions (their
+      validation and copies), dominant at this size; each ``H^-1`` comes from LAPACK ``dpotrf`` and
+      ``dpotri`` on its slice of the stack, in place (a non-PD candidate is flagged alone). Until
+      2026-11-27 the stack went through ``np.linalg.cholesky`` and ``np.linalg.inv`` of the factors and a
+      product ``L^-T L^-1`` for the condition number: the paper-size call (m = 30, n = 22, one BLAS thread)
+      took 0.74 ms against 0.57 ms now (best of 15 x 100 calls, thread CPU time, load average 8 on the
+      shared 2-core machine; docs/studies/2026-11-27-learning-speed.md, "reproduce on two processes").
     * n > 32: a Python loop over candidates calling LAPACK ``dpotrf``/``dpotrs`` (and ``dtrtri`` for
       "loo") directly. numpy's stacked routines have no triangular solve or inverse, so the stack
       needs a general inverse of each factor, 3-7x slower than ``dtrtri``/``dpotrs`` at n >= 100,
@@ -139,10 +143,7 @@ class BatchErrors:
                 raise ValueError(f"{name}[{bad[0]}] must be a finite number > 0, got {float(values[bad[0]])!r}")
         D, y, kind, w, cache = self.D, self.y, self.kind, self.w, self.cache
         if D.shape[0] <= STACKED_MAX_N:
-            try:
-                return _rbf_batch_stacked(D, y, g, sg, kind, w)
-            except np.linalg.LinAlgError:
-                pass  # a non-PD candidate spoils the whole stack: redo candidate by candidate
+            return _rbf_batch_stacked(D, y, g, sg, kind, w)
         if cache is not None and not cache.serves(D, w):
             raise ValueError("cache belongs to another training set (EigenCache(sqdist, weights) of these)")
         return _rbf_batch_loop(D, y, g, sg, kind, w, self.threads, cache)
@@ -164,32 +165,39 @@ STACKED_MAX_N = 32
 
 
 def _rbf_batch_stacked(D, y, g, sg, kind, w=None):
-    """All candidates at once: ``np.linalg.cholesky`` and a triangular inverse on an (m, n, n) stack.
-
-    Raises ``LinAlgError`` if any candidate is not positive definite.
-    """
-    n = D.shape[0]
+    """All candidates on one (m, n, n) stack: the kernels, the products and the reductions in numpy on the whole
+    stack, each ``H^-1`` by LAPACK ``dpotrf`` + ``dpotri`` (the inverse from the Cholesky factor, in place: about 10 us
+    a candidate at n = 22, where numpy's stacked ``cholesky`` and ``inv`` of the factor took twice that; see
+    `rbf_batch_errors`' Notes). A candidate that is not positive definite gets a row of +inf."""
+    n, m = D.shape[0], g.size
     H = rbf_from_squared_distances(D, sg[:, None, None])
-    H[:, np.arange(n), np.arange(n)] += 1.0 / g[:, None] if w is None else 1.0 / (g[:, None] * w[None, :])
+    diag = np.arange(n)
+    H[:, diag, diag] += 1.0 / g[:, None] if w is None else 1.0 / (g[:, None] * w[None, :])
     anorm = np.abs(H).sum(axis=1).max(axis=1)  # ||H||_1 (H symmetric)
-    L = np.linalg.cholesky(H)  # lower, H = L L'
-    # No stacked triangular inverse in numpy: inv() of the triangular factor (LU, O(n^3) like dtrtri
-    # but with a larger constant) is still the fastest for small n; H^-1 = L^-T L^-1.
-    Linv = np.linalg.inv(L)
-    B = np.column_stack([np.ones(n), y])
-    pq = np.swapaxes(Linv, 1, 2) @ (Linv @ B)
+    pd = np.ones(m, dtype=bool)
+    for j in range(m):
+        # H[j].T (= H[j]) is Fortran-ordered: LAPACK works in place, the upper triangle of H[j] ends up holding H^-1's
+        U, info = lapack.dpotrf(H[j].T, lower=1, clean=0, overwrite_a=1)
+        if info == 0:
+            _, info = lapack.dpotri(U, lower=1, overwrite_c=1)
+        pd[j] = info == 0
+    upper, lower = np.triu_indices(n, 1)
+    Hinv = H
+    Hinv[:, lower, upper] = Hinv[:, upper, lower]  # the whole symmetric H^-1
+    Hinv[~pd] = 0.0  # rows refused below
+    pq = Hinv @ np.column_stack([np.ones(n), y])
     p, q = pq[:, :, 0], pq[:, :, 1]
     s = p.sum(axis=1, keepdims=True)
-    alpha = q - (q.sum(axis=1, keepdims=True) / s) * p
-    if kind == "train":
-        out = alpha / g[:, None] if w is None else alpha / (g[:, None] * w[None, :])
-    else:
-        hinv_diag = np.einsum("mki,mki->mi", Linv, Linv)
-        out = alpha / (hinv_diag - p * p / s)
-    # The exact 1-norm condition number (>= the dpocon estimate LSSVR.fit uses, so a candidate kept here is
-    # never refused by the final fit): small stacks, one more (m, n, n) product.
-    cond = anorm * np.abs(np.swapaxes(Linv, 1, 2) @ Linv).sum(axis=1).max(axis=1)
-    out[~(cond < COND_REFUSE)] = np.inf
+    with np.errstate(divide="ignore", invalid="ignore"):
+        alpha = q - (q.sum(axis=1, keepdims=True) / s) * p
+        if kind == "train":
+            out = alpha / g[:, None] if w is None else alpha / (g[:, None] * w[None, :])
+        else:
+            out = alpha / (Hinv[:, diag, diag] - p * p / s)
+    # The exact 1-norm condition number (>= the dpocon estimate LSSVR.fit uses, so a candidate kept here is never
+    # refused by the final fit), from the inverse at hand.
+    cond = anorm * np.abs(Hinv).sum(axis=1).max(axis=1)
+    out[~(pd & (cond < COND_REFUSE))] = np.inf
     return out
 
 
