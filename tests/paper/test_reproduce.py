@@ -7,8 +7,8 @@ import pytest
 from click.testing import CliRunner
 
 from gyrodrift.cli import main
-from gyrodrift.paper.report import summary_lines
-from gyrodrift.paper.reproduce import reproduce
+from gyrodrift.paper.report import FIGURES_ELSEWHERE, REPORT_FIGURES, figure_png, summary_lines
+from gyrodrift.paper.reproduce import SerialExecutor, reproduce, run_reproduction
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 FAMILIES = {
@@ -183,18 +183,27 @@ def test_physics_baseline_is_the_closed_form(run):
 
 
 @pytest.mark.slow
-def test_deterministic_for_a_seed(run, tmp_path):
+def test_deterministic_for_a_seed_wherever_the_methods_run(run):
+    # the fixture ran the methods after the paper's rows in a forked worker process; here they run in this process
+    # (as where the platform cannot fork): the same results, number for number
     _, first = run
-    again = reproduce(tmp_path / "again", seed=3, quiet=True)
-    strip = lambda r: [{k: v for k, v in m.items()} for m in r["methods"]]  # noqa: E731
-    assert strip(again) == strip(first)
+    with SerialExecutor() as pool:
+        again = run_reproduction(seed=3, quiet=True, pool=pool)
+    assert {k: v for k, v in again.items() if k != "elapsed_s"} == {k: v for k, v in first.items() if k != "elapsed_s"}
+
+
+def test_figures_drawn_in_the_worker_are_those_drawn_here(run):
+    out, results = run
+    for name in REPORT_FIGURES:  # the fixture drew FIGURES_ELSEWHERE in its worker process
+        assert figure_png(name, results) == (out / f"{name}.png").read_bytes(), name
+    assert set(FIGURES_ELSEWHERE) < set(REPORT_FIGURES)
 
 
 def test_failed_run_leaves_previous_results(run, tmp_path, monkeypatch):
     out, _ = run
     before = {p.name: p.read_bytes() for p in out.iterdir()}
 
-    def boom(results, stage):
+    def boom(results, stage, pool):
         stage.file("report.md").write_text("half")
         raise RuntimeError("disk full")
 
@@ -222,7 +231,9 @@ def test_cli_prints_a_summary(run, tmp_path, monkeypatch):
     # the command's part: the seed passed on, the summary printed, the files written (the work is the fixture's,
     # its results handed back: test_deterministic_for_a_seed runs it again)
     seeds = []
-    monkeypatch.setattr("gyrodrift.paper.reproduce.run_reproduction", lambda seed, quiet: seeds.append(seed) or run[1])
+    monkeypatch.setattr(
+        "gyrodrift.paper.reproduce.run_reproduction", lambda seed, quiet, pool: seeds.append(seed) or run[1]
+    )
     r = CliRunner().invoke(main, ["reproduce", "--out", str(tmp_path / "r"), "--seed", "1"])
     assert r.exit_code == 0, r.output
     assert seeds == [1]

@@ -30,11 +30,15 @@ the selected model's identified drift compensated, and with the paper's Table 3 
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import math
+import multiprocessing
+import signal
 import time
 import warnings
-from concurrent.futures import ThreadPoolExecutor
+from collections.abc import Iterator
+from concurrent.futures import Executor, Future, ProcessPoolExecutor, ThreadPoolExecutor
 from importlib import resources
 from typing import Any
 
@@ -170,66 +174,105 @@ def _model_entry(name: str, family: str, model: DriftModel, data, **extra) -> di
     )
 
 
-def run_reproduction(seed: int = 0, quiet: bool = True) -> dict:
+def run_reproduction(seed: int = 0, quiet: bool = True, pool: Executor | None = None) -> dict:
     """Run every method on the paper's data; the JSON-ready results (see the module docstring).
 
     Deterministic for a given ``seed`` (each tuned method derives its own generator from it). Tuned values on
     the edge of their search box are recorded per method (``on_search_bound``) instead of warned about, and so are
-    training runs whose interval calibration score is wild (``interval_wild_runs``).
+    training runs whose interval calibration score is wild (``interval_wild_runs``). ``pool``: the executor of
+    `worker_pool` that runs the methods after the paper's rows beside this process (None: one made for this call);
+    the results do not depend on it.
     """
     seed = check_seed(seed, "seed")  # an int >= 0, before any work
+    if pool is not None:
+        return _run_reproduction(seed, quiet, pool)
+    with worker_pool() as own:
+        return _run_reproduction(seed, quiet, own)
+
+
+@contextlib.contextmanager
+def worker_pool() -> Iterator[Executor]:
+    """One worker beside this process for `run_reproduction`'s methods and the report's figures: a process forked
+    from this one (it starts with this process's modules imported and its data loaded: no start-up), or, where the
+    platform cannot fork, a `SerialExecutor` (the tasks run in this process). A context manager; leaving it early
+    (an error, Ctrl-C, which the worker ignores) drops the tasks not yet started.
+
+    Not a thread: the tuner limits the BLAS's threads and the methods silence warnings, both for the whole process,
+    so that two tunings in two threads would change each other's rounding (the last bits of a fitness)."""
+    if "fork" not in multiprocessing.get_all_start_methods():
+        yield SerialExecutor()
+        return
+    pool = ProcessPoolExecutor(
+        max_workers=1,
+        mp_context=multiprocessing.get_context("fork"),
+        initializer=signal.signal,
+        initargs=(signal.SIGINT, signal.SIG_IGN),
+    )
+    try:
+        yield pool
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+class SerialExecutor(Executor):
+    """An executor that runs each task in the calling thread when it is submitted (a finished future)."""
+
+    def submit(self, fn, /, *args, **kwargs) -> Future:
+        future: Future = Future()
+        try:
+            future.set_result(fn(*args, **kwargs))
+        except BaseException as exc:  # handed to the caller by future.result(), as a pool would
+            future.set_exception(exc)
+        return future
+
+
+@contextlib.contextmanager
+def _recorded_warnings() -> Iterator[None]:
+    """Search-bound and interval-outlier warnings silenced: `_model_entry` records them per method."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SearchBoundWarning)
         warnings.simplefilter("ignore", IntervalOutlierWarning)  # recorded per method (interval_wild_runs)
-        return _run_reproduction(seed, quiet)
+        yield
 
 
-def _run_reproduction(seed: int, quiet: bool) -> dict:
+def _run_reproduction(seed: int, quiet: bool, pool: Executor) -> dict:
     data = load_paper()
-    started = time.perf_counter()
-    methods: list[dict] = []
-    n_tuned = 3 * len(REPORTED_ENCODINGS)
-    with progress(n_tuned * PAPER_SETTINGS["max_iter"], "reproduce: tuning", quiet, unit="it") as bar:
-        tick = lambda _res: bar.update(1) and None  # noqa: E731 - one-line progress hook
-        seeds = np.random.SeedSequence(seed).spawn(3 * len(REPORTED_ENCODINGS))
-        for k, enc in enumerate(REPORTED_ENCODINGS):
-            common: dict[str, Any] = dict(
-                encoding=enc, scaling=SCALING, n_particles=PAPER_SETTINGS["n_particles"], quiet=True
-            )
-            cpso: dict[str, Any] = dict(
-                common,
-                method="cpso",
-                max_iter=PAPER_SETTINGS["max_iter"],
-                chaos_steps=PAPER_SETTINGS["chaos_steps"],
-                callback=tick,
-            )
-            m = fit_drift_model(data.train, objective="train_mae", rng=np.random.default_rng(seeds[3 * k]), **cpso)
-            methods.append(_model_entry(f"CPSO-LSSVM, paper settings, train MAE ({enc})", "cpso_paper", m, data))
-            m = fit_drift_model(data.train, objective="loo_mae", rng=np.random.default_rng(seeds[3 * k + 1]), **cpso)
-            assert m.tuning is not None
-            cpso_nfev = m.tuning.nfev
-            methods.append(_model_entry(f"CPSO-LSSVM, LOO MAE ({enc})", "cpso_loo", m, data))
-            pso_iter = math.ceil(cpso_nfev / PAPER_SETTINGS["n_particles"]) - 1
-            m = fit_drift_model(
-                data.train,
-                objective="loo_mae",
-                method="pso",
-                max_iter=pso_iter,
-                chaos_steps=0,
-                rng=np.random.default_rng(seeds[3 * k + 2]),
-                callback=lambda r, pso_iter=pso_iter: bar.update(PAPER_SETTINGS["max_iter"] / pso_iter) and None,
-                **common,
-            )
-            methods.append(
-                _model_entry(f"PSO-LSSVM (no chaos), LOO MAE, equal evaluations ({enc})", "pso_loo", m, data)
-            )
     claims = load_paper_claims()
-    chosen = min((m for m in methods if m["family"] == "cpso_loo"), key=lambda m: m["loo_mae_deg_h"])
-    # the Fig. 4/5 navigations (the Rust core, which releases the GIL) run on the other core beside the fits below
-    with ThreadPoolExecutor(max_workers=1) as pool:
-        navigation = pool.submit(position_error_72h, data, chosen, claims)
-        _other_methods(data, seed, methods)
-        position = navigation.result()
+    started = time.perf_counter()
+    # The methods after the paper's rows run in the worker, one task each, while this process tunes the paper's rows;
+    # the Fig. 4/5 navigations (the Rust core, which releases the GIL) start in a thread as soon as the LOO rows have
+    # chosen the model. Every method draws from its own seed: where and when it runs changes no number.
+    elsewhere = [pool.submit(_other_method, data, seed, k) for k in range(len(OTHER_METHODS))]
+    n_rows = 3 * len(REPORTED_ENCODINGS)
+    with progress(n_rows + len(elsewhere), "reproduce: fits", quiet, unit="fit") as bar:
+        finished = 0
+
+        def tick() -> None:  # one fit of this process, and the worker's finished meanwhile
+            nonlocal finished
+            now = sum(f.done() for f in elsewhere)
+            bar.update(1 + now - finished)
+            finished = now
+
+        with _recorded_warnings():
+            seeds = np.random.SeedSequence(seed).spawn(n_rows)
+            rows: dict[tuple[str, str], dict] = {}
+            for k, enc in enumerate(REPORTED_ENCODINGS):  # the LOO rows first: they choose the navigated model
+                rows[enc, "cpso_loo"] = _paper_row(data, enc, "cpso_loo", seeds[3 * k + 1])
+                tick()
+            chosen = min((rows[enc, "cpso_loo"] for enc in REPORTED_ENCODINGS), key=lambda m: m["loo_mae_deg_h"])
+            with ThreadPoolExecutor(max_workers=1) as thread:
+                navigation = thread.submit(position_error_72h, data, chosen, claims)
+                for k, enc in enumerate(REPORTED_ENCODINGS):
+                    rows[enc, "cpso_paper"] = _paper_row(data, enc, "cpso_paper", seeds[3 * k])
+                    tick()
+                    pso_iter = math.ceil(rows[enc, "cpso_loo"]["nfev"] / PAPER_SETTINGS["n_particles"]) - 1
+                    rows[enc, "pso_loo"] = _paper_row(data, enc, "pso_loo", seeds[3 * k + 2], pso_iter)
+                    tick()
+                others = [f.result() for f in elsewhere]
+                bar.update(len(elsewhere) - finished)
+                position = navigation.result()
+    methods = [rows[enc, family] for enc in REPORTED_ENCODINGS for family in ("cpso_paper", "cpso_loo", "pso_loo")]
+    methods += [entry for entries in others for entry in entries]
     return {
         "gyrodrift_version": __version__,
         "seed": seed,
@@ -261,32 +304,83 @@ def _run_reproduction(seed: int, quiet: bool) -> dict:
     }
 
 
-def _other_methods(data, seed: int, methods: list[dict]) -> None:
-    """Append the methods after the paper's rows to ``methods``: the latitude-free encodings and the hybrid, the grid,
-    the physics baselines and the paper's parameters (module docstring)."""
-    new_seeds = np.random.SeedSequence([seed, 7]).spawn(len(PHYSICS_VARIANTS))  # apart from the paper rows' seeds
-    for k, (enc, target) in enumerate(PHYSICS_VARIANTS):
-        m = fit_drift_model(
-            data.train,
-            encoding=enc,
-            target=target,
-            scaling=SCALING,
-            objective="loo_mae",
-            method="cpso",
-            n_particles=PAPER_SETTINGS["n_particles"],
-            max_iter=PAPER_SETTINGS["max_iter"],
-            chaos_steps=PAPER_SETTINGS["chaos_steps"],
-            rng=np.random.default_rng(new_seeds[k]),
-            quiet=True,
-        )
-        hybrid = ", hybrid: inversion + learned correction" if target == "residual" else ""
-        methods.append(_model_entry(f"CPSO-LSSVM, LOO MAE ({enc}{hybrid})", "physics_encoding", m, data, target=target))
-    for enc in REPORTED_ENCODINGS:
-        m = fit_drift_model(data.train, encoding=enc, scaling=SCALING, objective="loo_mae", method="grid", quiet=True)
-        assert m.tuning is not None
-        m.tuning.settings["grid_size"] = GRID_SIZE
-        methods.append(_model_entry(f"grid-search LSSVM, LOO MAE ({enc})", "grid_loo", m, data))
-    methods.append(
+def _paper_row(data, enc: str, family: str, seed, pso_iter: int = 0) -> dict:
+    """One of the paper's rows (``family`` cpso_paper, cpso_loo or pso_loo; module docstring) for encoding ``enc``,
+    its swarm seeded by ``seed`` (a `numpy.random.SeedSequence`); ``pso_iter``: the pso_loo row's iterations (as
+    many evaluations as the encoding's cpso_loo row used)."""
+    common: dict[str, Any] = dict(
+        encoding=enc,
+        scaling=SCALING,
+        n_particles=PAPER_SETTINGS["n_particles"],
+        quiet=True,
+        rng=np.random.default_rng(seed),
+    )
+    if family == "pso_loo":
+        m = fit_drift_model(data.train, objective="loo_mae", method="pso", max_iter=pso_iter, chaos_steps=0, **common)
+        return _model_entry(f"PSO-LSSVM (no chaos), LOO MAE, equal evaluations ({enc})", family, m, data)
+    cpso = dict(common, method="cpso", max_iter=PAPER_SETTINGS["max_iter"], chaos_steps=PAPER_SETTINGS["chaos_steps"])
+    if family == "cpso_paper":
+        m = fit_drift_model(data.train, objective="train_mae", **cpso)
+        return _model_entry(f"CPSO-LSSVM, paper settings, train MAE ({enc})", family, m, data)
+    m = fit_drift_model(data.train, objective="loo_mae", **cpso)
+    return _model_entry(f"CPSO-LSSVM, LOO MAE ({enc})", family, m, data)
+
+
+OTHER_METHODS: tuple[tuple[str, ...], ...] = (
+    *((("physics_encoding", enc, target) for enc, target in PHYSICS_VARIANTS)),
+    *(("grid_loo", enc) for enc in REPORTED_ENCODINGS),
+    ("baselines",),
+    *(("paper_params", enc) for enc in REPORTED_ENCODINGS),
+)
+"""The methods after the paper's rows, in the order of the results: `_other_method`'s tasks."""
+
+
+def _other_method(data, seed: int, k: int) -> list[dict]:
+    """The entries of ``OTHER_METHODS[k]``: a latitude-free encoding or the hybrid, the grid, the physics baselines
+    (inversion and latitude line) or the paper's parameters of one encoding (three scalings; module docstring)."""
+    family, *args = OTHER_METHODS[k]
+    with _recorded_warnings():
+        if family == "physics_encoding":
+            enc, target = args
+            variant = PHYSICS_VARIANTS.index((enc, target))
+            new_seed = np.random.SeedSequence([seed, 7]).spawn(len(PHYSICS_VARIANTS))[variant]  # not the paper rows'
+            m = fit_drift_model(
+                data.train,
+                encoding=enc,
+                target=target,
+                scaling=SCALING,
+                objective="loo_mae",
+                method="cpso",
+                n_particles=PAPER_SETTINGS["n_particles"],
+                max_iter=PAPER_SETTINGS["max_iter"],
+                chaos_steps=PAPER_SETTINGS["chaos_steps"],
+                rng=np.random.default_rng(new_seed),
+                quiet=True,
+            )
+            hybrid = ", hybrid: inversion + learned correction" if target == "residual" else ""
+            return [_model_entry(f"CPSO-LSSVM, LOO MAE ({enc}{hybrid})", family, m, data, target=target)]
+        if family == "grid_loo":
+            (enc,) = args
+            m = fit_drift_model(
+                data.train, encoding=enc, scaling=SCALING, objective="loo_mae", method="grid", quiet=True
+            )
+            assert m.tuning is not None
+            m.tuning.settings["grid_size"] = GRID_SIZE
+            return [_model_entry(f"grid-search LSSVM, LOO MAE ({enc})", family, m, data)]
+        if family == "baselines":
+            return _baselines(data)
+        (enc,) = args
+        out = []
+        for scaling in ("none", "standard", "minmax"):
+            m = fit_drift_model(data.train, encoding=enc, scaling=scaling, gamma=PAPER_GAMMA, sigma=PAPER_SIGMA)
+            out.append(_model_entry(f"LSSVM with the paper's gamma, sigma ({enc}, {scaling} scaling)", family, m, data))
+        return out
+
+
+def _baselines(data) -> list[dict]:
+    """The untrained physics inversion and the least-squares line on the latitude error."""
+    line = fit_latitude_line(data.train)
+    return [
         score(
             "physics inversion of the 12 h latitude error",
             "physics_inversion",
@@ -295,10 +389,7 @@ def _other_methods(data, seed: int, methods: list[dict]) -> None:
             data.train,
             physics_inversion(data.train),
             formula="drift = w_ie * (lat_12h - lat0) / (cos(lat0) * (1 - cos(w_ie * 12 h))), lat0 = 28.222 deg",
-        )
-    )
-    line = fit_latitude_line(data.train)
-    methods.append(
+        ),
         score(
             "least-squares line on the latitude error",
             "latitude_line",
@@ -308,14 +399,8 @@ def _other_methods(data, seed: int, methods: list[dict]) -> None:
             line.predict(data.train.lat_err_arcsec.reshape(-1, 1)),
             slope_deg_h_per_arcsec=float(line.coef_[0]),
             intercept_deg_h=float(line.intercept_),
-        )
-    )
-    for enc in REPORTED_ENCODINGS:
-        for scaling in ("none", "standard", "minmax"):
-            m = fit_drift_model(data.train, encoding=enc, scaling=scaling, gamma=PAPER_GAMMA, sigma=PAPER_SIGMA)
-            methods.append(
-                _model_entry(f"LSSVM with the paper's gamma, sigma ({enc}, {scaling} scaling)", "paper_params", m, data)
-            )
+        ),
+    ]
 
 
 def position_error_72h(data, chosen: dict, claims: dict) -> dict:
@@ -381,8 +466,9 @@ def reproduce(out_dir="gyrodrift-reproduce", seed: int = 0, quiet: bool = False)
 
     seed = check_seed(seed, "seed")
     out = output_folder(out_dir, "reproduce", report.REPORT_FILES)
-    results = run_reproduction(seed=seed, quiet=quiet)
-    with out.publish() as stage:
-        write_json(results, stage.file("results.json"))
-        report.write_report(results, stage)
+    with worker_pool() as pool:
+        results = run_reproduction(seed=seed, quiet=quiet, pool=pool)
+        with out.publish() as stage:
+            write_json(results, stage.file("results.json"))
+            report.write_report(results, stage, pool)
     return results
