@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import importlib
 import math
 import multiprocessing
 import signal
@@ -260,6 +261,10 @@ def _run_reproduction(seed: int, quiet: bool, pool: Executor) -> dict:
                 rows[enc, "cpso_loo"] = _paper_row(data, enc, "cpso_loo", seeds[3 * k + 1])
                 tick()
             chosen = min((rows[enc, "cpso_loo"] for enc in REPORTED_ENCODINGS), key=lambda m: m["loo_mae_deg_h"])
+            # The navigation's modules import pyarrow, which scikit-learn's input checks in this thread look up in
+            # sys.modules: half-imported by the thread, it failed them ("partially initialized module 'pyarrow' has
+            # no attribute 'Table'"). Imported here first.
+            importlib.import_module("pyarrow")
             with ThreadPoolExecutor(max_workers=1) as thread:
                 navigation = thread.submit(position_error_72h, data, chosen, claims)
                 for k, enc in enumerate(REPORTED_ENCODINGS):
