@@ -115,11 +115,23 @@ def _label(m: dict, chosen: dict) -> str:
 
 
 def make_figures(results: dict, pool: Executor | None = None) -> dict[str, bytes]:
-    """The report's PNG figures, {name: PNG bytes} for the names in `REPORT_FIGURES`. ``pool``: an executor
-    (`gyrodrift.paper.reproduce.worker_pool`) that draws half of them beside this process (the same bytes)."""
-    there = {name: pool.submit(figure_png, name, results) for name in FIGURES_ELSEWHERE} if pool is not None else {}
-    here = {name: figure_png(name, results) for name in REPORT_FIGURES if name not in there}
-    return {name: there[name].result() if name in there else here[name] for name in REPORT_FIGURES}
+    """The report's PNG figures, {name: PNG bytes} for the names in `REPORT_FIGURES`, drawn in this process or by
+    ``pool`` (an executor: `gyrodrift.paper.reproduce.worker_pool`'s worker, which `load_plotting` prepared while this
+    process was busy; the same bytes)."""
+    if pool is None:
+        return {name: figure_png(name, results) for name in REPORT_FIGURES}
+    drawn = {name: pool.submit(figure_png, name, results) for name in REPORT_FIGURES}
+    return {name: future.result() for name, future in drawn.items()}
+
+
+def load_plotting() -> None:
+    """Import matplotlib's figure and Agg canvas and load its default font: what the first figure of a process pays
+    besides its drawing (about 1 s of CPU, as much as the four figures), done ahead by a worker that will draw."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(1, 1))
+    fig.text(0.5, 0.5, "0")
+    _png(fig)
 
 
 def figure_png(name: str, results: dict) -> bytes:
@@ -317,8 +329,6 @@ _FIGURE_MAKERS = {
     "error_per_run": _error_per_run,
     "position_error_72h": _position_error,
 }
-FIGURES_ELSEWHERE = ("fitness_curve", "pred_vs_true")
-"""The figures `make_figures` draws in its ``pool`` (about half of the drawing's time)."""
 
 
 def _headline(results: dict) -> dict[str, Any]:
@@ -713,7 +723,7 @@ def render_html(blocks: list[tuple], images: dict[str, bytes]) -> str:
 
 def write_report(results: dict, stage: Stage, pool: Executor | None = None) -> None:
     """Write the figures, ``report.md`` and ``report.html`` into `stage` (a `gyrodrift.files.atomic.Stage`; the
-    caller publishes them with ``results.json``); ``pool`` draws half of the figures (`make_figures`)."""
+    caller publishes them with ``results.json``); ``pool`` draws the figures (`make_figures`)."""
     pngs = make_figures(results, pool)
     images = {f"{name}.png": data for name, data in pngs.items()}
     for filename, data in images.items():

@@ -472,6 +472,7 @@ def reproduce(out_dir="gyrodrift-reproduce", seed: int = 0, quiet: bool = False)
     seed = check_seed(seed, "seed")
     out = output_folder(out_dir, "reproduce", report.REPORT_FILES)
     with worker_pool() as pool:
+        pool.submit(report.load_plotting)  # the worker has time to spare beside the paper's rows; it draws the figures
         results = run_reproduction(seed=seed, quiet=quiet, pool=pool)
         with out.publish() as stage:
             write_json(results, stage.file("results.json"))
