@@ -88,18 +88,44 @@ pub struct DriftCurve {
     pub alignment_cov: [[f64; 2]; 2],
 }
 
-/// The free (no measurement) transition of the mission's error over `t` \[s\] (level body).
-fn free_transition(model: &Model, t: f64) -> DMatrix<f64> {
-    let level: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-    let steps = (t.max(0.0) / MISSION_STEP_S).ceil() as usize;
-    let mut out = DMatrix::identity(model.n, model.n);
-    if steps > 0 {
-        let (phi, _) = model.discretise(&level, 0.0, t / steps as f64);
-        for _ in 0..steps {
-            out = &phi * out;
+/// The north and east rows of the free (no measurement) transition of the mission's error (level body) over any
+/// span: E' Phi(60 s)^m tabulated as far as asked, times Phi of the rest of the span (Phi = exp(F t): the same
+/// transition as `ceil(t / 60)` equal steps, to rounding).
+struct FreeRows<'a> {
+    model: &'a Model,
+    step: DMatrix<f64>,
+    /// E' Phi(60 s)^m for m = 0, 1, ... (2 x n each).
+    table: Vec<DMatrix<f64>>,
+}
+
+impl<'a> FreeRows<'a> {
+    const LEVEL: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+    fn new(model: &'a Model) -> Self {
+        let (step, _) = model.discretise(&Self::LEVEL, 0.0, MISSION_STEP_S);
+        let rows = DMatrix::identity(model.n, model.n).rows(POS, 2).into_owned();
+        FreeRows {
+            model,
+            step,
+            table: vec![rows],
         }
     }
-    out
+
+    /// The rows (north, east; 2 x n) of the free transition over `t` \[s\] (0 for t <= 0).
+    fn over(&mut self, t: f64) -> DMatrix<f64> {
+        let t = t.max(0.0);
+        let whole = (t / MISSION_STEP_S).floor() as usize;
+        while self.table.len() <= whole {
+            let next = self.table.last().expect("the table starts with E'") * &self.step;
+            self.table.push(next);
+        }
+        let rest = t - whole as f64 * MISSION_STEP_S;
+        if rest > 0.0 {
+            &self.table[whole] * self.model.discretise(&Self::LEVEL, 0.0, rest).0
+        } else {
+            self.table[whole].clone()
+        }
+    }
 }
 
 /// The smoother's 1-sigma of the z drift carried into navigation at each of `cfg.spans_s`, and its covariance with
@@ -180,7 +206,7 @@ pub fn drift_std_curve(cfg: &PlanConfig) -> Result<DriftCurve, CoreError> {
     let select = navigation_start_selector(n);
     // E[x~_s y'] once the mission runs (module docs).
     let mut cross: Option<DMatrix<f64>> = None;
-    let whole_mission = free_transition(&model, cfg.mission_s);
+    let mut free_rows = FreeRows::new(&model);
     let mut out = DriftCurve {
         drift_std: Vec::with_capacity(cfg.spans_s.len()),
         cross: vec![[0.0; 2]; cfg.spans_s.len()],
@@ -216,15 +242,12 @@ pub fn drift_std_curve(cfg: &PlanConfig) -> Result<DriftCurve, CoreError> {
         if k == k_start {
             // The mission starts from the aligner's leftovers y0 = E x~_a.
             cross = Some(&aligner.joint * &select);
-            let to_end = &whole_mission * &select;
+            let to_end = free_rows.over(cfg.mission_s) * &select;
             let floor = &to_end * &aligner.truth * to_end.transpose();
-            out.alignment_cov = [
-                [floor[(POS, POS)], floor[(POS, POS + 1)]],
-                [floor[(POS + 1, POS)], floor[(POS + 1, POS + 1)]],
-            ];
+            out.alignment_cov = [[floor[(0, 0)], floor[(0, 1)]], [floor[(1, 0)], floor[(1, 1)]]];
             for (i, u) in aligner.pending.drain(..) {
                 let v = &to_end * u;
-                out.cross[i] = [v[POS], v[POS + 1]];
+                out.cross[i] = [v[0], v[1]];
             }
         }
         let t = k as f64 / rate;
@@ -233,8 +256,8 @@ pub fn drift_std_curve(cfg: &PlanConfig) -> Result<DriftCurve, CoreError> {
             match cross.as_ref() {
                 // E[y a'x~] carried freely to the mission's end.
                 Some(c) => {
-                    let u = free_transition(&model, mission_end - t) * (c.transpose() * &a);
-                    out.cross[next_span] = [u[POS], u[POS + 1]];
+                    let u = free_rows.over(mission_end - t) * (c.transpose() * &a);
+                    out.cross[next_span] = [u[0], u[1]];
                 }
                 None => aligner.pending.push((next_span, aligner.joint.transpose() * &a)),
             }
@@ -496,6 +519,33 @@ mod tests {
         let s = curve.drift_std[0];
         let floor = (m.pos_cov[1][1] + curve.alignment_cov[1][1]).sqrt();
         assert!(c.abs() > 0.05 * s * floor && c.abs() < s * floor, "{c} {s} {floor}");
+    }
+
+    #[test]
+    fn the_tabulated_free_rows_match_the_dense_transition() {
+        // The definition: the whole transition in ceil(t / 60 s) equal steps, its north and east rows.
+        let model = Model::new(&plan_config(40.0, &[6.0]).smoother);
+        let level: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        let dense = |t: f64| {
+            let steps = (t / MISSION_STEP_S).ceil() as usize;
+            let mut out = DMatrix::identity(model.n, model.n);
+            if steps > 0 {
+                let (phi, _) = model.discretise(&level, 0.0, t / steps as f64);
+                for _ in 0..steps {
+                    out = &phi * out;
+                }
+            }
+            out.rows(POS, 2).into_owned()
+        };
+        let mut rows = FreeRows::new(&model);
+        for t in [0.0, 37.0, 60.0, 3_605.0, 250_000.0, 76.0 * HOUR + 5.0, 1_000.0] {
+            let (fast, slow) = (rows.over(t), dense(t));
+            // Column by column (each state's own unit), relative to the column's size.
+            for (f, d) in fast.column_iter().zip(slow.column_iter()) {
+                let gap = (f - d).abs().max();
+                assert!(gap <= 1e-10 * d.abs().max(), "t = {t} s: {f} vs {d}");
+            }
+        }
     }
 
     #[test]

@@ -544,6 +544,27 @@ impl Turntable {
         }
     }
 
+    /// A cursor at time t >= 0 \[s\] for [`Turntable::state_at`] and [`Turntable::uniform_at`] from t on, found
+    /// as [`Turntable::state`] finds its segment (no walk through the earlier periods).
+    pub fn cursor_at(&self, t: f64) -> TableCursor {
+        if self.segments.is_empty() || !(self.period > 0.0 && t >= self.period_start) {
+            let seg = self.segments.partition_point(|s| s.t0 <= t).saturating_sub(1);
+            return TableCursor {
+                seg,
+                ..TableCursor::default()
+            };
+        }
+        let mut n_period = ((t - self.period_start) / self.period).floor() as u64;
+        let mut base = n_period as f64 * self.period;
+        if n_period > 0 && t < base + self.period_start {
+            n_period -= 1; // rounding put t just before this period's start
+            base = n_period as f64 * self.period;
+        }
+        let segs = &self.segments[self.n_prefix..];
+        let seg = self.n_prefix + segs.partition_point(|s| s.t0 <= t - base).saturating_sub(1);
+        TableCursor { seg, n_period, base }
+    }
+
     /// If the segment holding time t (found through `cursor`, as in [`Turntable::state_at`]) turns at a
     /// constant rate (a cruise, a dwell, or the whole of `None`), that segment; `None` during ramps. Lets a
     /// caller reuse per-sample trigonometry and evaluate the angle without a segment search.
