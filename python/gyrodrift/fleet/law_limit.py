@@ -27,6 +27,14 @@ linear-Gaussian model of the two terms:
   hours from an exact state, `label_sigma_deg_h` without leftovers) is independent of any 16 h estimate, so
   ``2 s_future^2`` is a lower bound of E|e|^2 for every law identified from the 16 h, however good.
 
+A tighter bound for every law identified from the 16 h (`lower_bound_mean_square_nmi2`), in the same model: with
+w = w_past + w_future (independent increments), e = [J (theta - theta_0) + w_past] + w_future and the bracket a
+function of the 16 h data and their noise only, so E|e|^2 >= 2 s_future^2 + tr Cov(J theta_0 - w_past | data).
+With a = tr(J P J'), P the covariance of theta_0 given the data, and b = 2 (s^2 - s_future^2) >= tr Cov(w_past |
+data), Cauchy-Schwarz on the cross term gives tr Cov(...) >= (sqrt(a) - sqrt(b))^2 where b < a: the most the data
+could do is know the past noise exactly and have it cancel the identification error exactly. The bound is reached
+when they do (tests/fleet/test_law_limit.py's adversarial Monte Carlo).
+
 So E|e|^2 = tr(J P J') + 2 s^2 (`predicted_mean_square_nmi2`), and the probability that |e| < 1 nmi is that of a
 zero-mean 2-D Gaussian with covariance J P J' + s^2 I (the planner's `gyrodrift.procedure.plan.norm_cdf`). Where the
 simulated law is known (`simulated_law`: the campaign's scenario of each run, its z-gyro bias plus k1 (T_b - t0_c),
@@ -45,6 +53,7 @@ __all__ = [
     "final_sensitivity",
     "future_noise_std_nmi",
     "limit_report",
+    "lower_bound_mean_square_nmi2",
     "noise_floor_std_nmi",
     "predicted_mean_square_nmi2",
     "simulated_law",
@@ -85,11 +94,24 @@ def future_noise_std_nmi(runs, hours: float) -> np.ndarray:
 
     out = np.full(len(runs), math.nan)
     lat, arw, vrw = (_column(runs, c) for c in ("lat_deg", "arw_deg_rth", "vrw_ug_rthz"))
+    done: dict[tuple[float, float, float], float] = {}  # runs that share a site and a grade share the analysis
     for i in np.flatnonzero(np.isfinite(lat) & np.isfinite(arw) & np.isfinite(vrw)):
-        noise = SensorNoise(arw_deg_rth=float(arw[i]), vrw_ug_rthz=float(vrw[i]))
-        sigma_deg_h, nmi_per_deg_h = label_sigma_deg_h(float(lat[i]), noise, hours=hours)
-        out[i] = sigma_deg_h * nmi_per_deg_h
+        key = (float(lat[i]), float(arw[i]), float(vrw[i]))
+        if key not in done:
+            noise = SensorNoise(arw_deg_rth=key[1], vrw_ug_rthz=key[2])
+            sigma_deg_h, nmi_per_deg_h = label_sigma_deg_h(key[0], noise, hours=hours)
+            done[key] = sigma_deg_h * nmi_per_deg_h
+        out[i] = done[key]
     return out
+
+
+def lower_bound_mean_square_nmi2(identification_nmi2, floor_std_nmi, future_std_nmi) -> np.ndarray:
+    """The lower bound of E|e|^2 [nmi^2] of any law identified from the 16 h (module docstring): ``2 s_f^2 +
+    max(sqrt(a) - sqrt(b), 0)^2`` with a the identification part tr(J P J') [nmi^2], b = 2 (s^2 - s_f^2) the past
+    noise's (0 if negative), s and s_f the per-axis 1-sigmas of all the noise and of the noise after 16 h [nmi]."""
+    s, s_f = np.asarray(floor_std_nmi, float), np.asarray(future_std_nmi, float)
+    past = np.maximum(2.0 * (s * s - s_f * s_f), 0.0)
+    return 2.0 * s_f * s_f + np.maximum(np.sqrt(np.asarray(identification_nmi2, float)) - np.sqrt(past), 0.0) ** 2
 
 
 def predicted_mean_square_nmi2(sensitivity, cov, floor_std_nmi) -> np.ndarray:
@@ -129,8 +151,9 @@ def limit_report(runs, laws: dict, finals: dict, groups: dict, *, future_hours: 
     `laws`: per method name, ``(eps_b, k1, cov)`` per run (deg/h at T_b, deg/h/degC, (runs, 2, 2)); `finals`: the
     observed 72 h final error [nmi] per method (`gyrodrift.fleet.law_study.compare_laws`); `groups`: the run masks;
     `future_hours`: ``truth_h - features_h``; `simulated`: `simulated_law`'s (eps_b, k1), or None. Per group: the
-    noise floor's predicted RMS ``2 s^2`` (and observed |w| with the simulated law), the future noise's RMS (the
-    lower bound), and per law the predicted RMS (identification part and total), the observed RMS, their ratio, the
+    noise floor's predicted RMS ``2 s^2`` (and observed |w| with the simulated law), the future noise's RMS, and per
+    law the predicted RMS (identification part and total), the lower bound's RMS (`lower_bound_mean_square_nmi2`;
+    NaN without the noise columns), the observed RMS, their ratio, the
     predicted and observed shares under 1 nmi at 72 h, and with the simulated law the observed identification RMS
     and the z-scores (rms and mean) of eps_b's and k1's errors."""
     from gyrodrift.earth import NMI_M
@@ -149,7 +172,8 @@ def limit_report(runs, laws: dict, finals: dict, groups: dict, *, future_hours: 
         j = sens / NMI_M
         total = j @ cov @ np.swapaxes(j, 1, 2) + floor_cov
         share = np.array([norm_cdf(c, 1.0) if np.all(np.isfinite(c)) else math.nan for c in total])
-        per_law[name] = (theta, np.asarray(cov, float), ident, share)
+        bound = lower_bound_mean_square_nmi2(ident, s, s_future)
+        per_law[name] = (theta, np.asarray(cov, float), ident, share, bound)
     out: dict[str, Any] = {"groups": {}}
     for group, mask in groups.items():
         m = np.asarray(mask, bool) & np.isfinite(s)
@@ -164,12 +188,13 @@ def limit_report(runs, laws: dict, finals: dict, groups: dict, *, future_hours: 
             w = n0 + np.einsum("nij,nj->ni", sens, np.nan_to_num(truth))
             entry["n_simulated"] = int(known.sum())
             entry["observed_noise_floor_rms_nmi"] = _rms(np.hypot(w[known, 0], w[known, 1]) / NMI_M)
-        for name, (theta, cov, ident, share) in per_law.items():
+        for name, (theta, cov, ident, share, bound) in per_law.items():
             predicted = math.sqrt(float(np.mean(ident[m] + 2.0 * s[m] ** 2))) if m.any() else math.nan
             observed = _rms(finals[name][m])
             row = {
                 "predicted_identification_rms_nmi": _rms(np.sqrt(ident[m])),
                 "predicted_rms_nmi": predicted,
+                "lower_bound_rms_nmi": math.sqrt(float(np.mean(bound[m]))) if m.any() else math.nan,
                 "observed_rms_nmi": observed,
                 "ratio": observed / predicted if predicted > 0 else math.nan,
                 "predicted_under_1nmi_final": float(np.mean(share[m])) if m.any() else math.nan,
@@ -189,6 +214,6 @@ def limit_report(runs, laws: dict, finals: dict, groups: dict, *, future_hours: 
             entry["laws"][name] = row
         out["groups"][group] = entry
     out["predicted_rms_final_nmi"] = {
-        name: np.sqrt(ident + 2.0 * s**2) for name, (_, _, ident, _) in per_law.items()
+        name: np.sqrt(ident + 2.0 * s**2) for name, (_, _, ident, _, _) in per_law.items()
     }  # per run: sqrt(E|e|^2)
     return out

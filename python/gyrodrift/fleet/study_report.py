@@ -53,7 +53,8 @@ def law_lines(doc: dict) -> list[str]:
     """One line per drift-law group with runs (a group holding every run only as ``all``): the held-out shares and
     RMS of the constant today, the identified law and the offline best constant and law, the law's difference to
     the constant today, the gap it closes; then, with ``drift_laws.limit``, the identified law's physical limit
-    (`gyrodrift.fleet.law_limit`): predicted and observed RMS and share under 1 nmi at 72 h."""
+    (`gyrodrift.fleet.law_limit`): predicted RMS, the lower bound of any law from the 16 h, observed RMS and the
+    predicted and observed share under 1 nmi at 72 h."""
     lines = []
     groups = _groups(doc)
     for group, v in groups.items():
@@ -80,9 +81,8 @@ def law_lines(doc: dict) -> list[str]:
             lines.append(
                 f"Physical limit of the identified law, {group}: predicted RMS {_f(r['predicted_rms_nmi'])} nmi "
                 f"(identification {_f(r['predicted_identification_rms_nmi'])}, noise floor "
-                f"{_f(limit['noise_floor_rms_nmi'])}; the noise after the 16 h alone "
-                f"{_f(limit['future_noise_rms_nmi'])}), observed {_f(r['observed_rms_nmi'])} (ratio {_f(r['ratio'])}); "
-                "under 1 nmi at 72 h predicted "
+                f"{_f(limit['noise_floor_rms_nmi'])}; no law from the 16 h below {_f(r['lower_bound_rms_nmi'])}), "
+                f"observed {_f(r['observed_rms_nmi'])} (ratio {_f(r['ratio'])}); under 1 nmi at 72 h predicted "
                 f"{_pct(r['predicted_under_1nmi_final'])}, observed {_pct(r['observed_under_1nmi_final'])}."
             )
     return lines
