@@ -1,7 +1,7 @@
 """Benchmark: what the learning side costs as the fleet grows (issue 20). Prints times and ratios; never fails.
 
     python benchmarks/bench_learning_scale.py [--sizes 22,200,1000] [--tune-sizes 22,200] [--exact-max 200]
-                                              [--model-runs 1500] [--no-cli] [--no-calibration]
+                                              [--model-runs 1500] [--reproduce-rounds 2] [--no-cli] [--no-calibration]
 
 1. **One LOO evaluation** of the tuner (closed-form LOO residuals of one (gamma, sigma) candidate) on ``n`` runs,
    per candidate, three ways in the same process: ``rbf_batch_errors`` with the BLAS's default threads (what the
@@ -16,7 +16,9 @@
 3. **The CLI** (subprocesses, Python's start-up and imports included), one line per issue 20 target: the command,
    the child's CPU time (user + system, what the work cost on a shared machine) and wall time, and the target
    (wall, on a quiet 2-core machine): ``gyrodrift fit`` with defaults on the paper's 22 training runs and on
-   ``--sizes`` synthetic runs; ``gyrodrift reproduce``; ``gyrodrift predict`` and ``gyrodrift export`` with a model
+   ``--sizes`` synthetic runs; ``gyrodrift reproduce`` (a forked worker beside it) alternately with the same on one
+   process (``SERIAL_REPRODUCE``, the reference), ``--reproduce-rounds`` times each, and the ratio of the best walls;
+   ``gyrodrift predict`` and ``gyrodrift export`` with a model
    of ``--model-runs`` runs (fitted with a fixed ``--gamma 100 --sigma 0.7`` to keep this benchmark short: the load
    does not depend on how gamma and sigma were found); then the references of the same run: ``python -c pass`` and
    the imports of the learning commands: those of ``predict``/``export`` (``gyrodrift.cli`` and the model file's
@@ -174,7 +176,7 @@ FIT_IMPORTS = "import gyrodrift.cli, gyrodrift.learn.model_io, gyrodrift.learn.d
 """The imports of ``fit`` and ``reproduce``: the estimators add scikit-learn (and with it scipy.stats)."""
 
 
-def cli(sizes: list[int], model_runs: int) -> None:
+def cli(sizes: list[int], model_runs: int, reproduce_rounds: int) -> None:
     from gyrodrift.learn.model_io import load_model, load_predictor
     from gyrodrift.runs.datasets import load_paper
 
@@ -187,7 +189,7 @@ def cli(sizes: list[int], model_runs: int) -> None:
             synthetic_runs(n, np.random.default_rng(1)).to_csv(d / f"runs{n}.csv")
             target = 10.0 if n <= 200 else 60.0 if n <= 1000 else None
             target_line(["gyrodrift", "fit", f"runs{n}.csv", "--out", f"m{n}.json", "--quiet"], d, target)
-        target_line(["gyrodrift", "reproduce", "--out", "repro", "--quiet"], d, 5.0)
+        reproduce_against_serial(d, reproduce_rounds)
         synthetic_runs(model_runs, np.random.default_rng(2)).to_csv(d / "big.csv")
         wall, _ = child(
             ["gyrodrift", "fit", "big.csv", "--out", "big.json", "--gamma", "100", "--sigma", "0.7", "--quiet"], d
@@ -206,6 +208,36 @@ def cli(sizes: list[int], model_runs: int) -> None:
             wall, cpu = time.perf_counter() - t0, time.process_time() - c0
             what = f"{load.__name__} of the {model_runs}-run model, in this process"
             print(f"   {what:<92s} CPU {cpu:6.2f}  wall {wall:6.2f}")
+
+
+SERIAL_REPRODUCE = (
+    "import contextlib, gyrodrift.paper.reproduce as r; "
+    "r.worker_pool = lambda: contextlib.nullcontext(r.SerialExecutor()); "
+    "from gyrodrift.cli import main; main()"
+)
+"""``gyrodrift reproduce`` with its worker's tasks run in its own process, one after the other (`SerialExecutor`, as
+where the platform cannot fork): the same work on one process, the reference of the two-process command."""
+
+
+def reproduce_against_serial(d: Path, rounds: int) -> None:
+    """``gyrodrift reproduce`` (a forked worker beside the command's process) and the same on one process
+    (``SERIAL_REPRODUCE``), alternately ``rounds`` times: the best wall of each, their CPU, the load average, and the
+    ratio of the walls."""
+    runs = {"two processes": ["gyrodrift"], "one process (reference)": [sys.executable, "-c", SERIAL_REPRODUCE]}
+    best: dict[str, tuple[float, float]] = {}
+    for k in range(rounds):
+        for name, head in runs.items():
+            load = os.getloadavg()[0]
+            wall, cpu = child([*head, "reproduce", "--out", f"repro{k}{len(head)}", "--quiet"], d)
+            print(
+                f"   reproduce, {name:<24s} round {k + 1}: CPU {cpu:6.2f}  wall {wall:6.2f}  (load average {load:.2f})"
+            )
+            if name not in best or wall < best[name][0]:
+                best[name] = (wall, cpu)
+    (two, _), (one, _) = best.values()
+    print(
+        f"   reproduce: best wall {two:.2f} s on two processes, {one:.2f} s on one: ratio {two / one:.2f} (target 5 s)"
+    )
 
 
 @contextlib.contextmanager
@@ -281,6 +313,9 @@ def main() -> None:
         "--exact-max", type=int, default=200, help="largest n of section 2 also tuned unsnapped (minutes at 1000)"
     )
     parser.add_argument("--model-runs", type=int, default=1500, help="training runs of the model predict/export load")
+    parser.add_argument(
+        "--reproduce-rounds", type=int, default=2, help="rounds of reproduce on two processes and on one (section 3)"
+    )
     parser.add_argument("--no-cli", action="store_true", help="skip section 3")
     parser.add_argument("--no-calibration", action="store_true", help="skip section 4")
     args = parser.parse_args()
@@ -288,7 +323,7 @@ def main() -> None:
     loo_evaluation(sizes)
     tuning_runs([int(v) for v in args.tune_sizes.split(",") if v], args.exact_max)
     if not args.no_cli:
-        cli([n for n in sizes if n != 22], args.model_runs)
+        cli([n for n in sizes if n != 22], args.model_runs, args.reproduce_rounds)
     if not args.no_calibration:
         calibration_against_tune(sizes)
 

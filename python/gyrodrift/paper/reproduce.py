@@ -245,10 +245,10 @@ def _run_reproduction(seed: int, quiet: bool, pool: Executor) -> dict:
     # chosen the model. Every method draws from its own seed: where and when it runs changes no number.
     elsewhere = [pool.submit(_other_method, data, seed, k) for k in range(len(OTHER_METHODS))]
     n_rows = 3 * len(REPORTED_ENCODINGS)
-    with progress(n_rows + len(elsewhere), "reproduce: fits", quiet, unit="fit") as bar:
+    with progress(n_rows + len(elsewhere), "reproduce: methods", quiet, unit="task") as bar:
         finished = 0
 
-        def tick() -> None:  # one fit of this process, and the worker's finished meanwhile
+        def tick() -> None:  # one row of this process, and the worker's tasks finished meanwhile
             nonlocal finished
             now = sum(f.done() for f in elsewhere)
             bar.update(1 + now - finished)
