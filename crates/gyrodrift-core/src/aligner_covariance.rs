@@ -182,7 +182,7 @@ impl AlignerPass {
     /// One aligner step of `dt` \[s\] with the mean attitude `c` (`truth`: the true model's Phi and Q).
     fn step(&mut self, c: &Mat3, dt: f64, truth: &Model) -> Result<(), CoreError> {
         let (phi, q) = truth.discretise(c, 0.0, dt);
-        let (_, q_own) = self.model.discretise(c, 0.0, dt);
+        let q_own = self.model.process_noise(&phi, dt); // the same site and states: the same Phi
         let own = symmetrise(&phi * &self.own * phi.transpose() + q_own);
         let s_inv = (&self.h * &own * self.h.transpose() + &self.r_own)
             .try_inverse()

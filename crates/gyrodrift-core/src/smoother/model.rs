@@ -103,9 +103,15 @@ impl Model {
             term = &term * &ft / k as f64;
             phi += &term;
         }
+        let q = self.process_noise(&phi, t);
+        (phi, q)
+    }
+
+    /// Q over `t` \[s\] with the transition `phi` over it (trapezoidal): (Phi Qc Phi' + Qc) t / 2. F does not
+    /// depend on the noise, so a model with other noise densities on the same site and states shares its Phi.
+    pub(crate) fn process_noise(&self, phi: &DMatrix<f64>, t: f64) -> DMatrix<f64> {
         let qc = DMatrix::from_diagonal(&self.qc);
-        let q = (&phi * &qc * phi.transpose() + &qc) * (0.5 * t);
-        (phi, symmetrise(q))
+        symmetrise((phi * &qc * phi.transpose() + &qc) * (0.5 * t))
     }
 }
 
