@@ -32,7 +32,6 @@ from __future__ import annotations
 
 import contextlib
 import csv
-import importlib
 import math
 import multiprocessing
 import signal
@@ -46,12 +45,15 @@ from typing import Any
 import numpy as np
 
 from gyrodrift import __version__
+from gyrodrift.drift_law import DriftLaw
+from gyrodrift.ins.scenario import Scenario
 from gyrodrift.learn.baselines import fit_latitude_line, physics_inversion, position_error_of_drift_nmi
 from gyrodrift.learn.cpso import check_seed
 from gyrodrift.learn.drift_model import DriftModel, fit_drift_model
 from gyrodrift.learn.encodings import ENCODING_DESCRIPTIONS
 from gyrodrift.learn.interval import IntervalOutlierWarning
 from gyrodrift.learn.tuning import SearchBoundWarning, on_search_bound
+from gyrodrift.procedure.navigate import navigate
 from gyrodrift.progress import progress
 from gyrodrift.runs.datasets import load_paper
 from gyrodrift.runs.table import RunTable
@@ -261,10 +263,8 @@ def _run_reproduction(seed: int, quiet: bool, pool: Executor) -> dict:
                 rows[enc, "cpso_loo"] = _paper_row(data, enc, "cpso_loo", seeds[3 * k + 1])
                 tick()
             chosen = min((rows[enc, "cpso_loo"] for enc in REPORTED_ENCODINGS), key=lambda m: m["loo_mae_deg_h"])
-            # The navigation's modules import pyarrow, which scikit-learn's input checks in this thread look up in
-            # sys.modules: half-imported by the thread, it failed them ("partially initialized module 'pyarrow' has
-            # no attribute 'Table'"). Imported here first.
-            importlib.import_module("pyarrow")
+            # the navigation's modules come with this module's: imported in the thread, pyarrow was once seen
+            # half-initialised by scikit-learn's input checks here ("partially initialized module 'pyarrow'")
             with ThreadPoolExecutor(max_workers=1) as thread:
                 navigation = thread.submit(position_error_72h, data, chosen, claims)
                 for k, enc in enumerate(REPORTED_ENCODINGS):
@@ -415,10 +415,6 @@ def position_error_72h(data, chosen: dict, claims: dict) -> dict:
     run's true axial drift: nothing compensated, the selected model's identified drift compensated, the paper's
     Table 3 drift compensated. Errors computed minus true; position error in nmi (1852 m).
     """
-    from gyrodrift.drift_law import DriftLaw
-    from gyrodrift.ins.scenario import Scenario
-    from gyrodrift.procedure.navigate import navigate
-
     err = np.abs(np.asarray(chosen["test_err_deg_h"]))
     order = np.argsort(err, kind="stable")
     k = int(order[(len(order) - 1) // 2])  # the (lower) median error
