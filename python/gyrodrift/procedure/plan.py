@@ -52,7 +52,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.optimize import brentq
 
 from gyrodrift.earth import NMI_M
 from gyrodrift.errors import InputError
@@ -148,6 +147,8 @@ def norm_quantile(cov, p: float) -> float:
     l1, _ = _eigen(cov)
     if l1 == 0.0:
         return 0.0
+    from scipy.optimize import brentq  # here: scipy.optimize costs ~0.4 s of every CLI start
+
     high = math.sqrt(-2.0 * l1 * math.log1p(-p)) * 1.0001  # the circular Gaussian of the largest axis
     return float(brentq(lambda r: norm_cdf(cov, r) - p, 0.0, high, xtol=1e-12 * high, rtol=1e-12))
 
@@ -202,6 +203,8 @@ class MissionErrorModel:
 
         def miss(s: float) -> float:
             return self.share_within(s, budget.error_nmi, s * rho) - budget.share
+
+        from scipy.optimize import brentq  # here: scipy.optimize costs ~0.4 s of every CLI start
 
         return float(brentq(miss, 0.0, hi, xtol=1e-12))
 

@@ -61,7 +61,6 @@ from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
-from scipy.optimize import minimize_scalar
 
 from gyrodrift.earth import NMI_M
 from gyrodrift.ins.scenario import Scenario
@@ -112,6 +111,8 @@ def minimise_linear_criterion(n0, e0, gn, ge, criterion: str) -> float:
     d_ls = -float(np.sum(n0[sl] * gn[sl] + e0[sl] * ge[sl])) / den
     if criterion != "max":
         return d_ls
+
+    from scipy.optimize import minimize_scalar  # here: scipy.optimize costs ~0.4 s of every CLI start
 
     def f(d):
         return float(criterion_value(n0 + d * gn, e0 + d * ge, "max"))

@@ -40,7 +40,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.optimize import minimize
 
 from gyrodrift.drift_law import DriftLaw
 from gyrodrift.procedure.best_law import BestLaw
@@ -103,6 +102,8 @@ def best_law_coefficients(
     r = np.concatenate([np.asarray(ref_n, float)[sl], np.asarray(ref_e, float)[sl]])
     (u, k1), *_ = np.linalg.lstsq(a, -r, rcond=None)
     if criterion == "max":
+        from scipy.optimize import minimize  # here: scipy.optimize costs ~0.4 s of every CLI start
+
         n, e = (np.asarray(x, float) for x in (ref_n, ref_e))
         gn, ge, hn, he = (np.asarray(x, float) for x in (gn, ge, hn, he))
 
