@@ -8,7 +8,7 @@ from click.testing import CliRunner
 
 from gyrodrift.cli import main
 from gyrodrift.paper.report import REPORT_FIGURES, figure_png, summary_lines
-from gyrodrift.paper.reproduce import SerialExecutor, reproduce, run_reproduction
+from gyrodrift.paper.reproduce import SerialExecutor, reproduce, run_reproduction, worker_pool
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 FAMILIES = {
@@ -239,3 +239,11 @@ def test_cli_prints_a_summary(run, tmp_path, monkeypatch):
     assert "physics inversion" in r.output and "selected by LOO" in r.output
     assert "wall time" in r.output and "simulated 72 h" in r.output
     assert (tmp_path / "r" / "results.json").exists()
+
+
+@pytest.mark.parametrize("make_pool", [worker_pool, SerialExecutor], ids=["worker", "serial"])
+def test_a_task_s_error_reaches_the_caller(make_pool):
+    with make_pool() as pool:
+        assert pool.submit(int, "12").result() == 12
+        with pytest.raises(ValueError, match="invalid literal for int"):
+            pool.submit(int, "twelve").result()
