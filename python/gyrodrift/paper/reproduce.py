@@ -35,6 +35,7 @@ import csv
 import math
 import multiprocessing
 import signal
+import sys
 import time
 import warnings
 from collections.abc import Iterator
@@ -195,14 +196,15 @@ def run_reproduction(seed: int = 0, quiet: bool = True, pool: Executor | None = 
 
 @contextlib.contextmanager
 def worker_pool() -> Iterator[Executor]:
-    """One worker beside this process for `run_reproduction`'s methods and the report's figures: a process forked
-    from this one (it starts with this process's modules imported and its data loaded: no start-up), or, where the
-    platform cannot fork, a `SerialExecutor` (the tasks run in this process). A context manager; leaving it early
-    (an error, Ctrl-C, which the worker ignores) drops the tasks not yet started.
+    """One worker beside this process for `run_reproduction`'s methods and the report's figures: on Linux a process
+    forked from this one (it starts with this process's modules imported and its data loaded: no start-up);
+    elsewhere a `SerialExecutor` (the tasks run in this process: Windows cannot fork, and macOS's system libraries
+    are not safe in a forked child). A context manager; leaving it early (an error, Ctrl-C, which the worker
+    ignores) drops the tasks not yet started.
 
     Not a thread: the tuner limits the BLAS's threads and the methods silence warnings, both for the whole process,
     so that two tunings in two threads would change each other's rounding (the last bits of a fitness)."""
-    if "fork" not in multiprocessing.get_all_start_methods():
+    if not sys.platform.startswith("linux"):
         yield SerialExecutor()
         return
     pool = ProcessPoolExecutor(
