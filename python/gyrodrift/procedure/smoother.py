@@ -13,7 +13,9 @@ leaves out a bias instability the sensor has: `SensorNoise.white_only_note`, whi
 
 A Gauss-Markov bias (``bias_instability_deg_h``) is three more states; the drift carried into navigation leaves
 its end value out (it forgets that value within its correlation time, so its mean over a mission of many
-correlation times is near zero), and the history is the total.
+correlation times is near zero), and the history is the total. On the README tour's INS (0.001 deg/h, 1 h) the
+carried drift's 1-sigma is calibrated when the noise is given and half the error when it is measured from the log
+(docs/studies/2026-11-27-smoother-bias-instability.md).
 
 Thermal model: when the log has a temperature column the z drift is modelled as eps_z + k_z (T - T_ref), k_z a
 random constant [deg/h/degC] and T the log's temperature (T_ref: the temperature at the end of the coarse
