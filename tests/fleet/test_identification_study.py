@@ -97,10 +97,10 @@ def test_seeds_summary_and_seed_option(study, capsys):
 
 def test_coverage_over_seeds_runs_at_reduced_size(study, capsys):
     """The --coverage-seeds mode (8 fleets in docs/studies/2026-11-23-identification-study.md): one fleet of
-    10 + 4 runs, the
-    runs measured with the smoother so the default fits on its fleet base."""
+    8 + 2 runs (one hot, one in range), the runs measured with the smoother so the default fits on its fleet
+    base."""
     module, _ = study
-    c = module.coverage_study([1], n_train=10, n_test=4, n_hot=1, rate_hz=2.0)
+    c = module.coverage_study([1], n_train=8, n_test=2, n_hot=1, rate_hz=2.0)
     assert c["default_physics_columns"] == ["drift_smoother_fleet_deg_h"]
     for name in (module.DEFAULT, module.FLEET_PHYSICS_ENCODING, module.OLD_DEFAULT):
         assert c[name]["coverage_eff"].shape == (1,) and 0.0 <= c[name]["coverage_eff"][0] <= 1.0
