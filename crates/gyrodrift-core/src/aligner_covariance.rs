@@ -196,9 +196,11 @@ impl AlignerPass {
         let truth_pred = &phi * &self.truth * phi.transpose() + &q;
         self.truth = symmetrise(&i_kh * truth_pred * i_kh.transpose() + &gain * &self.r_true * gain.transpose());
         self.joint = (&phi * &self.joint * phi.transpose() + &q) * i_kh.transpose();
-        let carry = &i_kh * &phi;
-        for (_, u) in self.pending.iter_mut() {
-            *u = &carry * &*u;
+        if !self.pending.is_empty() {
+            let carry = &i_kh * &phi;
+            for (_, u) in self.pending.iter_mut() {
+                *u = &carry * &*u;
+            }
         }
         Ok(())
     }
