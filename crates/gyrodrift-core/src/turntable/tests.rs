@@ -112,6 +112,19 @@ fn angle_rate_accel_are_continuous_consistent_and_bounded() {
             );
             t += 0.0137;
         }
+        // A cursor placed by cursor_at (no walk from the start) agrees too, at the time and from it on.
+        for t0 in [0.0, 0.5 * horizon, 1000.0 * horizon + 0.3] {
+            let mut cur = tt.cursor_at(t0);
+            if !tt.segments.is_empty() {
+                let g = &tt.segments[cur.seg];
+                let (start, end) = (cur.base + g.t0, cur.base + g.t0 + g.duration);
+                assert!(start <= t0 && t0 < end, "{sch:?} cursor_at({t0}) on [{start}, {end})");
+            }
+            for t in [t0, t0 + 0.07, t0 + 0.5 * horizon, t0 + 2.0 * horizon] {
+                let (a, b) = (tt.state(t), tt.state_at(&mut cur, t));
+                assert!((a.angle - b.angle).abs() < 1e-9, "{sch:?} cursor_at({t0}) at {t}");
+            }
+        }
         // Segment ends in closed form agree with evaluation.
         for (te, s) in tt.segment_ends() {
             if te.is_finite() {
