@@ -75,7 +75,10 @@ def test_refitting_the_file_before_the_parts_gives_the_same_numbers(tmp_path):
 
 
 def _same(a, b, where: str) -> bool:
-    """Equal JSON documents, floats to 1e-12 relative (another BLAS may round the last bits differently)."""
+    """Equal JSON documents, floats to 1e-9 relative: the leave-one-out objective is computed by LAPACK's
+    Cholesky inverse (dpotrf + dpotri) since 2f9687c, the file by numpy's inverse before it; the two agree to 6.3e-12
+    relative here and to 2.8e-10 over random stacks (tests of `gyrodrift.learn.lssvm_batch`), and another BLAS may
+    round the last bits differently."""
     if isinstance(a, dict) and isinstance(b, dict):
         assert a.keys() == b.keys(), where
         return all(_same(a[k], b[k], f"{where}.{k}") for k in a)
@@ -83,7 +86,7 @@ def _same(a, b, where: str) -> bool:
         assert len(a) == len(b), where
         return all(_same(x, y, f"{where}[{i}]") for i, (x, y) in enumerate(zip(a, b, strict=True)))
     if isinstance(a, float) and isinstance(b, float):
-        assert a == pytest.approx(b, rel=1e-12, abs=0.0), where
+        assert a == pytest.approx(b, rel=1e-9, abs=0.0), where
         return True
     assert a == b, where
     return True
