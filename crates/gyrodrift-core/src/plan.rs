@@ -4,10 +4,11 @@
 //! span from the first sample. The same error model, priors, measurements (zero velocity and the known position
 //! every `update_s`) and coarse-alignment start as the smoother, run as a Riccati recursion alone: the covariance of
 //! a Kalman filter does not depend on the data, and the smoother's reported end drift (`drift_end_std`, what it
-//! carries into navigation: eps_z + b_gm,z + b_rrw,z) is its filter's at the last update. So one forward pass
-//! gives the smoother's 1-sigma at every span at once (each span taken at the first update at or after it: the
-//! update grid is `coarse_s + k update_s`). The attitude is the simulator's C_b^n(t) = C_b0^n Rz(alpha(t)),
-//! alpha the table angle of the rotation scheme (the navigator's attitude error is arcseconds: first order),
+//! carries into navigation: eps_z + b_rrw,z, the Gauss-Markov state b_gm,z left out) is its filter's at the last
+//! update. So one forward pass gives the smoother's 1-sigma at every span at once (each span taken at the first
+//! update at or after it: the update grid is `coarse_s + k update_s`). The attitude is the simulator's
+//! C_b^n(t) = C_b0^n Rz(alpha(t)), alpha the table angle of the rotation scheme (the navigator's attitude error is
+//! arcseconds: first order),
 //! averaged over each update interval at the sample rate as the smoother averages its navigator's. The thermal
 //! state is not part of it (the planner adds the thermal term apart; `thermal` must be off).
 //!
@@ -196,11 +197,12 @@ pub fn drift_std_curve(cfg: &PlanConfig) -> Result<DriftCurve, CoreError> {
     let k_start =
         n_coarse + ((cfg.mission_start_s * rate - n_coarse as f64) / n_update as f64).round() as u64 * n_update;
     let mission_end = cfg.mission_start_s + cfg.mission_s;
-    // Selector of the total z drift carried into navigation.
+    // Selector of the z drift carried into navigation: eps_z + rrw_z, the Gauss-Markov state left out as the
+    // smoother leaves it out of `drift_end` (its value at the span's end is forgotten within a few correlation times).
     let mut a = DVector::zeros(n);
     a[EPS + 2] = 1.0;
-    for first in [model.gm, model.rrw].into_iter().flatten() {
-        a[first + 2] = 1.0;
+    if let Some(r) = model.rrw {
+        a[r + 2] = 1.0;
     }
     let identity = DMatrix::<f64>::identity(n, n);
     let select = navigation_start_selector(n);
