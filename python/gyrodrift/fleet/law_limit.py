@@ -17,7 +17,7 @@ linear-Gaussian model of the two terms:
   as the law's covariance; `identify` adds the learned correction's variance to eps_ref's, left out here: the limit
   is what the 16 h data give); an eps_ref about another T_ref T_a moves to T_b with its covariance
   (``A P A'``, A = [[1, T_b - T_a], [0, 1]]);
-* the noise floor w ~ N(0, s^2 I): s = sigma_c |g|, the label's 1-sigma (``drift_std_deg_h``, the core's covariance
+* the noise floor w ~ N(0, s^2 I): s = sigma_c ``|g|``, the label's 1-sigma (``drift_std_deg_h``, the core's covariance
   analysis, `gyrodrift.procedure.truth.label_sigma_deg_h`) times the final error's sensitivity to a constant, the
   per-axis final-error 1-sigma of the noise, taken isotropic (the approximation of the truth law's covariance,
   `gyrodrift.procedure.truth_law.law_covariance`);
@@ -35,11 +35,11 @@ data), Cauchy-Schwarz on the cross term gives tr Cov(...) >= (sqrt(a) - sqrt(b))
 could do is know the past noise exactly and have it cancel the identification error exactly. The bound is reached
 when they do (tests/fleet/test_law_limit.py's adversarial Monte Carlo).
 
-So E|e|^2 = tr(J P J') + 2 s^2 (`predicted_mean_square_nmi2`), and the probability that |e| < 1 nmi is that of a
+So E|e|^2 = tr(J P J') + 2 s^2 (`predicted_mean_square_nmi2`), and the probability that ``|e|`` < 1 nmi is that of a
 zero-mean 2-D Gaussian with covariance J P J' + s^2 I (the planner's `gyrodrift.procedure.plan.norm_cdf`). Where the
 simulated law is known (`simulated_law`: the campaign's scenario of each run, its z-gyro bias plus k1 (T_b - t0_c),
 with no k2, k3, bias instability or rate random walk) the observed parts are reported beside the predicted ones:
-|J (theta - theta_0)|, |w|, and the z-scores of eps_b's and k1's errors against P (`limit_report`).
+``|J (theta - theta_0)|``, ``|w|``, and the z-scores of eps_b's and k1's errors against P (`limit_report`).
 """
 
 from __future__ import annotations
@@ -75,9 +75,9 @@ def final_sensitivity(runs) -> np.ndarray:
 
 
 def noise_floor_std_nmi(runs) -> np.ndarray:
-    """s of each run [nmi]: the label's 1-sigma (``drift_std_deg_h``) times |g| at the 72 h end, the per-axis 1-sigma
-    of the final error the noise leaves with the true law compensated (module docstring); NaN without the label's
-    1-sigma."""
+    """s of each run [nmi]: the label's 1-sigma (``drift_std_deg_h``) times ``|g|`` at the 72 h end, the per-axis
+    1-sigma of the final error the noise leaves with the true law compensated (module docstring); NaN without the
+    label's 1-sigma."""
     from gyrodrift.earth import NMI_M
 
     g = final_sensitivity(runs)[:, :, 0]
@@ -151,7 +151,7 @@ def limit_report(runs, laws: dict, finals: dict, groups: dict, *, future_hours: 
     `laws`: per method name, ``(eps_b, k1, cov)`` per run (deg/h at T_b, deg/h/degC, (runs, 2, 2)); `finals`: the
     observed 72 h final error [nmi] per method (`gyrodrift.fleet.law_study.compare_laws`); `groups`: the run masks;
     `future_hours`: ``truth_h - features_h``; `simulated`: `simulated_law`'s (eps_b, k1), or None. Per group: the
-    noise floor's predicted RMS ``2 s^2`` (and observed |w| with the simulated law), the future noise's RMS, and per
+    noise floor's predicted RMS ``2 s^2`` (and observed ``|w|`` with the simulated law), the future noise's RMS, and per
     law the predicted RMS (identification part and total), the lower bound's RMS (`lower_bound_mean_square_nmi2`;
     NaN without the noise columns), the observed RMS, their ratio, the
     predicted and observed shares under 1 nmi at 72 h, and with the simulated law the observed identification RMS

@@ -223,6 +223,7 @@ class SerialExecutor(Executor):
     """An executor that runs each task in the calling thread when it is submitted (a finished future)."""
 
     def submit(self, fn, /, *args, **kwargs) -> Future:
+        """Run ``fn(*args, **kwargs)`` now, in this process; its result or exception in a done `Future`."""
         future: Future = Future()
         try:
             future.set_result(fn(*args, **kwargs))
