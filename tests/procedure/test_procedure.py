@@ -173,6 +173,8 @@ def test_truth_command_other_criteria(long_log, tmp_path, criterion):
     assert abs(doc["drift_deg_h"] - LONG_DRIFT) < 2e-5
     assert doc["refinements"] <= 1 and abs(doc["last_step_deg_h"]) < 1e-7
     assert len(doc["grid"]["drift_deg_h"]) == 81 and len(doc["verify"]) == 3
+    # No --noise: the label's 1-sigma is from the white noise measured in the log, and the file says so.
+    assert doc["noise"]["source"] == "log" and "white sensor noise only" in doc["noise_note"]
     for name in ("true_drift.json", "alignment.json"):
         assert json.loads((out / name).read_text())
     for name in ("criterion.png", "alignment_z_sigma.png"):

@@ -188,6 +188,8 @@ def truth_command(log, criterion, hours, site, log_format, out_dir, noise, as_js
         f"{res.run}: true drift {res.drift_deg_h:.7f} +- {res.drift_std_deg_h:.7f} deg/h (1-sigma of the label at the "
         f"log's noise level; {criterion} criterion over {hours:g} h)"
     )
+    if res.noise_note is not None:
+        click.echo(f"  note: {res.noise_note}")
     if res.flagged:
         click.echo(f"warning: {res.run}: label flagged: {res.flag_reason}", err=True)
     click.echo(

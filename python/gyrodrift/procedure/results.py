@@ -260,6 +260,9 @@ class TrueDrift:
     flag_reason : str
     noise : dict or None
         The noise model of the covariance analysis (`SensorNoise.to_dict`).
+    noise_note : str or None
+        The caveat when that noise was measured from the log (`SensorNoise.white_only_note`: white noise only, the
+        label's 1-sigma leaves out a bias instability), else None.
     law : BestLaw or None
         The best drift law (`gyrodrift.procedure.truth_law`); None without a temperature or when not asked.
     """
@@ -288,6 +291,7 @@ class TrueDrift:
     flagged: bool = False
     flag_reason: str = ""
     noise: dict | None = field(default=None, repr=False)
+    noise_note: str | None = None
     law: BestLaw | None = field(default=None, repr=False)
 
     def to_dict(self) -> dict[str, Any]:
@@ -300,6 +304,7 @@ class TrueDrift:
             "flagged": bool(self.flagged),
             "flag_reason": self.flag_reason,
             "noise": self.noise,
+            "noise_note": self.noise_note,
             "criterion": self.criterion,
             "hours": self.hours,
             "trial_deg_h": self.trial_deg_h,

@@ -420,4 +420,5 @@ def find_true_drift(
         flagged=flagged,
         flag_reason=reason,
         noise=noise.to_dict(),
+        noise_note=noise.white_only_note,
     )
