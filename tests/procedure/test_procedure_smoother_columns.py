@@ -99,6 +99,7 @@ def test_features_command_writes_them_and_replaces_a_table_written_before_them(t
     assert recognise_run_table(out.read_bytes())
     r = CliRunner().invoke(main, ["features", str(log), "--out", str(out), "--quiet"])
     assert r.exit_code == 0, r.output
+    assert "note: the 1-sigma assumes white sensor noise only" in r.stderr  # no --noise: measured, white only
     f = extract_features(open_log(log))
     assert f.smoother is not None and f.smoother.model == "thermal"
     runs = read_runs_csv(out)
@@ -106,6 +107,7 @@ def test_features_command_writes_them_and_replaces_a_table_written_before_them(t
         assert runs.column(column)[0] == getattr(f, column), column
     r = CliRunner().invoke(main, ["features", str(log), "--out", str(out), "--no-smoother", "--quiet"])
     assert r.exit_code == 0, r.output
+    assert "white sensor noise" not in r.stderr  # neither a smoother nor a label: no 1-sigma to qualify
     runs = read_runs_csv(out)
     for column in ("drift_smoother_deg_h", *SMOOTHER_THERMAL_COLUMNS):
         assert np.isnan(runs.column(column)[0]), column

@@ -125,6 +125,7 @@ def features_command(
     1-sigma drift_std_deg_h and label_flagged.
     """
     from gyrodrift.fleet.features import features_table
+    from gyrodrift.procedure.noise import SensorNoise
     from gyrodrift.procedure.writers import check_features_outputs, write_features_csv
 
     if workers is not None and scheduler is not None:
@@ -147,6 +148,8 @@ def features_command(
     if as_json:
         print_json([row.row() for row in rows])
     say_wrote([p for p in (out, curves) if p is not None], quiet=quiet, as_json=as_json, detail=f"{len(rows)} run(s)")
+    if noise is None and (smoother or with_truth):  # each log's noise measured from it: white only
+        click.echo(f"note: {SensorNoise(source='log').white_only_note}", err=True)
 
 
 @click.command("truth", epilog="Example: gyrodrift truth sim/imu.parquet --criterion final --out truth")
