@@ -19,8 +19,10 @@ def test_features_on_a_local_cluster_ends_without_dask_noise(tmp_path):
     out = tmp_path / "runs.csv"
     env = {**os.environ, "MPLBACKEND": "Agg"}
     cli = [sys.executable, "-c", "from gyrodrift.cli import main; main()"]
+    # The noise given, so that stderr has no note on a measured noise (`features` says it once otherwise).
+    noise = ["--gyro-arw-deg-rth", "0.0005", "--accel-vrw-ug-rthz", "5"]
     done = subprocess.run(
-        [*cli, "features", *map(str, logs), "--workers", "2", "--out", str(out), "--quiet"],
+        [*cli, "features", *map(str, logs), *noise, "--workers", "2", "--out", str(out), "--quiet"],
         capture_output=True,
         text=True,
         env=env,
