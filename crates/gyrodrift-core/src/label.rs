@@ -66,13 +66,46 @@ impl FreeNavigation {
         )
     }
 
-    /// The smoother's settings whose error model this navigation propagates (its site and noise; a 1 Hz placeholder
-    /// rate, which the model does not use).
-    pub(crate) fn smoother_config(&self) -> SmootherConfig {
+    /// The smoother's settings and error model this navigation propagates with the z gyro's `slow` bias: its site,
+    /// white noise and slow-bias states (a 1 Hz placeholder rate, which the model does not use). The x and y
+    /// slow-bias states keep zero process noise (and, started at zero, stay zero): the table modulates them away,
+    /// as it does the constant horizontal biases.
+    pub(crate) fn model(&self, slow: &SlowBias) -> (SmootherConfig, Model) {
         let mut sc = SmootherConfig::new(self.lat, 0.0, self.height, 1.0);
         sc.gyro_arw = self.gyro_arw;
         sc.accel_vrw = self.accel_vrw;
-        sc
+        sc.gyro_bias_instability = slow.bias_instability;
+        sc.gyro_correlation = slow.correlation;
+        sc.gyro_rrw = slow.rrw;
+        let mut model = Model::new(&sc);
+        for first in [model.gm, model.rrw].into_iter().flatten() {
+            model.qc[first] = 0.0;
+            model.qc[first + 1] = 0.0;
+        }
+        (sc, model)
+    }
+}
+
+/// The z gyro's slowly varying bias beside its white noise (SI): a first-order Gauss-Markov bias instability
+/// (stationary 1-sigma) [rad/s] with its correlation time \[s\], and a rate random walk [rad/s/sqrt(s)] (0: none).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SlowBias {
+    pub bias_instability: f64,
+    pub correlation: f64,
+    pub rrw: f64,
+}
+
+impl SlowBias {
+    /// No slow bias (white noise only).
+    pub const NONE: SlowBias = SlowBias {
+        bias_instability: 0.0,
+        correlation: 3600.0,
+        rrw: 0.0,
+    };
+
+    /// Range checks; errors name the key.
+    pub(crate) fn validate(&self) -> Result<(), CoreError> {
+        check_slow_bias(self.bias_instability, self.correlation, self.rrw)
     }
 }
 
@@ -99,6 +132,15 @@ pub struct LabelConfig {
 }
 
 impl LabelConfig {
+    /// The z gyro's slow bias of this label.
+    fn slow(&self) -> SlowBias {
+        SlowBias {
+            bias_instability: self.gyro_bias_instability,
+            correlation: self.gyro_correlation,
+            rrw: self.gyro_rrw,
+        }
+    }
+
     /// White noise only (no bias instability, no rate random walk), the alignment's errors left out.
     pub fn white(lat: f64, span_s: f64, step_s: f64, gyro_arw: f64, accel_vrw: f64, rms: bool) -> Self {
         LabelConfig {
@@ -148,9 +190,9 @@ pub fn label_sigma(cfg: &LabelConfig) -> Result<LabelSigma, CoreError> {
     let nav = &cfg.navigation;
     nav.validate("curve interval")?;
     let s = Unit::Si("s");
-    check_slow_bias(cfg.gyro_bias_instability, cfg.gyro_correlation, cfg.gyro_rrw)?;
+    cfg.slow().validate()?;
     in_range("rrw_start_s", "random-walk start", cfg.rrw_start_s, 0.0, 1e7, s)?;
-    let (sc, model) = truth_model(cfg);
+    let (sc, model) = nav.model(&cfg.slow());
     let n = model.n;
     let identity: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     let (phi, q) = model.discretise(&identity, 0.0, nav.step_s);
@@ -212,21 +254,6 @@ pub fn label_sigma(cfg: &LabelConfig) -> Result<LabelSigma, CoreError> {
         sensitivity: g2.sqrt(),
         pos_std: [p[(POS, POS)].max(0.0).sqrt(), p[(POS + 1, POS + 1)].max(0.0).sqrt()],
     })
-}
-
-/// The smoother's settings and error model of the label's truth: its site, noise and z gyro's slow bias (the x
-/// and y slow-bias states keep zero variance and no process noise).
-fn truth_model(cfg: &LabelConfig) -> (crate::smoother::SmootherConfig, Model) {
-    let mut sc = cfg.navigation.smoother_config();
-    sc.gyro_bias_instability = cfg.gyro_bias_instability;
-    sc.gyro_correlation = cfg.gyro_correlation;
-    sc.gyro_rrw = cfg.gyro_rrw;
-    let mut model = Model::new(&sc);
-    for first in [model.gm, model.rrw].into_iter().flatten() {
-        model.qc[first] = 0.0;
-        model.qc[first + 1] = 0.0;
-    }
-    (sc, model)
 }
 
 /// Covariance of the navigation's error state at its start from the fine aligner's noise-driven leftovers
@@ -339,7 +366,7 @@ mod tests {
         use rand_distr::{Distribution, StandardNormal};
         let al = cfg.alignment.as_ref().unwrap();
         assert_eq!(al.rate_hz, 1.0);
-        let (sc, model) = truth_model(cfg);
+        let (sc, model) = cfg.navigation.model(&cfg.slow());
         let acfg = aligner_on_smoother_model(&sc, &al.filter);
         let own = Model::new(&acfg);
         let n = model.n;

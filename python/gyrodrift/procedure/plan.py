@@ -20,25 +20,28 @@ The model (docs/procedure.md, "Planning the static time"):
    it when too small to learn k_z), k_z [deg/h/degC] known to ``coeff_std`` (a fleet prior: `gyrodrift fit`'s
    pooled k_z prior, or a datasheet): ``s(T)^2 = s_id(T)^2 + (coeff_std dT)^2``. Conservative when the span's own
    temperature change teaches the smoother k_z.
-3. Mission. The north/east position error e after compensating the drift, at the end of the mission (72 h of
-   free navigation from the end of the alignment), is a zero-mean 2-D Gaussian with covariance
-   ``Sigma = Sigma_floor + s^2 g g' + g c' + c g'``: ``g`` the response to a unit drift error (close to the closed forms
-   dL(t) = (eps cos L / w)(1 - cos w t) north and dlon(t) = eps sin L (t - sin(w t) / w) east, Schuler terms
-   aside), ``Sigma_floor`` the floor, the error the mission keeps even with the exact drift: the angle and velocity
-   random walks over the mission (`_core.mission_covariance`) plus the aligner's leftover attitude and velocity
-   errors it starts from, carried over the mission (`_core.drift_std_curve`'s ``alignment_cov_m2``); and
-   ``c = E[(d - d_hat) p]`` the covariance of the drift error with that floor p. Both come from the same data:
-   the aligner and the smoother start from the one coarse alignment and read the same noise over the 4 h
-   alignment (the smoother's drift error and the aligner's leftover heading and tilts move together), and after
-   it the same noise drives the smoother's error and the mission's (the smoother partly reads the noise's walk as
-   drift, which then cancels part of it in the mission). One Riccati pass carries the aligner (its own prior,
-   noise model and 1 s zero-velocity updates, on the smoother's error model) beside the smoother and gives both
-   (`_core.drift_std_curve`; gyrodrift-core ``plan``'s docs hold the recursion). The horizontal
-   sensor biases are modulated away by the table. The share of runs within a radius r is
-   ``P(|e| <= r) = (1 / 2 pi) int_0^{2 pi} (1 - exp(-r^2 / (2 s(theta)))) dtheta``, s(theta) = l1 cos^2 theta +
-   l2 sin^2 theta (l1, l2 the eigenvalues of Sigma; polar coordinates of the whitened error), integrated by the
-   midpoint rule (a smooth periodic integrand: the error falls geometrically with the points); quantiles by root
-   finding on it.
+3. Mission. The north/east position error e after compensating the drift, at the end of the mission (72 h of free
+   navigation from the end of the alignment), is a zero-mean 2-D Gaussian with covariance ``Sigma = Sigma_floor + W +
+   s^2 g g' + g c' + c g'``: ``g`` the response to a unit drift error (close to the closed forms dL(t) = (eps cos L /
+   w)(1 - cos w t) north and dlon(t) = eps sin L (t - sin(w t) / w) east, Schuler terms aside), ``Sigma_floor`` the
+   floor, the error the mission keeps even with the exact drift: the angle and velocity random walks and the z gyro's
+   slow bias over the mission (`_core.mission_covariance`: the Gauss-Markov bias instability stationary, which the
+   drift carried into navigation leaves out, and the rate random walk from the mission's start; the x and y ones
+   modulated away by the table), plus the aligner's leftover attitude and velocity errors it starts from, carried
+   over the mission, with their covariance with the Gauss-Markov bias (`_core.drift_std_curve`'s
+   ``alignment_cov_m2``), plus, with a rate random walk, the part ``W`` from its value at the span's end, where the
+   smoother takes the drift it carries (``walk_cov_m2``, per span; every span must then end after the alignment); and
+   ``c = E[(d - d_hat) p]`` the covariance of the drift error with that floor p. Both come from the same data: the
+   aligner and the smoother start from the one coarse alignment and read the same noise over the 4 h alignment (the
+   smoother's drift error and the aligner's leftover heading and tilts move together), and after it the same noise
+   drives the smoother's error and the mission's (the smoother partly reads the noise's walk as drift, which then
+   cancels part of it in the mission; the smoother splits constant and Gauss-Markov bias imperfectly). One Riccati
+   pass carries the aligner (its own prior, noise model and 1 s zero-velocity updates, on the smoother's error model)
+   beside the smoother and gives both (`_core.drift_std_curve`; gyrodrift-core ``plan``'s docs hold the recursion).
+   The horizontal sensor biases are modulated away by the table. The share of runs within a radius r is ``P(|e| <= r)
+   = (1 / 2 pi) int_0^{2 pi} (1 - exp(-r^2 / (2 s(theta)))) dtheta``, s(theta) = l1 cos^2 theta + l2 sin^2 theta (l1,
+   l2 the eigenvalues of Sigma; polar coordinates of the whitened error), integrated by the midpoint rule (a smooth
+   periodic integrand: the error falls geometrically with the points); quantiles by root finding on it.
 
 Units at the edges: drift deg/h, spans and mission h, position nmi (1852 m), latitude deg.
 """
@@ -176,33 +179,39 @@ class MissionErrorModel:
     alignment_cov_m2: tuple[tuple[float, float], tuple[float, float]]
     response_m_per_deg_h: tuple[float, float]
 
-    def covariance_m2(self, drift_std_deg_h: float, cross_m_deg_h=(0.0, 0.0)) -> np.ndarray:
-        """Sigma = Sigma_floor + s^2 g g' + g c' + c g' [m^2] for a drift 1-sigma s [deg/h] and its covariance c
-        with the floor [m deg/h] (`IdentificationCurve.cross_m_deg_h`; 0: independent)."""
+    def covariance_m2(self, drift_std_deg_h: float, cross_m_deg_h=(0.0, 0.0), walk_cov_m2=None) -> np.ndarray:
+        """Sigma = Sigma_floor + W + s^2 g g' + g c' + c g' [m^2] for a drift 1-sigma s [deg/h], its covariance c
+        with the floor [m deg/h] (`IdentificationCurve.cross_m_deg_h`; 0: independent) and the floor's part W
+        [m^2] from the z rate random walk at the span's end (`IdentificationCurve.walk_cov_m2`; None: none)."""
         s = _finite("drift_std_deg_h", drift_std_deg_h, low=0.0)
         g = np.asarray(self.response_m_per_deg_h, dtype=float)
         c = np.asarray(cross_m_deg_h, dtype=float).reshape(2)
-        return np.asarray(self.floor_cov_m2, dtype=float) + s * s * np.outer(g, g) + np.outer(g, c) + np.outer(c, g)
+        floor = np.asarray(self.floor_cov_m2, dtype=float)
+        if walk_cov_m2 is not None:
+            floor = floor + np.asarray(walk_cov_m2, dtype=float).reshape(2, 2)
+        return floor + s * s * np.outer(g, g) + np.outer(g, c) + np.outer(c, g)
 
-    def share_within(self, drift_std_deg_h: float, error_nmi: float, cross_m_deg_h=(0.0, 0.0)) -> float:
+    def share_within(
+        self, drift_std_deg_h: float, error_nmi: float, cross_m_deg_h=(0.0, 0.0), walk_cov_m2=None
+    ) -> float:
         """Share of runs whose error is at most `error_nmi` [nmi]."""
-        return norm_cdf(self.covariance_m2(drift_std_deg_h, cross_m_deg_h), error_nmi * NMI_M)
+        return norm_cdf(self.covariance_m2(drift_std_deg_h, cross_m_deg_h, walk_cov_m2), error_nmi * NMI_M)
 
-    def quantile_nmi(self, drift_std_deg_h: float, p: float, cross_m_deg_h=(0.0, 0.0)) -> float:
+    def quantile_nmi(self, drift_std_deg_h: float, p: float, cross_m_deg_h=(0.0, 0.0), walk_cov_m2=None) -> float:
         """The p-quantile of the error [nmi]."""
-        return norm_quantile(self.covariance_m2(drift_std_deg_h, cross_m_deg_h), p) / NMI_M
+        return norm_quantile(self.covariance_m2(drift_std_deg_h, cross_m_deg_h, walk_cov_m2), p) / NMI_M
 
-    def max_drift_std_deg_h(self, budget: MissionBudget, cross_per_std_m=(0.0, 0.0)) -> float | None:
+    def max_drift_std_deg_h(self, budget: MissionBudget, cross_per_std_m=(0.0, 0.0), walk_cov_m2=None) -> float | None:
         """The largest drift 1-sigma s [deg/h] meeting `budget`, the covariance with the floor scaling with it
         (c = s `cross_per_std_m` [m]); None when the floor alone misses it."""
-        if self.share_within(0.0, budget.error_nmi) < budget.share:
+        if self.share_within(0.0, budget.error_nmi, walk_cov_m2=walk_cov_m2) < budget.share:
             return None
         rho = np.asarray(cross_per_std_m, dtype=float).reshape(2)
         g = float(np.hypot(*self.response_m_per_deg_h))
         hi = 10.0 * budget.error_nmi * NMI_M / g  # a 10 nmi 1-sigma drift term: far outside any budget
 
         def miss(s: float) -> float:
-            return self.share_within(s, budget.error_nmi, s * rho) - budget.share
+            return self.share_within(s, budget.error_nmi, s * rho, walk_cov_m2) - budget.share
 
         from scipy.optimize import brentq  # here: scipy.optimize costs ~0.4 s of every CLI start
 
@@ -212,9 +221,11 @@ class MissionErrorModel:
 def mission_error_model(
     lat_deg: float, noise: SensorNoise, *, hours: float = 72.0, height_m: float = 0.0, alignment_cov_m2=None
 ) -> MissionErrorModel:
-    """The `MissionErrorModel` of a site and a noise model: the floor is the ARW's and VRW's over the mission
-    (`_core.mission_covariance`, from no initial error) plus `alignment_cov_m2` [m^2] (2 x 2, north, east), the
-    alignment's leftovers carried over the mission (`IdentificationCurve.alignment_cov_m2`; default none)."""
+    """The `MissionErrorModel` of a site and a noise model: the floor is the ARW's, VRW's and the z gyro's slow
+    bias's over the mission (`_core.mission_covariance`, from no initial attitude or velocity error; the
+    Gauss-Markov bias stationary, the rate random walk from zero at the mission's start) plus `alignment_cov_m2`
+    [m^2] (2 x 2, north, east), the alignment's leftovers carried over the mission
+    (`IdentificationCurve.alignment_cov_m2`; default none: the slow bias then independent of them)."""
     from gyrodrift import _core
 
     lat = _finite("lat_deg", lat_deg, low=-90.0, high=90.0)
@@ -229,7 +240,8 @@ def mission_error_model(
             accel_vrw_m_s_rts=noise.vrw_m_s_rts,
             att_sigma_rad=[0.0, 0.0, 0.0],
             vel_sigma_m_s=0.0,
-        )
+        ),
+        **{k: v for k, v in noise.core_keywords().items() if k not in ("gyro_arw_rad_rts", "accel_vrw_m_s_rts")},
     )
     a = np.zeros((2, 2)) if alignment_cov_m2 is None else np.asarray(alignment_cov_m2, dtype=float)
     if a.shape != (2, 2) or not np.all(np.isfinite(a)):
@@ -270,14 +282,19 @@ class IdentificationCurve:
     cross_m_deg_h : ndarray, shape (spans, 2)
         E[(d - d_hat) p] [m deg/h], p the north, east floor at the mission's end (module docs, point 3).
     alignment_cov_m2 : ndarray, shape (2, 2)
-        The floor's part from the aligner's leftover attitude and velocity errors [m^2] (north, east), the same
-        for every span (`mission_error_model`'s `alignment_cov_m2`).
+        The floor's part from the aligner's leftover attitude and velocity errors [m^2] (north, east), with their
+        covariance with the Gauss-Markov z bias at the mission's start, the same for every span
+        (`mission_error_model`'s `alignment_cov_m2`).
+    walk_cov_m2 : ndarray, shape (spans, 2, 2)
+        The floor's part from the z rate random walk's value at each span's end [m^2] (module docs, point 3;
+        zero without one: `MissionErrorModel.covariance_m2`'s `walk_cov_m2`).
     """
 
     spans_h: np.ndarray
     drift_std_deg_h: np.ndarray
     cross_m_deg_h: np.ndarray
     alignment_cov_m2: np.ndarray
+    walk_cov_m2: np.ndarray
 
 
 def identification_curve(
@@ -331,6 +348,7 @@ def identification_curve(
         drift_std_deg_h=np.asarray(out["drift_std_rad_s"], dtype=float) / DEG_PER_H,
         cross_m_deg_h=np.asarray(out["cross_rad_s_m"], dtype=float).reshape(-1, 2) / DEG_PER_H,
         alignment_cov_m2=np.asarray(out["alignment_cov_m2"], dtype=float).reshape(2, 2),
+        walk_cov_m2=np.asarray(out["walk_cov_m2"], dtype=float).reshape(-1, 2, 2),
     )
 
 
@@ -346,12 +364,14 @@ class Plan:
         The smoother's drift 1-sigma [deg/h] at each span, and with the thermal term added (module docs).
     cross_m_deg_h : ndarray, shape (spans, 2)
         The drift error's covariance with the mission's floor, north and east [m deg/h].
+    walk_cov_m2 : ndarray, shape (spans, 2, 2)
+        The floor's part from the z rate random walk at each span's end [m^2] (`IdentificationCurve.walk_cov_m2`).
     share_within : ndarray
         Predicted share of runs within the budget's error at each span.
     quantile_nmi : ndarray
         Predicted ``budget.share`` quantile of the mission error [nmi] at each span.
     floor_quantile_nmi : float
-        The same with the exact drift (the floor alone).
+        The same with the exact drift (the floor alone; the rate random walk's part at the span below).
     max_drift_std_deg_h : float or None
         The largest drift 1-sigma meeting the budget (None: the floor misses it), with the covariance with the floor
         scaled from the shortest span meeting it (else the longest span).
@@ -370,6 +390,7 @@ class Plan:
     spans_h: np.ndarray
     drift_std_id_deg_h: np.ndarray
     cross_m_deg_h: np.ndarray
+    walk_cov_m2: np.ndarray
     drift_std_deg_h: np.ndarray
     share_within: np.ndarray
     quantile_nmi: np.ndarray
@@ -406,6 +427,7 @@ class Plan:
             "spans_h": arr(self.spans_h),
             "drift_std_id_deg_h": arr(self.drift_std_id_deg_h),
             "cross_m_deg_h": [arr(c) for c in self.cross_m_deg_h],
+            "walk_cov_m2": [[arr(r) for r in w] for w in self.walk_cov_m2],
             "drift_std_deg_h": arr(self.drift_std_deg_h),
             "share_within": arr(self.share_within),
             "quantile_nmi": arr(self.quantile_nmi),
@@ -468,7 +490,7 @@ def plan_identification(
     if spans[-1] < hi - 1e-9:
         spans = np.append(spans, hi)
     curve = identification_curve(noise, spans, scenario=scn, timeline=timeline, mission_h=budget.hours)
-    sid, cross = curve.drift_std_deg_h, curve.cross_m_deg_h
+    sid, cross, walk = curve.drift_std_deg_h, curve.cross_m_deg_h, curve.walk_cov_m2
     s = np.hypot(sid, thermal)
     mission = mission_error_model(
         scn.site.lat_deg,
@@ -477,12 +499,13 @@ def plan_identification(
         height_m=scn.site.height_m,
         alignment_cov_m2=curve.alignment_cov_m2,
     )
-    share = np.array([mission.share_within(x, budget.error_nmi, c) for x, c in zip(s, cross, strict=True)])
-    quant = np.array([mission.quantile_nmi(x, budget.share, c) for x, c in zip(s, cross, strict=True)])
-    floor_q = mission.quantile_nmi(0.0, budget.share)
+    each = list(zip(s, cross, walk, strict=True))
+    share = np.array([mission.share_within(x, budget.error_nmi, c, w) for x, c, w in each])
+    quant = np.array([mission.quantile_nmi(x, budget.share, c, w) for x, c, w in each])
     meets = share >= budget.share
     at = int(np.argmax(meets)) if meets.any() else len(spans) - 1  # the span the budget's allowance is quoted at
-    s_max = mission.max_drift_std_deg_h(budget, cross[at] / sid[at] if sid[at] > 0 else (0.0, 0.0))
+    floor_q = mission.quantile_nmi(0.0, budget.share, walk_cov_m2=walk[at])
+    s_max = mission.max_drift_std_deg_h(budget, cross[at] / sid[at] if sid[at] > 0 else (0.0, 0.0), walk[at])
     pct = f"{100 * budget.share:g} %"
     if s_max is None:
         shortest, reason = (
@@ -532,6 +555,7 @@ def plan_identification(
         spans_h=spans,
         drift_std_id_deg_h=sid,
         cross_m_deg_h=cross,
+        walk_cov_m2=walk,
         drift_std_deg_h=s,
         share_within=share,
         quantile_nmi=quant,
@@ -568,13 +592,13 @@ def mission_outlook(
     curve = identification_curve(noise, np.arange(span, _MAX_SPAN_H, 0.25), lat_deg=lat_deg, mission_h=budget.hours)
     mission = mission_error_model(lat_deg, noise, hours=budget.hours, alignment_cov_m2=curve.alignment_cov_m2)
     scale = s / curve.drift_std_deg_h[0] if curve.drift_std_deg_h[0] > 0 else 0.0
-    stds, crosses = curve.drift_std_deg_h * scale, curve.cross_m_deg_h * scale
-    quant = {f"{p:g}": mission.quantile_nmi(s, p, crosses[0]) for p in probs}
-    share = mission.share_within(s, budget.error_nmi, crosses[0])
-    s_max = mission.max_drift_std_deg_h(budget, crosses[0] / s if s > 0 else (0.0, 0.0))
+    stds, crosses, walks = curve.drift_std_deg_h * scale, curve.cross_m_deg_h * scale, curve.walk_cov_m2
+    quant = {f"{p:g}": mission.quantile_nmi(s, p, crosses[0], walks[0]) for p in probs}
+    share = mission.share_within(s, budget.error_nmi, crosses[0], walks[0])
+    s_max = mission.max_drift_std_deg_h(budget, crosses[0] / s if s > 0 else (0.0, 0.0), walks[0])
     ready = share >= budget.share
     more: float | None = None
-    q = mission.quantile_nmi(s, budget.share, crosses[0])
+    q = mission.quantile_nmi(s, budget.share, crosses[0], walks[0])
     if ready:
         note = f"ready: predicted {100 * budget.share:g} % quantile {q:.2f} nmi meets {budget.describe()}"
     elif s_max is None:
@@ -585,7 +609,7 @@ def mission_outlook(
         ok = [
             k
             for k in range(1, len(stds))
-            if mission.share_within(stds[k], budget.error_nmi, crosses[k]) >= budget.share
+            if mission.share_within(stds[k], budget.error_nmi, crosses[k], walks[k]) >= budget.share
         ][:1]
         if ok:
             more = float(curve.spans_h[ok[0]] - span)
