@@ -136,8 +136,7 @@ pub(crate) struct AlignerPass {
     own: DMatrix<f64>,
     pub(crate) truth: DMatrix<f64>,
     pub(crate) joint: DMatrix<f64>,
-    /// Its zero-velocity measurement matrix and noise, the truth's zero-velocity noise.
-    h: DMatrix<f64>,
+    /// Its zero-velocity noise and the truth's (the measurement: the velocity states `DV..DV + 3`).
     r_own: DMatrix<f64>,
     r_true: DMatrix<f64>,
     model: Model,
@@ -166,12 +165,11 @@ impl AlignerPass {
             n,
             initial_sigma(&acfg, coarse_end_s).iter().map(|s| s * s),
         ));
-        let (h, r) = measurement_model(sc, n);
+        let (_, r) = measurement_model(sc, n);
         Ok(AlignerPass {
             own,
             truth: start.clone(),
             joint: start,
-            h: h.rows(0, 3).into_owned(),
             r_own: DMatrix::from_diagonal_element(3, 3, al.zupt_sigma * al.zupt_sigma),
             r_true: r.view((0, 0), (3, 3)).into_owned(),
             model,
@@ -180,27 +178,28 @@ impl AlignerPass {
     }
 
     /// One aligner step of `dt` \[s\] with the mean attitude `c` (`truth`: the true model's Phi and Q).
+    ///
+    /// H selects the three velocity states, so (I - K H) M = M - K M\[v, :\] and M (I - K H)' = M - M\[:, v\] K':
+    /// rank-3 updates instead of n^3 products; Phi P Phi' runs over Phi's non-zero entries ([`Sandwich`]).
     fn step(&mut self, c: &Mat3, dt: f64, truth: &Model) -> Result<(), CoreError> {
         let (phi, q) = truth.discretise(c, 0.0, dt);
         let q_own = self.model.process_noise(&phi, dt); // the same site and states: the same Phi
-        let own = symmetrise(&phi * &self.own * phi.transpose() + q_own);
-        let s_inv = (&self.h * &own * self.h.transpose() + &self.r_own)
+        let phi_nz = Sandwich::new(&phi);
+        let own = symmetrise(phi_nz.apply(&self.own) + q_own);
+        let s_inv = (own.view((DV, DV), (3, 3)) + &self.r_own)
             .try_inverse()
             .ok_or(CoreError::Setting {
                 key: "aligner",
                 message: "the aligner's innovation covariance is singular".to_string(),
             })?;
-        let gain = &own * self.h.transpose() * s_inv;
-        let i_kh = DMatrix::<f64>::identity(own.nrows(), own.ncols()) - &gain * &self.h;
-        self.own = symmetrise(&i_kh * &own * i_kh.transpose() + &gain * &self.r_own * gain.transpose());
-        let truth_pred = &phi * &self.truth * phi.transpose() + &q;
-        self.truth = symmetrise(&i_kh * truth_pred * i_kh.transpose() + &gain * &self.r_true * gain.transpose());
-        self.joint = (&phi * &self.joint * phi.transpose() + &q) * i_kh.transpose();
-        if !self.pending.is_empty() {
-            let carry = &i_kh * &phi;
-            for (_, u) in self.pending.iter_mut() {
-                *u = &carry * &*u;
-            }
+        let gain = own.columns(DV, 3) * s_inv;
+        self.own = symmetrise(joseph(own, &gain, &self.r_own));
+        self.truth = symmetrise(joseph(phi_nz.apply(&self.truth) + &q, &gain, &self.r_true));
+        let joint = phi_nz.apply(&self.joint) + &q;
+        self.joint = &joint - joint.columns(DV, 3) * gain.transpose();
+        for (_, u) in self.pending.iter_mut() {
+            let w = &phi * &*u;
+            *u = &w - &gain * w.rows(DV, 3);
         }
         Ok(())
     }
@@ -225,6 +224,57 @@ impl AlignerPass {
     }
 }
 
+/// (I - K H) M (I - K H)' + K R K' for H selecting the velocity states `DV..DV + 3` (`gain` K is n x 3).
+fn joseph(m: DMatrix<f64>, gain: &DMatrix<f64>, r: &DMatrix<f64>) -> DMatrix<f64> {
+    let left = &m - gain * m.rows(DV, 3);
+    &left - left.columns(DV, 3) * gain.transpose() + gain * r * gain.transpose()
+}
+
+/// Phi P Phi' over the non-zero entries of Phi (a discretised error model: its bias rows are those of the
+/// identity or a decay, so about half its entries are zero).
+pub(crate) struct Sandwich {
+    n: usize,
+    /// (row, column, value) of Phi's non-zero entries.
+    entries: Vec<(usize, usize, f64)>,
+}
+
+impl Sandwich {
+    pub(crate) fn new(phi: &DMatrix<f64>) -> Self {
+        let n = phi.nrows();
+        let mut entries = Vec::with_capacity(n * n);
+        for j in 0..n {
+            for i in 0..n {
+                if phi[(i, j)] != 0.0 {
+                    entries.push((i, j, phi[(i, j)]));
+                }
+            }
+        }
+        Sandwich { n, entries }
+    }
+
+    /// M Phi': column i gathers Phi_ij times column j of M (column-major storage).
+    fn right(&self, m: &DMatrix<f64>) -> DMatrix<f64> {
+        let n = self.n;
+        let mut out = DMatrix::zeros(m.nrows(), n);
+        let rows = m.nrows();
+        let (from, to) = (m.as_slice(), out.as_mut_slice());
+        for &(i, j, v) in &self.entries {
+            for (o, x) in to[i * rows..(i + 1) * rows]
+                .iter_mut()
+                .zip(&from[j * rows..(j + 1) * rows])
+            {
+                *o += v * x;
+            }
+        }
+        out
+    }
+
+    /// Phi P Phi' = ((P Phi')' Phi')'.
+    pub(crate) fn apply(&self, p: &DMatrix<f64>) -> DMatrix<f64> {
+        self.right(&self.right(p).transpose()).transpose()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -243,6 +293,43 @@ mod tests {
             }
         }
         sum.map(|row| row.map(|x| x / (to - from) as f64))
+    }
+
+    /// A pseudo-random matrix with about a third of its entries zero (a fixed LCG: reproducible).
+    fn matrix(rows: usize, cols: usize, seed: u64) -> DMatrix<f64> {
+        let mut state = seed;
+        DMatrix::from_fn(rows, cols, |_, _| {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            let u = (state >> 11) as f64 / (1u64 << 53) as f64;
+            if u < 0.33 {
+                0.0
+            } else {
+                2.0 * u - 1.0
+            }
+        })
+    }
+
+    #[test]
+    fn the_sparse_sandwich_and_the_rank_3_joseph_form_match_the_dense_products() {
+        for n in [14, 17, 21] {
+            let phi = matrix(n, n, 1 + n as u64);
+            let m = matrix(n, n, 2 + n as u64);
+            let gain = matrix(n, 3, 3 + n as u64);
+            let r = DMatrix::from_diagonal_element(3, 3, 0.3);
+            let dense = &phi * &m * phi.transpose();
+            let worst = (Sandwich::new(&phi).apply(&m) - &dense).amax();
+            assert!(worst < 1e-12 * dense.amax(), "n {n}: sandwich off by {worst:e}");
+            let mut h = DMatrix::zeros(3, n);
+            for i in 0..3 {
+                h[(i, DV + i)] = 1.0;
+            }
+            let i_kh = DMatrix::<f64>::identity(n, n) - &gain * &h;
+            let dense = &i_kh * &m * i_kh.transpose() + &gain * &r * gain.transpose();
+            let worst = (joseph(m.clone(), &gain, &r) - &dense).amax();
+            assert!(worst < 1e-12 * dense.amax(), "n {n}: Joseph form off by {worst:e}");
+        }
     }
 
     #[test]
