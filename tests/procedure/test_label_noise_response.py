@@ -55,9 +55,10 @@ def _truth(scenario: Scenario) -> float:
 
 @pytest.mark.slow
 def test_the_label_error_is_linear_in_the_noise_and_blind_to_the_deterministic_errors():
-    plain = _truth(_run(noise_scale=1.0, thermal=False)) - _truth(_run(noise_scale=0.0, thermal=False))
+    twin = _truth(_run(noise_scale=0.0, thermal=False))  # the noise-free twin of the plain and the double run
+    plain = _truth(_run(noise_scale=1.0, thermal=False)) - twin
     hot = _truth(_run(noise_scale=1.0, thermal=True)) - _truth(_run(noise_scale=0.0, thermal=True))
-    double = _truth(_run(noise_scale=2.0, thermal=False)) - _truth(_run(noise_scale=0.0, thermal=False))
+    double = _truth(_run(noise_scale=2.0, thermal=False)) - twin
     sigma = 2.5e-4  # deg/h: the order of the label's 1-sigma here; the error must be a sizable part of it
     assert abs(plain) > 0.05 * sigma
     # The drift's warm-up and swing (up to 0.0014 deg/h) and the other biases move it by under 0.1 % of itself.
