@@ -104,6 +104,8 @@ def test_a_rate_random_walk_reaches_the_plan_and_the_outlook():
         assert np.all(np.linalg.eigvalsh(cov) > 0)
     plan = plan_identification(noise, lat_deg=LAT, min_span_h=6.0, max_span_h=8.0, step_h=1.0)
     assert np.asarray(plan.to_dict()["walk_cov_m2"]).shape == (3, 2, 2)
-    # A span ending before the mission starts (the alignment's 4 h) is refused with a random walk.
-    with pytest.raises(InputError, match="spans_s"):
+    # A span ending before the mission starts (the alignment's 4 h) is refused with a random walk, by its key.
+    with pytest.raises(InputError, match=r"^span_h: 2 h ends before the alignment \(4 h\)"):
         identification_curve(noise, [2.0, 6.0], lat_deg=LAT)
+    with pytest.raises(InputError, match="^span_h"):
+        plan_identification(noise, lat_deg=LAT, min_span_h=3.0, max_span_h=8.0)

@@ -325,6 +325,11 @@ def identification_curve(
     mission = _finite("mission_h", mission_h, low=1.0 / 60.0, high=1000.0)
     if timeline.align_h + mission < spans[-1]:
         raise InputError(f"span_h: {spans[-1]:g} h outlasts the mission (ends at {timeline.align_h + mission:g} h)")
+    if noise.rrw_deg_h_rth > 0 and spans[0] < timeline.align_h:
+        raise InputError(
+            f"span_h: {spans[0]:g} h ends before the alignment ({timeline.align_h:g} h): with a rate random walk the "
+            "planner needs every span to end after it"
+        )
     site = scn.site
     keywords: dict[str, Any] = {
         **site.core_position(),
@@ -511,8 +516,8 @@ def plan_identification(
         shortest, reason = (
             None,
             (
-                f"no span meets {budget.describe()}: the error floor alone (the exact drift: the noise and the "
-                f"alignment's leftovers) leaves the {pct} quantile at {floor_q:.2f} nmi"
+                f"no span meets {budget.describe()}: the error floor alone (the exact drift: the noise, the gyro's "
+                f"slow bias and the alignment's leftovers) leaves the {pct} quantile at {floor_q:.2f} nmi"
             ),
         )
     elif s_max <= thermal:
