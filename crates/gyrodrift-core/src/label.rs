@@ -116,13 +116,10 @@ pub struct LabelConfig {
     pub navigation: FreeNavigation,
     /// `true`: the criterion is the root mean square of the position error over the curve; `false`: its last value.
     pub rms: bool,
-    /// The z gyro's slowly varying bias, which the label's constant absorbs and the run's noise-free twin lacks:
-    /// first-order Gauss-Markov bias instability (stationary 1-sigma) [rad/s] with correlation time \[s\], and
-    /// rate random walk [rad/s/sqrt(s)] that has walked `rrw_start_s` \[s\] (the alignment) before the navigation
-    /// starts (0: none). The x and y ones are modulated by the table and left out, like the constant biases.
-    pub gyro_bias_instability: f64,
-    pub gyro_correlation: f64,
-    pub gyro_rrw: f64,
+    /// The z gyro's slowly varying bias, which the label's constant absorbs and the run's noise-free twin lacks,
+    /// its rate random walk having walked `rrw_start_s` \[s\] (the alignment) before the navigation starts. The x
+    /// and y ones are modulated by the table and left out, like the constant biases.
+    pub slow: SlowBias,
     pub rrw_start_s: f64,
     /// The fine alignment the navigation starts from (None: its errors left out but `att_sigma`, `vel_sigma`).
     /// Given, the navigation starts from the covariance of the aligner's noise-driven leftovers (attitude and
@@ -132,23 +129,12 @@ pub struct LabelConfig {
 }
 
 impl LabelConfig {
-    /// The z gyro's slow bias of this label.
-    fn slow(&self) -> SlowBias {
-        SlowBias {
-            bias_instability: self.gyro_bias_instability,
-            correlation: self.gyro_correlation,
-            rrw: self.gyro_rrw,
-        }
-    }
-
     /// White noise only (no bias instability, no rate random walk), the alignment's errors left out.
     pub fn white(lat: f64, span_s: f64, step_s: f64, gyro_arw: f64, accel_vrw: f64, rms: bool) -> Self {
         LabelConfig {
             navigation: FreeNavigation::white(lat, span_s, step_s, gyro_arw, accel_vrw),
             rms,
-            gyro_bias_instability: 0.0,
-            gyro_correlation: 3600.0,
-            gyro_rrw: 0.0,
+            slow: SlowBias::NONE,
             rrw_start_s: 0.0,
             alignment: None,
         }
@@ -190,9 +176,9 @@ pub fn label_sigma(cfg: &LabelConfig) -> Result<LabelSigma, CoreError> {
     let nav = &cfg.navigation;
     nav.validate("curve interval")?;
     let s = Unit::Si("s");
-    cfg.slow().validate()?;
+    cfg.slow.validate()?;
     in_range("rrw_start_s", "random-walk start", cfg.rrw_start_s, 0.0, 1e7, s)?;
-    let (sc, model) = nav.model(&cfg.slow());
+    let (sc, model) = nav.model(&cfg.slow);
     let n = model.n;
     let identity: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     let (phi, q) = model.discretise(&identity, 0.0, nav.step_s);
@@ -206,10 +192,10 @@ pub fn label_sigma(cfg: &LabelConfig) -> Result<LabelSigma, CoreError> {
         p[(DV + i, DV + i)] = nav.vel_sigma * nav.vel_sigma;
     }
     if let Some(g) = model.gm {
-        p[(g + 2, g + 2)] = cfg.gyro_bias_instability * cfg.gyro_bias_instability;
+        p[(g + 2, g + 2)] = cfg.slow.bias_instability * cfg.slow.bias_instability;
     }
     if let Some(r) = model.rrw {
-        p[(r + 2, r + 2)] = cfg.gyro_rrw * cfg.gyro_rrw * cfg.rrw_start_s;
+        p[(r + 2, r + 2)] = cfg.slow.rrw * cfg.slow.rrw * cfg.rrw_start_s;
     }
     if let Some(al) = &cfg.alignment {
         let leftovers = alignment_leftovers(cfg, &sc, &model, al)?;
@@ -281,7 +267,7 @@ fn alignment_leftovers(
         Unit::Si("s"),
     )?;
     check(
-        cfg.gyro_rrw == 0.0 || (cfg.rrw_start_s - al.end_s).abs() <= 1e-9 * al.end_s,
+        cfg.slow.rrw == 0.0 || (cfg.rrw_start_s - al.end_s).abs() <= 1e-9 * al.end_s,
         "rrw_start_s",
         format!(
             "the rate random walk starts the navigation at the alignment's end ({} s), got {} s",
@@ -296,10 +282,10 @@ fn alignment_leftovers(
     let n = model.n;
     let mut start = DMatrix::zeros(n, n);
     if let Some(g) = model.gm {
-        start[(g + 2, g + 2)] = cfg.gyro_bias_instability * cfg.gyro_bias_instability;
+        start[(g + 2, g + 2)] = cfg.slow.bias_instability * cfg.slow.bias_instability;
     }
     if let Some(r) = model.rrw {
-        start[(r + 2, r + 2)] = cfg.gyro_rrw * cfg.gyro_rrw * coarse_end_s;
+        start[(r + 2, r + 2)] = cfg.slow.rrw * cfg.slow.rrw * coarse_end_s;
     }
     // The run's zero-velocity measurement is exact (the navigator's velocity error is the state, the sensor noise
     // the model's Q): a noise-free run leaves the aligner nothing of its own.
@@ -339,8 +325,8 @@ mod tests {
         let arw = 0.0005 * DEG_PER_SQRT_H;
         let mut cfg = LabelConfig::white(40.0 * DEG, 6.0 * HOUR, 60.0, arw, 5.0 * MICRO_G, false);
         if slow {
-            cfg.gyro_bias_instability = 0.002 * DEG_PER_H;
-            cfg.gyro_rrw = 0.0005 * DEG_PER_H_PER_SQRT_H;
+            cfg.slow.bias_instability = 0.002 * DEG_PER_H;
+            cfg.slow.rrw = 0.0005 * DEG_PER_H_PER_SQRT_H;
             cfg.rrw_start_s = HOUR;
         }
         cfg.alignment = Some(FineAlignment {
@@ -366,7 +352,7 @@ mod tests {
         use rand_distr::{Distribution, StandardNormal};
         let al = cfg.alignment.as_ref().unwrap();
         assert_eq!(al.rate_hz, 1.0);
-        let (sc, model) = cfg.navigation.model(&cfg.slow());
+        let (sc, model) = cfg.navigation.model(&cfg.slow);
         let acfg = aligner_on_smoother_model(&sc, &al.filter);
         let own = Model::new(&acfg);
         let n = model.n;
@@ -376,10 +362,10 @@ mod tests {
         let (coarse, end) = (al.filter.coarse_s as u64, al.end_s as u64);
         let mut x = DMatrix::zeros(n, runs);
         if let Some(g) = model.gm {
-            x.set_row(g + 2, &(normal(1) * cfg.gyro_bias_instability).row(0));
+            x.set_row(g + 2, &(normal(1) * cfg.slow.bias_instability).row(0));
         }
         if let Some(r) = model.rrw {
-            x.set_row(r + 2, &(normal(1) * (cfg.gyro_rrw * (coarse as f64).sqrt())).row(0));
+            x.set_row(r + 2, &(normal(1) * (cfg.slow.rrw * (coarse as f64).sqrt())).row(0));
         }
         let mut xa = DMatrix::zeros(n, runs);
         let mut pa = DMatrix::from_diagonal(&DVector::from_vec(initial_sigma(&acfg, coarse as f64)).map(|s| s * s));

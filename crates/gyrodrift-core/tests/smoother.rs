@@ -4,7 +4,7 @@
 use gyrodrift_core::attitude::Euler;
 use gyrodrift_core::error::CoreError;
 use gyrodrift_core::imu_error::ImuErrorParams;
-use gyrodrift_core::label::{label_sigma, LabelConfig};
+use gyrodrift_core::label::{label_sigma, LabelConfig, SlowBias};
 use gyrodrift_core::simulator::{ImuChunk, ImuSimulator, ImuSimulatorConfig};
 use gyrodrift_core::smoother::{state_names, Smoother, SmootherConfig, SmootherResult};
 use gyrodrift_core::temperature::TemperatureProfile;
@@ -140,16 +140,16 @@ fn label_sigma_adds_the_z_gyro_bias_instability_and_rate_random_walk() {
     // A Gauss-Markov z bias (1-sigma bi, correlation time tau): independent of the white noise, so the label's
     // variances add.
     let (bi, tau) = (0.001 * DEG_PER_H, 600.0);
-    let gm = LabelConfig {
-        gyro_bias_instability: bi,
-        gyro_correlation: tau,
-        ..white.clone()
+    let slow = SlowBias {
+        bias_instability: bi,
+        correlation: tau,
+        rrw: 0.0,
     };
+    let gm = LabelConfig { slow, ..white.clone() };
     let s_gm = label_sigma(&gm).unwrap().drift_std;
     let gm_only = LabelConfig::white(40.0 * DEG, 72.0 * HOUR, 60.0, 0.0, 0.0, false);
     let s_gm_only = label_sigma(&LabelConfig {
-        gyro_bias_instability: bi,
-        gyro_correlation: tau,
+        slow,
         ..gm_only.clone()
     })
     .unwrap()
@@ -184,8 +184,10 @@ fn label_sigma_adds_the_z_gyro_bias_instability_and_rate_random_walk() {
     assert!((0.97..1.03).contains(&ratio), "{ratio}");
     // Long memory (tau >> 72 h): a random constant, which the label absorbs in full: sigma(d*) = sigma.
     let s_const = label_sigma(&LabelConfig {
-        gyro_bias_instability: bi,
-        gyro_correlation: 1e9,
+        slow: SlowBias {
+            correlation: 1e9,
+            ..slow
+        },
         ..gm_only.clone()
     })
     .unwrap()
@@ -195,8 +197,9 @@ fn label_sigma_adds_the_z_gyro_bias_instability_and_rate_random_walk() {
     // absorbs in full (variance rrw^2 start), independent of its walk during the span: the variances add.
     let rrw = 0.0005 * DEG_PER_H_PER_SQRT_H;
     let start = 4.0 * HOUR;
+    let walk = SlowBias { rrw, ..SlowBias::NONE };
     let only_start = label_sigma(&LabelConfig {
-        gyro_rrw: rrw,
+        slow: walk,
         rrw_start_s: start,
         ..gm_only.clone()
     })
@@ -204,7 +207,7 @@ fn label_sigma_adds_the_z_gyro_bias_instability_and_rate_random_walk() {
     .drift_std;
     assert!(only_start > rrw * start.sqrt());
     let walking = label_sigma(&LabelConfig {
-        gyro_rrw: rrw,
+        slow: walk,
         rrw_start_s: 0.0,
         ..gm_only.clone()
     })
@@ -214,7 +217,10 @@ fn label_sigma_adds_the_z_gyro_bias_instability_and_rate_random_walk() {
     assert!((only_start - both).abs() < 1e-6 * both, "{only_start} {both}");
     // Refused settings name their key.
     let bad = label_sigma(&LabelConfig {
-        gyro_correlation: 0.0,
+        slow: SlowBias {
+            correlation: 0.0,
+            ..slow
+        },
         ..gm
     })
     .unwrap_err();

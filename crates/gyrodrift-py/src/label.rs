@@ -6,7 +6,7 @@ use super::config::SimulatorConfig;
 use super::core_err;
 use gyrodrift_core::aligner_covariance::FineAlignment;
 use gyrodrift_core::filter_prior::FilterSettings;
-use gyrodrift_core::label::{label_sigma as core_label_sigma, FreeNavigation, LabelConfig};
+use gyrodrift_core::label::{label_sigma as core_label_sigma, FreeNavigation, LabelConfig, SlowBias};
 use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -81,9 +81,11 @@ pub fn label_sigma<'py>(
     let cfg = LabelConfig {
         navigation: navigation.inner.clone(),
         rms,
-        gyro_bias_instability: gyro_bias_instability_rad_s,
-        gyro_correlation: gyro_correlation_s,
-        gyro_rrw: gyro_rrw_rad_s_rts,
+        slow: SlowBias {
+            bias_instability: gyro_bias_instability_rad_s,
+            correlation: gyro_correlation_s,
+            rrw: gyro_rrw_rad_s_rts,
+        },
         rrw_start_s,
         alignment: alignment.map(|sim| FineAlignment {
             rate_hz: sim.inner.rate_hz,
