@@ -9,7 +9,8 @@ run is one that installs the package (``pip install``), behind a ``<!-- skip: ne
 inside that installation; tests/test_docs.py checks that no other block is skipped or left unlabelled.
 
 It also orders the session: the files of `LONGEST_FIRST` run first (pytest_collection_modifyitems), so that
-``python -m pytest -n auto`` (each file whole on one worker) does not end with one long file running alone.
+``python -m pytest -n auto`` (each file whole on one worker) does not end with one long file running alone, and gives
+the test processes and those they start one OpenBLAS thread (``OPENBLAS_NUM_THREADS``, unless set).
 """
 
 from __future__ import annotations
@@ -24,6 +25,14 @@ import pytest
 from sybil import Sybil
 from sybil.parsers.markdown import CodeBlockParser, PythonCodeBlockParser, SkipParser
 from sybil.parsers.rest import DocTestParser
+
+# One OpenBLAS thread in the test processes and every process they start (CLI subprocesses, campaign and dask
+# workers, the documents' bash blocks), set before anything here imports numpy: the suite's matrices are small, where
+# a second BLAS thread gives no time and burns CPU waiting, and under `pytest -n auto` each worker's threads compete
+# with the other worker (as `gyrodrift.learn.tuning` explains for its own factorisations). The tests compare values
+# computed under this same setting. Measured one process at a time (user + sys of the tests, loaded 2-core machine,
+# at a369db7): tests/learn 47 -> 32 s, tests/fleet/test_campaign.py 52 -> 43 s. An explicit setting is kept.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 ROOT = Path(__file__).resolve().parent
 EXECUTED_LANGUAGES = ("bash", "python")
