@@ -93,32 +93,30 @@ docstring_sybil = Sybil(
 pytest_collect_file = (markdown_sybil + docstring_sybil).pytest()
 
 LONGEST_FIRST = (
-    "tests/procedure/test_procedure.py",
     "tests/procedure/test_smoother.py",
-    "tests/fleet/test_campaign.py",
-    "tests/sensors/test_allan.py",
     "README.md",
+    "tests/fleet/test_campaign.py",
+    "tests/procedure/test_procedure.py",
     "tests/fleet/test_identification_study.py",
+    "tests/sensors/test_allan.py",
     "tests/cli/test_cli_errors.py",
-    "docs/campaigns.md",
-    "tests/fleet/test_campaign_dask_cluster.py",
-    "tests/fleet/test_campaign_interrupt.py",
     "tests/export/test_export_compiled.py",
-    "tests/paper/test_reproduce.py",
-    "tests/ins/test_ins_navigation.py",
+    "docs/campaigns.md",
     "docs/procedure.md",
-    "tests/fleet/test_dask_shutdown.py",
+    "tests/fleet/test_campaign_interrupt.py",
+    "tests/ins/test_ins_navigation.py",
+    "tests/paper/test_reproduce.py",
     "tests/procedure/test_plan.py",
+    "tests/fleet/test_campaign_dask_cluster.py",
+    "tests/fleet/test_dask_shutdown.py",
     "tests/fleet/test_campaign_store_checks.py",
     "tests/learn/test_intervals.py",
 )
-"""The files with the most CPU time, the longest first (99 down to 15 s each, user + sys with child processes, in a
-one-process run of each room at fd4837e: `python -m pytest tests/<room> -n 0`, each test's time summed per file; the
-first ten re-ordered by the per-file CPU measured one file at a time at 7fee3dd, after the campaign files got
-cheaper: test_procedure 91 s, test_smoother 87, test_campaign 73, test_allan 71, test_cli_errors 53, the dask cluster
-and interrupt files 35 and 34); the rest follow in their collection order. pytest-xdist's --dist loadfile hands whole
-files to the workers in the session's order (--no-loadscope-reorder in pyproject's addopts; its default orders files
-by their number of tests, which sent the long few-test files last). A file missing from the tree fails
+"""The files with the most test time, the longest first (62 down to 6 s each: setup + call + teardown of each test
+summed per file, from `python -m pytest -n auto --durations=0` at 5101d1c, 2026-11-28, quiet 2-core machine; the
+sum over all files was 595 s); the rest follow in their collection order. pytest-xdist's --dist loadfile hands
+whole files to the workers in the session's order (--no-loadscope-reorder in pyproject's addopts; its default
+orders files by their number of tests, which sent the long few-test files last). A file missing from the tree fails
 tests/test_suite_order.py."""
 
 
