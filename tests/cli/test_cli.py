@@ -110,3 +110,30 @@ def test_fit_says_when_a_split_column_is_ignored(tmp_path, paper_csv):
         ],
     )
     assert r.exit_code == 0 and "has a split column; training on all 32 rows" in r.output
+
+
+def test_warnings_become_one_line_each_on_stderr_also_when_the_command_fails():
+    import warnings
+
+    import click
+
+    from gyrodrift.cli.options import show_warnings
+    from gyrodrift.learn.interval import IntervalOutlierWarning
+
+    @click.command()
+    @click.option("--fail", is_flag=True)
+    def command(fail):
+        with show_warnings():
+            for _ in range(2):
+                warnings.warn("interval: run r7 is wild", IntervalOutlierWarning, stacklevel=1)
+            warnings.warn("gamma on its bound", UserWarning, stacklevel=1)
+            if fail:
+                raise click.ClickException("stopped")
+        click.echo("done")
+
+    for fail in (False, True):
+        result = CliRunner().invoke(command, ["--fail"] if fail else [])
+        lines = result.stderr.splitlines()
+        assert lines[:2] == ["warning: interval: run r7 is wild", "warning: gamma on its bound"], result.stderr
+        assert "Warning:" not in result.stderr and "warnings.warn" not in result.stderr
+        assert (result.exit_code, result.stdout) == ((1, "") if fail else (0, "done\n"))

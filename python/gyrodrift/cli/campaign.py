@@ -8,7 +8,14 @@ from pathlib import Path
 import click
 
 from gyrodrift.cli.examples import example_option, file_or_example
-from gyrodrift.cli.options import connect_timeout_option, json_option, print_json, quiet_option, say_wrote
+from gyrodrift.cli.options import (
+    connect_timeout_option,
+    json_option,
+    print_json,
+    quiet_option,
+    say_wrote,
+    show_warnings,
+)
 from gyrodrift.cli.types import FiniteFloat, InputPath, Seed
 
 __all__ = ["COMMANDS", "campaign_command", "study_command"]
@@ -194,7 +201,9 @@ def study_command(folder, out, test_fraction, seed, max_iter, as_json, quiet):
     target = OutputFolder(out, "study", STUDY_FILES, inputs=[folder])
     runs = read_runs(folder)
     campaign = CampaignStore(folder).campaign()
-    doc = run_study(runs, test_fraction=test_fraction, seed=seed, max_iter=max_iter, campaign=campaign).to_dict()
+    with show_warnings():
+        study = run_study(runs, test_fraction=test_fraction, seed=seed, max_iter=max_iter, campaign=campaign)
+    doc = study.to_dict()
     with target.publish() as stage:
         write_study_report(doc, stage)
     if as_json:

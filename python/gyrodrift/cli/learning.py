@@ -20,7 +20,14 @@ from gyrodrift.choices import (
     default_encoding,
 )
 from gyrodrift.cli.errors import write_stdout
-from gyrodrift.cli.options import choice_option, json_option, print_json, quiet_option, say_wrote
+from gyrodrift.cli.options import (
+    choice_option,
+    json_option,
+    print_json,
+    quiet_option,
+    say_wrote,
+    show_warnings,
+)
 from gyrodrift.cli.types import FiniteFloat, InputPath, Seed
 
 PREDICTIONS_HEADERS = ("run,drift_identified_deg_h", '{"run": ')
@@ -38,29 +45,6 @@ def _read_runs(path, lat0_deg, require_truth, split=None):
         if len(runs) == 0:
             raise OptionError(f"{path}: no rows with split = {split!r} (--split)")
     return runs
-
-
-class _ShowWarnings:
-    """Collect the warnings raised inside (e.g. a tuned value on its search bound, ill-conditioning) and print
-    each as one ``warning: ...`` line on stderr, instead of Python's two-line format with a source line."""
-
-    def __enter__(self):
-        import warnings
-
-        self._catcher = warnings.catch_warnings(record=True)
-        self._caught = self._catcher.__enter__()
-        warnings.simplefilter("always")
-        return self
-
-    def __exit__(self, *exc_info):
-        self._catcher.__exit__(*exc_info)
-        seen = set()
-        for w in self._caught:
-            text = str(w.message)
-            if text not in seen:
-                seen.add(text)
-                click.echo(f"warning: {text}", err=True)
-        return False
 
 
 _lat0_option = click.option(
@@ -198,7 +182,7 @@ def fit(
             err=True,
         )
     try:
-        with _ShowWarnings():
+        with show_warnings():
             model = fit_drift_model(
                 runs,
                 encoding=default_encoding(target) if encoding is None else encoding,

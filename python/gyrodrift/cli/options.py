@@ -2,12 +2,16 @@
 
 The options of the commands that read IMU logs (the static site ``--lat0-deg``, ``--lon0-deg``, ``--height-m``
 and ``--format``), the sensor noise (``--noise``, ...), an output folder ``--out``, ``--connect-timeout-s``,
-``--json``, ``--quiet``, and the one ``wrote ...`` line of every command that writes files.
+``--json``, ``--quiet``, the one ``wrote ...`` line of every command that writes files, and warnings as
+one ``warning: ...`` line each.
 """
 
 from __future__ import annotations
 
+import contextlib
 import functools
+import warnings
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -25,6 +29,7 @@ __all__ = [
     "quiet_option",
     "print_json",
     "say_wrote",
+    "show_warnings",
 ]
 
 
@@ -223,3 +228,17 @@ def say_wrote(paths, *, quiet: bool, as_json: bool = False, detail: str = "") ->
         return
     text = "wrote " + ", ".join(str(p) for p in paths) + (f" ({detail})" if detail else "")
     click.echo(text, err=as_json)
+
+
+@contextlib.contextmanager
+def show_warnings() -> Iterator[None]:
+    """Collect the warnings raised inside (e.g. a tuned value on its search bound, an interval's outlying runs) and
+    print each distinct one as one ``warning: ...`` line on stderr, instead of Python's two-line format naming a
+    source line; also when the block raises."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            yield
+        finally:
+            for text in dict.fromkeys(str(w.message) for w in caught):
+                click.echo(f"warning: {text}", err=True)

@@ -285,6 +285,7 @@ def run_study(
     limit, `gyrodrift.fleet.law_limit`), or None."""
     from gyrodrift.fleet.run_table import run_table
     from gyrodrift.learn.baselines import physics_inversion
+    from gyrodrift.learn.interval import IntervalOutlierWarning
     from gyrodrift.learn.tuning import SearchBoundWarning
 
     n_all = len(runs)
@@ -326,12 +327,14 @@ def run_study(
     ]
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", SearchBoundWarning)
+        warnings.simplefilter("always", IntervalOutlierWarning)
         for name in learned:
             predict, note, priors[name] = _fit_learned(name, train, seed=seed, max_iter=max_iter)
             pred, lo, hi = predict(test)
             methods[name] = MethodResult(name, np.asarray(pred, float), lo, hi, note=note)
-    for w in {str(w.message) for w in caught if issubclass(w.category, SearchBoundWarning)}:
-        notes.append(f"tuning warned: {w}")
+    for category, said in ((SearchBoundWarning, "tuning warned"), (IntervalOutlierWarning, "a fit warned")):
+        for w in dict.fromkeys(str(w.message) for w in caught if issubclass(w.category, category)):
+            notes.append(f"{said}: {w}")
     methods["12 h physics inversion"] = MethodResult("12 h physics inversion", physics_inversion(test))
     cf, cf_std = test_df.numbers("drift_curvefit_deg_h"), test_df.numbers("drift_curvefit_std_deg_h")
     methods["12 h curve fit"] = MethodResult("12 h curve fit", cf, cf - Z90 * cf_std, cf + Z90 * cf_std)
@@ -391,8 +394,9 @@ def run_study(
         train_sizes = sorted({s for s in (10, 20, 40, 80, 160, 320, 640) if s < n_train} | {n_train})
     order = np.random.default_rng(seed + 1).permutation(n_train)
     size_curve: dict[str, Any] = {"sizes": train_sizes, "rms_eff": {}}
-    with warnings.catch_warnings():
+    with warnings.catch_warnings():  # the curves use the point predictions: their fits' warnings say nothing here
         warnings.simplefilter("ignore", SearchBoundWarning)
+        warnings.simplefilter("ignore", IntervalOutlierWarning)
         for name in LEARNED:
             values = []
             for size in train_sizes:
