@@ -1,7 +1,9 @@
-"""Fixtures shared by the whole suite: simulated logs built once per test session (once per pytest-xdist worker)."""
+"""Fixtures shared by the whole suite: simulated logs built once per test session (once per pytest-xdist worker),
+and one reproduction of the paper shared by every worker of the session."""
 
 from __future__ import annotations
 
+import fcntl
 import json
 from collections.abc import Callable
 from pathlib import Path
@@ -28,3 +30,24 @@ def simulated_log(tmp_path_factory: pytest.TempPathFactory) -> Callable[[dict[st
         return logs[key]
 
     return log_of
+
+
+@pytest.fixture(scope="session")
+def paper_reproduction(tmp_path_factory: pytest.TempPathFactory, worker_id: str) -> tuple[Path, dict[str, Any]]:
+    """``(folder, results)`` of ``reproduce(folder, seed=3, quiet=True)``: the paper's experiment on the embedded data.
+
+    Run once per test session: under pytest-xdist the first worker to ask runs it (its methods in a forked worker
+    process, as the command does) while the others wait on a lock (POSIX flock), then read its results.json, which
+    holds the same dict (JSON round-trips it exactly; test_deterministic_for_a_seed_wherever_the_methods_run
+    compares a fresh run with it). Shared read-only: a test must not modify the folder.
+    """
+    from gyrodrift.paper.reproduce import reproduce
+
+    base = tmp_path_factory.getbasetemp()
+    root = base if worker_id == "master" else base.parent  # the session's folder, shared by its workers
+    folder = root / "paper-reproduction"
+    with open(root / "paper-reproduction.lock", "a") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+        if (folder / "results.json").is_file():  # published whole (atomically) by another worker
+            return folder, json.loads((folder / "results.json").read_text())
+        return folder, reproduce(folder, seed=3, quiet=True)

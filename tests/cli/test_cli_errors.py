@@ -37,7 +37,7 @@ class Inputs:
     static_log: Path  # 6 min without rotation (for allan)
     scenario: Path
     model: Path
-    results: dict  # one real reproduction, replayed by the reproduce command
+    results: dict  # one real reproduction (tests/conftest.py's, seed 3), replayed by the reproduce command
 
 
 def _run(*args, **kwargs):
@@ -45,9 +45,7 @@ def _run(*args, **kwargs):
 
 
 @pytest.fixture(scope="module")
-def inputs(tmp_path_factory):
-    from gyrodrift.paper.reproduce import run_reproduction
-
+def inputs(tmp_path_factory, paper_reproduction):
     folder = tmp_path_factory.mktemp("inputs")
     (log,), _ = simulate_fleet(folder / "fleet", 1, rate_hz=5.0)
     # 6 min at 10 Hz: 3600 samples, averaging times 0.1-102 s (11 points); what is checked here is where allan's
@@ -65,7 +63,7 @@ def inputs(tmp_path_factory):
     fit = ["fit", PAPER_RUNS, "--lat0-deg", 28.222, "--split", "train", "--encoding", "temp_range", "--target", "drift"]
     r = _run(*fit, "--gamma", 10, "--sigma", 1, "--out", model)  # an encoding every command (export too) takes
     assert r.exit_code == 0, r.output
-    return Inputs(folder, log, static_log, scenario, model, run_reproduction(seed=0, quiet=True))
+    return Inputs(folder, log, static_log, scenario, model, paper_reproduction[1])
 
 
 # Each writing command: its arguments for an output location, and the file or folder it writes there.

@@ -24,10 +24,10 @@ FAMILIES = {
 
 
 @pytest.fixture(scope="module")
-def run(tmp_path_factory):
-    out = tmp_path_factory.mktemp("repro") / "out"
-    results = reproduce(out, seed=3, quiet=True)
-    return out, results
+def run(paper_reproduction):
+    """(folder, results) of `reproduce(folder, seed=3, quiet=True)`: tests/conftest.py's one reproduction of the
+    session (tests/cli/test_cli_errors.py replays it too); read-only."""
+    return paper_reproduction
 
 
 def test_files_and_figures(run):
