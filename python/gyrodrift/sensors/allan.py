@@ -594,17 +594,21 @@ def allan_deviation(log: Any, *, chunk_samples: int = 200_000, quiet: bool = Tru
         for chunk in log.chunks(chunk_samples):
             inc = np.hstack([chunk.dtheta_rad, chunk.dv_m_s])
             lowest, highest = np.minimum(lowest, inc.min(axis=0)), np.maximum(highest, inc.max(axis=0))
-            # still-table check on 1 s means of the z rate
+            # still-table check on 1 s means of the z rate: the second begun in the previous chunk, then the
+            # chunk's whole seconds (one row each), then the start of the next second
             dz = chunk.dtheta_rad[:, 2]
-            i = 0
-            while i < len(dz):
-                take = min(per_second - z_cnt, len(dz) - i)
-                z_acc += float(dz[i : i + take].sum())
-                z_cnt += take
-                i += take
+            i = min(per_second - z_cnt, len(dz)) if z_cnt else 0
+            if i:
+                z_acc += float(dz[:i].sum())
+                z_cnt += i
                 if z_cnt == per_second:
                     z_means.append(z_acc * log.rate_hz / per_second)
                     z_acc, z_cnt = 0.0, 0
+            whole = (len(dz) - i) // per_second * per_second
+            seconds = dz[i : i + whole].reshape(-1, per_second).sum(axis=1)
+            z_means.extend((seconds * log.rate_hz / per_second).tolist())
+            if len(dz) > i + whole:
+                z_acc, z_cnt = float(dz[i + whole :].sum()), len(dz) - i - whole
             cum = total + np.cumsum(inc, axis=0)
             # phase points at the end of every `stride` samples
             first = (stride - carry) - 1
