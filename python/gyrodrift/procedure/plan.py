@@ -80,6 +80,9 @@ DEFAULT_QUANTILES = (0.5, 0.9, 0.95, 0.99)
 """Probabilities of the 72 h error quantiles reported."""
 _THETA_POINTS = 2048
 """Midpoints over a quarter turn for `norm_cdf` (the integrand is symmetric in each quadrant)."""
+_THETA = (np.arange(_THETA_POINTS) + 0.5) * (0.5 * math.pi / _THETA_POINTS)
+_COS2, _SIN2 = np.cos(_THETA) ** 2, np.sin(_THETA) ** 2
+"""cos^2 and sin^2 at those midpoints, computed once: `norm_cdf` runs once per run of a fleet (the law's limit)."""
 _MISSION_STEP_S = 60.0
 """Propagation step of the mission covariance [s]."""
 _UPDATE_S = 10.0
@@ -136,8 +139,7 @@ def norm_cdf(cov, radius) -> float:
         return 0.0
     if l1 == 0.0:
         return 1.0
-    theta = (np.arange(_THETA_POINTS) + 0.5) * (0.5 * math.pi / _THETA_POINTS)
-    s = l1 * np.cos(theta) ** 2 + l2 * np.sin(theta) ** 2
+    s = l1 * _COS2 + l2 * _SIN2
     with np.errstate(divide="ignore", over="ignore"):
         return float(np.mean(1.0 - np.exp(-(r * r) / (2.0 * s))))
 
