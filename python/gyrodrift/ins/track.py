@@ -21,6 +21,7 @@ dlon/dt = v_E / ((R_N + h) cos lat)), linear otherwise. Sources:
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import os
 from dataclasses import dataclass
@@ -119,7 +120,7 @@ class ReferenceTrack:
             lat = self.lat_rad[i] + x * (self.lat_rad[i + 1] - self.lat_rad[i])
             lon = self.lon_rad[i] + x * (self.lon_rad[i + 1] - self.lon_rad[i])
             return lat, lon, h
-        rates = self._position_rates()
+        rates = self._position_rates
         h00, h10 = 2 * x**3 - 3 * x**2 + 1, x**3 - 2 * x**2 + x
         h01, h11 = -2 * x**3 + 3 * x**2, x**3 - x**2
         out = []
@@ -127,8 +128,10 @@ class ReferenceTrack:
             out.append(h00 * p[i] + h10 * dt * r[i] + h01 * p[i + 1] + h11 * dt * r[i + 1])
         return out[0], out[1], h
 
+    @functools.cached_property
     def _position_rates(self) -> tuple[np.ndarray, np.ndarray]:
-        """(dlat/dt, dlon/dt) [rad/s] at the track's time stamps, from the velocity."""
+        """(dlat/dt, dlon/dt) [rad/s] at the track's time stamps, from the velocity (computed at the first `at`,
+        kept for the next: a navigation asks for every chunk)."""
         assert self.vel_enu_m_s is not None
         rm, rn = radii_of_curvature(self.lat_rad)
         v = self.vel_enu_m_s
