@@ -13,15 +13,19 @@ import time
 from pathlib import Path
 
 import pytest
+from click.testing import CliRunner
 from test_campaign_store_checks import FAST
 
+from gyrodrift.cli import main
 from gyrodrift.fleet.store import read_runs
 
 TINY = Path(__file__).resolve().parents[2] / "examples" / "campaigns" / "tiny.toml"
 COUNT = 8
-ABORT_COUNT = 4
-"""The second Ctrl-C test's runs: 14 h at 20 Hz (seconds each), two per worker, so that the abort meets runs in
-progress and the rerun has at most three of them left to do."""
+ABORT_COUNT = 3
+"""The second Ctrl-C test's runs: 14 h at 20 Hz (about a second each, measured 1.0-1.1 s on a loaded machine), one
+per worker and a third the first commit hands out (its worker starts it before the client commits), so that the
+abort, ~0.35 s after that commit, meets it in progress and the rerun has at most two runs left to do (four runs
+gave the rerun a third one, ~1 s more, for no claim of its own)."""
 
 
 def _campaign(tmp_path: Path, text: str) -> Path:
@@ -66,15 +70,10 @@ def _wait_for(out: Path, n: int, proc: subprocess.Popen, timeout: float = 120.0)
 
 
 def _rerun_completes(src: Path, out: Path, before: dict[str, int], count: int) -> None:
-    """The same command again completes the campaign (on one worker: an interpreter fewer to start)."""
-    res = subprocess.run(
-        [sys.executable, "-c", "from gyrodrift.cli import main; main()", "campaign", str(src), "--out", str(out)]
-        + ["--workers", "1", "--quiet"],
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
-    assert res.returncode == 0, res.stderr
+    """The same command again completes the campaign (in this process, on one worker: the rerun's point is the
+    store the interrupt left, not a fresh interpreter, which cost ~1 s more)."""
+    res = CliRunner().invoke(main, ["campaign", str(src), "--out", str(out), "--workers", "1", "--quiet"])
+    assert res.exit_code == 0, res.output
     after = _committed(out)
     assert sorted(after) == [f"run-{i:06d}.parquet" for i in range(count)]
     assert {k: after[k] for k in before} == before  # the committed runs were not rewritten
