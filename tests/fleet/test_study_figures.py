@@ -10,7 +10,7 @@ from gyrodrift.fleet.study_report import FIGURES, make_figures, method_colours, 
 METHODS = ["CPSO-LSSVM (LOO)", "GP regression", "hybrid default", "12 h physics inversion", "16 h smoother", FLEET_ROW]
 
 
-@pytest.fixture
+@pytest.fixture(scope="module")
 def doc():
     rms = {n: 1e-4 * (k + 1) for k, n in enumerate(METHODS)}
     curve = {n: [rms[n], 1.5 * rms[n]] for n in METHODS}
@@ -23,12 +23,17 @@ def doc():
     }
 
 
-def test_each_method_has_one_colour_in_every_figure(doc):
+@pytest.fixture(scope="module")
+def figures(doc):
+    """The study's figures of `doc`, drawn once for the module (the tests only read and render them)."""
+    return study_figures(doc)
+
+
+def test_each_method_has_one_colour_in_every_figure(doc, figures):
     from matplotlib.colors import to_hex
 
     colour = method_colours(doc)
     assert len(set(colour.values())) == len(METHODS)
-    figures = study_figures(doc)
     assert set(figures) == set(FIGURES)
     seen = 0
     for name, fig in figures.items():
@@ -47,8 +52,7 @@ def test_each_method_has_one_colour_in_every_figure(doc):
     assert seen == 3 + 2 * len(METHODS)
 
 
-def test_log_axes_label_more_than_one_tick_and_legends_sit_outside_the_axes(doc):
-    figures = study_figures(doc)
+def test_log_axes_label_more_than_one_tick_and_legends_sit_outside_the_axes(doc, figures):
     fig = figures["methods.png"]
     fig.canvas.draw()
     (ax,) = fig.axes
