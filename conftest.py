@@ -93,28 +93,31 @@ docstring_sybil = Sybil(
 pytest_collect_file = (markdown_sybil + docstring_sybil).pytest()
 
 LONGEST_FIRST = (
-    "tests/procedure/test_smoother.py",
     "README.md",
+    "tests/procedure/test_smoother.py",
     "tests/fleet/test_campaign.py",
-    "tests/procedure/test_procedure.py",
     "tests/fleet/test_identification_study.py",
+    "tests/procedure/test_procedure.py",
+    "docs/campaigns.md",
     "tests/sensors/test_allan.py",
     "tests/cli/test_cli_errors.py",
     "tests/export/test_export_compiled.py",
-    "docs/campaigns.md",
-    "docs/procedure.md",
     "tests/fleet/test_campaign_interrupt.py",
-    "tests/ins/test_ins_navigation.py",
-    "tests/paper/test_reproduce.py",
     "tests/procedure/test_plan.py",
+    "docs/procedure.md",
     "tests/fleet/test_campaign_dask_cluster.py",
     "tests/fleet/test_dask_shutdown.py",
+    "tests/ins/test_ins_navigation.py",
+    "tests/ins/test_ins_reference.py",
+    "docs/export.md",
+    "tests/paper/test_reproduce.py",
+    "tests/procedure/test_truth_law.py",
     "tests/fleet/test_campaign_store_checks.py",
-    "tests/learn/test_intervals.py",
+    "tests/ins/test_ins_vehicle.py",
 )
-"""The files with the most test time, the longest first (62 down to 6 s each: setup + call + teardown of each test
-summed per file, from `python -m pytest -n auto --durations=0` at 5101d1c, 2026-11-28, quiet 2-core machine; the
-sum over all files was 595 s); the rest follow in their collection order. pytest-xdist's --dist loadfile hands
+"""The files with the most test time, the longest first (58 down to 6 s each: setup + call + teardown of each test
+summed per file, from `python -m pytest -n auto --durations=0` at 9ae8057, 2026-11-28, quiet 2-core machine; the
+sum over all files was 546 s); the rest follow in their collection order. pytest-xdist's --dist loadfile hands
 whole files to the workers in the session's order (--no-loadscope-reorder in pyproject's addopts; its default
 orders files by their number of tests, which sent the long few-test files last). A file missing from the tree fails
 tests/test_suite_order.py."""
