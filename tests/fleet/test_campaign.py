@@ -398,14 +398,18 @@ def test_runs_carry_the_smoothers_thermal_columns(store, tmp_path):
         np.testing.assert_array_equal(table.column(c), runs.numbers(c))
 
 
-def test_a_store_written_before_the_thermal_columns_reads_resumes_and_studies(store, tmp_path):
+def test_a_store_written_before_the_thermal_columns_reads_resumes_and_studies(store, tmp_path, monkeypatch):
     """Run files without the four thermal columns (the previous schema): read as NaN, whichever file comes
-    first; a resumed campaign adds runs with them; the study says its fleet row is unavailable."""
+    first; a resumed campaign adds runs with them; the study says its fleet row is unavailable. The study's fits'
+    interval warnings become notes, any other warning reaches the caller."""
     import shutil
+    import warnings
 
     import pyarrow.parquet as pq
 
+    from gyrodrift.fleet import study as study_module
     from gyrodrift.fleet.study import FLEET_ROW, run_study
+    from gyrodrift.learn.interval import IntervalOutlierWarning
     from gyrodrift.runs.columns import SMOOTHER_THERMAL_COLUMNS
 
     out, src = store
@@ -419,7 +423,19 @@ def test_a_store_written_before_the_thermal_columns_reads_resumes_and_studies(st
     for c in SMOOTHER_THERMAL_COLUMNS:
         assert np.all(np.isnan(runs.numbers(c))), c
     assert np.all(np.isfinite(runs.numbers("drift_smoother_deg_h")))
-    study = run_study(runs, test_fraction=0.17, seed=0, max_iter=3, train_sizes=[10])
+    fit_learned = study_module._fit_learned
+
+    def warning_fit(name, train, **kwargs):
+        warnings.warn(f"interval: {name} is wild", IntervalOutlierWarning, stacklevel=1)
+        warnings.warn(f"something else from {name}", RuntimeWarning, stacklevel=1)
+        return fit_learned(name, train, **kwargs)
+
+    monkeypatch.setattr(study_module, "_fit_learned", warning_fit)
+    with pytest.warns(RuntimeWarning) as raised:
+        study = run_study(runs, test_fraction=0.17, seed=0, max_iter=3, train_sizes=[10])
+    # PSO is fitted only for the held-out runs (not for the training-size curves, whose fits warn what they warn)
+    assert "something else from PSO-LSSVM (LOO)" in {str(w.message) for w in raised}
+    assert "a fit warned: interval: linear model is wild" in study.notes, study.notes
     assert FLEET_ROW not in study.methods and "16 h smoother" in study.methods
     assert any(f"the '{FLEET_ROW}' row is unavailable" in n for n in study.notes), study.notes
     # resume: the last run again with today's code (the first file read is an old one); the old files stay as

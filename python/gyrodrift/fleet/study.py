@@ -332,9 +332,13 @@ def run_study(
             predict, note, priors[name] = _fit_learned(name, train, seed=seed, max_iter=max_iter)
             pred, lo, hi = predict(test)
             methods[name] = MethodResult(name, np.asarray(pred, float), lo, hi, note=note)
-    for category, said in ((SearchBoundWarning, "tuning warned"), (IntervalOutlierWarning, "a fit warned")):
-        for w in dict.fromkeys(str(w.message) for w in caught if issubclass(w.category, category)):
-            notes.append(f"{said}: {w}")
+    noted = {SearchBoundWarning: "tuning warned", IntervalOutlierWarning: "a fit warned"}
+    for category, said in noted.items():
+        for text in dict.fromkeys(str(w.message) for w in caught if issubclass(w.category, category)):
+            notes.append(f"{said}: {text}")
+    for other in caught:  # any other warning goes on to the caller, as raised
+        if not issubclass(other.category, tuple(noted)):
+            warnings.warn_explicit(other.message, other.category, other.filename, other.lineno)
     methods["12 h physics inversion"] = MethodResult("12 h physics inversion", physics_inversion(test))
     cf, cf_std = test_df.numbers("drift_curvefit_deg_h"), test_df.numbers("drift_curvefit_std_deg_h")
     methods["12 h curve fit"] = MethodResult("12 h curve fit", cf, cf - Z90 * cf_std, cf + Z90 * cf_std)
