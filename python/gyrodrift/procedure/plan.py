@@ -83,6 +83,7 @@ _THETA_POINTS = 2048
 _THETA = (np.arange(_THETA_POINTS) + 0.5) * (0.5 * math.pi / _THETA_POINTS)
 _COS2, _SIN2 = np.cos(_THETA) ** 2, np.sin(_THETA) ** 2
 """cos^2 and sin^2 at those midpoints, computed once: `norm_cdf` runs once per run of a fleet (the law's limit)."""
+_COS2.flags.writeable = _SIN2.flags.writeable = False  # shared by every call: read-only
 _MISSION_STEP_S = 60.0
 """Propagation step of the mission covariance [s]."""
 _UPDATE_S = 10.0
