@@ -47,7 +47,7 @@ use crate::attitude::{
     scale, sub, transpose, Mat3, Quat, Vec3, QUAT_IDENTITY,
 };
 use crate::earth;
-use crate::error::{check, CoreError};
+use crate::error::{check_with, CoreError};
 use crate::strapdown::coning_sculling;
 
 /// What the coarse alignment finds at the end of its span.
@@ -162,11 +162,9 @@ impl BiasFitSums {
 impl InertialCoarseAlignment {
     /// A span of `n_samples` (at least 2) samples at `rate_hz` \[Hz\] at latitude `lat` \[rad\], height `height` \[m\].
     pub fn new(lat: f64, height: f64, rate_hz: f64, n_samples: u64) -> Result<Self, CoreError> {
-        check(
-            n_samples >= 2,
-            "coarse_s",
-            format!("the coarse span holds {n_samples} samples, at least 2 are needed"),
-        )?;
+        check_with(n_samples >= 2, "coarse_s", || {
+            format!("the coarse span holds {n_samples} samples, at least 2 are needed")
+        })?;
         Ok(InertialCoarseAlignment {
             lat,
             g: earth::normal_gravity(lat, height),

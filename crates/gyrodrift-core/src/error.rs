@@ -86,6 +86,19 @@ pub(crate) fn check(ok: bool, key: &'static str, message: impl Into<String>) -> 
     }
 }
 
+/// As [`check`], with the message formatted only on failure (the validations run on every call of the core, some
+/// of them per chunk or per piece of a route: formatting their numbers every time cost more than the checks).
+pub(crate) fn check_with(ok: bool, key: &'static str, message: impl FnOnce() -> String) -> Result<(), CoreError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(CoreError::Setting {
+            key,
+            message: message(),
+        })
+    }
+}
+
 /// User units of messages: the SI value is converted before printing.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum Unit {
@@ -168,9 +181,7 @@ pub(crate) fn in_range(
     hi: f64,
     unit: Unit,
 ) -> Result<(), CoreError> {
-    check(
-        x.is_finite() && x >= lo && x <= hi,
-        key,
+    check_with(x.is_finite() && x >= lo && x <= hi, key, || {
         format!(
             "{quantity} {} is outside [{}, {}]{}",
             unit.show(x),
@@ -180,8 +191,8 @@ pub(crate) fn in_range(
                 "" => String::new(),
                 n => format!(" {n}"),
             }
-        ),
-    )
+        )
+    })
 }
 
 /// Values (SI) in `unit` as "(a, b, c) unit".
@@ -202,9 +213,7 @@ pub(crate) fn all_in_range(
     hi: f64,
     unit: Unit,
 ) -> Result<(), CoreError> {
-    check(
-        v.iter().all(|x| x.is_finite() && *x >= lo && *x <= hi),
-        key,
+    check_with(v.iter().all(|x| x.is_finite() && *x >= lo && *x <= hi), key, || {
         format!(
             "{quantity} {} is outside [{}, {}]{}",
             show_all(v, unit),
@@ -214,8 +223,8 @@ pub(crate) fn all_in_range(
                 "" => String::new(),
                 n => format!(" {n}"),
             }
-        ),
-    )
+        )
+    })
 }
 
 /// Check that every element of `v` (SI) is finite, positive and at most `hi`; the message shows all of them.
@@ -226,9 +235,7 @@ pub(crate) fn all_positive_at_most(
     hi: f64,
     unit: Unit,
 ) -> Result<(), CoreError> {
-    check(
-        v.iter().all(|x| x.is_finite() && *x > 0.0 && *x <= hi),
-        key,
+    check_with(v.iter().all(|x| x.is_finite() && *x > 0.0 && *x <= hi), key, || {
         format!(
             "{quantity} {} is outside (0, {}]{}",
             show_all(v, unit),
@@ -237,8 +244,8 @@ pub(crate) fn all_positive_at_most(
                 "" => String::new(),
                 n => format!(" {n}"),
             }
-        ),
-    )
+        )
+    })
 }
 
 /// A number with 6 significant digits, without trailing zeros (90 not 90.00000, 1e-300 in exponent form).
@@ -270,6 +277,22 @@ pub(crate) fn sig(x: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_passing_check_formats_no_message() {
+        let mut formatted = 0;
+        assert!(check_with(true, "k", || {
+            formatted += 1;
+            String::new()
+        })
+        .is_ok());
+        assert_eq!(formatted, 0);
+        let e = check_with(false, "k", || format!("x {}", sig(1.5))).unwrap_err();
+        assert_eq!(e.to_string(), "k: x 1.5");
+        assert!(in_range("k", "q", 2.0, 0.0, 1.0, Unit::Si("m")).is_err());
+        assert!(in_range("k", "q", f64::NAN, 0.0, 1.0, Unit::Si("m")).is_err());
+        assert!(in_range("k", "q", 0.5, 0.0, 1.0, Unit::Si("m")).is_ok());
+    }
 
     #[test]
     fn numbers_print_short() {

@@ -23,7 +23,7 @@
 //! The prior's values are stored in the units they are quoted in; the SI accessors convert with `units`.
 
 use crate::attitude::Vec3;
-use crate::error::{self, all_positive_at_most, check, in_range, sig, CoreError, Unit};
+use crate::error::{self, all_positive_at_most, check_with, in_range, sig, CoreError, Unit};
 use crate::limits::{check_arw, check_vrw};
 use crate::units::{DEG, DEG_PER_H, MICRO_G, SQRT_HOUR};
 
@@ -132,15 +132,13 @@ impl FilterSettings {
         let s = Unit::Si("s");
         in_range("coarse_s", "coarse span", self.coarse_s, 10.0, 86_400.0, s)?;
         all_positive_at_most("update_s", "update interval", &[self.update_s], 60.0, s)?;
-        check(
-            (self.update_s * rate_hz).round() >= 1.0,
-            "update_s",
+        check_with((self.update_s * rate_hz).round() >= 1.0, "update_s", || {
             format!(
                 "update interval {} s holds no sample at {} Hz",
                 sig(self.update_s),
                 sig(rate_hz)
-            ),
-        )?;
+            )
+        })?;
         if let Some(a) = self.att_sigma {
             all_positive_at_most("att_sigma_rad", "initial attitude sigma", &a, 0.2, error::ARCSEC)?;
         }

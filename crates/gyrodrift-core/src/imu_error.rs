@@ -27,7 +27,7 @@
 //! (x, y, z) then rate random walk (x, y, z). A term whose magnitude is zero draws nothing.
 
 use crate::attitude::Vec3;
-use crate::error::{check, CoreError, Unit};
+use crate::error::{check_with, CoreError, Unit};
 use crate::limits::{check_arw, check_vrw};
 use rand_core::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
@@ -109,13 +109,15 @@ impl ImuErrorParams {
             gb,
             g,
         )?;
-        check(
+        check_with(
             self.gyro_correlation.is_finite() && self.gyro_correlation > 0.0,
             "gyro_correlation_s",
-            format!(
-                "correlation time {} s must be positive and finite",
-                crate::error::sig(self.gyro_correlation)
-            ),
+            || {
+                format!(
+                    "correlation time {} s must be positive and finite",
+                    crate::error::sig(self.gyro_correlation)
+                )
+            },
         )?;
         in_range(
             "gyro_rrw_rad_s_rts",

@@ -5,7 +5,7 @@
 
 use crate::aligner_covariance::{navigation_start_selector, AlignerPass, FineAlignment, TableAttitude};
 use crate::attitude::Mat3;
-use crate::error::{check, CoreError};
+use crate::error::{check, check_with, CoreError};
 use crate::kalman::{DV, EPS, PHI};
 use crate::limits::{check_arw, check_rate, check_site, check_slow_bias, check_vrw};
 use crate::smoother::model::{symmetrise, Model};
@@ -266,13 +266,15 @@ fn alignment_leftovers(
         1e7,
         Unit::Si("s"),
     )?;
-    check(
+    check_with(
         cfg.slow.rrw == 0.0 || (cfg.rrw_start_s - al.end_s).abs() <= 1e-9 * al.end_s,
         "rrw_start_s",
-        format!(
-            "the rate random walk starts the navigation at the alignment's end ({} s), got {} s",
-            al.end_s, cfg.rrw_start_s
-        ),
+        || {
+            format!(
+                "the rate random walk starts the navigation at the alignment's end ({} s), got {} s",
+                al.end_s, cfg.rrw_start_s
+            )
+        },
     )?;
     let rate = al.rate_hz;
     let n_coarse = (al.filter.coarse_s * rate).round() as u64;

@@ -23,7 +23,7 @@
 
 use crate::attitude::Euler;
 use crate::error::{
-    all_positive_at_most, check, in_range, CoreError, Unit, DEG_H_PER_RTH, DEG_PER_RTH, MICRO_G_PER_RTHZ,
+    all_positive_at_most, check_with, in_range, CoreError, Unit, DEG_H_PER_RTH, DEG_PER_RTH, MICRO_G_PER_RTHZ,
 };
 use crate::units::STANDARD_GRAVITY;
 
@@ -72,37 +72,35 @@ pub fn check_rate(rate_hz: f64) -> Result<(), CoreError> {
 
 /// Check of a run length \[s\] at `rate_hz` (at least one sample).
 pub fn check_duration(duration_s: f64, rate_hz: f64) -> Result<(), CoreError> {
-    check(
+    check_with(
         duration_s.is_finite() && duration_s > 0.0 && duration_s <= MAX_DURATION_S,
         "duration_s",
-        format!(
-            "duration {} s is outside (0, {}] s",
-            crate::error::sig(duration_s),
-            MAX_DURATION_S
-        ),
+        || {
+            format!(
+                "duration {} s is outside (0, {}] s",
+                crate::error::sig(duration_s),
+                MAX_DURATION_S
+            )
+        },
     )?;
-    check(
-        (duration_s * rate_hz).round() >= 1.0,
-        "duration_s",
+    check_with((duration_s * rate_hz).round() >= 1.0, "duration_s", || {
         format!(
             "duration {} s gives no sample at {} Hz",
             crate::error::sig(duration_s),
             crate::error::sig(rate_hz)
-        ),
-    )
+        )
+    })
 }
 
 /// Checks of an attitude.
 pub fn check_attitude(e: Euler) -> Result<(), CoreError> {
     let p = MAX_PITCH_DEG.to_radians();
-    check(
-        e.pitch.is_finite() && e.pitch.abs() < p,
-        "pitch_rad",
+    check_with(e.pitch.is_finite() && e.pitch.abs() < p, "pitch_rad", || {
         format!(
             "pitch {} is outside (-{MAX_PITCH_DEG}, {MAX_PITCH_DEG}) deg",
             Unit::Deg.show(e.pitch)
-        ),
-    )?;
+        )
+    })?;
     let r = MAX_ROLL_DEG.to_radians();
     in_range("roll_rad", "roll", e.roll, -r, r, Unit::Deg)?;
     let y = MAX_YAW_DEG.to_radians();

@@ -63,7 +63,7 @@
 
 use crate::aligner_covariance::{aligner_on_smoother_model, navigation_start_selector, AlignerPass, TableAttitude};
 use crate::attitude::{Euler, Mat3};
-use crate::error::{check, CoreError};
+use crate::error::{check, check_with, CoreError};
 use crate::filter_prior::FilterSettings;
 use crate::kalman::EPS;
 use crate::label::{FreeNavigation, SlowBias};
@@ -162,14 +162,12 @@ pub fn drift_std_curve(cfg: &PlanConfig) -> Result<DriftCurve, CoreError> {
         "thermal",
         "the planner has no thermal state (the thermal term is added apart)",
     )?;
-    check(
-        cfg.aligner.coarse_s == sc.coarse_s,
-        "aligner",
+    check_with(cfg.aligner.coarse_s == sc.coarse_s, "aligner", || {
         format!(
             "the aligner's coarse span ({} s) must be the smoother's ({} s): one coarse alignment",
             cfg.aligner.coarse_s, sc.coarse_s
-        ),
-    )?;
+        )
+    })?;
     let attitude = TableAttitude::new(&cfg.scheme, cfg.attitude, sc.rate_hz)?;
     let rate = sc.rate_hz;
     let n_coarse = (sc.coarse_s * rate).round() as u64;
@@ -179,25 +177,27 @@ pub fn drift_std_curve(cfg: &PlanConfig) -> Result<DriftCurve, CoreError> {
     check(!cfg.spans_s.is_empty(), "spans_s", "no span given")?;
     let mut last = f64::NEG_INFINITY;
     for &s in &cfg.spans_s {
-        check(
+        check_with(
             s.is_finite() && s >= t_first && s <= sc.span_s * (1.0 + 1e-12) && s > last,
             "spans_s",
-            format!(
-                "spans must ascend within [{t_first} s, {} s] (the first update to the smoother's span), got {s}",
-                sc.span_s
-            ),
+            || {
+                format!(
+                    "spans must ascend within [{t_first} s, {} s] (the first update to the smoother's span), got {s}",
+                    sc.span_s
+                )
+            },
         )?;
         last = s;
     }
-    check(
+    check_with(
         cfg.mission_start_s.is_finite() && cfg.mission_start_s >= t_first,
         "mission_start_s",
-        format!("must be a finite time >= the first update ({t_first} s): the alignment ends there at the earliest"),
+        || format!("must be a finite time >= the first update ({t_first} s): the alignment ends there at the earliest"),
     )?;
-    check(
+    check_with(
         cfg.mission_s.is_finite() && cfg.mission_s >= 60.0 && cfg.mission_start_s + cfg.mission_s >= last,
         "mission_s",
-        format!("the mission must last >= 60 s and end after the longest span ({last} s)"),
+        || format!("the mission must last >= 60 s and end after the longest span ({last} s)"),
     )?;
     let model = Model::new(sc);
     let n = model.n;
@@ -233,14 +233,16 @@ pub fn drift_std_curve(cfg: &PlanConfig) -> Result<DriftCurve, CoreError> {
     // The mission starts at the smoother's update nearest to `mission_start_s` (the update grid's k).
     let k_start =
         n_coarse + ((cfg.mission_start_s * rate - n_coarse as f64) / n_update as f64).round() as u64 * n_update;
-    check(
+    check_with(
         rz.is_none() || cfg.spans_s[0] >= k_start as f64 / rate - 1e-9,
         "spans_s",
-        format!(
-            "with a rate random walk every span must end after the mission starts ({} s), got {} s",
-            k_start as f64 / rate,
-            cfg.spans_s[0]
-        ),
+        || {
+            format!(
+                "with a rate random walk every span must end after the mission starts ({} s), got {} s",
+                k_start as f64 / rate,
+                cfg.spans_s[0]
+            )
+        },
     )?;
     let mission_end = cfg.mission_start_s + cfg.mission_s;
     // Selector of the z drift carried into navigation: eps_z + rrw_z, the Gauss-Markov state left out as the
@@ -304,10 +306,12 @@ pub fn drift_std_curve(cfg: &PlanConfig) -> Result<DriftCurve, CoreError> {
                 *v *= decay;
             }
         }
-        let s_inv = (&h * &p * h.transpose() + &r).try_inverse().ok_or(CoreError::Setting {
-            key: "update_s",
-            message: "the planner's innovation covariance is singular".to_string(),
-        })?;
+        let s_inv = (&h * &p * h.transpose() + &r)
+            .try_inverse()
+            .ok_or_else(|| CoreError::Setting {
+                key: "update_s",
+                message: "the planner's innovation covariance is singular".to_string(),
+            })?;
         let gain = &p * h.transpose() * s_inv;
         let i_kh = &identity - &gain * &h;
         p = symmetrise(&i_kh * &p * i_kh.transpose() + &gain * &r * gain.transpose());

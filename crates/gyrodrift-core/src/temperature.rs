@@ -1,7 +1,7 @@
 //! Temperature of the IMU [deg C] as a function of time \[s\]: the input of the temperature-dependent
 //! axial drift (see `imu_error`).
 
-use crate::error::{check, CoreError};
+use crate::error::{check, check_with, CoreError};
 use std::f64::consts::TAU;
 
 /// A daily swing added to a warm-up: A sin(2 pi t / P + phase) [deg C], with A the amplitude [deg C], P the
@@ -122,45 +122,39 @@ impl TemperatureProfile {
                 tau_s,
                 swing,
             } => {
-                check(
+                check_with(
                     start_c.is_finite() && (-100.0..=200.0).contains(start_c),
                     "temp_start_c",
-                    format!("must be in [-100, 200] deg C, got {start_c}"),
+                    || format!("must be in [-100, 200] deg C, got {start_c}"),
                 )?;
-                check(
+                check_with(
                     end_c.is_finite() && (-100.0..=200.0).contains(end_c),
                     "temp_end_c",
-                    format!("must be in [-100, 200] deg C, got {end_c}"),
+                    || format!("must be in [-100, 200] deg C, got {end_c}"),
                 )?;
-                check(
-                    tau_s.is_finite() && *tau_s > 0.0,
-                    "temp_tau_s",
-                    format!("must be positive and finite, got {tau_s}"),
-                )?;
+                check_with(tau_s.is_finite() && *tau_s > 0.0, "temp_tau_s", || {
+                    format!("must be positive and finite, got {tau_s}")
+                })?;
                 let a = swing.amplitude_c;
-                check(
+                check_with(
                     a.is_finite() && a >= 0.0 && start_c.min(*end_c) - a >= -100.0 && start_c.max(*end_c) + a <= 200.0,
                     "temp_swing_amplitude_c",
-                    format!("must be >= 0 deg C and keep the warm-up within [-100, 200] deg C, got {a}"),
+                    || format!("must be >= 0 deg C and keep the warm-up within [-100, 200] deg C, got {a}"),
                 )?;
-                check(
+                check_with(
                     swing.period_s.is_finite() && swing.period_s > 0.0,
                     "temp_swing_period_s",
-                    format!("must be positive and finite, got {}", swing.period_s),
+                    || format!("must be positive and finite, got {}", swing.period_s),
                 )?;
-                check(
-                    swing.phase_rad.is_finite(),
-                    "temp_swing_phase_rad",
-                    format!("must be finite, got {}", swing.phase_rad),
-                )
+                check_with(swing.phase_rad.is_finite(), "temp_swing_phase_rad", || {
+                    format!("must be finite, got {}", swing.phase_rad)
+                })
             }
             TemperatureProfile::Series { t_s, temp_c } => {
                 check(!t_s.is_empty(), "temp_series_t_s", "must not be empty")?;
-                check(
-                    t_s.len() == temp_c.len(),
-                    "temp_series_c",
-                    format!("has {} values but temp_series_t_s has {}", temp_c.len(), t_s.len()),
-                )?;
+                check_with(t_s.len() == temp_c.len(), "temp_series_c", || {
+                    format!("has {} values but temp_series_t_s has {}", temp_c.len(), t_s.len())
+                })?;
                 check(t_s.iter().all(|t| t.is_finite()), "temp_series_t_s", "must be finite")?;
                 check(
                     t_s.windows(2).all(|w| w[1] > w[0]),

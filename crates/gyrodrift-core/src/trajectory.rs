@@ -26,7 +26,7 @@
 //! Frames: navigation ENU, vehicle frame Right-Forward-Up with the vehicle level. SI units throughout.
 
 use crate::earth;
-use crate::error::{check, sig, CoreError};
+use crate::error::{check_with, sig, CoreError};
 use crate::limits::{MAX_HEIGHT_M, MAX_LAT_DEG, MIN_HEIGHT_M};
 use std::f64::consts::PI;
 
@@ -127,45 +127,46 @@ impl Trajectory {
     /// Lay the route out from `yaw0` and height `h0` \[m\] over [0, `duration_s`] and check it (errors name
     /// `trajectory`).
     pub fn new(cfg: &TrajectoryConfig, yaw0: f64, h0: f64, duration_s: f64) -> Result<Self, CoreError> {
-        check(
-            cfg.start_s.is_finite() && cfg.start_s >= 0.0,
-            "trajectory",
-            format!("the static period of {} s must be >= 0", sig(cfg.start_s)),
-        )?;
+        check_with(cfg.start_s.is_finite() && cfg.start_s >= 0.0, "trajectory", || {
+            format!("the static period of {} s must be >= 0", sig(cfg.start_s))
+        })?;
         for (i, s) in cfg.segments.iter().enumerate() {
-            check(
-                s.duration.is_finite() && s.duration > 0.0,
-                "trajectory",
-                format!("segment {}: duration {} s must be > 0", i + 1, sig(s.duration)),
-            )?;
-            check(
+            check_with(s.duration.is_finite() && s.duration > 0.0, "trajectory", || {
+                format!("segment {}: duration {} s must be > 0", i + 1, sig(s.duration))
+            })?;
+            check_with(
                 s.accel.is_finite() && s.accel.abs() <= MAX_ACCEL_M_S2,
                 "trajectory",
-                format!(
-                    "segment {}: acceleration {} m/s^2 is outside [-{MAX_ACCEL_M_S2}, {MAX_ACCEL_M_S2}] m/s^2",
-                    i + 1,
-                    sig(s.accel)
-                ),
+                || {
+                    format!(
+                        "segment {}: acceleration {} m/s^2 is outside [-{MAX_ACCEL_M_S2}, {MAX_ACCEL_M_S2}] m/s^2",
+                        i + 1,
+                        sig(s.accel)
+                    )
+                },
             )?;
-            check(
+            check_with(
                 s.yaw_rate.is_finite() && s.yaw_rate.abs() <= MAX_YAW_RATE_RAD_S,
                 "trajectory",
-                format!(
-                    "segment {}: turn rate {} deg/s is outside +-{} deg/s",
-                    i + 1,
-                    sig(s.yaw_rate.to_degrees()),
-                    sig(MAX_YAW_RATE_RAD_S.to_degrees())
-                ),
+                || {
+                    format!(
+                        "segment {}: turn rate {} deg/s is outside +-{} deg/s",
+                        i + 1,
+                        sig(s.yaw_rate.to_degrees()),
+                        sig(MAX_YAW_RATE_RAD_S.to_degrees())
+                    )
+                },
             )?;
             // Peak vertical speed and acceleration of the climb profile.
             let (w, a) = (
                 s.climb.abs() * PI / (2.0 * s.duration),
                 s.climb.abs() * PI * PI / (2.0 * s.duration * s.duration),
             );
-            check(
+            check_with(
                 s.climb.is_finite() && w <= MAX_CLIMB_RATE_M_S && a <= MAX_ACCEL_M_S2,
                 "trajectory",
-                format!(
+                || {
+                    format!(
                     "segment {}: a climb of {} m in {} s needs a vertical speed of {} m/s and acceleration {} m/s^2 \
                      (at most {MAX_CLIMB_RATE_M_S} m/s and {MAX_ACCEL_M_S2} m/s^2)",
                     i + 1,
@@ -173,7 +174,8 @@ impl Trajectory {
                     sig(s.duration),
                     sig(w),
                     sig(a)
-                ),
+                )
+                },
             )?;
         }
         let mut pieces = Vec::new();
@@ -184,37 +186,31 @@ impl Trajectory {
                 if t >= duration_s {
                     break 'outer;
                 }
-                check(
-                    pieces.len() < MAX_PIECES,
-                    "trajectory",
-                    format!("the route repeats more than {MAX_PIECES} segments over the run"),
-                )?;
+                check_with(pieces.len() < MAX_PIECES, "trajectory", || {
+                    format!("the route repeats more than {MAX_PIECES} segments over the run")
+                })?;
                 let mut v1 = v + s.accel * s.duration;
                 // An exact stop (v0 = accel x duration) may round to -1e-16 m/s: that is zero.
                 if v1.abs() <= 1e-9 * (1.0 + v.abs()) {
                     v1 = 0.0;
                 }
-                check(
-                    (0.0..=MAX_SPEED_M_S).contains(&v1),
-                    "trajectory",
+                check_with((0.0..=MAX_SPEED_M_S).contains(&v1), "trajectory", || {
                     format!(
                         "segment {} ends at speed {} m/s (t = {} s), outside [0, {MAX_SPEED_M_S}] m/s",
                         i + 1,
                         sig(v1),
                         sig(t + s.duration)
-                    ),
-                )?;
+                    )
+                })?;
                 let h1 = h + s.climb;
-                check(
-                    (MIN_HEIGHT_M..=MAX_HEIGHT_M).contains(&h1),
-                    "trajectory",
+                check_with((MIN_HEIGHT_M..=MAX_HEIGHT_M).contains(&h1), "trajectory", || {
                     format!(
                         "segment {} ends at height {} m (t = {} s), outside [{MIN_HEIGHT_M}, {MAX_HEIGHT_M}] m",
                         i + 1,
                         sig(h1),
                         sig(t + s.duration)
-                    ),
-                )?;
+                    )
+                })?;
                 pieces.push(Piece {
                     t0: t,
                     t1: t + s.duration,
@@ -431,19 +427,15 @@ pub fn check_route_latitude(traj: &Trajectory, lat0: f64, yaw0: f64, duration_s:
         p = p1;
         rate = r1;
         t = t1;
-        // The message is formatted only on failure (once per second of route otherwise: 0.3 M times for 88 h).
-        if p[0].abs() > lat_max {
-            return check(
-                false,
-                "trajectory",
-                format!(
-                    "the route reaches latitude {} deg at t = {} h, beyond +-{} deg",
-                    sig(p[0].to_degrees()),
-                    sig(t / crate::units::HOUR),
-                    sig(lat_max.to_degrees())
-                ),
-            );
-        }
+        // Once per second of route (0.3 M times for 88 h): the message is formatted only on failure.
+        check_with(p[0].abs() <= lat_max, "trajectory", || {
+            format!(
+                "the route reaches latitude {} deg at t = {} h, beyond +-{} deg",
+                sig(p[0].to_degrees()),
+                sig(t / crate::units::HOUR),
+                sig(lat_max.to_degrees())
+            )
+        })?;
     }
     Ok(())
 }

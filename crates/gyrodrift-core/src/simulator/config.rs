@@ -1,7 +1,7 @@
 //! The settings of a simulated run ([`ImuSimulatorConfig`]) and their range checks.
 
 use crate::attitude::Euler;
-use crate::error::{check, CoreError};
+use crate::error::{check_with, CoreError};
 use crate::imu_error::ImuErrorParams;
 use crate::limits::{check_attitude, check_duration, check_site};
 use crate::temperature::{DailySwing, TemperatureProfile};
@@ -87,15 +87,13 @@ pub(super) fn check_period(table: &Turntable, dt: f64) -> Result<(), CoreError> 
         RotationScheme::Indexing { .. } => ("positions_rad", "indexing cycle"),
         _ => ("reciprocating_span_rad", "reciprocating period"),
     };
-    check(
-        false,
-        key,
+    check_with(false, key, || {
         format!(
             "the {what} of {} s is shorter than {MIN_SAMPLES_PER_PERIOD} samples ({} s at {} Hz): \
              the moves are too small",
             crate::error::sig(period),
             crate::error::sig(MIN_SAMPLES_PER_PERIOD * dt),
             crate::error::sig(1.0 / dt)
-        ),
-    )
+        )
+    })
 }

@@ -38,7 +38,7 @@ pub use config::{ImuSimulatorConfig, MIN_SAMPLES_PER_PERIOD};
 
 use crate::attitude::{euler_to_dcm, mat_t_vec, Mat3, Vec3};
 use crate::earth;
-use crate::error::{check, CoreError};
+use crate::error::{check_with, CoreError};
 use crate::imu_error::ImuErrorModel;
 use crate::temperature::TemperatureProfile;
 use crate::turntable::{TableCursor, Turntable};
@@ -260,11 +260,9 @@ impl ImuSimulator {
     /// The number of samples the next chunk of at most `n` samples holds (the samples remaining, if fewer),
     /// after checking `n` against [`MAX_CHUNK_SAMPLES`] so that a caller never allocates more than that.
     pub fn chunk_len(&self, n: u64) -> Result<usize, CoreError> {
-        check(
-            (1..=MAX_CHUNK_SAMPLES).contains(&n),
-            "n",
-            format!("a chunk of {n} samples is outside [1, {MAX_CHUNK_SAMPLES}] samples (12 float64 values each)"),
-        )?;
+        check_with((1..=MAX_CHUNK_SAMPLES).contains(&n), "n", || {
+            format!("a chunk of {n} samples is outside [1, {MAX_CHUNK_SAMPLES}] samples (12 float64 values each)")
+        })?;
         // Bounded by MAX_CHUNK_SAMPLES, which fits usize on every supported platform (>= 32 bits).
         Ok(self.remaining().min(n) as usize)
     }

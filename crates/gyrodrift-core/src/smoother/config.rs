@@ -1,7 +1,7 @@
 //! The smoother's settings ([`SmootherConfig`]), their range checks and the state layout they give.
 
 use super::{DEFAULT_THERMAL_MIN_RANGE_C, DEFAULT_THERMAL_SIGMA_DEG_H_PER_C, MAX_UPDATES, POS};
-use crate::error::{check, CoreError};
+use crate::error::{check, check_with, CoreError};
 use crate::filter_prior::FilterSettings;
 use crate::kalman::{N_STATES as N_BASE, STATE_NAMES as BASE_NAMES};
 use crate::limits::{check_site, check_slow_bias};
@@ -144,16 +144,14 @@ impl SmootherConfig {
             Unit::Si("deg C"),
         )?;
         let updates = ((self.span_s - self.coarse_s) / self.update_s).ceil();
-        check(
-            updates <= MAX_UPDATES as f64,
-            "update_s",
+        check_with(updates <= MAX_UPDATES as f64, "update_s", || {
             format!(
                 "update interval {} s gives {} updates over the span; at most {MAX_UPDATES} are kept for the \
                  backward pass (use a longer interval)",
                 sig(self.update_s),
                 sig(updates)
-            ),
-        )
+            )
+        })
     }
 
     /// The settings the aligner shares (flat here: `FilterSettings` names them once; `new` and `with_filter` take

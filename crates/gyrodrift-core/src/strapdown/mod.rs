@@ -47,7 +47,7 @@ use crate::attitude::{
 };
 use crate::earth;
 use crate::error::{all_in_range, show_all, Unit};
-use crate::error::{check, CoreError};
+use crate::error::{check, check_with, CoreError};
 use crate::imu_error::{MAX_ACCEL_BIAS_M_S2, MAX_GYRO_BIAS_RAD_S};
 use crate::limits::{
     check_attitude, check_increments, check_lengths, check_site, increment_bounds, MAX_HEIGHT_M, MIN_HEIGHT_M,
@@ -123,13 +123,15 @@ impl Default for NavigatorConfig {
 impl NavigatorConfig {
     pub fn validate(&self) -> Result<(), CoreError> {
         check_site(self.lat, self.lon, self.height, self.rate_hz)?;
-        check(
+        check_with(
             self.vel.iter().all(|v| v.is_finite() && v.abs() <= 1000.0),
             "vel_enu_m_s",
-            format!(
-                "velocity {} must be finite and within +-1000 m/s",
-                show_all(&self.vel, Unit::Si("m/s"))
-            ),
+            || {
+                format!(
+                    "velocity {} must be finite and within +-1000 m/s",
+                    show_all(&self.vel, Unit::Si("m/s"))
+                )
+            },
         )?;
         check_attitude(self.attitude)
     }
@@ -377,23 +379,19 @@ impl Navigator {
     /// (the coning/sculling memory), the Earth terms and the bias estimates are kept, so a corrected run goes on
     /// exactly as a run started from the corrected state with the same history.
     pub fn correct(&mut self, phi: Vec3, dv: Vec3) -> Result<(), CoreError> {
-        check(
-            phi.iter().all(|x| x.is_finite() && x.abs() <= 0.5),
-            "phi",
+        check_with(phi.iter().all(|x| x.is_finite() && x.abs() <= 0.5), "phi", || {
             format!(
                 "attitude correction {} must be finite and within +-{}",
                 show_all(&phi, Unit::Deg),
                 Unit::Deg.show(0.5)
-            ),
-        )?;
-        check(
-            dv.iter().all(|x| x.is_finite() && x.abs() <= 1000.0),
-            "dv",
+            )
+        })?;
+        check_with(dv.iter().all(|x| x.is_finite() && x.abs() <= 1000.0), "dv", || {
             format!(
                 "velocity correction {} must be finite and within +-1000 m/s",
                 show_all(&dv, Unit::Si("m/s"))
-            ),
-        )?;
+            )
+        })?;
         self.q = quat_normalize(quat_mul(rotvec_to_quat(phi), self.q));
         self.vel = sub(self.vel, dv);
         if self.cfg.vertical == Vertical::Fixed {
@@ -520,11 +518,9 @@ impl Navigator {
         sink: F,
     ) -> Result<(), CoreError> {
         let given = |key: &'static str, x: Option<&[f64]>| match x {
-            Some(x) => check(
-                3 * x.len() == dtheta.len(),
-                key,
-                format!("{} values for {} samples", x.len(), dtheta.len() / 3),
-            ),
+            Some(x) => check_with(3 * x.len() == dtheta.len(), key, || {
+                format!("{} values for {} samples", x.len(), dtheta.len() / 3)
+            }),
             None => Ok(()),
         };
         given("reference_height_m", inputs.reference_height_m)?;

@@ -23,7 +23,7 @@
 //!   positions, so the table never accumulates net turns: e.g. [0, 90, 180, 270] deg slews +90, +90, +90 and
 //!   then -270 back. The cruise rate's magnitude is used for every slew.
 
-use crate::error::{check, CoreError, Unit};
+use crate::error::{check, check_with, CoreError, Unit};
 use crate::units::DEG;
 use std::f64::consts::TAU;
 
@@ -252,14 +252,16 @@ pub const MAX_INDEX_POSITIONS: usize = 1000;
 pub const MAX_SPAN_RAD: f64 = 1000.0;
 
 fn check_span(span: f64) -> Result<(), CoreError> {
-    check(
+    check_with(
         span.is_finite() && span > 0.0 && span <= MAX_SPAN_RAD,
         "reciprocating_span_rad",
-        format!(
-            "span {} is outside (0, {}]",
-            Unit::Deg.show(span),
-            Unit::Deg.show(MAX_SPAN_RAD)
-        ),
+        || {
+            format!(
+                "span {} is outside (0, {}]",
+                Unit::Deg.show(span),
+                Unit::Deg.show(MAX_SPAN_RAD)
+            )
+        },
     )
 }
 
@@ -357,23 +359,27 @@ pub const MAX_TABLE_RATE_RAD_S: f64 = 10.0;
 pub const MAX_TABLE_ACCEL_RAD_S2: f64 = 100.0;
 
 fn check_rate_accel(rate: f64, accel: f64) -> Result<(), CoreError> {
-    check(
+    check_with(
         rate.is_finite() && rate != 0.0 && rate.abs() <= MAX_TABLE_RATE_RAD_S,
         "rotation_rate_rad_s",
-        format!(
-            "table rate {} must be non-zero and within +-{}",
-            Unit::DegPerS.show(rate),
-            Unit::DegPerS.show(MAX_TABLE_RATE_RAD_S)
-        ),
+        || {
+            format!(
+                "table rate {} must be non-zero and within +-{}",
+                Unit::DegPerS.show(rate),
+                Unit::DegPerS.show(MAX_TABLE_RATE_RAD_S)
+            )
+        },
     )?;
-    check(
+    check_with(
         accel.is_finite() && accel > 0.0 && accel <= MAX_TABLE_ACCEL_RAD_S2,
         "rotation_accel_rad_s2",
-        format!(
-            "table acceleration {} is outside (0, {}]",
-            Unit::DegPerS2.show(accel),
-            Unit::DegPerS2.show(MAX_TABLE_ACCEL_RAD_S2)
-        ),
+        || {
+            format!(
+                "table acceleration {} is outside (0, {}]",
+                Unit::DegPerS2.show(accel),
+                Unit::DegPerS2.show(MAX_TABLE_ACCEL_RAD_S2)
+            )
+        },
     )
 }
 
@@ -415,11 +421,9 @@ impl Turntable {
             } => {
                 check_rate_accel(*rate, *accel)?;
                 check_span(*span)?;
-                check(
-                    dwell.is_finite() && *dwell >= 0.0,
-                    "dwell_s",
-                    format!("dwell {} s must be >= 0 and finite", crate::error::sig(*dwell)),
-                )?;
+                check_with(dwell.is_finite() && *dwell >= 0.0, "dwell_s", || {
+                    format!("dwell {} s must be >= 0 and finite", crate::error::sig(*dwell))
+                })?;
                 let d = span * rate.signum();
                 let mut t = push_move(&mut segs, 0.0, 0.0, d, *rate, *accel);
                 t = push_dwell(&mut segs, t, d, *dwell);
@@ -436,25 +440,25 @@ impl Turntable {
                 dwell,
             } => {
                 check_rate_accel(*rate, *accel)?;
-                check(
+                check_with(
                     !positions.is_empty() && positions.len() <= MAX_INDEX_POSITIONS,
                     "positions_rad",
-                    format!(
+                    || {
+                        format!(
                         "{} positions, expected 1 to {MAX_INDEX_POSITIONS} (the cycle's profile and its modulation \
                          residual grow with their number)",
                         positions.len()
-                    ),
+                    )
+                    },
                 )?;
-                check(
+                check_with(
                     positions.iter().all(|p| p.is_finite() && p.abs() <= 1000.0),
                     "positions_rad",
-                    format!("positions must be finite and within +-{}", Unit::Deg.show(1000.0)),
+                    || format!("positions must be finite and within +-{}", Unit::Deg.show(1000.0)),
                 )?;
-                check(
-                    dwell.is_finite() && *dwell >= 0.0,
-                    "dwell_s",
-                    format!("dwell {} s must be >= 0 and finite", crate::error::sig(*dwell)),
-                )?;
+                check_with(dwell.is_finite() && *dwell >= 0.0, "dwell_s", || {
+                    format!("dwell {} s must be >= 0 and finite", crate::error::sig(*dwell))
+                })?;
                 // Prefix: move from 0 to positions[0].
                 let mut t = push_move(&mut segs, 0.0, 0.0, positions[0], *rate, *accel);
                 n_prefix = segs.len();
