@@ -18,7 +18,7 @@ use crate::attitude::{euler_to_dcm, mat_mul, Euler, Mat3};
 use crate::error::{check, CoreError};
 use crate::filter_prior::FilterSettings;
 use crate::kalman::{DV, PHI};
-use crate::smoother::model::{initial_sigma, measurement_model, symmetrise, Model};
+use crate::smoother::model::{initial_sigma, joseph, measurement_model, symmetrise, Model, Sandwich};
 use crate::smoother::SmootherConfig;
 use crate::turntable::{RotationScheme, Turntable};
 use nalgebra::{DMatrix, DVector};
@@ -130,6 +130,9 @@ pub(crate) fn navigation_start_selector(n: usize) -> DMatrix<f64> {
     e
 }
 
+/// The states the aligner's zero-velocity update measures.
+const VELOCITY: [usize; 3] = [DV, DV + 1, DV + 2];
+
 /// The aligner's own Riccati pass and the true covariances it carries (module docs).
 pub(crate) struct AlignerPass {
     /// Its own covariance (for its gain), its true error covariance A, and J = E[x_o x~'].
@@ -188,13 +191,18 @@ impl AlignerPass {
         let own = symmetrise(phi_nz.apply(&self.own) + q_own);
         let s_inv = (own.view((DV, DV), (3, 3)) + &self.r_own)
             .try_inverse()
-            .ok_or(CoreError::Setting {
+            .ok_or_else(|| CoreError::Setting {
                 key: "aligner",
                 message: "the aligner's innovation covariance is singular".to_string(),
             })?;
         let gain = own.columns(DV, 3) * s_inv;
-        self.own = symmetrise(joseph(own, &gain, &self.r_own));
-        self.truth = symmetrise(joseph(phi_nz.apply(&self.truth) + &q, &gain, &self.r_true));
+        self.own = symmetrise(joseph(&own, &gain, &self.r_own, &VELOCITY));
+        self.truth = symmetrise(joseph(
+            &(phi_nz.apply(&self.truth) + &q),
+            &gain,
+            &self.r_true,
+            &VELOCITY,
+        ));
         let joint = phi_nz.apply(&self.joint) + &q;
         self.joint = &joint - joint.columns(DV, 3) * gain.transpose();
         for (_, u) in self.pending.iter_mut() {
@@ -221,57 +229,6 @@ impl AlignerPass {
             j = end;
         }
         Ok(())
-    }
-}
-
-/// (I - K H) M (I - K H)' + K R K' for H selecting the velocity states `DV..DV + 3` (`gain` K is n x 3).
-fn joseph(m: DMatrix<f64>, gain: &DMatrix<f64>, r: &DMatrix<f64>) -> DMatrix<f64> {
-    let left = &m - gain * m.rows(DV, 3);
-    &left - left.columns(DV, 3) * gain.transpose() + gain * r * gain.transpose()
-}
-
-/// Phi P Phi' over the non-zero entries of Phi (a discretised error model: its bias rows are those of the
-/// identity or a decay, so about half its entries are zero).
-pub(crate) struct Sandwich {
-    n: usize,
-    /// (row, column, value) of Phi's non-zero entries.
-    entries: Vec<(usize, usize, f64)>,
-}
-
-impl Sandwich {
-    pub(crate) fn new(phi: &DMatrix<f64>) -> Self {
-        let n = phi.nrows();
-        let mut entries = Vec::with_capacity(n * n);
-        for j in 0..n {
-            for i in 0..n {
-                if phi[(i, j)] != 0.0 {
-                    entries.push((i, j, phi[(i, j)]));
-                }
-            }
-        }
-        Sandwich { n, entries }
-    }
-
-    /// M Phi': column i gathers Phi_ij times column j of M (column-major storage).
-    fn right(&self, m: &DMatrix<f64>) -> DMatrix<f64> {
-        let n = self.n;
-        let mut out = DMatrix::zeros(m.nrows(), n);
-        let rows = m.nrows();
-        let (from, to) = (m.as_slice(), out.as_mut_slice());
-        for &(i, j, v) in &self.entries {
-            for (o, x) in to[i * rows..(i + 1) * rows]
-                .iter_mut()
-                .zip(&from[j * rows..(j + 1) * rows])
-            {
-                *o += v * x;
-            }
-        }
-        out
-    }
-
-    /// Phi P Phi' = ((P Phi')' Phi')'.
-    pub(crate) fn apply(&self, p: &DMatrix<f64>) -> DMatrix<f64> {
-        self.right(&self.right(p).transpose()).transpose()
     }
 }
 
@@ -327,7 +284,7 @@ mod tests {
             }
             let i_kh = DMatrix::<f64>::identity(n, n) - &gain * &h;
             let dense = &i_kh * &m * i_kh.transpose() + &gain * &r * gain.transpose();
-            let worst = (joseph(m.clone(), &gain, &r) - &dense).amax();
+            let worst = (joseph(&m, &gain, &r, &VELOCITY) - &dense).amax();
             assert!(worst < 1e-12 * dense.amax(), "n {n}: Joseph form off by {worst:e}");
         }
     }

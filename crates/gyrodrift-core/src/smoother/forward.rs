@@ -1,7 +1,7 @@
 //! The forward pass: the Kalman filter after the coarse alignment, with the navigator it corrects (closed loop),
 //! and the store of every update the backward pass needs.
 
-use super::model::{measurement_model, symmetrise, Model};
+use super::model::{joseph, measurement_model, symmetrise, Model, Sandwich, MEASURED};
 use super::{SmootherConfig, POS};
 use crate::attitude::Mat3;
 use crate::earth;
@@ -62,7 +62,7 @@ impl Forward {
         let c_mean: Mat3 = std::array::from_fn(|i| std::array::from_fn(|j| self.c_sum[i][j] / n_int));
         let (phi, q) = self.model.discretise(&c_mean, self.temp_sum / n_int, t);
         let x_pred = &phi * &self.x;
-        let p_pred = symmetrise(&phi * &self.p * phi.transpose() + q);
+        let p_pred = symmetrise(Sandwich::new(&phi).apply(&self.p) + q);
         if let Some(prev) = self.steps.last_mut() {
             prev.phi_next = Some(phi);
         }
@@ -78,21 +78,21 @@ impl Forward {
             (s.lon - cfg.lon) * rn * cfg.lat.cos(),
         ]);
         let n = self.model.n;
-        let (h, r) = measurement_model(cfg, n);
+        let (_, r) = measurement_model(cfg, n);
         let diverged = |message: String| CoreError::Diverged {
             key: "dv_m_s",
             t_s,
             message,
         };
-        let innovation_cov = &h * &p_pred * h.transpose() + &r;
+        // H selects the MEASURED states: H P H' and P H' are P's rows and columns (model::joseph).
+        let innovation_cov = p_pred.select_rows(&MEASURED).select_columns(&MEASURED) + &r;
         let s_inv = innovation_cov
             .try_inverse()
             .filter(|m| m.iter().all(|x| x.is_finite()) && z.iter().all(|x| x.is_finite()))
             .ok_or_else(|| diverged("the smoother's update has no finite solution".to_string()))?;
-        let k_gain = &p_pred * h.transpose() * s_inv;
-        let x_upd = &x_pred + &k_gain * (&z - &h * &x_pred);
-        let i_kh = DMatrix::identity(n, n) - &k_gain * &h;
-        let p_upd = symmetrise(&i_kh * &p_pred * i_kh.transpose() + &k_gain * r * k_gain.transpose());
+        let k_gain = p_pred.select_columns(&MEASURED) * s_inv;
+        let x_upd = &x_pred + &k_gain * (&z - x_pred.select_rows(&MEASURED));
+        let p_upd = symmetrise(joseph(&p_pred, &k_gain, &r, &MEASURED));
         // Feedback of attitude, velocity and the constant biases; position, GM and RRW stay in the state.
         let mut u = DVector::zeros(n);
         for i in PHI..NABLA + 3 {

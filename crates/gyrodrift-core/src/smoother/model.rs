@@ -145,6 +145,59 @@ pub(crate) fn symmetrise(m: DMatrix<f64>) -> DMatrix<f64> {
     (&m + m.transpose()) * 0.5
 }
 
+/// (I - K H) M (I - K H)' + K R K' for H selecting the states `measured` (`gain` K is n x `measured.len()`): with
+/// H a selection, (I - K H) M = M - K M\[measured, :\] and M (I - K H)' = M - M\[:, measured\] K', rank-m
+/// updates instead of n^3 products (the smoother's update and the aligner's pass).
+pub(crate) fn joseph(m: &DMatrix<f64>, gain: &DMatrix<f64>, r: &DMatrix<f64>, measured: &[usize]) -> DMatrix<f64> {
+    let left = m - gain * m.select_rows(measured);
+    &left - left.select_columns(measured) * gain.transpose() + gain * r * gain.transpose()
+}
+
+/// Phi P Phi' over the non-zero entries of Phi (a discretised error model: its bias rows are those of the
+/// identity or a decay, so about half its entries are zero).
+pub(crate) struct Sandwich {
+    n: usize,
+    /// (row, column, value) of Phi's non-zero entries.
+    entries: Vec<(usize, usize, f64)>,
+}
+
+impl Sandwich {
+    pub(crate) fn new(phi: &DMatrix<f64>) -> Self {
+        let n = phi.nrows();
+        let mut entries = Vec::with_capacity(n * n);
+        for j in 0..n {
+            for i in 0..n {
+                if phi[(i, j)] != 0.0 {
+                    entries.push((i, j, phi[(i, j)]));
+                }
+            }
+        }
+        Sandwich { n, entries }
+    }
+
+    /// M Phi': column i gathers Phi_ij times column j of M (column-major storage).
+    pub(crate) fn right(&self, m: &DMatrix<f64>) -> DMatrix<f64> {
+        let n = self.n;
+        let mut out = DMatrix::zeros(m.nrows(), n);
+        let rows = m.nrows();
+        let (from, to) = (m.as_slice(), out.as_mut_slice());
+        for &(i, j, v) in &self.entries {
+            for (o, x) in to[i * rows..(i + 1) * rows]
+                .iter_mut()
+                .zip(&from[j * rows..(j + 1) * rows])
+            {
+                *o += v * x;
+            }
+        }
+        out
+    }
+
+    /// Phi P Phi' = ((P Phi')' Phi')'.
+    pub(crate) fn apply(&self, p: &DMatrix<f64>) -> DMatrix<f64> {
+        self.right(&self.right(p).transpose()).transpose()
+    }
+}
+
 /// Prior 1-sigma of every state when the forward filter starts at `t_s` [s] (the end of the coarse alignment),
 /// in the order of `state_names` (SI).
 pub(crate) fn initial_sigma(cfg: &SmootherConfig, t_s: f64) -> Vec<f64> {
@@ -172,14 +225,16 @@ pub(crate) fn initial_sigma(cfg: &SmootherConfig, t_s: f64) -> Vec<f64> {
     sigma
 }
 
-/// The measurement matrix and noise covariance of one update (velocity E N U [m/s], position north, east [m]).
+/// The states one update measures, in the order of the measurement (velocity E N U, position north, east).
+pub(crate) const MEASURED: [usize; 5] = [DV, DV + 1, DV + 2, POS, POS + 1];
+
+/// The measurement matrix (selecting [`MEASURED`]) and noise covariance of one update (velocity E N U [m/s],
+/// position north, east [m]).
 pub(crate) fn measurement_model(cfg: &SmootherConfig, n: usize) -> (DMatrix<f64>, DMatrix<f64>) {
     let mut h = DMatrix::zeros(5, n);
-    for i in 0..3 {
-        h[(i, DV + i)] = 1.0;
+    for (row, &state) in MEASURED.iter().enumerate() {
+        h[(row, state)] = 1.0;
     }
-    h[(3, POS)] = 1.0;
-    h[(4, POS + 1)] = 1.0;
     let mut r = DMatrix::zeros(5, 5);
     for i in 0..3 {
         r[(i, i)] = cfg.zupt_sigma * cfg.zupt_sigma;

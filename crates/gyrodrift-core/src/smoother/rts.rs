@@ -2,7 +2,7 @@
 //! the result it gives.
 
 use super::forward::{Forward, Step};
-use super::model::symmetrise;
+use super::model::{symmetrise, Sandwich};
 use super::SmootherConfig;
 use crate::error::CoreError;
 use crate::kalman::{EPS, NABLA};
@@ -139,14 +139,20 @@ impl Forward {
             let phi = step.phi_next.as_ref().expect("every step but the last has a successor");
             let p_pred = &self.p_pred[k];
             // C = P_k Phi' P_pred^-1 through the correlation matrix of P_pred.
+            // D scales rows and columns (diagonal): no n^3 products with it.
             let d: DVector<f64> = p_pred.diagonal().map(|v| if v > 0.0 { 1.0 / v.sqrt() } else { 1.0 });
-            let dm = DMatrix::from_diagonal(&d);
-            let corr = symmetrise(&dm * p_pred * &dm);
+            let corr = symmetrise(DMatrix::from_fn(n, n, |i, j| d[i] * p_pred[(i, j)] * d[j]));
             let chol = corr
                 .cholesky()
                 .ok_or_else(|| diverged("the smoother's predicted covariance is not positive definite"))?;
-            let a = &step.p * phi.transpose() * &dm; // P_k Phi' D
-            let c = chol.solve(&a.transpose()).transpose() * &dm; // (P_k Phi' D) corr^-1 D
+            let mut a = Sandwich::new(phi).right(&step.p); // P_k Phi' D
+            for (mut column, dj) in a.column_iter_mut().zip(d.iter()) {
+                column *= *dj;
+            }
+            let mut c = chol.solve(&a.transpose()).transpose(); // (P_k Phi' D) corr^-1 D
+            for (mut column, dj) in c.column_iter_mut().zip(d.iter()) {
+                column *= *dj;
+            }
             xs = &step.x + &c * (&xs - &self.x_pred[k]);
             ps = symmetrise(&step.p + &c * (&ps - p_pred) * c.transpose());
             record(k, step, &xs, &ps, &mut hist);
