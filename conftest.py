@@ -15,6 +15,7 @@ the test processes and those they start one OpenBLAS thread (``OPENBLAS_NUM_THRE
 
 from __future__ import annotations
 
+import gc
 import os
 import shutil
 import subprocess
@@ -136,3 +137,10 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     """Moves the files of `LONGEST_FIRST` to the front, in its order; a stable sort, so each file's items stay
     together and in order (a document's blocks, a module's fixtures) and the other files keep their order."""
     items.sort(key=longest_first_key)
+
+
+def pytest_collection_finish(session: pytest.Session) -> None:
+    """Moves every object alive after the collection (the imported modules of numpy, scipy, scikit-learn,
+    matplotlib, the tests' own) out of reach of Python's cyclic garbage collector (`gc.freeze`): they live as long
+    as the process, and each full collection walked them all again."""
+    gc.freeze()
