@@ -134,10 +134,16 @@ impl Model {
     /// Q over `t` \[s\] with the transition `phi` over it (trapezoidal): (Phi Qc Phi' + Qc) t / 2. F does not
     /// depend on the noise, so a model with other noise densities on the same site and states shares its Phi.
     pub(crate) fn process_noise(&self, phi: &DMatrix<f64>, t: f64) -> DMatrix<f64> {
-        let qc = DMatrix::from_diagonal(&self.qc);
-        // Phi Qc as Phi's columns scaled (Qc is diagonal): the product's values, without its n^3 work.
-        let phi_qc = DMatrix::from_fn(self.n, self.n, |i, j| phi[(i, j)] * self.qc[j]);
-        symmetrise((phi_qc * phi.transpose() + &qc) * (0.5 * t))
+        // Qc is diagonal and driven on a few states (attitude, velocity, the slow biases): Phi Qc Phi' is the sum
+        // of qc_j phi_j phi_j' over the columns j with qc_j != 0, rank-one updates instead of n^3 work.
+        let mut q = DMatrix::from_diagonal(&self.qc);
+        for (j, &qc) in self.qc.iter().enumerate() {
+            if qc != 0.0 {
+                let column = phi.column(j);
+                q.ger(qc, &column, &column, 1.0);
+            }
+        }
+        symmetrise(q * (0.5 * t))
     }
 }
 
