@@ -73,42 +73,19 @@ def rbf_batch_errors(
 
     Notes
     -----
-    Two implementations, chosen by n and measured against per-candidate loops on the 2-core development
-    machine (m = 30 candidates, gamma log-uniform in [0.1, 1000], sigma log-uniform in [0.3, 3] times the
-    input scale, best of several runs, ``OPENBLAS_NUM_THREADS=1``; the machine was shared, so
-    individual numbers scatter by up to 2x between runs):
-
-    ==========  ==================  ===============  ====================  ========================
-    n, kind     this function       loop of          loop of               numpy stack for every n
-                                    ``LSSVR.fit``    ``lssvr_solve`` /     (``cholesky`` +
-                                                     ``lssvr_loo_...``     ``inv(L)`` on (m, n, n))
-    ==========  ==================  ===============  ====================  ========================
-    22 train    0.37 ms (stacked)   8.3 ms           1.5 ms                0.35 ms
-    22 loo      0.39 ms (stacked)   6.2 ms           1.8 ms                0.37 ms
-    100 train   2.1 ms (loop)       12 ms            4.5 ms                15 ms
-    100 loo     4.0 ms (loop)       14 ms            6.5 ms                13 ms
-    200 train   8.1 ms (loop)       35 ms            20 ms                 74 ms
-    200 loo     22 ms (loop)        36 ms            33 ms                 60 ms
-    500 train   72 ms (loop)        126 ms           104 ms                537 ms
-    500 loo     159 ms (loop)       201 ms           193 ms                524 ms
-    ==========  ==================  ===============  ====================  ========================
+    Two implementations, chosen by n (the measurements behind the choice: docs/studies/2026-11-27-learning-speed.md,
+    "rbf_batch_errors: the two implementations, measured"):
 
     * n <= 32 (the paper has n = 22): the candidates' kernels, products and reductions are computed on
       one (m, n, n) stack, which removes the per-candidate Python overhead of the public functions (their
       validation and copies), dominant at this size; each ``H^-1`` comes from LAPACK ``dpotrf`` and
-      ``dpotri`` on its slice of the stack, in place (a non-PD candidate is flagged alone). Until
-      2026-11-27 the stack went through ``np.linalg.cholesky`` and ``np.linalg.inv`` of the factors and a
-      product ``L^-T L^-1`` for the condition number: the paper-size call (m = 30, n = 22, one BLAS thread)
-      took 0.74 ms against 0.57 ms now (best of 15 x 100 calls, thread CPU time, load average 8 on the
-      shared 2-core machine; docs/studies/2026-11-27-learning-speed.md, "reproduce on two processes").
+      ``dpotri`` on its slice of the stack, in place (a non-PD candidate is flagged alone), and the condition
+      number is the exact 1-norm one of the stack.
     * n > 32: a Python loop over candidates calling LAPACK ``dpotrf``/``dpotrs`` (and ``dtrtri`` for
-      "loo") directly. numpy's stacked routines have no triangular solve or inverse, so the stack
-      needs a general inverse of each factor, 3-7x slower than ``dtrtri``/``dpotrs`` at n >= 100,
-      and m*n*n memory. Building each kernel from ``sqdist`` in place of calling the public
-      functions saves their validation (symmetry check, copies).
-
-    The condition check (exact 1-norm condition number for the stack, ``dpocon`` in the loop) came later;
-    with it, on the same shared machine: n = 22 train 0.46 ms, loo 0.48 ms; n = 100 train 2.7 ms, loo 4.5 ms.
+      "loo") directly, with ``dpocon`` for the condition number. numpy's stacked routines have no triangular
+      solve or inverse, so a stack would need a general inverse of each factor, several times slower than
+      ``dtrtri``/``dpotrs`` at n >= 100, and m*n*n memory. Building each kernel from ``sqdist`` in place of
+      calling the public functions saves their validation (symmetry check, copies).
     """
     return BatchErrors(sqdist, y, kind, weights, threads, cache)(gammas, sigmas)
 
