@@ -18,7 +18,7 @@ use crate::attitude::{euler_to_dcm, mat_mul, Euler, Mat3};
 use crate::error::{check, CoreError};
 use crate::filter_prior::FilterSettings;
 use crate::kalman::{DV, PHI};
-use crate::smoother::model::{initial_sigma, joseph, measurement_model, symmetrise, Model, Sandwich};
+use crate::smoother::model::{initial_sigma, joseph, measurement_noise, symmetrise, Model, Sandwich};
 use crate::smoother::SmootherConfig;
 use crate::turntable::{RotationScheme, Turntable};
 use nalgebra::{DMatrix, DVector};
@@ -168,7 +168,7 @@ impl AlignerPass {
             n,
             initial_sigma(&acfg, coarse_end_s).iter().map(|s| s * s),
         ));
-        let (_, r) = measurement_model(sc, n);
+        let r = measurement_noise(sc);
         Ok(AlignerPass {
             own,
             truth: start.clone(),
@@ -250,43 +250,6 @@ mod tests {
             }
         }
         sum.map(|row| row.map(|x| x / (to - from) as f64))
-    }
-
-    /// A pseudo-random matrix with about a third of its entries zero (a fixed LCG: reproducible).
-    fn matrix(rows: usize, cols: usize, seed: u64) -> DMatrix<f64> {
-        let mut state = seed;
-        DMatrix::from_fn(rows, cols, |_, _| {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            let u = (state >> 11) as f64 / (1u64 << 53) as f64;
-            if u < 0.33 {
-                0.0
-            } else {
-                2.0 * u - 1.0
-            }
-        })
-    }
-
-    #[test]
-    fn the_sparse_sandwich_and_the_rank_3_joseph_form_match_the_dense_products() {
-        for n in [14, 17, 21] {
-            let phi = matrix(n, n, 1 + n as u64);
-            let m = matrix(n, n, 2 + n as u64);
-            let gain = matrix(n, 3, 3 + n as u64);
-            let r = DMatrix::from_diagonal_element(3, 3, 0.3);
-            let dense = &phi * &m * phi.transpose();
-            let worst = (Sandwich::new(&phi).apply(&m) - &dense).amax();
-            assert!(worst < 1e-12 * dense.amax(), "n {n}: sandwich off by {worst:e}");
-            let mut h = DMatrix::zeros(3, n);
-            for i in 0..3 {
-                h[(i, DV + i)] = 1.0;
-            }
-            let i_kh = DMatrix::<f64>::identity(n, n) - &gain * &h;
-            let dense = &i_kh * &m * i_kh.transpose() + &gain * &r * gain.transpose();
-            let worst = (joseph(&m, &gain, &r, &VELOCITY) - &dense).amax();
-            assert!(worst < 1e-12 * dense.amax(), "n {n}: Joseph form off by {worst:e}");
-        }
     }
 
     #[test]

@@ -1,7 +1,7 @@
 //! The forward pass: the Kalman filter after the coarse alignment, with the navigator it corrects (closed loop),
 //! and the store of every update the backward pass needs.
 
-use super::model::{joseph, measurement_model, symmetrise, Model, Sandwich, MEASURED};
+use super::model::{joseph, measurement_noise, symmetrise, Model, Sandwich, MEASURED};
 use super::{SmootherConfig, POS};
 use crate::attitude::Mat3;
 use crate::earth;
@@ -78,7 +78,7 @@ impl Forward {
             (s.lon - cfg.lon) * rn * cfg.lat.cos(),
         ]);
         let n = self.model.n;
-        let (_, r) = measurement_model(cfg, n);
+        let r = measurement_noise(cfg);
         let diverged = |message: String| CoreError::Diverged {
             key: "dv_m_s",
             t_s,

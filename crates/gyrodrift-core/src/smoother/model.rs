@@ -241,6 +241,11 @@ pub(crate) fn measurement_model(cfg: &SmootherConfig, n: usize) -> (DMatrix<f64>
     for (row, &state) in MEASURED.iter().enumerate() {
         h[(row, state)] = 1.0;
     }
+    (h, measurement_noise(cfg))
+}
+
+/// The noise covariance of one update's measurements ([`MEASURED`]): zero-velocity, then position.
+pub(crate) fn measurement_noise(cfg: &SmootherConfig) -> DMatrix<f64> {
     let mut r = DMatrix::zeros(5, 5);
     for i in 0..3 {
         r[(i, i)] = cfg.zupt_sigma * cfg.zupt_sigma;
@@ -248,5 +253,54 @@ pub(crate) fn measurement_model(cfg: &SmootherConfig, n: usize) -> (DMatrix<f64>
     for i in 3..5 {
         r[(i, i)] = cfg.position_sigma * cfg.position_sigma;
     }
-    (h, r)
+    r
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A pseudo-random matrix with about a third of its entries zero (a fixed LCG: reproducible).
+    fn matrix(rows: usize, cols: usize, seed: u64) -> DMatrix<f64> {
+        let mut state = seed;
+        DMatrix::from_fn(rows, cols, |_, _| {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            let u = (state >> 11) as f64 / (1u64 << 53) as f64;
+            if u < 0.33 {
+                0.0
+            } else {
+                2.0 * u - 1.0
+            }
+        })
+    }
+
+    #[test]
+    fn the_sparse_sandwich_and_the_selected_joseph_form_match_the_dense_products() {
+        let velocity = [DV, DV + 1, DV + 2];
+        for n in [17, 21] {
+            let phi = matrix(n, n, 1 + n as u64);
+            let m = matrix(n, n, 2 + n as u64);
+            let dense = &phi * &m * phi.transpose();
+            let worst = (Sandwich::new(&phi).apply(&m) - &dense).amax();
+            assert!(worst < 1e-12 * dense.amax(), "n {n}: sandwich off by {worst:e}");
+            for measured in [&velocity[..], &MEASURED[..]] {
+                let k = measured.len();
+                let gain = matrix(n, k, 3 + n as u64);
+                let r = DMatrix::from_diagonal_element(k, k, 0.3);
+                let mut h = DMatrix::zeros(k, n);
+                for (row, &state) in measured.iter().enumerate() {
+                    h[(row, state)] = 1.0;
+                }
+                let i_kh = DMatrix::<f64>::identity(n, n) - &gain * &h;
+                let dense = &i_kh * &m * i_kh.transpose() + &gain * &r * gain.transpose();
+                let worst = (joseph(&m, &gain, &r, measured) - &dense).amax();
+                assert!(
+                    worst < 1e-12 * dense.amax(),
+                    "n {n}, {k} measured: Joseph form off by {worst:e}"
+                );
+            }
+        }
+    }
 }
