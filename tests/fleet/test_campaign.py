@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from pool_processes import pool_workers
 from test_campaign_store_checks import FAST
 
 from gyrodrift.cli import main
@@ -293,7 +294,7 @@ def test_kill_9_then_rerun_completes_without_duplicates(tmp_path, victim):
     try:
         _wait_for_runs(out, 2, proc)
         if victim == "client":
-            workers = [c for c in psutil.Process(proc.pid).children(recursive=True) if "spawn" in " ".join(c.cmdline())]
+            workers = pool_workers(psutil, proc.pid)
             assert workers
             os.kill(proc.pid, signal.SIGKILL)
             proc.wait(30)
@@ -306,7 +307,7 @@ def test_kill_9_then_rerun_completes_without_duplicates(tmp_path, victim):
             rerun = CliRunner().invoke(main, [*cmd[3:], "1"])
             assert rerun.exit_code == 0, rerun.output
         else:
-            kids = [c for c in psutil.Process(proc.pid).children(recursive=True) if "spawn" in " ".join(c.cmdline())]
+            kids = pool_workers(psutil, proc.pid)
             assert kids
             kids[0].kill()
             assert proc.wait(120) == 0, proc.stderr.read()

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
+from pool_processes import pool_workers
 from test_campaign_store_checks import FAST
 
 from gyrodrift.cli import main
@@ -113,7 +114,7 @@ def test_second_sigint_aborts_at_once_and_stops_the_workers(tmp_path):
     proc = _start(src, out)
     try:
         _wait_for(out, 1, proc)
-        workers = [c for c in psutil.Process(proc.pid).children(recursive=True) if "spawn" in " ".join(c.cmdline())]
+        workers = pool_workers(psutil, proc.pid)
         assert workers
         os.killpg(proc.pid, signal.SIGINT)
         time.sleep(0.3)
