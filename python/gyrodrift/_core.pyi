@@ -410,6 +410,23 @@ def label_sigma(
     alignment_end_s: float = ...,
     coarse_s: float = ...,
 ) -> dict[str, Any]: ...
+def check_rows(
+    t: npt.ArrayLike,
+    gyro: npt.ArrayLike | tuple[npt.ArrayLike, npt.ArrayLike, npt.ArrayLike],
+    accel: npt.ArrayLike | tuple[npt.ArrayLike, npt.ArrayLike, npt.ArrayLike],
+    *,
+    temperature: npt.ArrayLike | None,
+    truth: Sequence[npt.ArrayLike],
+    ref_height: npt.ArrayLike | None,
+    previous_t: float | None,
+    step_s: float,
+    step_tolerance_s: float,
+    max_gyro: float,
+    max_accel: float,
+    temperature_c: tuple[float, float],
+    height_m: tuple[float, float],
+    scale: float,
+) -> tuple[bool, FloatArray | None, FloatArray | None]: ...
 def drift_std_curve(
     smoother_config: SmootherConfig,
     simulator_config: SimulatorConfig,

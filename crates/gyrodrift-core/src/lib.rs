@@ -33,6 +33,7 @@ pub mod earth;
 pub mod error;
 pub mod filter_prior;
 pub mod imu_error;
+pub mod imu_rows;
 pub mod kalman;
 pub mod label;
 pub mod limits;

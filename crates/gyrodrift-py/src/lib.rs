@@ -7,6 +7,7 @@ mod config;
 mod errors;
 mod label;
 mod plan;
+mod rows;
 mod smoother;
 
 use config::{AlignerConfig, NavigatorConfig, SimulatorConfig};
@@ -572,6 +573,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<smoother::Smoother>()?;
     m.add_class::<label::FreeNavigationConfig>()?;
     m.add_function(wrap_pyfunction!(label::label_sigma, m)?)?;
+    m.add_function(wrap_pyfunction!(rows::check_rows, m)?)?;
     m.add_function(wrap_pyfunction!(plan::drift_std_curve, m)?)?;
     m.add_function(wrap_pyfunction!(plan::mission_covariance, m)?)?;
     Ok(())

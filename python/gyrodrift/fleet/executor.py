@@ -254,9 +254,7 @@ def _on_pool(fn, tasks, size: int, on_done, interrupts, on_start) -> int:
         if not remaining or (interrupts is not None and interrupts.stopping):
             return 0
         finished: set[int] = set()
-        pool = concurrent.futures.ProcessPoolExecutor(
-            max_workers=size, mp_context=ctx, initializer=_worker_init
-        )
+        pool = concurrent.futures.ProcessPoolExecutor(max_workers=size, mp_context=ctx, initializer=_worker_init)
         try:
             _pool_round(pool, fn, tasks, deque(remaining), size, on_done, interrupts, on_start, finished)
         except concurrent.futures.process.BrokenProcessPool:

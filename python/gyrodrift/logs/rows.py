@@ -52,42 +52,43 @@ class RowChecker:
         """The block of `raw` (samples `first`...) as float64 increments, gyro and accel as two C-contiguous
         (n, 3) arrays, or `LogError` at its first problem.
 
-        One vectorised pass per quantity decides that a block is clean (the usual case); only a block with a
-        problem goes through the detailed checks, in a fixed order (non-finite values, temperature range, time,
-        magnitudes), which name the row and column.
+        One pass of the core (`_core.check_rows`, the same comparisons as the checks below) decides that a block
+        is clean (the usual case) and gives its increments; only a block with a problem goes through the
+        detailed checks, in a fixed order (non-finite values, temperature range, time, magnitudes), which name
+        the row and column.
         """
         t = np.asarray(raw.t, dtype=np.float64)
-        if len(raw.sensors) == 2:
-            gyro, acc = raw.sensors
-        else:
-            gyro, acc = _stack3(raw.sensors[:3]), _stack3(raw.sensors[3:])
+        gyro, acc = (raw.sensors[0], raw.sensors[1]) if len(raw.sensors) == 2 else (raw.sensors[:3], raw.sensors[3:])
         temp = None if raw.temp is None else np.asarray(raw.temp, dtype=np.float64)
         truth = None if raw.truth is None else tuple(np.asarray(c, dtype=np.float64) for c in raw.truth)
         href = None if raw.ref_height is None else np.asarray(raw.ref_height, dtype=np.float64)
-        low, high = TEMPERATURE_LIMITS_C
-        clean = (
-            bool(np.isfinite(t).all())
-            and self._time_ok(t)
-            and bool((np.abs(gyro) <= self.limits[0]).all())  # NaN and inf fail too
-            and bool((np.abs(acc) <= self.limits[1]).all())
-            and (temp is None or bool(((temp >= low) & (temp <= high)).all()))
-            and (truth is None or all(bool(np.isfinite(c).all()) for c in truth))
-            and (href is None or bool(((href >= HEIGHT_LIMITS_M[0]) & (href <= HEIGHT_LIMITS_M[1])).all()))
+        clean, gyro_inc, acc_inc = _core.check_rows(
+            t,
+            gyro,
+            acc,
+            temperature=temp,
+            truth=truth or (),
+            ref_height=href,
+            previous_t=self.prev_t,
+            step_s=self.dt,
+            step_tolerance_s=GAP_TOLERANCE * self.dt,
+            max_gyro=self.limits[0],
+            max_accel=self.limits[1],
+            temperature_c=TEMPERATURE_LIMITS_C,
+            height_m=HEIGHT_LIMITS_M,
+            scale=1.0 if self.increments else self.dt,
         )
         if not clean:
-            self._explain(RawBlock(t, (gyro, acc), temp, truth, href), first)
+            stacked = tuple(np.asarray(a) if isinstance(a, np.ndarray) else _stack3(a) for a in (gyro, acc))
+            self._explain(RawBlock(t, stacked, temp, truth, href), first)
+            raise AssertionError("the core found a problem the detailed checks do not")  # pragma: no cover
         self.prev_t = float(t[-1]) if len(t) else self.prev_t
-        if not self.increments:
-            gyro = gyro * self.dt
-            acc = acc * self.dt
-        sensors = (np.ascontiguousarray(gyro), np.ascontiguousarray(acc))
+        # None: an (n, 3) array that needed no scaling, kept as it is
+        sensors = tuple(
+            np.ascontiguousarray(given, dtype=np.float64) if out is None else out
+            for given, out in ((gyro, gyro_inc), (acc, acc_inc))
+        )
         return RawBlock(t, sensors, temp, truth, href, raw.table_angle_deg)
-
-    def _time_ok(self, t: np.ndarray) -> bool:
-        if not len(t):
-            return True
-        full = t if self.prev_t is None else np.concatenate([[self.prev_t], t])
-        return bool((np.abs(np.diff(full) - self.dt) <= GAP_TOLERANCE * self.dt).all())
 
     def _finite(self, a: np.ndarray, first: int, names: tuple[str, ...]) -> None:
         bad = ~np.isfinite(a)
