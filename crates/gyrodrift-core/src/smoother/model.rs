@@ -147,8 +147,16 @@ impl Model {
     }
 }
 
-pub(crate) fn symmetrise(m: DMatrix<f64>) -> DMatrix<f64> {
-    (&m + m.transpose()) * 0.5
+/// (M + M') / 2, in place: each off-diagonal pair becomes its mean (the diagonal is its own mean).
+pub(crate) fn symmetrise(mut m: DMatrix<f64>) -> DMatrix<f64> {
+    for j in 0..m.ncols() {
+        for i in 0..j {
+            let mean = (m[(i, j)] + m[(j, i)]) * 0.5;
+            m[(i, j)] = mean;
+            m[(j, i)] = mean;
+        }
+    }
+    m
 }
 
 /// (I - K H) M (I - K H)' + K R K' for H selecting the states `measured` (`gain` K is n x `measured.len()`): with
