@@ -99,6 +99,14 @@ pub(crate) fn check_with(ok: bool, key: &'static str, message: impl FnOnce() -> 
     }
 }
 
+/// As [`check_with`], for inputs that do not fit together: a [`CoreError::Shape`] naming `key`.
+pub(crate) fn check_shape_with(ok: bool, key: &'static str, message: impl FnOnce() -> String) -> Result<(), CoreError> {
+    check_with(ok, key, message).map_err(|e| match e {
+        CoreError::Setting { key, message } => CoreError::Shape { key, message },
+        other => other,
+    })
+}
+
 /// User units of messages: the SI value is converted before printing.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum Unit {

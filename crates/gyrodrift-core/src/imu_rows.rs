@@ -8,7 +8,7 @@
 //! within its magnitude limit (a NaN is not), every temperature and reference height lies within its closed
 //! range, and every truth cell is finite: the reader's vectorised checks, comparison for comparison.
 
-use crate::error::CoreError;
+use crate::error::{check_shape_with as shape, CoreError};
 
 /// The three axes of one sensor in a block: three columns of n values, or n rows of three (row-major, 3 n).
 #[derive(Clone, Copy, Debug)]
@@ -126,18 +126,6 @@ impl RowBlock<'_> {
     }
 }
 
-/// A [`CoreError::Shape`] on `key` unless `ok` (its message formatted only then).
-fn shape(ok: bool, key: &'static str, message: impl FnOnce() -> String) -> Result<(), CoreError> {
-    if ok {
-        Ok(())
-    } else {
-        Err(CoreError::Shape {
-            key,
-            message: message(),
-        })
-    }
-}
-
 /// Every step |t_k - t_(k-1) - step| <= tolerance, from `previous_t` to the first stamp too.
 fn steps_ok(t: &[f64], previous_t: Option<f64>, limits: &RowLimits) -> bool {
     let ok = |a: f64, b: f64| ((b - a) - limits.step_s).abs() <= limits.step_tolerance_s;
@@ -233,7 +221,10 @@ mod tests {
         let mut b = block(&t, &s, &temp);
         assert!(b.check_lengths().is_ok());
         b.ref_height = Some(&short);
-        assert!(b.check_lengths().is_err());
+        assert!(matches!(
+            b.check_lengths(),
+            Err(CoreError::Shape { key: "ref_height", .. })
+        ));
         let mut b = block(&t, &s, &temp);
         b.gyro = Axes::Columns([&s[0], &short, &s[2]]);
         assert!(b.check_lengths().is_err());
