@@ -225,8 +225,10 @@ def _pool_round(pool, fn, tasks, queue: deque[int], size: int, on_done, interrup
         raise
 
 
-POOL_PRELOAD = ("gyrodrift.fleet.science", "gyrodrift.fleet.features", "gyrodrift.procedure")
-"""The modules of the tasks a local pool runs, imported once by the client's fork server (`_pool_context`)."""
+POOL_PRELOAD = ("gyrodrift.fleet.science", "gyrodrift.fleet.features", "gyrodrift.procedure", "scipy.optimize")
+"""The modules of the tasks a local pool runs, imported once by the client's fork server (`_pool_context`):
+scipy.optimize (and scipy.linalg with it) too, which the procedure imports on first use (the features' curve fit,
+the best drift law)."""
 
 
 def _pool_context() -> multiprocessing.context.BaseContext:

@@ -48,7 +48,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.linalg import lapack
 
 from gyrodrift.errors import GyrodriftError, InputError
 from gyrodrift.learn.kernels import check_positive
@@ -127,6 +126,8 @@ def one_norm(H: np.ndarray) -> float:
 
 def condition_estimate(U: np.ndarray, anorm: float) -> float:
     """1-norm condition number estimate of ``H = U'U`` from its Cholesky factor (LAPACK ``dpocon``, O(n^2))."""
+    from scipy.linalg import lapack  # here (and below): scipy.linalg costs ~0.4 s of a CLI start
+
     rcond, info = lapack.dpocon(U, anorm, uplo="U")
     if info != 0:  # pragma: no cover - only on invalid arguments
         raise np.linalg.LinAlgError(f"dpocon failed with info={info}")
@@ -178,12 +179,16 @@ def cholesky_upper(H: np.ndarray) -> np.ndarray | None:
     C-ordered ``H`` arrives as a Fortran-ordered array without a copy; ``U`` is Fortran-ordered too, so
     the later ``dpotrs``/``dtrtri`` calls do not copy it either.
     """
+    from scipy.linalg import lapack
+
     U, info = lapack.dpotrf(H.T, lower=0, clean=1, overwrite_a=1)
     return U if info == 0 else None
 
 
 def cho_solve(U: np.ndarray, B: np.ndarray) -> np.ndarray:
     """Solve ``U'U X = B`` (``dpotrs``, two triangular solves)."""
+    from scipy.linalg import lapack
+
     X, info = lapack.dpotrs(U, B, lower=0)
     if info != 0:  # pragma: no cover - only on invalid arguments
         raise np.linalg.LinAlgError(f"dpotrs failed with info={info}")
@@ -192,6 +197,8 @@ def cho_solve(U: np.ndarray, B: np.ndarray) -> np.ndarray:
 
 def inverse_diagonal(U: np.ndarray) -> np.ndarray:
     """``diag(H^-1)`` for ``H = U'U``: ``H^-1 = U^-1 U^-T``, so row sums of squares of ``U^-1`` (``dtrtri``)."""
+    from scipy.linalg import lapack
+
     Uinv, info = lapack.dtrtri(U, lower=0)
     if info != 0:  # pragma: no cover - a successful dpotrf has a non-zero diagonal
         raise np.linalg.LinAlgError(f"dtrtri failed with info={info}")

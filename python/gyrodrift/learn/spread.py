@@ -54,7 +54,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import cho_solve, cholesky, solve_triangular
 from threadpoolctl import threadpool_limits
 
 from gyrodrift.errors import InputError
@@ -100,6 +99,8 @@ def _neg_log_likelihood(theta: np.ndarray, Z: np.ndarray, sqd: np.ndarray, y: np
     (R&W 2006 eqs. 2.30, 5.9) without its per-call kernel bookkeeping. ``sqd`` (d, n, n): squared differences of
     each input; ``noise``: the diagonal added (``alpha``). +inf and a zero gradient where K is not positive
     definite, as scikit-learn."""
+    from scipy.linalg import cho_solve, cholesky  # here (and below): scipy.linalg costs ~0.4 s of a CLI start
+
     c0, c1, tau2 = math.exp(theta[0]), math.exp(theta[1]), math.exp(theta[-1])
     inv_l2 = np.exp(-2.0 * theta[2:-1])
     scaled = sqd * inv_l2[:, None, None]
@@ -199,6 +200,8 @@ class SpreadGP:
         """Fit on inputs ``Z`` (n_runs, n_inputs), targets ``y`` (n_runs,) and label 1-sigmas ``label_std``
         (n_runs,; same unit as y; None or NaN: unknown, taken as 0). ``loo=False`` skips ``loo_std_`` (an
         n x n inverse: not needed when the calibration is given, as on loading a model file)."""
+        from scipy.linalg import cho_solve
+
         Z = np.asarray(Z, float)
         y = np.asarray(y, float)
         n = len(y)
@@ -237,6 +240,8 @@ class SpreadGP:
 
     def _factorise(self) -> None:
         """``L_`` and ``alpha_`` at ``theta_`` (call with the BLAS on one thread, as `fit` does: the same floats)."""
+        from scipy.linalg import cho_solve, cholesky
+
         ys, alpha = self._labels
         K = _cross_kernel(self.theta_, self.Z_train_, self.Z_train_)
         K[np.diag_indices(self.n_runs_)] += math.exp(self.theta_[-1]) + alpha
@@ -249,6 +254,8 @@ class SpreadGP:
     def predict_std(self, Z) -> np.ndarray:
         """Predictive 1-sigma of a new run's drift at each row of ``Z`` [unit of y], label noise excluded
         (the run-to-run variation ``tau`` included)."""
+        from scipy.linalg import solve_triangular
+
         Z = np.asarray(Z, float)
         check_matrix_memory(len(Z), self.n_runs_, 3, "the interval's Gaussian process", unit="runs")
         Zs = self._z(Z)
