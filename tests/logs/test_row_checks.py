@@ -29,7 +29,7 @@ def numpy_clean(t, gyro, acc, temp, truth, href, prev_t) -> bool:
 
 
 def block(rng: np.random.Generator, n: int):
-    t = 100.0 + STEP * np.arange(n) + rng.uniform(-0.5, 0.5, n) * TOL
+    t = 100.0 + STEP * np.arange(n) + rng.uniform(-0.25, 0.25, n) * TOL  # steps within TOL / 2: clean by a margin
     gyro = rng.uniform(-1, 1, (n, 3)) * LIMITS["max_gyro"] * 0.99
     acc = rng.uniform(-1, 1, (n, 3)) * LIMITS["max_accel"] * 0.99
     return t, gyro, acc, rng.uniform(-50, 140, n), [rng.normal(size=n) for _ in range(3)], rng.uniform(0, 500, n)
