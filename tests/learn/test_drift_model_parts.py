@@ -82,7 +82,7 @@ def _same(a, b, where: str) -> bool:
 
     A list of floats (dual coefficients, residuals) is one solution of a linear system, whose rounding error is
     bounded norm-wise: each element within 1e-9 of the list's largest magnitude. Elements near zero carry the
-    absolute error of the whole vector: on a Sapphire Rapids Xeon (OpenBLAS's AVX-512 kernels) dual coefficient 4
+    absolute error of the whole vector: on an Emerald Rapids Xeon (OpenBLAS's AVX-512 kernels) dual coefficient 4
     of the paper's fit, -3.7e-08 among values up to 0.055, differed from the file's by 4e-15 deg/h: 1.2e-7 of
     itself, 8e-14 of the largest."""
     if isinstance(a, dict) and isinstance(b, dict):
