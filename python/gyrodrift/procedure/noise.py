@@ -7,11 +7,19 @@
 [deg/h/sqrt(h)].
 
 `estimate_white_noise` measures ARW and VRW from a log itself: on a static base the increments are a smooth
-signal (Earth rate, gravity, the table turning) plus white noise, so the second differences of consecutive
-increments, d_k = x_{k+1} - 2 x_k + x_{k-1}, remove the signal and keep the noise with variance 6 s^2 (s^2 the
-per-sample noise variance; a density N gives s = N sqrt(dt)). The spread is taken robustly (1.4826 times the
-median absolute value), so the few samples where the table starts, stops or reverses do not count, and
-averaged over the three axes. Measured on simulated logs: within 1 % of the simulated ARW and VRW.
+signal (Earth rate, gravity, the table turning) plus white noise, so the fourth differences of consecutive
+increments, d_k = x_{k+2} - 4 x_{k+1} + 6 x_k - 4 x_{k-1} + x_{k-2}, remove the signal and keep the noise with
+variance C(8, 4) s^2 = 70 s^2 (s^2 the per-sample noise variance; a density N gives s = N sqrt(dt)). The spread is
+taken robustly (1.4826 times the median absolute value), so the few samples where the table starts, stops or
+reverses do not count, and averaged over the three axes.
+
+The order matters at low rates: the table modulates the horizontal Earth rate and a tilt's share of gravity at its
+turning rate w, which a difference of order k keeps with the factor (2 sin(w dt / 2))^k against the noise's
+sqrt(C(2k, k)). With 1 deg of tilt on a 6 deg/s table, second differences read a 5 ug/sqrt(Hz) VRW as 2.1 times
+itself at 2 Hz and 11 times at 1 Hz, third differences 1.01 and 1.16 times, fourth 1.01 and 1.03; the ARW read
+1.04 / 1.57, 1.02 / 1.08 and 1.03 / 1.09 times itself at 2 / 1 Hz (the table's reversals, sparse at 10 Hz, are a
+few per cent of the samples at 1 Hz). At 10 Hz every order reads both within 0.5 %; the fourth differences' spread
+is 15 % wider than the second's for the same samples (docs/studies/2026-11-28-white-noise-low-rates.md).
 """
 
 from __future__ import annotations
@@ -128,7 +136,7 @@ class SensorNoise:
     def white_only_note(self) -> str | None:
         """A one-line caveat when this model was measured from a log (``source="log"``: white noise only), else
         None: a 1-sigma computed under it leaves out any gyro bias instability or rate random walk of the sensor,
-        which the second differences cannot see and 16 h cannot resolve."""
+        which the fourth differences cannot see and 16 h cannot resolve."""
         if self.source != "log" or self.bias_instability_deg_h > 0 or self.rrw_deg_h_rth > 0:
             return None
         return (
@@ -175,29 +183,36 @@ def load_noise_file(path) -> SensorNoise:
     return SensorNoise(**values, source=str(p))
 
 
-def _robust_sigma(d2: np.ndarray) -> np.ndarray:
-    """Per-column white-noise 1-sigma of a sample from its second differences (module docs)."""
-    return 1.482602218505602 * np.median(np.abs(d2), axis=0) / math.sqrt(6.0)
+DIFFERENCE_ORDER = 4
+"""The order of the differences `estimate_white_noise` takes of the increments (module docs)."""
+_DIFFERENCE_VARIANCE = math.comb(2 * DIFFERENCE_ORDER, DIFFERENCE_ORDER)
+"""Variance of a difference of that order of unit white noise: C(8, 4) = 70."""
+
+
+def _robust_sigma(d4: np.ndarray) -> np.ndarray:
+    """Per-column white-noise 1-sigma of a sample from its fourth differences (module docs)."""
+    return 1.482602218505602 * np.median(np.abs(d4), axis=0) / math.sqrt(_DIFFERENCE_VARIANCE)
 
 
 def estimate_white_noise(log: ImuLog, *, hours: float = 1.0, chunk_samples: int = 100_000) -> SensorNoise:
-    """ARW and VRW of `log` from the second differences of its first `hours` of increments (module docs).
+    """ARW and VRW of `log` from the fourth differences of its first `hours` of increments (module docs).
 
     Returns a `SensorNoise` with ``source="log"`` and no bias drift terms.
     """
-    n = min(log.n_samples, max(3, log.samples_for(hours * HOUR)))
+    span = DIFFERENCE_ORDER + 1  # samples in one difference
+    n = min(log.n_samples, max(span, log.samples_for(hours * HOUR)))
     sig_g, sig_a, weights = np.zeros(3), np.zeros(3), 0
     tail_g = tail_a = None
     for chunk in log.chunks(chunk_samples, stop=n):
         g, a = np.asarray(chunk.dtheta_rad, float), np.asarray(chunk.dv_m_s, float)
         if tail_g is not None and tail_a is not None:  # the differences across chunk boundaries
             g, a = np.vstack([tail_g, g]), np.vstack([tail_a, a])
-        if len(g) >= 3:
-            m = len(g) - 2
-            sig_g += m * _robust_sigma(np.diff(g, 2, axis=0)) ** 2
-            sig_a += m * _robust_sigma(np.diff(a, 2, axis=0)) ** 2
+        if len(g) >= span:
+            m = len(g) - DIFFERENCE_ORDER
+            sig_g += m * _robust_sigma(np.diff(g, DIFFERENCE_ORDER, axis=0)) ** 2
+            sig_a += m * _robust_sigma(np.diff(a, DIFFERENCE_ORDER, axis=0)) ** 2
             weights += m
-        tail_g, tail_a = g[-2:], a[-2:]
+        tail_g, tail_a = g[-DIFFERENCE_ORDER:], a[-DIFFERENCE_ORDER:]
     if weights == 0:
         raise InputError(f"{log.label}: too few samples to measure the sensor noise")
     sqrt_dt = math.sqrt(1.0 / log.rate_hz)

@@ -8,7 +8,7 @@ uses every sample the identification may use, and its 1-sigma is the Cramer-Rao 
 error model: no method identifying the drift from these 16 h can do better on average.
 
 The noise model (`SensorNoise`) is given (a scenario's or `gyrodrift allan`'s ``[gyro]``/``[accel]`` keys) or
-measured from the log (ARW and VRW from the second differences of the increments; no bias drift, so the 1-sigma
+measured from the log (ARW and VRW from the fourth differences of the increments; no bias drift, so the 1-sigma
 leaves out a bias instability the sensor has: `SensorNoise.white_only_note`, which `identify` prints).
 
 A Gauss-Markov bias (``bias_instability_deg_h``) is three more states; the drift carried into navigation leaves
