@@ -20,6 +20,12 @@ itself at 2 Hz and 11 times at 1 Hz, third differences 1.01 and 1.16 times, four
 1.04 / 1.57, 1.02 / 1.08 and 1.03 / 1.09 times itself at 2 / 1 Hz (the table's reversals, sparse at 10 Hz, are a
 few per cent of the samples at 1 Hz). At 10 Hz every order reads both within 0.5 %; the fourth differences' spread
 is 15 % wider than the second's for the same samples (docs/studies/2026-11-28-white-noise-low-rates.md).
+
+Increments that are pulse counts (``unit = "pulse"`` in a log format; `lattice_steps` finds the step in the first
+chunk) carry the counter's remainder as well: steps below `COUNTING_LIMIT` (half) of the per-sample noise add at
+most 6 % to the reading; coarser ones, as an RLG's 0.1-1 arcsec pulses against its 0.003-0.01 arcsec of noise per
+sample at 10-100 Hz, leave the samples showing the counting, not the sensor, and `estimate_white_noise` refuses
+them: the noise must then be given (a scenario file's keys, or `gyrodrift allan` on a long static log).
 """
 
 from __future__ import annotations
@@ -37,7 +43,7 @@ from gyrodrift.errors import InputError
 from gyrodrift.files.toml_input import read_toml
 from gyrodrift.files.toml_schema import Field, Number, Scope, type_name
 from gyrodrift.logs import ImuLog
-from gyrodrift.units import DEG, DEG_PER_H, DEG_PER_SQRT_H, HOUR, MICRO_G
+from gyrodrift.units import ARCSEC, DEG, DEG_PER_H, DEG_PER_SQRT_H, HOUR, MICRO_G
 
 __all__ = ["SensorNoise", "estimate_white_noise", "load_noise_file", "NOISE_FLOOR"]
 
@@ -189,22 +195,54 @@ _DIFFERENCE_VARIANCE = math.comb(2 * DIFFERENCE_ORDER, DIFFERENCE_ORDER)
 """Variance of a difference of that order of unit white noise: C(8, 4) = 70."""
 
 
+COUNTING_LIMIT = 0.5
+"""The largest pulse step, in per-sample noise (what the differences read), a log's noise is still read from: a pulse
+counter's remainder adds to what they read, 6 % of the 1-sigma at half a step per sigma of noise, 13 % at 0.8 and
+erratic beyond (a median on a lattice); tests/procedure/test_white_noise.py."""
+
+
 def _robust_sigma(d4: np.ndarray) -> np.ndarray:
     """Per-column white-noise 1-sigma of a sample from its fourth differences (module docs)."""
     return 1.482602218505602 * np.median(np.abs(d4), axis=0) / math.sqrt(_DIFFERENCE_VARIANCE)
 
 
+def lattice_steps(x: np.ndarray) -> np.ndarray:
+    """Per column of `x` (n, k): the step of the lattice its values lie on (a counter's pulse weight), else 0.
+
+    The step is the smallest gap between the column's distinct values, kept when every value is a whole number of
+    it (within 1 % of a step) and it stands above float rounding (1e-12 of the largest magnitude): continuous data
+    give 0, as does a column with fewer than three distinct values (two are a jump, not a counter).
+    """
+    steps = np.zeros(x.shape[1])
+    for c in range(x.shape[1]):
+        values = np.unique(x[:, c])
+        if len(values) < 3:
+            continue
+        step = float(np.min(np.diff(values)))
+        if step <= 1e-12 * float(np.max(np.abs(values))):
+            continue
+        counts = values / step
+        if float(np.max(np.abs(counts - np.round(counts)))) < 0.01:
+            steps[c] = step
+    return steps
+
+
 def estimate_white_noise(log: ImuLog, *, hours: float = 1.0, chunk_samples: int = 100_000) -> SensorNoise:
     """ARW and VRW of `log` from the fourth differences of its first `hours` of increments (module docs).
 
-    Returns a `SensorNoise` with ``source="log"`` and no bias drift terms.
+    Returns a `SensorNoise` with ``source="log"`` and no bias drift terms. `InputError` when the increments are
+    pulse counts too coarse for their noise (module docs): a step of `COUNTING_LIMIT` or more of the noise the
+    samples show.
     """
     span = DIFFERENCE_ORDER + 1  # samples in one difference
     n = min(log.n_samples, max(span, log.samples_for(hours * HOUR)))
     sig_g, sig_a, weights = np.zeros(3), np.zeros(3), 0
     tail_g = tail_a = None
+    steps: tuple[np.ndarray, np.ndarray] | None = None
     for chunk in log.chunks(chunk_samples, stop=n):
         g, a = np.asarray(chunk.dtheta_rad, float), np.asarray(chunk.dv_m_s, float)
+        if steps is None:  # the log's encoding, from its first chunk
+            steps = lattice_steps(g), lattice_steps(a)
         if tail_g is not None and tail_a is not None:  # the differences across chunk boundaries
             g, a = np.vstack([tail_g, g]), np.vstack([tail_a, a])
         if len(g) >= span:
@@ -213,9 +251,32 @@ def estimate_white_noise(log: ImuLog, *, hours: float = 1.0, chunk_samples: int 
             sig_a += m * _robust_sigma(np.diff(a, DIFFERENCE_ORDER, axis=0)) ** 2
             weights += m
         tail_g, tail_a = g[-DIFFERENCE_ORDER:], a[-DIFFERENCE_ORDER:]
-    if weights == 0:
+    if weights == 0 or steps is None:
         raise InputError(f"{log.label}: too few samples to measure the sensor noise")
+    sigma_g, sigma_a = np.sqrt(sig_g / weights), np.sqrt(sig_a / weights)  # per sample, per axis [rad], [m/s]
+    _check_counting(log, steps, (sigma_g, sigma_a))
     sqrt_dt = math.sqrt(1.0 / log.rate_hz)
-    arw = float(np.mean(np.sqrt(sig_g / weights))) / sqrt_dt  # rad/sqrt(s)
-    vrw = float(np.mean(np.sqrt(sig_a / weights))) / sqrt_dt  # m/s/sqrt(s)
+    arw = float(np.mean(sigma_g)) / sqrt_dt  # rad/sqrt(s)
+    vrw = float(np.mean(sigma_a)) / sqrt_dt  # m/s/sqrt(s)
     return SensorNoise(arw_deg_rth=arw / DEG * 60.0, vrw_ug_rthz=vrw / MICRO_G, source="log")
+
+
+def _check_counting(log: ImuLog, steps: tuple[np.ndarray, np.ndarray], sigmas: tuple[np.ndarray, np.ndarray]) -> None:
+    """`InputError` when a column's increments come in steps (`lattice_steps`) of `COUNTING_LIMIT` or more of the
+    per-sample noise its fourth differences show (`sigmas`: rad, m/s, per axis): the counting then makes a tenth or
+    more of what they read, and a median of differences on a coarse lattice can read 0."""
+    coarse = []
+    for sensor, step, sigma, unit, scale in (
+        ("gyro", steps[0], sigmas[0], "arcsec", 1.0 / ARCSEC),
+        ("accelerometer", steps[1], sigmas[1], "mm/s", 1000.0),
+    ):
+        for axis, q, s in zip("xyz", step, sigma, strict=True):
+            if q > 0.0 and q >= COUNTING_LIMIT * s:
+                coarse.append(f"{sensor} {axis}: steps of {q * scale:.3g} {unit}, noise {s * scale:.3g} {unit}")
+    if coarse:
+        raise InputError(
+            f"{log.label}: the increments are pulse counts too coarse to read the sensor's white noise from "
+            f"({'; '.join(coarse)} per sample): the samples would show the counting, not the sensor; give the "
+            "noise (--noise FILE: a scenario file's [gyro] arw_deg_rth and [accel] vrw_ug_rthz, or the "
+            "scenario_noise of `gyrodrift allan` on a long static log)"
+        )
