@@ -137,6 +137,9 @@ def test_pulses_coarser_than_the_noise_are_refused_with_the_fix(rate_hz, gyro_st
     against 0.0095 (10 Hz) or 0.003 arcsec (100 Hz) of noise per sample, where the differences read 7 times the ARW,
     or 0 (a median on a coarse lattice): refused, naming the gyros and the fix."""
     log = counted(tilted_table(rate_hz, noise=True), gyro_step_arcsec * ARCSEC, 1e-7)
-    with pytest.raises(InputError, match=r"pulse counts too coarse.*gyro x: steps of .* arcsec.*--noise FILE") as err:
+    with pytest.raises(
+        InputError,
+        match=r"steps \(pulse counts, or the file.s rounding\) too coarse.*gyro x: steps of .* arcsec.*--noise FILE",
+    ) as err:
         estimate_white_noise(log)
     assert "accelerometer" not in str(err.value)  # 1e-7 m/s steps, far below its noise

@@ -21,11 +21,12 @@ itself at 2 Hz and 11 times at 1 Hz, third differences 1.01 and 1.16 times, four
 few per cent of the samples at 1 Hz). At 10 Hz every order reads both within 0.5 %; the fourth differences' spread
 is 15 % wider than the second's for the same samples (docs/studies/2026-11-28-white-noise-low-rates.md).
 
-Increments that are pulse counts (``unit = "pulse"`` in a log format; `lattice_steps` finds the step in the first
-chunk) carry the counter's remainder as well: steps below `COUNTING_LIMIT` (half) of the per-sample noise add at
-most 6 % to the reading; coarser ones, as an RLG's 0.1-1 arcsec pulses against its 0.003-0.01 arcsec of noise per
-sample at 10-100 Hz, leave the samples showing the counting, not the sensor, and `estimate_white_noise` refuses
-them: the noise must then be given (a scenario file's keys, or `gyrodrift allan` on a long static log).
+Increments that are pulse counts (``unit = "pulse"`` in a log format), or values a file rounded, lie on a lattice
+(`lattice_steps` finds its step in the first chunk) and carry the counter's remainder or the rounding as well:
+steps below `COUNTING_LIMIT` (half) of the per-sample noise add at most 6 % to the reading; coarser ones, as an
+RLG's 0.1-1 arcsec pulses against its 0.003-0.01 arcsec of noise per sample at 10-100 Hz, leave the samples
+showing the counting, not the sensor, and `estimate_white_noise` refuses them: the noise must then be given (a
+scenario file's keys, or `gyrodrift allan` on a long static log).
 """
 
 from __future__ import annotations
@@ -275,8 +276,9 @@ def _check_counting(log: ImuLog, steps: tuple[np.ndarray, np.ndarray], sigmas: t
                 coarse.append(f"{sensor} {axis}: steps of {q * scale:.3g} {unit}, noise {s * scale:.3g} {unit}")
     if coarse:
         raise InputError(
-            f"{log.label}: the increments are pulse counts too coarse to read the sensor's white noise from "
-            f"({'; '.join(coarse)} per sample): the samples would show the counting, not the sensor; give the "
+            f"{log.label}: the increments come in steps (pulse counts, or the file's rounding) too coarse to read "
+            "the sensor's white noise from "
+            f"({'; '.join(coarse)} per sample): the samples would show the steps, not the sensor; give the "
             "noise (--noise FILE: a scenario file's [gyro] arw_deg_rth and [accel] vrw_ug_rthz, or the "
             "scenario_noise of `gyrodrift allan` on a long static log)"
         )
